@@ -1,0 +1,430 @@
+//! Instance, physical-device choice, logical device, queue, allocator and the validation messenger.
+
+use std::ffi::{c_void, CStr};
+use std::sync::{Arc, Mutex};
+
+use anyhow::{anyhow, bail, Context as _, Result};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+
+/// How to open a device.
+#[derive(Clone, Debug, Default)]
+pub struct ContextOptions {
+    /// Enable `VK_LAYER_KHRONOS_validation` and collect its messages (see [`Context::validation_messages`]).
+    pub validation: bool,
+    /// Choose a device by index (as `ppm-vk devices` lists them) or by a case-insensitive substring of its
+    /// name. `None` reads the `PPM_VK_DEVICE` environment variable, then prefers a discrete GPU.
+    pub device: Option<String>,
+}
+
+/// What a physical device is, for listings and run reports.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    pub index: usize,
+    pub name: String,
+    pub kind: String,
+    pub api_version: String,
+    pub driver: String,
+    /// Whether it has everything the kernels need; if not, what is missing.
+    pub missing: Vec<String>,
+}
+
+/// State shared by every object made from a [`Context`], so RAII handles can free themselves.
+pub(crate) struct Shared {
+    pub(crate) device: ash::Device,
+    pub(crate) allocator: Mutex<Option<Allocator>>,
+    pub(crate) push_descriptor: ash::khr::push_descriptor::Device,
+    pub(crate) validation: Option<Arc<Mutex<Vec<String>>>>,
+}
+
+/// An open Vulkan device with one compute queue. Cheap to clone (shared inside).
+#[derive(Clone)]
+pub struct Context {
+    inner: Arc<Inner>,
+}
+
+struct Inner {
+    // Field order is drop order: the device-side state goes before the instance.
+    shared: Arc<Shared>,
+    queue: vk::Queue,
+    queue_family: u32,
+    command_pool: Mutex<vk::CommandPool>,
+    info: DeviceInfo,
+    limits: vk::PhysicalDeviceLimits,
+    timestamp_valid_bits: u32,
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT, Box<Arc<Mutex<Vec<String>>>>)>,
+    instance: ash::Instance,
+    _entry: ash::Entry,
+}
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    // Info and verbose messages are the loader chatting; warnings and errors are bugs.
+    if severity.intersects(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
+        let text = if data.is_null() || (*data).p_message.is_null() {
+            "(no message)".to_string()
+        } else {
+            CStr::from_ptr((*data).p_message).to_string_lossy().into_owned()
+        };
+        let sink = &*(user as *const Arc<Mutex<Vec<String>>>);
+        if let Ok(mut v) = sink.lock() {
+            v.push(format!("{severity:?}: {text}"));
+        }
+    }
+    vk::FALSE
+}
+
+fn api_string(v: u32) -> String {
+    format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v))
+}
+
+/// What the kernels need from a device, checked before it is chosen.
+fn missing_features(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Vec<String> {
+    let mut missing = Vec::new();
+    let props = unsafe { instance.get_physical_device_properties(pd) };
+    if props.api_version < vk::API_VERSION_1_2 {
+        missing.push(format!("Vulkan 1.2 (device has {})", api_string(props.api_version)));
+    }
+    let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut v12);
+    unsafe { instance.get_physical_device_features2(pd, &mut f2) };
+    let f = f2.features;
+    if f.shader_int64 == vk::FALSE {
+        missing.push("shaderInt64 (64-bit photon counts and fixed-point flux sums)".into());
+    }
+    if f.shader_float64 == vk::FALSE {
+        missing.push("shaderFloat64 (per-hit-point statistics N and tau in double)".into());
+    }
+    if v12.host_query_reset == vk::FALSE {
+        missing.push("hostQueryReset".into());
+    }
+    let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
+    let has_push = exts
+        .iter()
+        .any(|e| e.extension_name_as_c_str().map(|n| n == ash::khr::push_descriptor::NAME).unwrap_or(false));
+    if !has_push {
+        missing.push("VK_KHR_push_descriptor".into());
+    }
+    let queues = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    if !queues.iter().any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE) && q.timestamp_valid_bits > 0) {
+        missing.push("a compute queue with timestamps".into());
+    }
+    missing
+}
+
+fn describe(instance: &ash::Instance, index: usize, pd: vk::PhysicalDevice) -> DeviceInfo {
+    let props = unsafe { instance.get_physical_device_properties(pd) };
+    let name = props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
+    let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
+    unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
+    let driver = format!(
+        "{} {}",
+        driver_props.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
+        driver_props.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
+    );
+    let kind = match props.device_type {
+        vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
+        vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
+        vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
+        vk::PhysicalDeviceType::CPU => "CPU",
+        _ => "other",
+    };
+    DeviceInfo {
+        index,
+        name,
+        kind: kind.into(),
+        api_version: api_string(props.api_version),
+        driver: driver.trim().to_string(),
+        missing: missing_features(instance, pd),
+    }
+}
+
+fn load_entry() -> Result<ash::Entry> {
+    unsafe { ash::Entry::load() }.map_err(|e| {
+        anyhow!(
+            "cannot load the Vulkan loader (libvulkan.so.1): {e}. On Debian/Ubuntu: \
+             `sudo apt-get install libvulkan1 mesa-vulkan-drivers` (or run ./scripts/setup)"
+        )
+    })
+}
+
+fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance> {
+    let app = vk::ApplicationInfo::default()
+        .application_name(c"ppm-vk")
+        .engine_name(c"ppm-vk")
+        .api_version(vk::API_VERSION_1_2);
+    let mut layers = Vec::new();
+    let mut exts = Vec::new();
+    if validation {
+        let available = unsafe { entry.enumerate_instance_layer_properties() }.context("listing Vulkan layers")?;
+        let found = available
+            .iter()
+            .any(|l| l.layer_name_as_c_str().map(|n| n == VALIDATION_LAYER).unwrap_or(false));
+        if !found {
+            bail!(
+                "validation was requested but VK_LAYER_KHRONOS_validation is not installed. On Debian/Ubuntu: \
+                 `sudo apt-get install vulkan-validationlayers` (or run ./scripts/setup)"
+            );
+        }
+        layers.push(VALIDATION_LAYER.as_ptr());
+        exts.push(ash::ext::debug_utils::NAME.as_ptr());
+    }
+    let info = vk::InstanceCreateInfo::default()
+        .application_info(&app)
+        .enabled_layer_names(&layers)
+        .enabled_extension_names(&exts);
+    unsafe { entry.create_instance(&info, None) }.context("vkCreateInstance failed (is a Vulkan driver installed?)")
+}
+
+impl Context {
+    /// Every physical device the loader sees, with what each lacks for ppm-vk.
+    pub fn list_devices() -> Result<Vec<DeviceInfo>> {
+        let entry = load_entry()?;
+        let instance = create_instance(&entry, false)?;
+        let pds = unsafe { instance.enumerate_physical_devices() }.context("enumerating Vulkan devices");
+        let out = pds.map(|pds| pds.iter().enumerate().map(|(i, &pd)| describe(&instance, i, pd)).collect());
+        unsafe { instance.destroy_instance(None) };
+        out
+    }
+
+    /// Opens a device: by `options.device`, else `PPM_VK_DEVICE`, else the first suitable discrete GPU,
+    /// then integrated, then any (lavapipe).
+    pub fn new(options: &ContextOptions) -> Result<Context> {
+        let entry = load_entry()?;
+        let instance = create_instance(&entry, options.validation)?;
+        // From here on, failure must destroy the instance: wrap the rest.
+        match Self::open(entry.clone(), instance.clone(), options) {
+            Ok(ctx) => Ok(ctx),
+            Err(e) => {
+                unsafe { instance.destroy_instance(None) };
+                Err(e)
+            }
+        }
+    }
+
+    fn open(entry: ash::Entry, instance: ash::Instance, options: &ContextOptions) -> Result<Context> {
+        let sink = Arc::new(Mutex::new(Vec::<String>::new()));
+        let debug = if options.validation {
+            let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
+            let user = Box::new(sink.clone());
+            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+                .message_severity(
+                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                )
+                .message_type(
+                    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+                )
+                .pfn_user_callback(Some(debug_callback))
+                .user_data(&*user as *const Arc<Mutex<Vec<String>>> as *mut c_void);
+            let messenger = unsafe { loader.create_debug_utils_messenger(&info, None) }
+                .context("creating the validation messenger")?;
+            Some((loader, messenger, user))
+        } else {
+            None
+        };
+
+        let pds = unsafe { instance.enumerate_physical_devices() }.context("enumerating Vulkan devices")?;
+        if pds.is_empty() {
+            bail!("no Vulkan device found. On Debian/Ubuntu: `sudo apt-get install mesa-vulkan-drivers` for lavapipe (CPU)");
+        }
+        let infos: Vec<DeviceInfo> = pds.iter().enumerate().map(|(i, &pd)| describe(&instance, i, pd)).collect();
+        let wanted = options.device.clone().or_else(|| std::env::var("PPM_VK_DEVICE").ok().filter(|s| !s.is_empty()));
+        let chosen = match wanted {
+            Some(w) => {
+                let hit = match w.parse::<usize>() {
+                    Ok(i) => infos.get(i),
+                    Err(_) => infos.iter().find(|d| d.name.to_lowercase().contains(&w.to_lowercase())),
+                };
+                let d = hit.ok_or_else(|| {
+                    anyhow!("no Vulkan device matches {w:?}; devices: {}", list_names(&infos))
+                })?;
+                if !d.missing.is_empty() {
+                    bail!("device {} ({}) lacks what ppm-vk needs: {}", d.index, d.name, d.missing.join(", "));
+                }
+                d.clone()
+            }
+            None => {
+                let rank = |d: &DeviceInfo| match d.kind.as_str() {
+                    "discrete GPU" => 0,
+                    "integrated GPU" => 1,
+                    "virtual GPU" => 2,
+                    _ => 3,
+                };
+                let mut ok: Vec<&DeviceInfo> = infos.iter().filter(|d| d.missing.is_empty()).collect();
+                ok.sort_by_key(|d| (rank(d), d.index));
+                match ok.first() {
+                    Some(d) => (*d).clone(),
+                    None => bail!(
+                        "no Vulkan device has what ppm-vk needs: {}",
+                        infos.iter().map(|d| format!("{} lacks {}", d.name, d.missing.join(", "))).collect::<Vec<_>>().join("; ")
+                    ),
+                }
+            }
+        };
+        let pd = pds[chosen.index];
+        let props = unsafe { instance.get_physical_device_properties(pd) };
+        let queues = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+        let (queue_family, qprops) = queues
+            .iter()
+            .enumerate()
+            .find(|(_, q)| q.queue_flags.contains(vk::QueueFlags::COMPUTE) && q.timestamp_valid_bits > 0)
+            .map(|(i, q)| (i as u32, *q))
+            .ok_or_else(|| anyhow!("device {} has no compute queue with timestamps", chosen.name))?;
+
+        let priorities = [1.0f32];
+        let queue_info = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+        let features = vk::PhysicalDeviceFeatures::default().shader_int64(true).shader_float64(true);
+        let mut v12 = vk::PhysicalDeviceVulkan12Features::default().host_query_reset(true);
+        let exts = [ash::khr::push_descriptor::NAME.as_ptr()];
+        let info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_info)
+            .enabled_features(&features)
+            .enabled_extension_names(&exts)
+            .push_next(&mut v12);
+        let device = unsafe { instance.create_device(pd, &info, None) }
+            .with_context(|| format!("creating a logical device on {}", chosen.name))?;
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: pd,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .context("creating the GPU memory allocator")?;
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let command_pool = unsafe { device.create_command_pool(&pool_info, None) }.context("creating a command pool")?;
+        let push_descriptor = ash::khr::push_descriptor::Device::new(&instance, &device);
+        let shared = Arc::new(Shared {
+            device,
+            allocator: Mutex::new(Some(allocator)),
+            push_descriptor,
+            validation: options.validation.then(|| sink.clone()),
+        });
+        Ok(Context {
+            inner: Arc::new(Inner {
+                shared,
+                queue,
+                queue_family,
+                command_pool: Mutex::new(command_pool),
+                info: chosen,
+                limits: props.limits,
+                timestamp_valid_bits: qprops.timestamp_valid_bits,
+                debug,
+                instance,
+                _entry: entry,
+            }),
+        })
+    }
+
+    pub(crate) fn shared(&self) -> &Arc<Shared> {
+        &self.inner.shared
+    }
+
+    /// The raw ash device, for recording commands.
+    pub fn device(&self) -> &ash::Device {
+        &self.inner.shared.device
+    }
+
+    pub fn info(&self) -> &DeviceInfo {
+        &self.inner.info
+    }
+
+    pub fn limits(&self) -> &vk::PhysicalDeviceLimits {
+        &self.inner.limits
+    }
+
+    pub fn queue_family(&self) -> u32 {
+        self.inner.queue_family
+    }
+
+    /// Nanoseconds per timestamp tick.
+    pub fn timestamp_period(&self) -> f64 {
+        self.inner.limits.timestamp_period as f64
+    }
+
+    pub fn timestamp_valid_bits(&self) -> u32 {
+        self.inner.timestamp_valid_bits
+    }
+
+    /// Warnings and errors the validation layer has reported so far (empty without validation).
+    pub fn validation_messages(&self) -> Vec<String> {
+        match &self.inner.shared.validation {
+            Some(sink) => sink.lock().map(|v| v.clone()).unwrap_or_default(),
+            None => Vec::new(),
+        }
+    }
+
+    /// Records commands into a fresh command buffer, submits it and waits for the queue.
+    pub fn run<T>(&self, record: impl FnOnce(vk::CommandBuffer) -> Result<T>) -> Result<T> {
+        let device = self.device();
+        let pool = self.inner.command_pool.lock().map_err(|_| anyhow!("command pool lock poisoned"))?;
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(*pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        let cmd = unsafe { device.allocate_command_buffers(&alloc) }.context("allocating a command buffer")?[0];
+        let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }.context("creating a fence");
+        let result = fence.and_then(|fence| {
+            let r = (|| {
+                let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+                unsafe { device.begin_command_buffer(cmd, &begin) }.context("vkBeginCommandBuffer")?;
+                let value = record(cmd)?;
+                unsafe { device.end_command_buffer(cmd) }.context("vkEndCommandBuffer")?;
+                let cmds = [cmd];
+                let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+                unsafe { device.queue_submit(self.inner.queue, &submit, fence) }.context("vkQueueSubmit")?;
+                unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }
+                    .context("waiting for the GPU (device lost or hung?)")?;
+                Ok(value)
+            })();
+            unsafe { device.destroy_fence(fence, None) };
+            r
+        });
+        unsafe { device.free_command_buffers(*pool, &[cmd]) };
+        result
+    }
+}
+
+fn list_names(infos: &[DeviceInfo]) -> String {
+    infos.iter().map(|d| format!("[{}] {}", d.index, d.name)).collect::<Vec<_>>().join(", ")
+}
+
+impl Drop for Inner {
+    fn drop(&mut self) {
+        unsafe {
+            let device = &self.shared.device;
+            let _ = device.device_wait_idle();
+            if let Ok(pool) = self.command_pool.lock() {
+                device.destroy_command_pool(*pool, None);
+            }
+            // The allocator frees its memory blocks; buffers made from this context hold `shared`, so by
+            // the time the last Context handle drops, every Buffer should be gone. If one is not (a leak in
+            // the caller), leave the device alive rather than destroy memory under it.
+            if Arc::strong_count(&self.shared) == 1 {
+                if let Ok(mut a) = self.shared.allocator.lock() {
+                    a.take();
+                }
+                device.destroy_device(None);
+            }
+            if let Some((loader, messenger, _)) = self.debug.take() {
+                loader.destroy_debug_utils_messenger(messenger, None);
+            }
+            if Arc::strong_count(&self.shared) == 1 {
+                self.instance.destroy_instance(None);
+            }
+        }
+    }
+}

@@ -1,0 +1,17 @@
+//! ppm-vk's device crate: thin, RAII wrappers over ash for compute work.
+//!
+//! It knows nothing of photons. It owns the Vulkan instance and device ([`Context`]), buffers
+//! ([`Buffer`]), compute pipelines whose bindings are pushed per dispatch ([`ComputePipeline`]),
+//! one-shot submission ([`Context::run`]) and named timestamp scopes ([`Profiler`]).
+
+mod buffer;
+mod context;
+mod pipeline;
+mod profiler;
+
+pub use buffer::{Buffer, BufferKind};
+pub use context::{Context, ContextOptions, DeviceInfo};
+pub use pipeline::{barrier, ComputePipeline, PipelineDesc};
+pub use profiler::{Profiler, ScopeTiming};
+
+pub use ash::vk;

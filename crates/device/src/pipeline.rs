@@ -1,0 +1,187 @@
+//! Compute pipelines whose storage buffers are pushed per dispatch (VK_KHR_push_descriptor), so no
+//! descriptor pools or sets live anywhere.
+
+use std::sync::Arc;
+
+use anyhow::{bail, Context as _, Result};
+use ash::vk;
+
+use crate::buffer::Buffer;
+use crate::context::{Context, Shared};
+
+/// What a pipeline is made from; the kernel crate fills this from SPIR-V reflection.
+pub struct PipelineDesc<'a> {
+    pub name: &'a str,
+    pub spirv: &'a [u32],
+    /// Storage-buffer bindings 0..n of set 0, in order.
+    pub bindings: u32,
+    /// Size of the push-constant block in bytes (0 for none).
+    pub push_size: u32,
+    /// The kernel's local workgroup size (x only: every kernel here is one-dimensional).
+    pub local_size: u32,
+}
+
+/// A compute pipeline with its layouts. Dropping it destroys them.
+pub struct ComputePipeline {
+    shared: Arc<Shared>,
+    name: String,
+    pipeline: vk::Pipeline,
+    layout: vk::PipelineLayout,
+    set_layout: vk::DescriptorSetLayout,
+    bindings: u32,
+    push_size: u32,
+    local_size: u32,
+}
+
+impl ComputePipeline {
+    pub fn new(ctx: &Context, desc: &PipelineDesc) -> Result<ComputePipeline> {
+        let shared = ctx.shared().clone();
+        let device = &shared.device;
+        let name = desc.name;
+        let binding_infos: Vec<_> = (0..desc.bindings)
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        let set_info = vk::DescriptorSetLayoutCreateInfo::default()
+            .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
+            .bindings(&binding_infos);
+        let set_layout = unsafe { device.create_descriptor_set_layout(&set_info, None) }
+            .with_context(|| format!("creating the descriptor set layout of kernel {name}"))?;
+        // Build the rest inside a closure so a failure still destroys what was made.
+        let mut out = ComputePipeline {
+            shared: shared.clone(),
+            name: name.to_string(),
+            pipeline: vk::Pipeline::null(),
+            layout: vk::PipelineLayout::null(),
+            set_layout,
+            bindings: desc.bindings,
+            push_size: desc.push_size,
+            local_size: desc.local_size,
+        };
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            .offset(0)
+            .size(desc.push_size)];
+        let set_layouts = [set_layout];
+        let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        if desc.push_size > 0 {
+            layout_info = layout_info.push_constant_ranges(&ranges);
+        }
+        out.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }
+            .with_context(|| format!("creating the pipeline layout of kernel {name}"))?;
+        let module_info = vk::ShaderModuleCreateInfo::default().code(desc.spirv);
+        let module = unsafe { device.create_shader_module(&module_info, None) }
+            .with_context(|| format!("creating the shader module of kernel {name}"))?;
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module)
+            .name(c"main");
+        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(out.layout)];
+        let created = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
+        unsafe { device.destroy_shader_module(module, None) };
+        out.pipeline = created.map_err(|(_, e)| e).with_context(|| format!("compiling kernel {name}"))?[0];
+        Ok(out)
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    pub fn local_size(&self) -> u32 {
+        self.local_size
+    }
+
+    /// Records one dispatch covering `invocations` threads (rounded up to whole workgroups; the kernel
+    /// bounds-checks), with `buffers` at bindings 0.. and `push` as its push constants.
+    pub fn dispatch(&self, cmd: vk::CommandBuffer, buffers: &[&Buffer], push: &[u8], invocations: u64) -> Result<()> {
+        let groups = invocations.div_ceil(self.local_size as u64);
+        // Spread over y when x would exceed the 65535 limit many devices (lavapipe included) have; kernels
+        // linearise gl_WorkGroupID with gl_NumWorkGroups.
+        let (gx, gy) = if groups <= 65535 { (groups, 1) } else { (65535, groups.div_ceil(65535)) };
+        if gy > 65535 {
+            bail!("kernel {}: {invocations} invocations are more than one dispatch can hold", self.name);
+        }
+        self.dispatch_groups(cmd, buffers, push, [gx as u32, gy as u32, 1])
+    }
+
+    /// Records a dispatch of exactly `groups` workgroups.
+    pub fn dispatch_groups(&self, cmd: vk::CommandBuffer, buffers: &[&Buffer], push: &[u8], groups: [u32; 3]) -> Result<()> {
+        if buffers.len() != self.bindings as usize {
+            bail!("kernel {} takes {} buffers, got {}", self.name, self.bindings, buffers.len());
+        }
+        if push.len() != self.push_size as usize {
+            bail!("kernel {} takes {} bytes of push constants, got {}", self.name, self.push_size, push.len());
+        }
+        if groups.contains(&0) {
+            return Ok(());
+        }
+        let device = &self.shared.device;
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
+            .iter()
+            .map(|b| [vk::DescriptorBufferInfo { buffer: b.raw(), offset: 0, range: vk::WHOLE_SIZE }])
+            .collect();
+        let writes: Vec<vk::WriteDescriptorSet> = infos
+            .iter()
+            .enumerate()
+            .map(|(i, info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_binding(i as u32)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .buffer_info(info)
+            })
+            .collect();
+        unsafe {
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
+            self.shared
+                .push_descriptor
+                .cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &writes);
+            if !push.is_empty() {
+                device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
+            }
+            device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
+        }
+        Ok(())
+    }
+}
+
+impl Drop for ComputePipeline {
+    fn drop(&mut self) {
+        unsafe {
+            let d = &self.shared.device;
+            d.destroy_pipeline(self.pipeline, None);
+            d.destroy_pipeline_layout(self.layout, None);
+            d.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+/// Records a full memory barrier between commands: every earlier compute or transfer write becomes
+/// visible to every later compute, transfer or host access. Kernels here run strictly one after another,
+/// so one kind of barrier serves all.
+pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer) {
+    let mb = [vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(
+            vk::AccessFlags::SHADER_READ
+                | vk::AccessFlags::SHADER_WRITE
+                | vk::AccessFlags::TRANSFER_READ
+                | vk::AccessFlags::TRANSFER_WRITE
+                | vk::AccessFlags::HOST_READ,
+        )];
+    unsafe {
+        ctx.device().cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::HOST,
+            vk::DependencyFlags::empty(),
+            &mb,
+            &[],
+            &[],
+        )
+    };
+}

@@ -1,0 +1,151 @@
+//! The scene as the kernels see it: flat records (crates/kernels/src/layout.rs) and the per-render
+//! constants. Both the GPU renderer and the CPU reference start from this one conversion.
+
+use anyhow::{bail, Result};
+use glam::Vec3;
+use ppm_vk_kernels::layout::{self, Light, Material, Quad, RenderParams, Sphere};
+
+use crate::scene::{Scene, Surface};
+use crate::settings::Settings;
+
+/// Flattened scene plus the constants of one render.
+#[derive(Clone, Debug)]
+pub struct GpuScene {
+    pub params: RenderParams,
+    pub materials: Vec<Material>,
+    pub spheres: Vec<Sphere>,
+    pub quads: Vec<Quad>,
+    pub lights: Vec<Light>,
+    /// The starting search radius of every hit point (eq. 8, or the setting).
+    pub initial_radius: f32,
+    /// Total emitted power of all lights, per channel (W, un-normalised photon flux sums to this).
+    pub total_power: [f64; 3],
+}
+
+fn arr(v: Vec3) -> [f32; 3] {
+    v.to_array()
+}
+
+/// Eq. 8: r = 2 (X + Y + Z) / (3 s), X, Y, Z the extents of the scene's bounding box, s the image size
+/// along one axis (the width).
+pub fn default_radius(scene: &Scene) -> f32 {
+    let (lo, hi) = scene.bounds();
+    let e = hi - lo;
+    2.0 * (e.x + e.y + e.z) / (3.0 * scene.camera.width as f32)
+}
+
+impl GpuScene {
+    /// `photon_capacity` and `grid_cells` size the photon batch buffers (see `Renderer`).
+    pub fn new(scene: &Scene, settings: &Settings, photon_capacity: u32, grid_cells: u32) -> Result<GpuScene> {
+        let materials: Vec<Material> = scene
+            .materials
+            .iter()
+            .map(|m| {
+                let (color, surface, ior) = match m.surface {
+                    Surface::Diffuse { albedo } => (albedo, layout::SURFACE_DIFFUSE, 1.0),
+                    Surface::Mirror { reflectance } => (reflectance, layout::SURFACE_MIRROR, 1.0),
+                    Surface::Glass { ior } => (Vec3::ONE, layout::SURFACE_GLASS, ior),
+                };
+                Material { color: arr(color), surface, emission: arr(m.emission), ior }
+            })
+            .collect();
+        let spheres: Vec<Sphere> = scene
+            .spheres
+            .iter()
+            .map(|s| Sphere { center: arr(s.center), radius: s.radius, material: s.material, ..Default::default() })
+            .collect();
+        let quads: Vec<Quad> = scene
+            .quads
+            .iter()
+            .map(|q| {
+                let c = q.edge_u.cross(q.edge_v);
+                let n = c.normalize();
+                Quad {
+                    origin: arr(q.origin),
+                    material: q.material,
+                    edge_u: arr(q.edge_u),
+                    area: c.length(),
+                    edge_v: arr(q.edge_v),
+                    plane_d: n.dot(q.origin),
+                    normal: arr(n),
+                    w: arr(c / c.dot(c)),
+                    ..Default::default()
+                }
+            })
+            .collect();
+
+        // Lights: emitting quads, chosen in proportion to their power (summed over RGB).
+        let mut lights = Vec::new();
+        let mut total_power = [0f64; 3];
+        for qi in scene.lights() {
+            let q = &scene.quads[qi as usize];
+            let e = scene.materials[q.material as usize].emission;
+            // A Lambertian emitter of radiance L and area A emits L A pi.
+            let power = e * q.area() * std::f32::consts::PI;
+            for c in 0..3 {
+                total_power[c] += power[c] as f64;
+            }
+            lights.push(Light { quad: qi, power: arr(power), ..Default::default() });
+        }
+        let sum: f64 = lights.iter().map(|l| l.power.iter().map(|&p| p as f64).sum::<f64>()).sum();
+        if lights.is_empty() || sum <= 0.0 {
+            bail!("scene {}: no light emits power", scene.name);
+        }
+        let mut run = 0f64;
+        for l in &mut lights {
+            let p = l.power.iter().map(|&p| p as f64).sum::<f64>() / sum;
+            run += p;
+            l.prob = p as f32;
+            l.cdf = run as f32;
+        }
+        if let Some(last) = lights.last_mut() {
+            last.cdf = 1.0; // no photon may fall past the last light through rounding
+        }
+
+        let (lo, hi) = scene.bounds();
+        let extent = (hi - lo).max_element();
+        let initial_radius = settings.initial_radius.unwrap_or_else(|| default_radius(scene));
+        if !(initial_radius.is_finite() && initial_radius > 0.0) {
+            bail!("initial radius must be positive and finite, got {initial_radius}");
+        }
+        // Cells at least twice the largest radius a hit point can ever have: 2x2x2 cells per lookup.
+        let cell_size = 2.0 * initial_radius * settings.radius_growth_bound();
+        let cam = &scene.camera;
+        let forward = (cam.look_at - cam.eye).normalize();
+        let right = forward.cross(cam.up).normalize();
+        let up = right.cross(forward);
+        let params = RenderParams {
+            eye: arr(cam.eye),
+            tan_half_fov: (cam.vfov_deg.to_radians() * 0.5).tan(),
+            right: arr(right),
+            aspect: cam.width as f32 / cam.height as f32,
+            up: arr(up),
+            width: cam.width,
+            forward: arr(forward),
+            height: cam.height,
+            grid_min: arr(lo - Vec3::splat(cell_size)),
+            cell_size,
+            grid_mask: grid_cells - 1,
+            num_spheres: spheres.len() as u32,
+            num_quads: quads.len() as u32,
+            num_lights: lights.len() as u32,
+            // Ray offsets scale with the scene, so a scene in millimetres or kilometres renders alike.
+            eps: 1e-4 * extent,
+            max_photon_depth: settings.max_photon_depth,
+            max_eye_depth: settings.max_eye_depth,
+            hit_slots: settings.hit_slots,
+            photon_capacity,
+            seed: settings.seed,
+            ..Default::default()
+        };
+        Ok(GpuScene { params, materials, spheres, quads, lights, initial_radius, total_power })
+    }
+
+    pub fn pixels(&self) -> u32 {
+        self.params.width * self.params.height
+    }
+
+    pub fn slots(&self) -> u32 {
+        self.pixels() * self.params.hit_slots
+    }
+}

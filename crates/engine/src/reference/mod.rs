@@ -1,0 +1,231 @@
+//! The CPU reference of every kernel, in plain Rust. Tracing follows the GLSL operation for operation in
+//! f32 and draws the same random numbers, so both produce the same paths (up to the last bit of a fused
+//! multiply-add); sums and the progressive update are in f64. The tests run both on identical inputs.
+
+pub mod rng;
+pub mod trace;
+
+use glam::{DVec3, Vec3};
+use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon, EMPTY_SLOT, FIXED_ONE, SURFACE_DIFFUSE, SURFACE_MIRROR};
+use ppm_vk_kernels::photon::MAX_RECORDS;
+
+use crate::gpu_scene::GpuScene;
+use rng::Rng;
+use trace::{cosine_direction, fresnel_dielectric, intersect_scene, oct_decode, oct_encode, reflect, v3, PI};
+
+/// Hit points (`hit_slots` per pixel) and directly seen emission per pixel, as `ray.comp` makes them.
+pub fn ray_pass(g: &GpuScene, jitter: [f32; 2], salt: u32) -> (Vec<HitPoint>, Vec<[f32; 4]>) {
+    let p = &g.params;
+    let slots = p.hit_slots as usize;
+    let mut hits = vec![HitPoint::default(); g.slots() as usize];
+    let mut direct = vec![[0f32; 4]; g.pixels() as usize];
+    for pixel in 0..g.pixels() {
+        let px = pixel % p.width;
+        let py = pixel / p.width;
+        let sx = (2.0 * (px as f32 + jitter[0]) / p.width as f32 - 1.0) * p.aspect * p.tan_half_fov;
+        let sy = (1.0 - 2.0 * (py as f32 + jitter[1]) / p.height as f32) * p.tan_half_fov;
+        let dir = (v3(p.forward) + sx * v3(p.right) + sy * v3(p.up)).normalize();
+        let mut rng = Rng::new(p.seed as u64 | ((salt as u64) << 32), pixel as u64);
+        // (origin, direction, throughput, depth)
+        let mut stack: Vec<(Vec3, Vec3, Vec3, u32)> = vec![(v3(p.eye), dir, Vec3::ONE, 0)];
+        let mut slot = 0usize;
+        let mut emitted = Vec3::ZERO;
+        let base = pixel as usize * slots;
+        while let Some((mut o, mut d, mut thr, mut depth)) = stack.pop() {
+            while depth < p.max_eye_depth {
+                let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else { break };
+                let m = &g.materials[h.material as usize];
+                let front = d.dot(h.normal) < 0.0;
+                let nf = if front { h.normal } else { -h.normal };
+                if m.surface == SURFACE_DIFFUSE {
+                    if front {
+                        emitted += thr * v3(m.emission);
+                    }
+                    let c = v3(m.color);
+                    if c.max_element() > 0.0 && slot < slots {
+                        hits[base + slot] = HitPoint {
+                            pos: h.pos.to_array(),
+                            pixel,
+                            normal: nf.to_array(),
+                            weight: (thr * c / PI).to_array(),
+                            ..Default::default()
+                        };
+                        slot += 1;
+                    }
+                    break;
+                }
+                depth += 1;
+                if m.surface == SURFACE_MIRROR {
+                    thr *= v3(m.color);
+                    d = reflect(d, nf);
+                    o = h.pos + p.eps * nf;
+                    continue;
+                }
+                let eta = if front { 1.0 / m.ior } else { m.ior };
+                let cos_i = -d.dot(nf);
+                let (f, cos_t) = fresnel_dielectric(cos_i, eta);
+                let refl = reflect(d, nf);
+                let refr = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
+                if f >= 1.0 {
+                    d = refl;
+                    o = h.pos + p.eps * nf;
+                } else if slot + stack.len() + 1 < slots {
+                    stack.push((h.pos + p.eps * nf, refl, thr * f, depth));
+                    thr *= 1.0 - f;
+                    d = refr;
+                    o = h.pos - p.eps * nf;
+                } else if rng.float() < f {
+                    d = refl;
+                    o = h.pos + p.eps * nf;
+                } else {
+                    d = refr;
+                    o = h.pos - p.eps * nf;
+                }
+            }
+        }
+        for s in slot..slots {
+            hits[base + s] = HitPoint { pixel: EMPTY_SLOT, ..Default::default() };
+        }
+        direct[pixel as usize] = [emitted.x, emitted.y, emitted.z, 1.0];
+    }
+    (hits, direct)
+}
+
+/// The records of photon `index` (global), as `photon.comp` leaves them.
+pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) {
+    let p = &g.params;
+    let mut rng = Rng::new(p.seed as u64 | ((salt as u64) << 32), index);
+    let u = rng.float();
+    let mut li = 0usize;
+    while li + 1 < g.lights.len() && u >= g.lights[li].cdf {
+        li += 1;
+    }
+    let light = &g.lights[li];
+    let q = &g.quads[light.quad as usize];
+    let a = rng.float();
+    let b = rng.float();
+    let mut o = v3(q.origin) + a * v3(q.edge_u) + b * v3(q.edge_v) + p.eps * v3(q.normal);
+    let u1 = rng.float();
+    let u2 = rng.float();
+    let mut d = cosine_direction(v3(q.normal), u1, u2);
+    let mut flux = v3(light.power) / light.prob;
+    let mut n = 0;
+    for _ in 0..p.max_photon_depth {
+        let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else { break };
+        let m = &g.materials[h.material as usize];
+        let front = d.dot(h.normal) < 0.0;
+        let nf = if front { h.normal } else { -h.normal };
+        if m.surface == SURFACE_DIFFUSE {
+            let c = v3(m.color);
+            let pr = c.max_element();
+            if pr <= 0.0 {
+                break;
+            }
+            out.push(Photon { pos: h.pos.to_array(), cell: trace::grid_hash(g, h.pos), flux: flux.to_array(), dir: oct_encode(d) });
+            n += 1;
+            if n == MAX_RECORDS || rng.float() >= pr {
+                break;
+            }
+            flux *= c / pr;
+            let v1 = rng.float();
+            let v2 = rng.float();
+            d = cosine_direction(nf, v1, v2);
+            o = h.pos + p.eps * nf;
+        } else if m.surface == SURFACE_MIRROR {
+            flux *= v3(m.color);
+            d = reflect(d, nf);
+            o = h.pos + p.eps * nf;
+        } else {
+            let eta = if front { 1.0 / m.ior } else { m.ior };
+            let cos_i = -d.dot(nf);
+            let (f, cos_t) = fresnel_dielectric(cos_i, eta);
+            if rng.float() < f {
+                d = reflect(d, nf);
+                o = h.pos + p.eps * nf;
+            } else {
+                d = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
+                o = h.pos - p.eps * nf;
+            }
+        }
+    }
+}
+
+/// All records of photons `first..first+count`, in photon order.
+pub fn photon_pass(g: &GpuScene, first: u64, count: u32, salt: u32) -> Vec<Photon> {
+    let mut out = Vec::new();
+    for i in 0..count as u64 {
+        trace_photon(g, first + i, salt, &mut out);
+    }
+    out
+}
+
+/// What one hit point gathers from `photons`, by brute force over every photon (an independent check
+/// of the grid): M, and the flux sum in f64 (with the cone weight of eq. 10 when `cone_k` > 0).
+pub fn gather_one(hp: &HitPoint, r2: f64, photons: &[Photon], cone_k: f32) -> (u32, DVec3) {
+    let mut m = 0;
+    let mut sum = DVec3::ZERO;
+    if hp.pixel == EMPTY_SLOT {
+        return (0, sum);
+    }
+    let r2f = r2 as f32;
+    let r = r2f.sqrt();
+    let pos = v3(hp.pos);
+    let n = v3(hp.normal);
+    for p in photons {
+        let dv = v3(p.pos) - pos;
+        let d2 = dv.dot(dv);
+        if d2 > r2f || oct_decode(p.dir).dot(n) >= 0.0 {
+            continue;
+        }
+        let w = if cone_k > 0.0 { 1.0 - d2.sqrt() / (cone_k * r) } else { 1.0 }; // eq. 10
+        m += 1;
+        sum += v3(p.flux).as_dvec3() * w as f64;
+    }
+    (m, sum)
+}
+
+/// `gather_one` for every slot, as pass accumulators (flux in the same 32.32 fixed point).
+pub fn gather(hits: &[HitPoint], stats: &[HitStats], photons: &[Photon], cone_k: f32) -> Vec<(u32, DVec3)> {
+    hits.iter().zip(stats).map(|(h, s)| gather_one(h, s.r2, photons, cone_k)).collect()
+}
+
+/// The progressive update of one hit point (eq. 3, 6; eq. 14 with the cone filter's sums), in f64.
+pub fn update(s: &HitStats, a: &PassAccum, alpha: f32) -> HitStats {
+    if a.m == 0 {
+        return *s;
+    }
+    let m = a.m as f64;
+    let alpha = alpha as f64;
+    let ratio = (s.n + alpha * m) / (s.n + m);
+    HitStats {
+        n: s.n + alpha * m,
+        r2: s.r2 * ratio, // eq. 3, squared
+        tau_r: (s.tau_r + a.flux_r as f64 / FIXED_ONE) * ratio, // eq. 6
+        tau_g: (s.tau_g + a.flux_g as f64 / FIXED_ONE) * ratio,
+        tau_b: (s.tau_b + a.flux_b as f64 / FIXED_ONE) * ratio,
+        pad0: 0.0,
+    }
+}
+
+/// Pixel radiance from the statistics (eq. 1-2; eq. 11's normalisation `norm`).
+pub fn resolve(g: &GpuScene, hits: &[HitPoint], stats: &[HitStats], direct: &[[f32; 4]], emitted: f64, norm: f32) -> Vec<[f64; 3]> {
+    let slots = g.params.hit_slots as usize;
+    (0..g.pixels() as usize)
+        .map(|pixel| {
+            let mut sum = DVec3::ZERO;
+            if emitted > 0.0 {
+                for s in 0..slots {
+                    let i = pixel * slots + s;
+                    if hits[i].pixel == EMPTY_SLOT {
+                        continue;
+                    }
+                    let st = &stats[i];
+                    let area = norm as f64 * std::f64::consts::PI * st.r2;
+                    sum += v3(hits[i].weight).as_dvec3() * DVec3::new(st.tau_r, st.tau_g, st.tau_b) / (area * emitted);
+                }
+            }
+            let d = direct[pixel];
+            [sum.x + d[0] as f64, sum.y + d[1] as f64, sum.z + d[2] as f64]
+        })
+        .collect()
+}

@@ -1,0 +1,55 @@
+//! Stage 4, `shaders/gather/`: per hit point, this batch's photons within R (gather.comp), then the
+//! progressive radius and flux update (update.comp, eq. 3, 6, 14).
+
+use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
+use ppm_vk_device::{vk, Buffer, ComputePipeline};
+
+use crate::lookup::Grid;
+use crate::push_struct;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GatherPush {
+    pub slots: u32,
+    /// Cone filter constant k >= 1, or 0 for none (eq. 10).
+    pub cone_k: f32,
+}
+push_struct!(GatherPush, GATHER);
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct UpdatePush {
+    pub slots: u32,
+    pub alpha: f32,
+}
+push_struct!(UpdatePush, UPDATE);
+
+/// Per-hit-point state the gather and update read and write.
+pub struct HitBuffers<'a> {
+    pub hit_points: &'a Buffer,
+    pub stats: &'a Buffer,
+    pub accum: &'a Buffer,
+}
+
+#[allow(clippy::too_many_arguments)]
+pub fn record_gather(
+    k: &ComputePipeline,
+    cmd: vk::CommandBuffer,
+    params: &Buffer,
+    hits: &HitBuffers,
+    photons: &Buffer,
+    grid: &Grid,
+    push: &GatherPush,
+) -> Result<()> {
+    k.dispatch(
+        cmd,
+        &[params, hits.hit_points, hits.stats, hits.accum, photons, &grid.sorted, &grid.cell_start],
+        bytemuck::bytes_of(push),
+        push.slots as u64,
+    )
+}
+
+pub fn record_update(k: &ComputePipeline, cmd: vk::CommandBuffer, hits: &HitBuffers, push: &UpdatePush) -> Result<()> {
+    k.dispatch(cmd, &[hits.stats, hits.accum], bytemuck::bytes_of(push), push.slots as u64)
+}

@@ -1,0 +1,147 @@
+//! The records kernels share with the host: `#[repr(C)]` twins of `shaders/common/types.glsl`, each
+//! checked at compile time against the std430 layout glslang produced (see `gpu_struct!`).
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::gpu_struct;
+
+pub const SURFACE_DIFFUSE: u32 = 0;
+pub const SURFACE_MIRROR: u32 = 1;
+pub const SURFACE_GLASS: u32 = 2;
+/// `HitPoint::pixel` of an empty slot.
+pub const EMPTY_SLOT: u32 = u32::MAX;
+/// The fixed-point scale of [`PassAccum`] flux sums (32.32).
+pub const FIXED_ONE: f64 = 4294967296.0;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Material {
+    pub color: [f32; 3],
+    pub surface: u32,
+    pub emission: [f32; 3],
+    pub ior: f32,
+}
+gpu_struct!(Material { color, surface, emission, ior });
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Sphere {
+    pub center: [f32; 3],
+    pub radius: f32,
+    pub material: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
+}
+gpu_struct!(Sphere { center, radius, material, pad0, pad1, pad2 });
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Quad {
+    pub origin: [f32; 3],
+    pub material: u32,
+    pub edge_u: [f32; 3],
+    pub area: f32,
+    pub edge_v: [f32; 3],
+    pub plane_d: f32,
+    pub normal: [f32; 3],
+    pub pad0: f32,
+    pub w: [f32; 3],
+    pub pad1: f32,
+}
+gpu_struct!(Quad { origin, material, edge_u, area, edge_v, plane_d, normal, pad0, w, pad1 });
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Light {
+    pub quad: u32,
+    pub cdf: f32,
+    pub prob: f32,
+    pub pad0: f32,
+    pub power: [f32; 3],
+    pub pad1: f32,
+}
+gpu_struct!(Light { quad, cdf, prob, pad0, power, pad1 });
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct RenderParams {
+    pub eye: [f32; 3],
+    pub tan_half_fov: f32,
+    pub right: [f32; 3],
+    pub aspect: f32,
+    pub up: [f32; 3],
+    pub width: u32,
+    pub forward: [f32; 3],
+    pub height: u32,
+    pub grid_min: [f32; 3],
+    pub cell_size: f32,
+    pub grid_mask: u32,
+    pub num_spheres: u32,
+    pub num_quads: u32,
+    pub num_lights: u32,
+    pub eps: f32,
+    pub max_photon_depth: u32,
+    pub max_eye_depth: u32,
+    pub hit_slots: u32,
+    pub photon_capacity: u32,
+    pub seed: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+}
+gpu_struct!(RenderParams {
+    eye, tan_half_fov, right, aspect, up, width, forward, height, grid_min, cell_size, grid_mask,
+    num_spheres, num_quads, num_lights, eps, max_photon_depth, max_eye_depth, hit_slots, photon_capacity,
+    seed, pad0, pad1
+});
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct HitPoint {
+    pub pos: [f32; 3],
+    pub pixel: u32,
+    pub normal: [f32; 3],
+    pub pad0: u32,
+    pub weight: [f32; 3],
+    pub pad1: u32,
+}
+gpu_struct!(HitPoint { pos, pixel, normal, pad0, weight, pad1 });
+
+impl HitPoint {
+    pub fn is_empty(&self) -> bool {
+        self.pixel == EMPTY_SLOT
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct HitStats {
+    pub n: f64,
+    pub r2: f64,
+    pub tau_r: f64,
+    pub tau_g: f64,
+    pub tau_b: f64,
+    pub pad0: f64,
+}
+gpu_struct!(HitStats { n, r2, tau_r, tau_g, tau_b, pad0 });
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct PassAccum {
+    pub flux_r: i64,
+    pub flux_g: i64,
+    pub flux_b: i64,
+    pub m: u32,
+    pub pad0: u32,
+}
+gpu_struct!(PassAccum { flux_r, flux_g, flux_b, m, pad0 });
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Photon {
+    pub pos: [f32; 3],
+    pub cell: u32,
+    pub flux: [f32; 3],
+    pub dir: u32,
+}
+gpu_struct!(Photon { pos, cell, flux, dir });

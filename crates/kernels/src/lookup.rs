@@ -1,0 +1,99 @@
+//! Stage 3b, `shaders/lookup/`: the photon grid, a hashed uniform grid rebuilt per batch by a counting
+//! sort (count, exclusive scan, scatter). Hit points then read the buckets their sphere overlaps.
+
+use anyhow::{bail, Result};
+use bytemuck::{Pod, Zeroable};
+use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context};
+
+use crate::push_struct;
+
+/// Buckets scanned per workgroup in `grid_scan.comp` (256 threads x 4).
+pub const SCAN_BLOCK: u32 = 1024;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ScanPush {
+    pub cells: u32,
+    pub phase: u32,
+}
+push_struct!(ScanPush, GRID_SCAN);
+
+/// The grid's buffers for a table of `cells` buckets.
+pub struct Grid {
+    pub cells: u32,
+    /// Per bucket: records in it while building; zero between batches.
+    pub cell_count: Buffer,
+    /// Per bucket: index of its first record in `sorted`; `cells + 1` entries.
+    pub cell_start: Buffer,
+    pub block_sums: Buffer,
+    /// Record indices, grouped by bucket.
+    pub sorted: Buffer,
+}
+
+impl Grid {
+    /// `cells` must be a power of two, at least [`SCAN_BLOCK`] and at most 65536 blocks.
+    pub fn new(ctx: &Context, cells: u32, capacity: u32) -> Result<Grid> {
+        if !cells.is_power_of_two() || cells < SCAN_BLOCK || cells / SCAN_BLOCK > 65536 {
+            bail!("photon grid: {cells} buckets is not a power of two in [{SCAN_BLOCK}, {}]", SCAN_BLOCK as u64 * 65536);
+        }
+        let cell_count = Buffer::new(ctx, "grid cell_count", cells as u64 * 4, BufferKind::Storage)?;
+        ctx.run(|cmd| {
+            cell_count.cmd_fill(cmd, 0);
+            Ok(())
+        })?;
+        Ok(Grid {
+            cells,
+            cell_count,
+            cell_start: Buffer::new(ctx, "grid cell_start", (cells as u64 + 1) * 4, BufferKind::Storage)?,
+            block_sums: Buffer::new(ctx, "grid block_sums", (cells / SCAN_BLOCK) as u64 * 4, BufferKind::Storage)?,
+            sorted: Buffer::new(ctx, "grid sorted", capacity as u64 * 4, BufferKind::Storage)?,
+        })
+    }
+}
+
+/// The three grid kernels.
+pub struct Lookup {
+    pub count: ComputePipeline,
+    pub scan: ComputePipeline,
+    pub scatter: ComputePipeline,
+}
+
+impl Lookup {
+    pub fn new(ctx: &Context) -> Result<Lookup> {
+        use crate::reflected::*;
+        Ok(Lookup {
+            count: crate::pipeline(ctx, &GRID_COUNT)?,
+            scan: crate::pipeline(ctx, &GRID_SCAN)?,
+            scatter: crate::pipeline(ctx, &GRID_SCATTER)?,
+        })
+    }
+
+    /// Records the grid build over the records in `photons` (their number is in `counter`); dispatches
+    /// cover `capacity` records and the kernels stop at the count.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        params: &Buffer,
+        photons: &Buffer,
+        counter: &Buffer,
+        grid: &Grid,
+        capacity: u32,
+    ) -> Result<()> {
+        self.count.dispatch(cmd, &[params, photons, counter, &grid.cell_count], &[], capacity as u64)?;
+        barrier(ctx, cmd);
+        let blocks = grid.cells / SCAN_BLOCK;
+        let scan_buffers = [&grid.cell_count, &grid.cell_start, &grid.block_sums];
+        for (phase, groups) in [(0u32, blocks), (1, 1), (2, blocks)] {
+            let push = ScanPush { cells: grid.cells, phase };
+            self.scan.dispatch_groups(cmd, &scan_buffers, bytemuck::bytes_of(&push), [groups, 1, 1])?;
+            barrier(ctx, cmd);
+        }
+        self.scatter.dispatch(
+            cmd,
+            &[params, photons, counter, &grid.cell_count, &grid.cell_start, &grid.sorted],
+            &[],
+            capacity as u64,
+        )
+    }
+}

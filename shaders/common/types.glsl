@@ -1,0 +1,117 @@
+// GPU records shared by the kernels. Each struct here has a #[repr(C)] twin in crates/kernels/src/layout.rs,
+// checked at compile time against the std430 offsets glslang gives these declarations (build.rs reflects them).
+#ifndef TYPES_GLSL
+#define TYPES_GLSL
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+
+const uint SURFACE_DIFFUSE = 0u;
+const uint SURFACE_MIRROR = 1u;
+const uint SURFACE_GLASS = 2u;
+
+struct Material {
+    vec3 color;      // diffuse albedo or mirror reflectance
+    uint surface;    // SURFACE_*
+    vec3 emission;   // radiance leaving the front side (quads only)
+    float ior;       // glass: index inside (outside is 1)
+};
+
+struct Sphere {
+    vec3 center;
+    float radius;
+    uint material;
+    uint pad0;
+    uint pad1;
+    uint pad2;
+};
+
+// Parallelogram origin + a*edge_u + b*edge_v, a,b in [0,1]; front normal = normalize(cross(edge_u, edge_v)).
+struct Quad {
+    vec3 origin;
+    uint material;
+    vec3 edge_u;
+    float area;
+    vec3 edge_v;
+    float plane_d;   // dot(normal, origin)
+    vec3 normal;
+    float pad0;
+    vec3 w;          // cross(u, v) / |cross(u, v)|^2: planar coordinates of a hit (Shirley's trick)
+    float pad1;
+};
+
+// A light to emit photons from, chosen with probability `prob` (proportional to power).
+struct Light {
+    uint quad;
+    float cdf;       // inclusive running sum of prob
+    float prob;
+    float pad0;
+    vec3 power;      // emission * area * pi: the flux a photon carries is power / prob
+    float pad1;
+};
+
+// Constants of one render, written once by the host.
+struct RenderParams {
+    vec3 eye;
+    float tan_half_fov;
+    vec3 right;      // camera basis, unit vectors
+    float aspect;    // width / height
+    vec3 up;
+    uint width;
+    vec3 forward;
+    uint height;
+    vec3 grid_min;   // origin of the photon grid's cells
+    float cell_size; // at least twice the largest search radius, so a sphere overlaps at most 2x2x2 cells
+    uint grid_mask;  // hash table size - 1 (a power of two)
+    uint num_spheres;
+    uint num_quads;
+    uint num_lights;
+    float eps;       // ray offset, relative to the scene's size
+    uint max_photon_depth;
+    uint max_eye_depth;
+    uint hit_slots;  // hit points per pixel (glass splits the eye path into both Fresnel branches)
+    uint photon_capacity; // photon records one batch can hold
+    uint seed;
+    uint pad0;
+    uint pad1;
+};
+
+// A diffuse point seen from a pixel (PPM pass 1). Fixed for the whole render.
+struct HitPoint {
+    vec3 pos;
+    uint pixel;      // 0xffffffff: empty slot
+    vec3 normal;     // facing the eye ray
+    uint pad0;
+    vec3 weight;     // eye-path throughput * f_r (albedo / pi)
+    uint pad1;
+};
+
+// Per-hit-point progressive statistics (eq. 3, 6), in double: N and tau must not lose increments over
+// billions of photons.
+struct HitStats {
+    double n;        // accumulated (alpha-scaled) photon count N
+    double r2;       // squared search radius R^2
+    double tau_r;    // accumulated un-normalised flux tau (times the cone filter's weights when on)
+    double tau_g;
+    double tau_b;
+    double pad0;
+};
+
+// What this pass's photons gave a hit point: M and tau_M, flux in 32.32 fixed point so the sum is exact
+// and independent of the order photons are visited in.
+struct PassAccum {
+    int64_t flux_r;
+    int64_t flux_g;
+    int64_t flux_b;
+    uint m;
+    uint pad0;
+};
+
+// A photon deposited on a diffuse surface.
+struct Photon {
+    vec3 pos;
+    uint cell;       // hash bucket of pos in the photon grid
+    vec3 flux;       // un-normalised: light power * path throughput / light choice probability
+    uint dir;        // direction of travel, octahedral snorm 2x16
+};
+
+const float FIXED_ONE = 4294967296.0; // 2^32: the fixed-point scale of PassAccum
+#endif

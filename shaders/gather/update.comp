@@ -1,0 +1,31 @@
+// The progressive update after a photon pass (eq. 3 and 6; with the cone filter the weighted sums of
+// eq. 12-13 stand in for tau, and eq. 14 is the same ratio), then clears the pass accumulators.
+// A hit point that received no photon is left as it is.
+#version 460
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+layout(local_size_x = 64) in;
+#include "types.glsl"
+layout(std430, binding = 0) buffer Stats { HitStats stats[]; };
+layout(std430, binding = 1) buffer Accum { PassAccum accum[]; };
+layout(push_constant) uniform UpdatePush {
+    uint slots;
+    float alpha;     // the fraction of new photons kept, in (0, 1)
+} pc;
+#include "invocation.glsl"
+
+void main() {
+    uint i = invocation_index();
+    if (i >= pc.slots) return;
+    PassAccum a = accum[i];
+    if (a.m == 0u) return;
+    HitStats s = stats[i];
+    double m = double(a.m);
+    double ratio = (s.n + double(pc.alpha) * m) / (s.n + m);
+    s.r2 *= ratio;                                                   // eq. 3 (squared)
+    s.tau_r = (s.tau_r + double(a.flux_r) / double(FIXED_ONE)) * ratio; // eq. 6 / eq. 14
+    s.tau_g = (s.tau_g + double(a.flux_g) / double(FIXED_ONE)) * ratio;
+    s.tau_b = (s.tau_b + double(a.flux_b) / double(FIXED_ONE)) * ratio;
+    s.n += double(pc.alpha) * m;
+    stats[i] = s;
+    accum[i] = PassAccum(0L, 0L, 0L, 0u, 0u);
+}

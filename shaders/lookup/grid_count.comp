@@ -1,0 +1,16 @@
+// Photon grid, step 1 of 3: count the photon records in each hash bucket.
+#version 460
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+layout(local_size_x = 256) in;
+#include "types.glsl"
+layout(std430, binding = 0) readonly buffer Params { RenderParams params; };
+layout(std430, binding = 1) readonly buffer Photons { Photon photons[]; };
+layout(std430, binding = 2) readonly buffer Counter { uint photon_count; };
+layout(std430, binding = 3) buffer CellCount { uint cell_count[]; };
+#include "invocation.glsl"
+
+void main() {
+    uint i = invocation_index();
+    if (i >= min(photon_count, params.photon_capacity)) return;
+    atomicAdd(cell_count[photons[i].cell], 1u);
+}

@@ -1,0 +1,99 @@
+// Pass 3, a photon pass: photons leave the lights in proportion to their power, bounce off mirrors and
+// through glass, and leave a record at every diffuse surface they reach, continuing by Russian roulette.
+// Each path keeps its records locally and a workgroup reserves space for all of its records with one
+// atomic: a single global counter hit once per record is the slowest thing on lavapipe.
+#version 460
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+layout(local_size_x = 64) in;
+
+#include "types.glsl"
+#include "bindings.glsl"
+layout(std430, binding = 4) readonly buffer Lights { Light lights[]; };
+layout(std430, binding = 5) writeonly buffer Photons { Photon photons[]; };
+layout(std430, binding = 6) buffer Counter { uint photon_count; };
+layout(push_constant) uniform PhotonPush {
+    uint64_t first;  // global index of this batch's first photon: its random stream
+    uint count;      // photons in this batch
+    uint salt;       // random stream family (photon passes and the probe pass differ)
+} pc;
+
+#include "rng.glsl"
+#include "geometry.glsl"
+#include "sampling.glsl"
+#include "grid.glsl"
+#include "invocation.glsl"
+
+// Records one path may leave; a path is ended at this many (ALGORITHM.md: bounded paths).
+const uint MAX_RECORDS = 16u;
+
+shared uint wg_count;
+shared uint wg_base;
+
+void main() {
+    uint i = invocation_index();
+    if (gl_LocalInvocationIndex == 0u) wg_count = 0u;
+    barrier();
+
+    Photon rec[MAX_RECORDS];
+    uint n = 0u;
+    if (i < pc.count) {
+        Rng rng = rng_new(uint64_t(params.seed) | (uint64_t(pc.salt) << 32), pc.first + uint64_t(i));
+        float u = rng_float(rng);
+        uint li = 0u;
+        while (li + 1u < params.num_lights && u >= lights[li].cdf) li++;
+        Light light = lights[li];
+        Quad q = quads[light.quad];
+        float a = rng_float(rng);
+        float b = rng_float(rng);
+        vec3 o = q.origin + a * q.edge_u + b * q.edge_v + params.eps * q.normal;
+        float u1 = rng_float(rng);
+        float u2 = rng_float(rng);
+        vec3 d = cosine_direction(q.normal, u1, u2);
+        vec3 flux = light.power / light.prob;
+
+        for (uint depth = 0u; depth < params.max_photon_depth; depth++) {
+            Hit h;
+            if (!intersect_scene(o, d, 0.0, 1e30, h)) break;
+            Material m = materials[h.material];
+            bool front = dot(d, h.normal) < 0.0;
+            vec3 nf = front ? h.normal : -h.normal;
+            if (m.surface == SURFACE_DIFFUSE) {
+                float p = max(m.color.r, max(m.color.g, m.color.b));
+                if (p <= 0.0) break; // a black emitter absorbs
+                rec[n++] = Photon(h.pos, grid_hash(grid_cell(h.pos)), flux, oct_encode(d));
+                if (n == MAX_RECORDS) break;
+                if (rng_float(rng) >= p) break; // Russian roulette: survive with the largest albedo
+                flux *= m.color / p;
+                float v1 = rng_float(rng);
+                float v2 = rng_float(rng);
+                d = cosine_direction(nf, v1, v2);
+                o = h.pos + params.eps * nf;
+            } else if (m.surface == SURFACE_MIRROR) {
+                flux *= m.color;
+                d = reflect(d, nf);
+                o = h.pos + params.eps * nf;
+            } else {
+                float eta = front ? 1.0 / m.ior : m.ior;
+                float cos_i = -dot(d, nf);
+                float cos_t;
+                float f = fresnel_dielectric(cos_i, eta, cos_t);
+                if (rng_float(rng) < f) {
+                    d = reflect(d, nf);
+                    o = h.pos + params.eps * nf;
+                } else {
+                    d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
+                    o = h.pos - params.eps * nf;
+                }
+            }
+        }
+    }
+
+    uint local = atomicAdd(wg_count, n);
+    barrier();
+    if (gl_LocalInvocationIndex == 0u) wg_base = atomicAdd(photon_count, wg_count);
+    barrier();
+    uint at = wg_base + local;
+    for (uint k = 0u; k < n; k++) {
+        if (at + k < params.photon_capacity) photons[at + k] = rec[k];
+    }
+}

@@ -1,0 +1,293 @@
+//! The `ppm-vk` command: render a scene, list devices, benchmark.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context as _, Result};
+use clap::{Args, Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use ppm_vk_engine::metrics::{compare, cornell_regions, Reference};
+use ppm_vk_engine::{Context, ContextOptions, PassStats, Renderer, Scene, Settings};
+
+mod bench;
+
+#[derive(Parser)]
+#[command(name = "ppm-vk", version = concat!(env!("CARGO_PKG_VERSION"), " (", env!("PPM_VK_GIT_REV"), ")"))]
+#[command(about = "Progressive photon mapping with photon probing and a cone filter, on Vulkan compute")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene progressively and write the image.
+    Render(RenderArgs),
+    /// List the Vulkan devices and whether each can run ppm-vk.
+    Devices,
+    /// Time each stage on a fixed set of cases; prints a table and writes JSON.
+    Bench(bench::BenchArgs),
+}
+
+#[derive(Args, Clone)]
+pub struct DeviceArgs {
+    /// Device index or name substring (see `ppm-vk devices`); default: $PPM_VK_DEVICE, else a discrete GPU.
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Enable the Vulkan validation layer and fail on any message it reports.
+    #[arg(long)]
+    pub validate: bool,
+}
+
+impl DeviceArgs {
+    pub fn open(&self) -> Result<Context> {
+        Context::new(&ContextOptions { validation: self.validate, device: self.device.clone() })
+    }
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Scene file (TOML; see docs/scene-format.md).
+    scene: PathBuf,
+    /// Photon passes to run (default 100 unless --time is given).
+    #[arg(long, conflicts_with = "time")]
+    passes: Option<u64>,
+    /// Render for this many seconds of wall time instead of a pass count.
+    #[arg(long)]
+    time: Option<f64>,
+    /// Photons emitted per pass.
+    #[arg(long, default_value_t = 1_000_000)]
+    photons_per_pass: u32,
+    /// Fraction of new photons kept per pass (eq. 3, 6), in (0, 1).
+    #[arg(long, default_value_t = 0.7)]
+    alpha: f32,
+    /// Seed of all random streams.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Starting search radius in scene units (default: the paper's eq. 8).
+    #[arg(long)]
+    radius: Option<f32>,
+    /// Override the scene's resolution, e.g. 256x256.
+    #[arg(long, value_parser = parse_resolution)]
+    resolution: Option<(u32, u32)>,
+    /// Hit points per pixel (glass splits an eye path into both Fresnel branches up to this many).
+    #[arg(long, default_value_t = 4)]
+    hit_slots: u32,
+    /// Output image: .exr (linear HDR) or .png (tone-mapped sRGB).
+    #[arg(long, short, default_value = "out.png")]
+    out: PathBuf,
+    /// Print the per-pass stage timing table.
+    #[arg(long)]
+    profile: bool,
+    /// Reference image (EXR) to measure error against at the end.
+    #[arg(long)]
+    reference: Option<PathBuf>,
+    /// Also write the image every N seconds while rendering (0: only at the end).
+    #[arg(long, default_value_t = 0.0)]
+    checkpoint: f64,
+    #[command(flatten)]
+    device: DeviceArgs,
+}
+
+fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;
+    let parse = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("{v:?}: {e}"));
+    let (w, h) = (parse(w)?, parse(h)?);
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        return Err(format!("resolution {w}x{h} out of range 1..=16384"));
+    }
+    Ok((w, h))
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => render(args),
+        Command::Devices => devices(),
+        Command::Bench(args) => bench::run(args),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn devices() -> Result<()> {
+    let list = Context::list_devices()?;
+    if list.is_empty() {
+        println!("no Vulkan devices found");
+    }
+    for d in list {
+        let status = if d.missing.is_empty() { "usable".to_string() } else { format!("lacks {}", d.missing.join(", ")) };
+        println!("[{}] {} ({}, Vulkan {}, {}): {}", d.index, d.name, d.kind, d.api_version, d.driver, status);
+    }
+    Ok(())
+}
+
+/// Fails if the validation layer said anything (only when it is on).
+pub fn check_validation(ctx: &Context) -> Result<()> {
+    let msgs = ctx.validation_messages();
+    if !msgs.is_empty() {
+        bail!("the validation layer reported {} message(s):\n{}", msgs.len(), msgs.join("\n"));
+    }
+    Ok(())
+}
+
+fn render(args: RenderArgs) -> Result<()> {
+    let ext = args.out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+    if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
+        bail!("--out {}: the extension must be .exr or .png", args.out.display());
+    }
+    if let Some(t) = args.time {
+        if !(t.is_finite() && t > 0.0) {
+            bail!("--time must be a positive number of seconds, got {t}");
+        }
+    }
+    let mut scene = Scene::load(&args.scene)?;
+    if let Some((w, h)) = args.resolution {
+        scene = scene.with_resolution(w, h);
+    }
+    let reference = match &args.reference {
+        Some(p) => Some(Reference::load(p)?),
+        None => None,
+    };
+    let settings = Settings {
+        photons_per_pass: args.photons_per_pass,
+        alpha: args.alpha,
+        seed: args.seed,
+        initial_radius: args.radius,
+        hit_slots: args.hit_slots,
+        ..Settings::default()
+    };
+    // Ctrl-C ends the render after the pass in flight; the image is written as usual.
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        ctrlc::set_handler(move || {
+            if stop.swap(true, Ordering::SeqCst) {
+                eprintln!("\nsecond interrupt: exiting without writing the image");
+                std::process::exit(130);
+            }
+        })
+        .context("installing the Ctrl-C handler")?;
+    }
+
+    let ctx = args.device.open()?;
+    let info = ctx.info().clone();
+    eprintln!("device: {} ({}, {})", info.name, info.kind, info.driver);
+    let started = Instant::now();
+    let mut renderer = Renderer::new(&ctx, &scene, settings)?;
+    let setup_s = started.elapsed().as_secs_f64();
+    let g = renderer.gpu_scene();
+    eprintln!(
+        "scene {}: {}x{}, {} hit-point slots, initial radius {:.5}, {} photons/pass; ray pass {:.1} ms GPU",
+        scene.name,
+        g.params.width,
+        g.params.height,
+        g.slots(),
+        g.initial_radius,
+        renderer.settings().photons_per_pass,
+        renderer.ray_ms()
+    );
+
+    let budget = args.time.map(Duration::from_secs_f64);
+    let passes = args.passes.unwrap_or(if budget.is_some() { u64::MAX } else { 100 });
+    let bar = if budget.is_some() { ProgressBar::new(1000) } else { ProgressBar::new(passes) };
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {msg} (eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let loop_start = Instant::now();
+    let mut history: Vec<PassStats> = Vec::new();
+    let mut last_checkpoint = Instant::now();
+    while (history.len() as u64) < passes {
+        if stop.load(Ordering::SeqCst) {
+            bar.println("interrupted: writing the image of the passes done so far");
+            break;
+        }
+        if let Some(b) = budget {
+            if loop_start.elapsed() >= b {
+                break;
+            }
+        }
+        let s = renderer.pass()?;
+        let elapsed = loop_start.elapsed().as_secs_f64();
+        let rate = renderer.emitted() as f64 / elapsed / 1e6;
+        match budget {
+            Some(b) => bar.set_position((elapsed / b.as_secs_f64() * 1000.0).min(1000.0) as u64),
+            None => bar.set_position(history.len() as u64 + 1),
+        }
+        bar.set_message(format!("pass {} | {:.2} M photons/s | {:.1} ms/pass", s.index, rate, s.wall_ms));
+        history.push(s);
+        if args.checkpoint > 0.0 && last_checkpoint.elapsed().as_secs_f64() >= args.checkpoint {
+            renderer.image()?.save(&args.out)?;
+            last_checkpoint = Instant::now();
+        }
+    }
+    bar.finish_and_clear();
+    let loop_s = loop_start.elapsed().as_secs_f64();
+    let image = renderer.image()?;
+    let bad = image.count_non_finite();
+    if bad > 0 {
+        bail!("the image has {bad} non-finite pixels: not written (this is a bug; please report it)");
+    }
+    image.save(&args.out)?;
+    check_validation(&ctx)?;
+
+    let emitted = renderer.emitted();
+    println!(
+        "{} passes, {} photons in {:.2} s ({:.2} M photons/s; setup {:.2} s) -> {}",
+        history.len(),
+        emitted,
+        loop_s,
+        emitted as f64 / loop_s.max(1e-9) / 1e6,
+        setup_s,
+        args.out.display()
+    );
+    print_stage_summary(&history, args.profile);
+    if let Some(reference) = reference {
+        report_error(&image, &reference, &scene)?;
+    }
+    Ok(())
+}
+
+fn print_stage_summary(history: &[PassStats], full: bool) {
+    if history.is_empty() {
+        return;
+    }
+    let names = ["photon", "lookup", "gather", "update"];
+    let n = history.len() as f64;
+    let mean = |name: &str| history.iter().map(|s| s.stage_ms(name)).sum::<f64>() / n;
+    let wall = history.iter().map(|s| s.wall_ms).sum::<f64>() / n;
+    let parts: Vec<String> = names.iter().map(|k| format!("{k} {:.2}", mean(k))).collect();
+    println!("mean GPU ms per pass: {} | wall {:.2}", parts.join(", "), wall);
+    if full {
+        println!("{:>6} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9}", "pass", "records", "photon", "lookup", "gather", "update", "wall");
+        for s in history {
+            println!(
+                "{:>6} {:>10} {:>9.2} {:>9.2} {:>9.2} {:>9.2} {:>9.2}",
+                s.index,
+                s.records,
+                s.stage_ms("photon"),
+                s.stage_ms("lookup"),
+                s.stage_ms("gather"),
+                s.stage_ms("update"),
+                s.wall_ms
+            );
+        }
+    }
+}
+
+fn report_error(image: &ppm_vk_engine::RgbImage, reference: &Reference, scene: &Scene) -> Result<()> {
+    let whole = compare(image, reference, None, true)?;
+    println!("error vs reference (its own noise removed): RMSE {:.4}, relMSE {:.5}, bias {:+.4}", whole.rmse, whole.rel_mse, whole.mean_bias);
+    if scene.name == "cornell-spheres" {
+        for r in cornell_regions() {
+            let e = compare(image, reference, Some(&r), true)?;
+            println!("  {:<12} RMSE {:.4}, relMSE {:.5}, bias {:+.4}", r.name, e.rmse, e.rel_mse, e.mean_bias);
+        }
+    }
+    Ok(())
+}
