@@ -7,15 +7,17 @@ layout(local_size_x = 64) in;
 #include "types.glsl"
 layout(std430, binding = 0) buffer Stats { HitStats stats[]; };
 layout(std430, binding = 1) buffer Accum { PassAccum accum[]; };
+layout(std430, binding = 2) readonly buffer Order { uint order[]; };
 layout(push_constant) uniform UpdatePush {
-    uint slots;
+    uint count;      // entries of `order` (the non-empty hit-point slots)
     float alpha;     // the fraction of new photons kept, in (0, 1)
 } pc;
 #include "invocation.glsl"
 
 void main() {
-    uint i = invocation_index();
-    if (i >= pc.slots) return;
+    uint t = invocation_index();
+    if (t >= pc.count) return;
+    uint i = order[t];
     PassAccum a = accum[i];
     if (a.m == 0u) return;
     HitStats s = stats[i];

@@ -1,9 +1,11 @@
 // Pass 3, a photon pass: photons leave the lights in proportion to their power, bounce off mirrors and
 // through glass, and leave a record at every diffuse surface they reach, continuing by Russian roulette.
-// Each path keeps its records locally and a workgroup reserves space for all of its records with one
-// atomic: a single global counter hit once per record is the slowest thing on lavapipe.
+// Records are appended to one buffer; the lanes of a subgroup that leave a record at the same step reserve
+// their slots with a single atomic (a global counter hit once per record is slow under contention). A
+// per-thread array of records, flushed once per path, measured slower on lavapipe: it lives in memory.
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_KHR_shader_subgroup_ballot : require
 layout(local_size_x = 64) in;
 
 #include "types.glsl"
@@ -26,15 +28,17 @@ layout(push_constant) uniform PhotonPush {
 // Records one path may leave; a path is ended at this many (ALGORITHM.md: bounded paths).
 const uint MAX_RECORDS = 16u;
 
-shared uint wg_count;
-shared uint wg_base;
+// Appends a record; the active lanes of a subgroup reserve their slots with one atomic.
+void emit(Photon rec) {
+    uvec4 ballot = subgroupBallot(true);
+    uint base = 0u;
+    if (subgroupElect()) base = atomicAdd(photon_count, subgroupBallotBitCount(ballot));
+    uint at = subgroupBroadcastFirst(base) + subgroupBallotExclusiveBitCount(ballot);
+    if (at < params.photon_capacity) photons[at] = rec;
+}
 
 void main() {
     uint i = invocation_index();
-    if (gl_LocalInvocationIndex == 0u) wg_count = 0u;
-    barrier();
-
-    Photon rec[MAX_RECORDS];
     uint n = 0u;
     if (i < pc.count) {
         Rng rng = rng_new(uint64_t(params.seed) | (uint64_t(pc.salt) << 32), pc.first + uint64_t(i));
@@ -60,7 +64,8 @@ void main() {
             if (m.surface == SURFACE_DIFFUSE) {
                 float p = max(m.color.r, max(m.color.g, m.color.b));
                 if (p <= 0.0) break; // a black emitter absorbs
-                rec[n++] = Photon(h.pos, grid_hash(grid_cell(h.pos)), flux, oct_encode(d));
+                emit(Photon(h.pos, grid_hash(grid_cell(h.pos)), flux, oct_encode(d)));
+                n++;
                 if (n == MAX_RECORDS) break;
                 if (rng_float(rng) >= p) break; // Russian roulette: survive with the largest albedo
                 flux *= m.color / p;
@@ -86,14 +91,5 @@ void main() {
                 }
             }
         }
-    }
-
-    uint local = atomicAdd(wg_count, n);
-    barrier();
-    if (gl_LocalInvocationIndex == 0u) wg_base = atomicAdd(photon_count, wg_count);
-    barrier();
-    uint at = wg_base + local;
-    for (uint k = 0u; k < n; k++) {
-        if (at + k < params.photon_capacity) photons[at + k] = rec[k];
     }
 }

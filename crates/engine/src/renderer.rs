@@ -81,6 +81,9 @@ pub struct Renderer {
     hit_points: Buffer,
     stats: Buffer,
     accum: Buffer,
+    /// Non-empty hit-point slots in Morton order of their position (built after the ray pass).
+    order: Buffer,
+    active: u32,
     direct: Buffer,
     image: Buffer,
     photons: Buffer,
@@ -151,6 +154,8 @@ impl Renderer {
             hit_points: storage("hit points", slots * std::mem::size_of::<HitPoint>() as u64)?,
             stats: ctx.buffer_from("hit stats", &stats_init)?,
             accum: storage("pass accumulators", slots * std::mem::size_of::<PassAccum>() as u64)?,
+            order: storage("hit-point order", slots * 4)?,
+            active: 0,
             direct: storage("direct emission", pixels * 16)?,
             image: storage("image", pixels * 16)?,
             photons: storage("photon records", capacity as u64 * record_size)?,
@@ -177,7 +182,7 @@ impl Renderer {
     }
 
     fn hit_buffers(&self) -> HitBuffers<'_> {
-        HitBuffers { hit_points: &self.hit_points, stats: &self.stats, accum: &self.accum }
+        HitBuffers { hit_points: &self.hit_points, stats: &self.stats, accum: &self.accum, order: &self.order }
     }
 
     /// Pass 1: hit points through each pixel's centre.
@@ -195,6 +200,12 @@ impl Renderer {
             Ok(())
         })?;
         self.ray_ms = self.profiler.read()?.iter().map(|s| s.duration_ms).sum();
+        // The gather walks the hit points in Morton order, so neighbouring threads read the same buckets.
+        // Done once per render on the host: the hit points of PPM never move.
+        let hits = self.read_hit_points()?;
+        let order = morton_order(&hits);
+        self.active = order.len() as u32;
+        self.ctx.upload(&self.order, bytemuck::cast_slice(&order))?;
         Ok(())
     }
 
@@ -202,7 +213,7 @@ impl Renderer {
     fn record_batch(&mut self, cmd: vk::CommandBuffer, first: u64, count: u32, log_index: u32) -> Result<()> {
         let ctx = &self.ctx;
         let scene = SceneBuffers { params: &self.params, spheres: &self.spheres, quads: &self.quads, materials: &self.materials };
-        let hits = HitBuffers { hit_points: &self.hit_points, stats: &self.stats, accum: &self.accum };
+        let hits = HitBuffers { hit_points: &self.hit_points, stats: &self.stats, accum: &self.accum, order: &self.order };
         let k = &self.kernels;
         let capacity = self.gpu.params.photon_capacity;
         self.counter.cmd_fill(cmd, 0);
@@ -217,7 +228,7 @@ impl Renderer {
             k.lookup.record(ctx, cmd, &self.params, &self.photons, &self.counter, &self.grid, capacity)
         })?;
         barrier(ctx, cmd);
-        let push = GatherPush { slots: self.gpu.slots(), cone_k: self.settings.cone_k.unwrap_or(0.0) };
+        let push = GatherPush { count: self.active, cone_k: self.settings.cone_k.unwrap_or(0.0) };
         self.profiler.scope(cmd, "gather", || {
             gather::record_gather(&k.gather, cmd, &self.params, &hits, &self.photons, &self.grid, &push)
         })?;
@@ -265,7 +276,7 @@ impl Renderer {
         // The update in its own submission, so an overflowed pass above never touches the statistics.
         let mut stages = stages;
         self.profiler.reset();
-        let push = UpdatePush { slots: self.gpu.slots(), alpha: self.settings.alpha };
+        let push = UpdatePush { count: self.active, alpha: self.settings.alpha };
         let hits = self.hit_buffers();
         let (profiler, k) = (&self.profiler, &self.kernels);
         self.ctx.run(|cmd| profiler.scope(cmd, "update", || gather::record_update(&k.update, cmd, &hits, &push)))?;
@@ -335,6 +346,11 @@ impl Renderer {
         self.ray_ms
     }
 
+    /// Non-empty hit-point slots (the hit points the gather visits).
+    pub fn active_hit_points(&self) -> u32 {
+        self.active
+    }
+
     /// Photons per batch the passes currently use.
     pub fn batch_size(&self) -> u32 {
         self.batch
@@ -381,7 +397,7 @@ impl Renderer {
 
     /// Runs the update kernel alone (after `trace_and_gather`).
     pub fn update_only(&mut self) -> Result<()> {
-        let push = UpdatePush { slots: self.gpu.slots(), alpha: self.settings.alpha };
+        let push = UpdatePush { count: self.active, alpha: self.settings.alpha };
         let hits = self.hit_buffers();
         let k = &self.kernels;
         self.ctx.run(|cmd| gather::record_update(&k.update, cmd, &hits, &push))
@@ -391,4 +407,34 @@ impl Renderer {
     pub fn set_emitted(&mut self, emitted: u64) {
         self.emitted = emitted;
     }
+}
+
+/// Indices of the non-empty slots sorted by the Morton code of their position in a 2^10 grid over the
+/// scene's bounds.
+fn morton_order(hits: &[HitPoint]) -> Vec<u32> {
+    fn spread(v: u32) -> u64 {
+        // Interleave 10 bits with two zero bits between each.
+        let mut x = v as u64 & 0x3ff;
+        x = (x | (x << 16)) & 0x30000ff;
+        x = (x | (x << 8)) & 0x300f00f;
+        x = (x | (x << 4)) & 0x30c30c3;
+        (x | (x << 2)) & 0x9249249
+    }
+    let (mut min, mut max) = (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN));
+    for h in hits.iter().filter(|h| !h.is_empty()) {
+        min = min.min(glam::Vec3::from_array(h.pos));
+        max = max.max(glam::Vec3::from_array(h.pos));
+    }
+    let scale = 1023.0 / (max - min).max_element().max(f32::MIN_POSITIVE);
+    let mut keyed: Vec<(u64, u32)> = hits
+        .iter()
+        .enumerate()
+        .filter(|(_, h)| !h.is_empty())
+        .map(|(i, h)| {
+            let q = ((glam::Vec3::from_array(h.pos) - min) * scale).clamp(glam::Vec3::ZERO, glam::Vec3::splat(1023.0));
+            (spread(q.x as u32) | (spread(q.y as u32) << 1) | (spread(q.z as u32) << 2), i as u32)
+        })
+        .collect();
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, i)| i).collect()
 }

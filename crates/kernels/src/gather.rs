@@ -11,7 +11,8 @@ use crate::push_struct;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GatherPush {
-    pub slots: u32,
+    /// Entries of the hit-point order (the non-empty slots).
+    pub count: u32,
     /// Cone filter constant k >= 1, or 0 for none (eq. 10).
     pub cone_k: f32,
 }
@@ -20,7 +21,7 @@ push_struct!(GatherPush, GATHER);
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct UpdatePush {
-    pub slots: u32,
+    pub count: u32,
     pub alpha: f32,
 }
 push_struct!(UpdatePush, UPDATE);
@@ -30,6 +31,8 @@ pub struct HitBuffers<'a> {
     pub hit_points: &'a Buffer,
     pub stats: &'a Buffer,
     pub accum: &'a Buffer,
+    /// Indices of the non-empty slots, in the order threads take them (spatially coherent).
+    pub order: &'a Buffer,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -44,12 +47,12 @@ pub fn record_gather(
 ) -> Result<()> {
     k.dispatch(
         cmd,
-        &[params, hits.hit_points, hits.stats, hits.accum, photons, &grid.sorted, &grid.cell_start],
+        &[params, hits.hit_points, hits.stats, hits.accum, photons, &grid.sorted, &grid.cell_start, hits.order],
         bytemuck::bytes_of(push),
-        push.slots as u64,
+        push.count as u64,
     )
 }
 
 pub fn record_update(k: &ComputePipeline, cmd: vk::CommandBuffer, hits: &HitBuffers, push: &UpdatePush) -> Result<()> {
-    k.dispatch(cmd, &[hits.stats, hits.accum], bytemuck::bytes_of(push), push.slots as u64)
+    k.dispatch(cmd, &[hits.stats, hits.accum, hits.order], bytemuck::bytes_of(push), push.count as u64)
 }

@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# Checks (and on Debian/Ubuntu installs) what building and running ppm-vk needs: a Rust toolchain, a C++
+# toolchain, the Vulkan loader, a Vulkan driver (lavapipe when there is no GPU), shaderc/glslang to compile
+# the kernels, and the validation layer the tests run under. Sourced by scripts/ppm-vk and scripts/test;
+# run it alone to check a machine. Exits non-zero with the exact command to run where it cannot fix things.
+set -euo pipefail
+
+say() { printf 'setup: %s\n' "$*" >&2; }
+has_vulkan_driver() { compgen -G '/usr/share/vulkan/icd.d/*.json' >/dev/null || compgen -G '/etc/vulkan/icd.d/*.json' >/dev/null; }
+
+# Debian package -> what it provides.
+DEBIAN_PACKAGES=(
+  "libvulkan1:the Vulkan loader"
+  "libvulkan-dev:Vulkan headers"
+  "mesa-vulkan-drivers:lavapipe, the CPU Vulkan driver (and Mesa's GPU drivers)"
+  "vulkan-validationlayers:the validation layer the tests run under"
+  "libshaderc-dev:shaderc, the GLSL compiler the kernels are built with"
+  "glslang-dev:glslang's static libraries shaderc links against"
+  "spirv-tools:SPIRV-Tools' static libraries"
+  "g++:a C++ toolchain (shaderc is C++)"
+  "pkg-config:library lookup"
+)
+
+if ! command -v cargo >/dev/null 2>&1; then
+  if [ -x "$HOME/.cargo/bin/cargo" ]; then
+    export PATH="$HOME/.cargo/bin:$PATH"
+  else
+    say "no Rust toolchain (cargo) found. Install one with rustup:"
+    say "  curl --proto '=https' --tlsv1.2 -sSf https://sh.rustup.rs | sh -s -- -y && . \"\$HOME/.cargo/env\""
+    exit 1
+  fi
+fi
+
+if command -v dpkg-query >/dev/null 2>&1; then
+  missing=()
+  for entry in "${DEBIAN_PACKAGES[@]}"; do
+    pkg=${entry%%:*}
+    if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
+      missing+=("$pkg")
+    fi
+  done
+  if [ ${#missing[@]} -gt 0 ]; then
+    say "installing: ${missing[*]}"
+    if [ "$(id -u)" -eq 0 ]; then
+      SUDO=""
+    elif command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
+      SUDO="sudo"
+    else
+      say "cannot install packages without root. Run:"
+      say "  sudo apt-get update && sudo apt-get install -y ${missing[*]}"
+      exit 1
+    fi
+    export DEBIAN_FRONTEND=noninteractive
+    if ! { $SUDO apt-get update -qq && $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null; }; then
+      say "apt-get could not install ${missing[*]}; install them by hand and rerun"
+      exit 1
+    fi
+  fi
+else
+  # Not Debian: check for the files themselves and say what to do.
+  ok=1
+  ldconfig -p 2>/dev/null | grep -q 'libvulkan.so.1' || { say "no Vulkan loader (libvulkan.so.1): install your distribution's vulkan-loader"; ok=0; }
+  has_vulkan_driver || { say "no Vulkan driver: install Mesa's Vulkan drivers (lavapipe) or your GPU's"; ok=0; }
+  say "not a Debian system: shaderc is linked through the override in .cargo/config.toml, written for Debian's"
+  say "static libraries; elsewhere remove that block and set SHADERC_LIB_DIR (see README, 'Other distributions')"
+  [ $ok -eq 1 ] || exit 1
+fi
+
+# A driver must actually be there: the loader alone renders nothing.
+if ! has_vulkan_driver; then
+  say "no Vulkan driver manifest in /usr/share/vulkan/icd.d: install mesa-vulkan-drivers"
+  exit 1
+fi
+# lavapipe and the loader look for a runtime directory; give them one where the session has none.
+if [ -z "${XDG_RUNTIME_DIR:-}" ] || [ ! -d "${XDG_RUNTIME_DIR}" ]; then
+  export XDG_RUNTIME_DIR="${TMPDIR:-/tmp}"
+fi

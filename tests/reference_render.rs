@@ -1,0 +1,138 @@
+//! cornell-spheres rendered end to end at 128 x 128 and scored against the independent Mitsuba 3 reference
+//! (/work/shared/reference, 512 x 512, 32768 spp; block-averaged by 4 for this size, exact for its box
+//! filter). The same checks must reject a deliberately broken image.
+
+mod common;
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+use common::*;
+use ppm_vk_engine::metrics::{self, Reference};
+use ppm_vk_engine::{Renderer, RgbImage, Settings};
+
+const RES: u32 = 128;
+const PHOTONS: u32 = 200_000;
+const PASSES: u32 = 12;
+
+// Measured (lavapipe, this configuration: 128x128, 12 passes of 200k photons, alpha 0.7), seeds 0-3:
+//   mean radiance vs the reference's: +0.03% .. +0.10% per channel
+//   back_wall relMSE 0.00117, 0.00130, 0.00153, 0.00119 (20 passes: 0.00085)
+//   caustic   relMSE 0.0586,  0.0636,  0.0654,  0.0561  (20 passes: 0.0464)
+// (relMSE with the reference's own noise removed; the caustic is noise-dominated at this photon count:
+// its mean bias is under 0.01.)
+/// Mean radiance per channel must be within this of the reference's: 20x the measured deviation, yet a
+/// 10% error in the indirect light alone (about 5% of the mean) fails it.
+const MEAN_TOL: f64 = 0.02;
+/// ~3x the worst measured back_wall relMSE; the same image with its photon estimate 10% low scores 0.0116.
+const BACK_WALL_REL_MSE: f64 = 0.005;
+/// ~2x the worst measured caustic relMSE (its noise varies more from seed to seed, and it is the region a
+/// broken glass or photon path shows up in first).
+const CAUSTIC_REL_MSE: f64 = 0.12;
+
+fn reference() -> &'static Reference {
+    static REF: OnceLock<Reference> = OnceLock::new();
+    REF.get_or_init(|| {
+        let path = Path::new(CORNELL_REFERENCE);
+        assert!(path.exists(), "required fixture {} is missing", path.display());
+        Reference::load(path).unwrap()
+    })
+}
+
+/// What the checks measured, for the log.
+#[derive(Debug)]
+struct Scores {
+    mean: [f64; 3],
+    ref_mean: [f64; 3],
+    back_wall: metrics::ErrorStats,
+    caustic: metrics::ErrorStats,
+}
+
+fn score(image: &RgbImage) -> Result<Scores, String> {
+    let refr = reference();
+    if image.count_non_finite() != 0 {
+        return Err(format!("{} non-finite pixel components", image.count_non_finite()));
+    }
+    let regions = metrics::cornell_regions();
+    let region = |name: &str| regions.iter().find(|r| r.name == name).cloned().ok_or(format!("no region {name}"));
+    let cmp = |name: &str| -> Result<metrics::ErrorStats, String> {
+        metrics::compare(image, refr, Some(&region(name)?), true).map_err(|e| format!("{e:#}"))
+    };
+    Ok(Scores { mean: image.mean(), ref_mean: refr.image.mean(), back_wall: cmp("back_wall")?, caustic: cmp("caustic")? })
+}
+
+/// The checks every good render must pass: mean per channel within 2% of the reference's mean, and relMSE
+/// on the flat back wall and around the glass sphere's caustic below the ceilings above.
+fn check_against_reference(image: &RgbImage) -> Result<(), String> {
+    let s = score(image)?;
+    println!("{s:#?}");
+    let mut errors = Vec::new();
+    for c in 0..3 {
+        let rel = (s.mean[c] - s.ref_mean[c]) / s.ref_mean[c];
+        if rel.abs() > MEAN_TOL {
+            errors.push(format!("channel {c}: mean {:.4} vs reference {:.4} ({:+.2}%)", s.mean[c], s.ref_mean[c], 100.0 * rel));
+        }
+    }
+    if !(s.back_wall.rel_mse <= BACK_WALL_REL_MSE) {
+        errors.push(format!("back_wall relMSE {:.5} > {BACK_WALL_REL_MSE}", s.back_wall.rel_mse));
+    }
+    if !(s.caustic.rel_mse <= CAUSTIC_REL_MSE) {
+        errors.push(format!("caustic relMSE {:.5} > {CAUSTIC_REL_MSE}", s.caustic.rel_mse));
+    }
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(errors.join("; "))
+    }
+}
+
+/// One render shared by both tests (the expensive part), with its context's validation messages.
+fn render() -> &'static (RgbImage, Vec<String>) {
+    static IMAGE: OnceLock<(RgbImage, Vec<String>)> = OnceLock::new();
+    IMAGE.get_or_init(|| {
+        let ctx = ctx();
+        let scene = cornell(RES, RES);
+        let mut r = Renderer::new(&ctx, &scene, Settings { photons_per_pass: PHOTONS, ..Settings::default() }).unwrap();
+        let t = std::time::Instant::now();
+        for _ in 0..PASSES {
+            r.pass().unwrap();
+        }
+        let image = r.image().unwrap();
+        println!("rendered {RES}x{RES}, {PASSES} passes of {PHOTONS} photons in {:.1} s", t.elapsed().as_secs_f64());
+        drop(r);
+        (image, ctx.validation_messages())
+    })
+}
+
+#[test]
+fn cornell_matches_mitsuba_reference() {
+    let (image, messages) = render();
+    assert!(messages.is_empty(), "validation messages:\n{}", messages.join("\n"));
+    if let Err(e) = check_against_reference(image) {
+        panic!("the render does not match the reference: {e}");
+    }
+}
+
+/// A kernel that applied the BRDF's 1/pi twice would scale the image by 1/pi: the checks must see it.
+#[test]
+fn checks_reject_a_broken_render() {
+    let (image, _) = render();
+    let mut broken = image.clone();
+    for p in &mut broken.pixels {
+        *p = p.map(|x| x / std::f32::consts::PI);
+    }
+    let err = check_against_reference(&broken).expect_err("an image scaled by 1/pi passed the reference checks");
+    println!("rejected as expected: {err}");
+    assert!(err.contains("mean"), "{err}");
+
+    // A subtler breakage: only the photon (indirect) estimate off by 10%, i.e. the image minus 10% of
+    // what the camera does not see directly. Approximate it by scaling the non-light pixels by 0.9.
+    let mut dim = image.clone();
+    for p in &mut dim.pixels {
+        if p.iter().all(|&x| x < 10.0) {
+            *p = p.map(|x| x * 0.9);
+        }
+    }
+    let err = check_against_reference(&dim).expect_err("an image with the indirect estimate 10% low passed");
+    println!("rejected as expected: {err}");
+}
