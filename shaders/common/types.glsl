@@ -92,7 +92,7 @@ struct HitStats {
     double tau_r;    // accumulated un-normalised flux tau (times the cone filter's weights when on)
     double tau_g;
     double tau_b;
-    double pad0;
+    double probe;    // lambda / r^2 from the probe pass (eq. 7), or 0 without probing
 };
 
 // What this pass's photons gave a hit point: M and tau_M, flux in 32.32 fixed point so the sum is exact

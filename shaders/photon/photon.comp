@@ -37,58 +37,79 @@ void emit(Photon rec) {
     if (at < params.photon_capacity) photons[at] = rec;
 }
 
-void main() {
-    uint i = invocation_index();
-    uint n = 0u;
-    if (i < pc.count) {
-        Rng rng = rng_new(uint64_t(params.seed) | (uint64_t(pc.salt) << 32), pc.first + uint64_t(i));
-        float u = rng_float(rng);
-        uint li = 0u;
-        while (li + 1u < params.num_lights && u >= lights[li].cdf) li++;
-        Light light = lights[li];
-        Quad q = quads[light.quad];
-        float a = rng_float(rng);
-        float b = rng_float(rng);
-        vec3 o = q.origin + a * q.edge_u + b * q.edge_v + params.eps * q.normal;
-        float u1 = rng_float(rng);
-        float u2 = rng_float(rng);
-        vec3 d = cosine_direction(q.normal, u1, u2);
-        vec3 flux = light.power / light.prob;
+// Photons per thread. A thread starts its next photon as soon as a path ends ("path regeneration"), so
+// the lanes of a subgroup stay busy instead of waiting for the longest of their paths.
+const uint PER_THREAD = 8u;
 
-        for (uint depth = 0u; depth < params.max_photon_depth; depth++) {
-            Hit h;
-            if (!intersect_scene(o, d, 0.0, 1e30, h)) break;
-            Material m = materials[h.material];
-            bool front = dot(d, h.normal) < 0.0;
-            vec3 nf = front ? h.normal : -h.normal;
-            if (m.surface == SURFACE_DIFFUSE) {
-                float p = max(m.color.r, max(m.color.g, m.color.b));
-                if (p <= 0.0) break; // a black emitter absorbs
-                emit(Photon(h.pos, grid_hash(grid_cell(h.pos)), flux, oct_encode(d)));
-                n++;
-                if (n == MAX_RECORDS) break;
-                if (rng_float(rng) >= p) break; // Russian roulette: survive with the largest albedo
-                flux *= m.color / p;
-                float v1 = rng_float(rng);
-                float v2 = rng_float(rng);
-                d = cosine_direction(nf, v1, v2);
-                o = h.pos + params.eps * nf;
-            } else if (m.surface == SURFACE_MIRROR) {
-                flux *= m.color;
+void main() {
+    uint t = invocation_index();
+    uint threads = (pc.count + PER_THREAD - 1u) / PER_THREAD;
+    if (t >= threads) return;
+    uint next = 0u;          // photons of this thread started so far
+    bool alive = false;
+    Rng rng;
+    vec3 o, d, flux;
+    uint depth = 0u;
+    uint n = 0u;             // records of the current path
+    for (;;) {
+        if (!alive) {
+            // Photon t + k * threads: consecutive threads start consecutive photons.
+            uint i = t + next * threads;
+            if (next == PER_THREAD || i >= pc.count) break;
+            next++;
+            rng = rng_new(uint64_t(params.seed) | (uint64_t(pc.salt) << 32), pc.first + uint64_t(i));
+            float u = rng_float(rng);
+            uint li = 0u;
+            while (li + 1u < params.num_lights && u >= lights[li].cdf) li++;
+            Light light = lights[li];
+            Quad q = quads[light.quad];
+            float a = rng_float(rng);
+            float b = rng_float(rng);
+            o = q.origin + a * q.edge_u + b * q.edge_v + params.eps * q.normal;
+            float u1 = rng_float(rng);
+            float u2 = rng_float(rng);
+            d = cosine_direction(q.normal, u1, u2);
+            flux = light.power / light.prob;
+            depth = 0u;
+            n = 0u;
+            alive = true;
+        }
+        Hit h;
+        if (depth >= params.max_photon_depth || !intersect_scene(o, d, 0.0, 1e30, h)) {
+            alive = false;
+            continue;
+        }
+        depth++;
+        Material m = materials[h.material];
+        bool front = dot(d, h.normal) < 0.0;
+        vec3 nf = front ? h.normal : -h.normal;
+        if (m.surface == SURFACE_DIFFUSE) {
+            float p = max(m.color.r, max(m.color.g, m.color.b));
+            if (p <= 0.0) { alive = false; continue; } // a black emitter absorbs
+            emit(Photon(h.pos, grid_hash(grid_cell(h.pos)), flux, oct_encode(d)));
+            n++;
+            // Russian roulette: survive with the largest albedo.
+            if (n == MAX_RECORDS || rng_float(rng) >= p) { alive = false; continue; }
+            flux *= m.color / p;
+            float v1 = rng_float(rng);
+            float v2 = rng_float(rng);
+            d = cosine_direction(nf, v1, v2);
+            o = h.pos + params.eps * nf;
+        } else if (m.surface == SURFACE_MIRROR) {
+            flux *= m.color;
+            d = reflect(d, nf);
+            o = h.pos + params.eps * nf;
+        } else {
+            float eta = front ? 1.0 / m.ior : m.ior;
+            float cos_i = -dot(d, nf);
+            float cos_t;
+            float f = fresnel_dielectric(cos_i, eta, cos_t);
+            if (rng_float(rng) < f) {
                 d = reflect(d, nf);
                 o = h.pos + params.eps * nf;
             } else {
-                float eta = front ? 1.0 / m.ior : m.ior;
-                float cos_i = -dot(d, nf);
-                float cos_t;
-                float f = fresnel_dielectric(cos_i, eta, cos_t);
-                if (rng_float(rng) < f) {
-                    d = reflect(d, nf);
-                    o = h.pos + params.eps * nf;
-                } else {
-                    d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
-                    o = h.pos - params.eps * nf;
-                }
+                d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
+                o = h.pos - params.eps * nf;
             }
         }
     }

@@ -4,6 +4,7 @@
 use anyhow::{bail, Result};
 use glam::Vec3;
 use ppm_vk_kernels::layout::{self, Light, Material, Quad, RenderParams, Sphere};
+use ppm_vk_kernels::lookup::SCAN_BLOCK;
 
 use crate::scene::{Scene, Surface};
 use crate::settings::Settings;
@@ -35,8 +36,8 @@ pub fn default_radius(scene: &Scene) -> f32 {
 }
 
 impl GpuScene {
-    /// `photon_capacity` and `grid_cells` size the photon batch buffers (see `Renderer`).
-    pub fn new(scene: &Scene, settings: &Settings, photon_capacity: u32, grid_cells: u32) -> Result<GpuScene> {
+    /// `photon_capacity` sizes the photon batch buffers (see `Renderer`).
+    pub fn new(scene: &Scene, settings: &Settings, photon_capacity: u32) -> Result<GpuScene> {
         let materials: Vec<Material> = scene
             .materials
             .iter()
@@ -109,7 +110,8 @@ impl GpuScene {
             bail!("initial radius must be positive and finite, got {initial_radius}");
         }
         // Cells at least twice the largest radius a hit point can ever have: 2x2x2 cells per lookup.
-        let cell_size = 2.0 * initial_radius * settings.radius_growth_bound();
+        let cell_size = 2.0 * initial_radius * settings.radius_growth_bound(initial_radius);
+        let grid_cells = grid_buckets(scene, cell_size, photon_capacity);
         let cam = &scene.camera;
         let forward = (cam.look_at - cam.eye).normalize();
         let right = forward.cross(cam.up).normalize();
@@ -148,4 +150,16 @@ impl GpuScene {
     pub fn slots(&self) -> u32 {
         self.pixels() * self.params.hit_slots
     }
+}
+
+/// Buckets of the photon grid's hash table. Photons lie on surfaces, so the cells that ever hold one
+/// are about (surface area / cell^2) times a small factor for cells a surface cuts at a slant; two
+/// buckets per such cell keeps collisions rare while the table stays small enough to be cached (a table
+/// sized by the photon count was 40x larger and its scan and atomics cost more than its collisions saved).
+pub fn grid_buckets(scene: &Scene, cell_size: f32, photon_capacity: u32) -> u32 {
+    let area: f64 = scene.quads.iter().map(|q| q.area() as f64).sum::<f64>()
+        + scene.spheres.iter().map(|s| 4.0 * std::f64::consts::PI * (s.radius as f64).powi(2)).sum::<f64>();
+    let cells = 1.5 * area / (cell_size as f64).powi(2);
+    let wanted = (2.0 * cells).min(2.0 * photon_capacity as f64).max(1.0);
+    (wanted as u64).next_power_of_two().clamp(SCAN_BLOCK as u64, SCAN_BLOCK as u64 * 65536) as u32
 }

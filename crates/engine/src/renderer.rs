@@ -7,8 +7,9 @@ use anyhow::{bail, Context as _, Result};
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
 use ppm_vk_kernels::gather::{self, GatherPush, HitBuffers, UpdatePush};
 use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon};
-use ppm_vk_kernels::lookup::{Grid, Lookup, SCAN_BLOCK};
-use ppm_vk_kernels::photon::{self, PhotonPush, MAX_RECORDS, SALT_EYE, SALT_PHOTON};
+use ppm_vk_kernels::lookup::{Grid, Lookup};
+use ppm_vk_kernels::photon::{self, PhotonPush, MAX_RECORDS, SALT_EYE, SALT_PHOTON, SALT_PROBE};
+use ppm_vk_kernels::probe::{self, ProbePush, MODE_PAPER, MODE_SCALE_FREE};
 use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers};
 use ppm_vk_kernels::resolve::{self, ResolvePush};
 use ppm_vk_kernels::{pipeline, reflected};
@@ -16,7 +17,7 @@ use ppm_vk_kernels::{pipeline, reflected};
 use crate::gpu_scene::GpuScene;
 use crate::image_io::RgbImage;
 use crate::scene::Scene;
-use crate::settings::Settings;
+use crate::settings::{ProbeMode, Settings};
 
 /// What one photon pass did and what it cost.
 #[derive(Clone, Debug)]
@@ -46,6 +47,7 @@ impl PassStats {
 
 struct Kernels {
     ray: ComputePipeline,
+    probe: ComputePipeline,
     photon: ComputePipeline,
     lookup: Lookup,
     gather: ComputePipeline,
@@ -97,6 +99,49 @@ pub struct Renderer {
     passes: u64,
     emitted: u64,
     ray_ms: f64,
+    probe_report: Option<ProbeReport>,
+}
+
+/// What the batches of photons feed their grid to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum GridUse {
+    Gather,
+    Probe,
+}
+
+/// What the probe pass did (eq. 7-9).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ProbeReport {
+    pub photons: u32,
+    pub hit_points: u32,
+    /// Hit points whose radius the probe enlarged.
+    pub enlarged: u32,
+    /// Hit points no probe photon reached (counted as sparse: lambda = r^2).
+    pub empty: u32,
+    /// lambda / r^2 over the hit points: min, quartiles, max.
+    pub lambda_ratio_quantiles: [f64; 5],
+    /// Mean starting radius over the hit points after probing, relative to r of eq. 8.
+    pub mean_radius_ratio: f64,
+    pub gpu_ms: f64,
+}
+
+impl ProbeReport {
+    fn new(stats: &[HitStats], hits: &[HitPoint], r: f32, photons: u32, gpu_ms: f64) -> ProbeReport {
+        let r2 = (r as f64).powi(2);
+        let live: Vec<&HitStats> = stats.iter().zip(hits).filter(|(_, h)| !h.is_empty()).map(|(s, _)| s).collect();
+        let mut ratios: Vec<f64> = live.iter().map(|s| s.probe).collect();
+        ratios.sort_by(|a, b| a.total_cmp(b));
+        let q = |f: f64| if ratios.is_empty() { 0.0 } else { ratios[((ratios.len() - 1) as f64 * f).round() as usize] };
+        ProbeReport {
+            photons,
+            hit_points: live.len() as u32,
+            enlarged: live.iter().filter(|s| s.r2 > r2 * (1.0 + 1e-9)).count() as u32,
+            empty: live.iter().filter(|s| s.probe >= 1.0).count() as u32,
+            lambda_ratio_quantiles: [q(0.0), q(0.25), q(0.5), q(0.75), q(1.0)],
+            mean_radius_ratio: live.iter().map(|s| (s.r2 / r2).sqrt()).sum::<f64>() / live.len().max(1) as f64,
+            gpu_ms,
+        }
+    }
 }
 
 /// Largest batch log (batches per pass).
@@ -113,8 +158,8 @@ impl Renderer {
         let wanted = settings.photons_per_pass as u64 * 4;
         let capacity = wanted.min(max_range / record_size).min(u32::MAX as u64 / 2) as u32;
         let capacity = capacity.max(MAX_RECORDS * 64);
-        let cells = (capacity as u64).next_power_of_two().clamp(SCAN_BLOCK as u64, SCAN_BLOCK as u64 * 65536) as u32;
-        let gpu = GpuScene::new(scene, &settings, capacity, cells)?;
+        let gpu = GpuScene::new(scene, &settings, capacity)?;
+        let cells = gpu.params.grid_mask + 1;
         let slots = gpu.slots() as u64;
         let pixels = gpu.pixels() as u64;
         let need = |what: &str, bytes: u64| -> Result<()> {
@@ -136,6 +181,7 @@ impl Renderer {
 
         let kernels = Kernels {
             ray: pipeline(ctx, &reflected::RAY)?,
+            probe: pipeline(ctx, &reflected::PROBE)?,
             photon: pipeline(ctx, &reflected::PHOTON)?,
             lookup: Lookup::new(ctx)?,
             gather: pipeline(ctx, &reflected::GATHER)?,
@@ -146,6 +192,7 @@ impl Renderer {
         let r2 = (gpu.initial_radius as f64).powi(2);
         let stats_init = vec![HitStats { r2, ..Default::default() }; slots as usize];
         let mut r = Renderer {
+            probe_report: None,
             params: ctx.buffer_from("params", &[gpu.params])?,
             spheres: ctx.buffer_from("spheres", &gpu.spheres)?,
             quads: ctx.buffer_from("quads", &gpu.quads)?,
@@ -174,6 +221,9 @@ impl Renderer {
         };
         drop(stats_init);
         r.ray_pass()?;
+        if r.settings.probe != ProbeMode::Off {
+            r.probe_pass()?;
+        }
         Ok(r)
     }
 
@@ -209,16 +259,21 @@ impl Renderer {
         Ok(())
     }
 
-    /// Records photon tracing, the grid build and the gather for one batch.
-    fn record_batch(&mut self, cmd: vk::CommandBuffer, first: u64, count: u32, log_index: u32) -> Result<()> {
+    /// Records photon tracing, the grid build and what uses the grid (the gather, or the probe's first
+    /// phase) for one batch of photons `first..first+count` (global indices).
+    fn record_batch(&self, cmd: vk::CommandBuffer, first: u64, count: u32, log_index: u32, use_: GridUse) -> Result<()> {
         let ctx = &self.ctx;
         let scene = SceneBuffers { params: &self.params, spheres: &self.spheres, quads: &self.quads, materials: &self.materials };
-        let hits = HitBuffers { hit_points: &self.hit_points, stats: &self.stats, accum: &self.accum, order: &self.order };
+        let hits = self.hit_buffers();
         let k = &self.kernels;
         let capacity = self.gpu.params.photon_capacity;
         self.counter.cmd_fill(cmd, 0);
         barrier(ctx, cmd);
-        let push = PhotonPush { first, count, salt: SALT_PHOTON };
+        let salt = match use_ {
+            GridUse::Gather => SALT_PHOTON,
+            GridUse::Probe => SALT_PROBE,
+        };
+        let push = PhotonPush { first, count, salt };
         self.profiler.scope(cmd, "photon", || {
             photon::record(&k.photon, cmd, &scene, &self.lights, &self.photons, &self.counter, &push)
         })?;
@@ -228,41 +283,51 @@ impl Renderer {
             k.lookup.record(ctx, cmd, &self.params, &self.photons, &self.counter, &self.grid, capacity)
         })?;
         barrier(ctx, cmd);
-        let push = GatherPush { count: self.active, cone_k: self.settings.cone_k.unwrap_or(0.0) };
-        self.profiler.scope(cmd, "gather", || {
-            gather::record_gather(&k.gather, cmd, &self.params, &hits, &self.photons, &self.grid, &push)
-        })?;
+        match use_ {
+            GridUse::Gather => {
+                let push = GatherPush { count: self.active, cone_k: self.settings.cone_k.unwrap_or(0.0) };
+                self.profiler.scope(cmd, "gather", || gather::record_gather(&k.gather, cmd, &self.params, &hits, &self.grid, &push))?;
+            }
+            GridUse::Probe => {
+                let push = self.probe_push(0);
+                self.profiler.scope(cmd, "probe", || probe::record(&k.probe, cmd, &self.params, &hits, &self.grid, &push))?;
+            }
+        }
         barrier(ctx, cmd);
         Ok(())
     }
 
-    /// One photon pass: `photons_per_pass` photons traced and gathered, then the progressive update.
-    pub fn pass(&mut self) -> Result<PassStats> {
-        let start = Instant::now();
-        let total = self.settings.photons_per_pass;
+    fn probe_push(&self, phase: u32) -> ProbePush {
+        let mode = match self.settings.probe {
+            ProbeMode::Paper => MODE_PAPER,
+            _ => MODE_SCALE_FREE,
+        };
+        ProbePush { count: self.active, phase, mode, beta_frac: self.settings.probe_beta }
+    }
+
+    /// Traces `total` photons from global index `first` and feeds each batch's grid to `use_`, in as few
+    /// batches as fit the record buffer. On overflow, clears the accumulators and goes again in smaller
+    /// batches: the same photons, since streams are by global index. Returns the GPU stages, the records
+    /// and the batch count.
+    fn run_batches(&mut self, first: u64, total: u32, use_: GridUse) -> Result<(Vec<ScopeTiming>, u64, u32)> {
         let capacity = self.gpu.params.photon_capacity as u64;
-        // Trace and gather in as few batches as fit the record buffer; on overflow, clear this pass's
-        // accumulators and go again in smaller batches (the same photons: streams are by global index).
-        let (stages, records, batches) = loop {
+        loop {
             let batches = total.div_ceil(self.batch);
             if batches > MAX_BATCHES {
                 bail!("a photon pass needs more than {MAX_BATCHES} batches: the scene leaves too many records per photon");
             }
             self.profiler.reset();
-            let emitted = self.emitted;
             let batch = self.batch;
-            let ctx = self.ctx.clone();
-            ctx.run(|cmd| {
+            self.ctx.run(|cmd| {
                 for b in 0..batches {
-                    let first = b * batch;
-                    let count = batch.min(total - first);
-                    self.record_batch(cmd, emitted + first as u64, count, b)?;
+                    let start = b * batch;
+                    self.record_batch(cmd, first + start as u64, batch.min(total - start), b, use_)?;
                 }
                 Ok(())
             })?;
             let log: Vec<u32> = self.ctx.download_prefix(&self.batch_log, batches as usize)?;
             if log.iter().all(|&n| n as u64 <= capacity) {
-                break (self.profiler.read()?, log.iter().map(|&n| n as u64).sum::<u64>(), batches);
+                return Ok((self.profiler.read()?, log.iter().map(|&n| n as u64).sum(), batches));
             }
             if self.batch == 1 {
                 bail!("one photon left more records than the record buffer holds ({capacity})");
@@ -272,9 +337,30 @@ impl Renderer {
                 self.accum.cmd_fill(cmd, 0);
                 Ok(())
             })?;
-        };
-        // The update in its own submission, so an overflowed pass above never touches the statistics.
-        let mut stages = stages;
+        }
+    }
+
+    /// Pass 2, once: photon probing sets each hit point's starting radius (eq. 7-9).
+    fn probe_pass(&mut self) -> Result<()> {
+        let photons = self.settings.probe_photons.unwrap_or(self.settings.photons_per_pass);
+        let (mut stages, _, _) = self.run_batches(0, photons, GridUse::Probe)?;
+        self.profiler.reset();
+        let push = self.probe_push(1);
+        let hits = self.hit_buffers();
+        let (profiler, k, params, grid) = (&self.profiler, &self.kernels, &self.params, &self.grid);
+        self.ctx.run(|cmd| profiler.scope(cmd, "probe", || probe::record(&k.probe, cmd, params, &hits, grid, &push)))?;
+        stages.extend(self.profiler.read()?);
+        let gpu_ms = stages.iter().map(|s| s.duration_ms).sum();
+        self.probe_report = Some(ProbeReport::new(&self.read_stats()?, &self.read_hit_points()?, self.gpu.initial_radius, photons, gpu_ms));
+        Ok(())
+    }
+
+    /// One photon pass: `photons_per_pass` photons traced and gathered, then the progressive update.
+    pub fn pass(&mut self) -> Result<PassStats> {
+        let start = Instant::now();
+        let total = self.settings.photons_per_pass;
+        let (mut stages, records, batches) = self.run_batches(self.emitted, total, GridUse::Gather)?;
+        // The update in its own submission, so an overflowed try above never touches the statistics.
         self.profiler.reset();
         let push = UpdatePush { count: self.active, alpha: self.settings.alpha };
         let hits = self.hit_buffers();
@@ -341,6 +427,11 @@ impl Renderer {
         self.emitted
     }
 
+    /// What the probe pass did, if it ran.
+    pub fn probe_report(&self) -> Option<&ProbeReport> {
+        self.probe_report.as_ref()
+    }
+
     /// GPU time of the ray pass, in milliseconds.
     pub fn ray_ms(&self) -> f64 {
         self.ray_ms
@@ -386,8 +477,7 @@ impl Renderer {
     /// update, and returns the batch's records (the pass accumulators keep the gathered sums).
     pub fn trace_and_gather(&mut self, first: u64, count: u32) -> Result<Vec<Photon>> {
         self.profiler.reset();
-        let ctx = self.ctx.clone();
-        ctx.run(|cmd| self.record_batch(cmd, first, count, 0))?;
+        self.ctx.run(|cmd| self.record_batch(cmd, first, count, 0, GridUse::Gather))?;
         let n: Vec<u32> = self.ctx.download_prefix(&self.counter, 1)?;
         if n[0] > self.gpu.params.photon_capacity {
             bail!("trace_and_gather: {} records overflow the capacity {}", n[0], self.gpu.params.photon_capacity);

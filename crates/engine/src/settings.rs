@@ -2,6 +2,18 @@
 
 use anyhow::{bail, Result};
 
+/// How the probe pass (eq. 7-9) sets the starting radii.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ProbeMode {
+    /// No probe pass: every hit point starts at r (eq. 8).
+    Off,
+    /// Eq. 9 to the letter: r' = r (1 + lambda / r) where lambda / r > beta.
+    Paper,
+    /// r' = r (1 + lambda / r^2): the same rule without eq. 9's dependence on the scene's units.
+    ScaleFree,
+}
+
 /// How to render. `Settings::default()` is the paper's setting for plain PPM.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Settings {
@@ -15,6 +27,12 @@ pub struct Settings {
     pub initial_radius: Option<f32>,
     /// Cone filter constant k >= 1 (eq. 10-14); `None`: no filter.
     pub cone_k: Option<f32>,
+    /// The probe pass (eq. 7-9).
+    pub probe: ProbeMode,
+    /// beta of eq. 9 as a fraction of r (the paper's best: 1/5).
+    pub probe_beta: f32,
+    /// Photons the probe pass emits; `None`: `photons_per_pass`, as in the paper.
+    pub probe_photons: Option<u32>,
     /// Hit points per pixel: glass splits an eye path into both Fresnel branches up to this many leaves.
     pub hit_slots: u32,
     /// Specular bounces an eye path may take before it is dropped.
@@ -31,6 +49,9 @@ impl Default for Settings {
             seed: 0,
             initial_radius: None,
             cone_k: None,
+            probe: ProbeMode::Off,
+            probe_beta: 0.2,
+            probe_photons: None,
             hit_slots: 4,
             max_eye_depth: 16,
             max_photon_depth: 64,
@@ -56,6 +77,12 @@ impl Settings {
                 bail!("initial radius must be positive and finite, got {r}");
             }
         }
+        if !(self.probe_beta.is_finite() && self.probe_beta > 0.0 && self.probe_beta < 1.0) {
+            bail!("probe beta must be a fraction of r in (0, 1), got {}", self.probe_beta);
+        }
+        if self.probe_photons == Some(0) {
+            bail!("probe photons must be at least 1");
+        }
         if !(1..=8).contains(&self.hit_slots) {
             bail!("hit slots per pixel must be in 1..=8, got {}", self.hit_slots);
         }
@@ -65,9 +92,14 @@ impl Settings {
         Ok(())
     }
 
-    /// The most a hit point's radius can grow above its start (1: radii only shrink in plain PPM).
-    pub fn radius_growth_bound(&self) -> f32 {
-        1.0
+    /// The most a hit point's radius can grow above its start `r` (radii only shrink in plain PPM; the probe
+    /// can enlarge them once, by at most 1 + lambda / r <= 1 + r (paper, lambda <= r^2) or 2 (scale-free)).
+    pub fn radius_growth_bound(&self, r: f32) -> f32 {
+        match self.probe {
+            ProbeMode::Off => 1.0,
+            ProbeMode::Paper => 1.0 + r,
+            ProbeMode::ScaleFree => 2.0,
+        }
     }
 
     /// The cone filter's normalisation 1 - 2/(3k) (eq. 11), or 1 without it.

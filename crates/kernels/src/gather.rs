@@ -41,13 +41,12 @@ pub fn record_gather(
     cmd: vk::CommandBuffer,
     params: &Buffer,
     hits: &HitBuffers,
-    photons: &Buffer,
     grid: &Grid,
     push: &GatherPush,
 ) -> Result<()> {
     k.dispatch(
         cmd,
-        &[params, hits.hit_points, hits.stats, hits.accum, photons, &grid.sorted, &grid.cell_start, hits.order],
+        &[params, hits.hit_points, hits.stats, hits.accum, &grid.sorted, &grid.cell_start, hits.order],
         bytemuck::bytes_of(push),
         push.count as u64,
     )

@@ -121,9 +121,10 @@ pub struct HitStats {
     pub tau_r: f64,
     pub tau_g: f64,
     pub tau_b: f64,
-    pub pad0: f64,
+    /// lambda / r^2 from the probe pass (eq. 7), or 0 without probing.
+    pub probe: f64,
 }
-gpu_struct!(HitStats { n, r2, tau_r, tau_g, tau_b, pad0 });
+gpu_struct!(HitStats { n, r2, tau_r, tau_g, tau_b, probe });
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]

@@ -1,8 +1,8 @@
 //! The GLSL compute kernels of ppm-vk, compiled from `shaders/` by shaderc at build time, with typed
 //! bindings. Knows nothing of scenes or files.
 //!
-//! One module per pipeline stage, in pipeline order: [`ray`] -> [`photon`] -> [`lookup`] -> [`gather`]
-//! -> [`resolve`]. Each kernel's storage-buffer count, push-constant size and workgroup size come from
+//! One module per pipeline stage, in pipeline order: [`ray`] -> [`probe`] (once) -> [`photon`] -> [`lookup`]
+//! -> [`gather`] -> [`resolve`]. Each kernel's storage-buffer count, push-constant size and workgroup size come from
 //! SPIR-V reflection ([`reflected`]); the records they share are in [`layout`], each checked at compile
 //! time against glslang's std430 offsets.
 
@@ -27,12 +27,13 @@ pub mod reflected {
 
     /// Every kernel, in pipeline order.
     pub const ALL: &[KernelInfo] =
-        &[RAY, PHOTON, GRID_COUNT, GRID_SCAN, GRID_SCATTER, GATHER, UPDATE, RESOLVE];
+        &[RAY, PROBE, PHOTON, GRID_COUNT, GRID_SCAN, GRID_SCATTER, GATHER, UPDATE, RESOLVE];
 }
 
 pub mod gather;
 pub mod lookup;
 pub mod photon;
+pub mod probe;
 pub mod ray;
 pub mod resolve;
 

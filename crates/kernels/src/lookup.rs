@@ -26,7 +26,7 @@ pub struct Grid {
     /// Per bucket: index of its first record in `sorted`; `cells + 1` entries.
     pub cell_start: Buffer,
     pub block_sums: Buffer,
-    /// Record indices, grouped by bucket.
+    /// The records, grouped by bucket.
     pub sorted: Buffer,
 }
 
@@ -46,7 +46,12 @@ impl Grid {
             cell_count,
             cell_start: Buffer::new(ctx, "grid cell_start", (cells as u64 + 1) * 4, BufferKind::Storage)?,
             block_sums: Buffer::new(ctx, "grid block_sums", (cells / SCAN_BLOCK) as u64 * 4, BufferKind::Storage)?,
-            sorted: Buffer::new(ctx, "grid sorted", capacity as u64 * 4, BufferKind::Storage)?,
+            sorted: Buffer::new(
+                ctx,
+                "grid sorted records",
+                capacity as u64 * std::mem::size_of::<crate::layout::Photon>() as u64,
+                BufferKind::Storage,
+            )?,
         })
     }
 }

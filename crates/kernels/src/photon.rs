@@ -9,6 +9,8 @@ use crate::ray::SceneBuffers;
 
 /// Most records one photon path may leave (`MAX_RECORDS` in photon.comp).
 pub const MAX_RECORDS: u32 = 16;
+/// Photons each thread traces one after another (`PER_THREAD` in photon.comp).
+pub const PER_THREAD: u32 = 8;
 /// Random-stream families, so photon passes, the probe pass and the eye pass never share numbers.
 pub const SALT_PHOTON: u32 = 1;
 pub const SALT_PROBE: u32 = 2;
@@ -39,6 +41,6 @@ pub fn record(
         cmd,
         &[scene.params, scene.spheres, scene.quads, scene.materials, lights, photons, counter],
         bytemuck::bytes_of(push),
-        push.count as u64,
+        push.count.div_ceil(PER_THREAD) as u64,
     )
 }

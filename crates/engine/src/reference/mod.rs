@@ -203,7 +203,7 @@ pub fn update(s: &HitStats, a: &PassAccum, alpha: f32) -> HitStats {
         tau_r: (s.tau_r + a.flux_r as f64 / FIXED_ONE) * ratio, // eq. 6
         tau_g: (s.tau_g + a.flux_g as f64 / FIXED_ONE) * ratio,
         tau_b: (s.tau_b + a.flux_b as f64 / FIXED_ONE) * ratio,
-        pad0: 0.0,
+        probe: s.probe,
     }
 }
 

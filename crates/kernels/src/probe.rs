@@ -1,0 +1,43 @@
+//! Stage 2, `shaders/probe/probe.comp`: photon probing (eq. 7-9), run once after the ray pass.
+
+use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
+use ppm_vk_device::{vk, Buffer, ComputePipeline};
+
+use crate::gather::HitBuffers;
+use crate::lookup::Grid;
+use crate::push_struct;
+
+/// Eq. 9 as printed (its result depends on the scene's units).
+pub const MODE_PAPER: u32 = 1;
+/// r' = r (1 + lambda / r^2).
+pub const MODE_SCALE_FREE: u32 = 2;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ProbePush {
+    /// Entries of the hit-point order.
+    pub count: u32,
+    /// 0: accumulate a batch of probe photons; 1: set the radii.
+    pub phase: u32,
+    pub mode: u32,
+    /// beta as a fraction of r.
+    pub beta_frac: f32,
+}
+push_struct!(ProbePush, PROBE);
+
+pub fn record(
+    k: &ComputePipeline,
+    cmd: vk::CommandBuffer,
+    params: &Buffer,
+    hits: &HitBuffers,
+    grid: &Grid,
+    push: &ProbePush,
+) -> Result<()> {
+    k.dispatch(
+        cmd,
+        &[params, hits.hit_points, hits.stats, hits.accum, &grid.sorted, &grid.cell_start, hits.order],
+        bytemuck::bytes_of(push),
+        push.count as u64,
+    )
+}
