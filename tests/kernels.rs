@@ -48,11 +48,10 @@ fn hit_points_agree(a: &HitPoint, b: &HitPoint, pos_tol: f32, weight_tol: f32) -
         && (wa - wb).abs().max_element() <= weight_tol * wa.abs().max_element().max(wb.abs().max_element())
 }
 
-#[test]
-fn ray_pass_matches_reference() {
+fn ray_pass_matches_reference_case(specialize: bool) {
     let ctx = ctx();
     let scene = cornell(RES, RES);
-    let r = Renderer::new(&ctx, &scene, settings()).unwrap();
+    let r = Renderer::new(&ctx, &scene, Settings { specialize, ..settings() }).unwrap();
     let g = r.gpu_scene();
     let gpu_hits = r.read_hit_points().unwrap();
     let gpu_direct = r.read_direct().unwrap();
@@ -103,6 +102,18 @@ fn ray_pass_matches_reference() {
     assert!(lit > 0, "no pixel sees the light directly");
     assert!(direct_ok >= gpu_direct.len() * 995 / 1000, "direct emission agrees on {direct_ok} of {} pixels", gpu_direct.len());
     assert_clean(&ctx);
+}
+
+/// With the scene compiled into the tracing kernels (the default).
+#[test]
+fn ray_pass_matches_reference() {
+    ray_pass_matches_reference_case(true);
+}
+
+/// The kernels as built, reading the scene from buffers.
+#[test]
+fn ray_pass_matches_reference_unspecialized() {
+    ray_pass_matches_reference_case(false);
 }
 
 /// Records per bucket `key`: (count, flux sum per channel).
@@ -204,11 +215,10 @@ fn total_flux(records: &[Photon]) -> [f64; 3] {
     t
 }
 
-#[test]
-fn photon_records_match_reference() {
+fn photon_records_match_reference_case(specialize: bool) {
     let ctx = ctx();
     let scene = cornell(RES, RES);
-    let mut r = Renderer::new(&ctx, &scene, settings()).unwrap();
+    let mut r = Renderer::new(&ctx, &scene, Settings { specialize, ..settings() }).unwrap();
     let gpu = r.trace_and_gather(0, PHOTONS).unwrap();
     let g = r.gpu_scene().clone();
     let cpu = reference::photon_pass(&g, 0, PHOTONS, SALT_PHOTON);
@@ -269,6 +279,18 @@ fn photon_records_match_reference() {
         assert!(close(tg[c], tc[c], 5e-3, 0.0), "channel {c}: total flux GPU {} CPU {}", tg[c], tc[c]);
     }
     assert_clean(&ctx);
+}
+
+/// With the scene compiled into the tracing kernels (the default).
+#[test]
+fn photon_records_match_reference() {
+    photon_records_match_reference_case(true);
+}
+
+/// The kernels as built, reading the scene from buffers.
+#[test]
+fn photon_records_match_reference_unspecialized() {
+    photon_records_match_reference_case(false);
 }
 
 /// Compares the GPU's pass accumulators with a brute-force gather over the GPU's own records.

@@ -84,7 +84,7 @@ fn run() -> Result<()> {
     for (name, stage, spv, info) in &kernels {
         writeln!(
             code,
-            "/// Kernel `shaders/{stage}/{name}.comp`.\npub const {}: KernelInfo = KernelInfo {{ name: {name:?}, stage: {stage:?}, spirv: include_bytes!({:?}), bindings: &{:?}, push_size: {}, local_size: {} }};",
+            "/// Kernel `shaders/{stage}/{name}.comp`.\npub const {}: KernelInfo = KernelInfo {{ name: {name:?}, stage: {stage:?}, source: \"{stage}/{name}.comp\", spirv: include_bytes!({:?}), bindings: &{:?}, push_size: {}, local_size: {} }};",
             name.to_uppercase(),
             spv.display().to_string(),
             info.bindings,
@@ -92,6 +92,13 @@ fn run() -> Result<()> {
             info.local_size
         )?;
     }
+    writeln!(code, "/// Every file under shaders/, by path relative to it, for compiling variants at run time.")?;
+    writeln!(code, "pub const SOURCES: &[(&str, &str)] = &[")?;
+    for path in &sources {
+        let rel = path.strip_prefix(&shader_dir)?.to_string_lossy().replace('\\', "/");
+        writeln!(code, "    ({rel:?}, include_str!({:?})),", path.display().to_string())?;
+    }
+    writeln!(code, "];")?;
     writeln!(code, "/// std430 layouts of the GLSL structs, as glslang laid them out.")?;
     writeln!(code, "#[allow(non_snake_case, non_upper_case_globals, dead_code)]\npub mod layout {{")?;
     for (sname, (layout, _)) in &layouts {

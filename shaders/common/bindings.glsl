@@ -1,8 +1,23 @@
 // Scene bindings shared by the kernels that trace rays (ray, photon): always bindings 0-3, in this order.
+// The intersection loops read the scene through SPHERE(i), QUAD(i), NUM_SPHERES and NUM_QUADS. Built as
+// shipped, they read the buffers; the renderer recompiles the tracing kernels with SCENE_CONSTANTS defined
+// and the primitives written out as constants (crates/kernels/src/specialize.rs), so the unrolled loops
+// need no loads at all. Only loop indices may index the constants: a dynamic index into a constant array
+// makes lavapipe copy it per invocation, so materials and lights are always read from their buffers.
 #ifndef BINDINGS_GLSL
 #define BINDINGS_GLSL
 layout(std430, binding = 0) readonly buffer Params { RenderParams params; };
 layout(std430, binding = 1) readonly buffer Spheres { Sphere spheres[]; };
 layout(std430, binding = 2) readonly buffer Quads { Quad quads[]; };
 layout(std430, binding = 3) readonly buffer Materials { Material materials[]; };
+#ifdef SCENE_CONSTANTS
+#include "scene_constants.glsl"
+#define SPHERE(i) SCENE_SPHERES[i]
+#define QUAD(i) SCENE_QUADS[i]
+#else
+#define NUM_SPHERES params.num_spheres
+#define NUM_QUADS params.num_quads
+#define SPHERE(i) spheres[i]
+#define QUAD(i) quads[i]
+#endif
 #endif

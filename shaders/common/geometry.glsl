@@ -1,5 +1,5 @@
-// Ray intersection with the scene (analytic spheres and parallelograms). Needs the buffers `spheres`,
-// `quads` and `params` declared by the including kernel.
+// Ray intersection with the scene (analytic spheres and parallelograms), through the accessors of
+// bindings.glsl.
 #ifndef GEOMETRY_GLSL
 #define GEOMETRY_GLSL
 
@@ -8,16 +8,18 @@ struct Hit {
     vec3 pos;
     vec3 normal;     // geometric normal: outward for spheres, the front normal for quads
     uint material;
-    uint kind;       // 0 sphere, 1 quad
-    uint index;
 };
 
-// Nearest hit with t in (tmin, tmax); false if none.
+// Nearest hit with t in (tmin, tmax); false if none. What the hit needs is taken inside the loops, where
+// the primitive's index is the loop's own.
 bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {
     hit.t = tmax;
     bool found = false;
-    for (uint i = 0u; i < params.num_spheres; i++) {
-        Sphere s = spheres[i];
+    bool on_sphere = false;
+    vec3 center = vec3(0.0);
+    float inv_radius = 0.0;
+    for (uint i = 0u; i < NUM_SPHERES; i++) {
+        Sphere s = SPHERE(i);
         vec3 oc = o - s.center;
         float b = dot(oc, d);
         float c = dot(oc, oc) - s.radius * s.radius;
@@ -27,11 +29,12 @@ bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {
         float t = -b - sq;
         if (t <= tmin) t = -b + sq;
         if (t > tmin && t < hit.t) {
-            hit.t = t; hit.kind = 0u; hit.index = i; found = true;
+            hit.t = t; found = true; on_sphere = true;
+            center = s.center; inv_radius = 1.0 / s.radius; hit.material = s.material;
         }
     }
-    for (uint i = 0u; i < params.num_quads; i++) {
-        Quad q = quads[i];
+    for (uint i = 0u; i < NUM_QUADS; i++) {
+        Quad q = QUAD(i);
         float denom = dot(q.normal, d);
         if (abs(denom) < 1e-12) continue;
         float t = (q.plane_d - dot(q.normal, o)) / denom;
@@ -40,18 +43,12 @@ bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {
         float a = dot(q.w, cross(rel, q.edge_v));
         float b = dot(q.w, cross(q.edge_u, rel));
         if (a < 0.0 || a > 1.0 || b < 0.0 || b > 1.0) continue;
-        hit.t = t; hit.kind = 1u; hit.index = i; found = true;
+        hit.t = t; found = true; on_sphere = false;
+        hit.normal = q.normal; hit.material = q.material;
     }
     if (found) {
         hit.pos = o + hit.t * d;
-        if (hit.kind == 0u) {
-            Sphere s = spheres[hit.index];
-            hit.normal = (hit.pos - s.center) / s.radius;
-            hit.material = s.material;
-        } else {
-            hit.normal = quads[hit.index].normal;
-            hit.material = quads[hit.index].material;
-        }
+        if (on_sphere) hit.normal = (hit.pos - center) * inv_radius;
     }
     return found;
 }

@@ -12,7 +12,8 @@ use ppm_vk_kernels::photon::{self, PhotonPush, MAX_RECORDS, SALT_EYE, SALT_PHOTO
 use ppm_vk_kernels::probe::{self, ProbePush, MODE_PAPER, MODE_SCALE_FREE};
 use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers};
 use ppm_vk_kernels::resolve::{self, ResolvePush};
-use ppm_vk_kernels::{pipeline, reflected};
+use ppm_vk_kernels::specialize::{self, MAX_INLINE_PRIMITIVES};
+use ppm_vk_kernels::{pipeline, pipeline_from, reflected};
 
 use crate::gpu_scene::GpuScene;
 use crate::image_io::RgbImage;
@@ -179,10 +180,18 @@ impl Renderer {
         need("the hit points", slots * std::mem::size_of::<HitPoint>() as u64)?;
         need("the hit-point statistics", slots * std::mem::size_of::<HitStats>() as u64)?;
 
+        // The tracing kernels with this scene compiled in, where it is small enough (see specialize.rs).
+        let traced = |k: &reflected::KernelInfo| -> Result<ComputePipeline> {
+            if gpu.spheres.len() + gpu.quads.len() > MAX_INLINE_PRIMITIVES || !settings.specialize {
+                return pipeline(ctx, k);
+            }
+            let constants = specialize::scene_constants(&gpu.spheres, &gpu.quads);
+            pipeline_from(ctx, k, &specialize::compile(k, &constants)?)
+        };
         let kernels = Kernels {
-            ray: pipeline(ctx, &reflected::RAY)?,
+            ray: traced(&reflected::RAY)?,
             probe: pipeline(ctx, &reflected::PROBE)?,
-            photon: pipeline(ctx, &reflected::PHOTON)?,
+            photon: traced(&reflected::PHOTON)?,
             lookup: Lookup::new(ctx)?,
             gather: pipeline(ctx, &reflected::GATHER)?,
             update: pipeline(ctx, &reflected::UPDATE)?,

@@ -39,6 +39,9 @@ pub struct Settings {
     pub max_eye_depth: u32,
     /// Bounces a photon path may take (diffuse records are further bounded by 16 per path).
     pub max_photon_depth: u32,
+    /// Compile the tracing kernels with the scene inlined as constants (faster; same results up to the
+    /// last bit of a fused multiply-add). `false` uses the kernels as built.
+    pub specialize: bool,
 }
 
 impl Default for Settings {
@@ -55,6 +58,7 @@ impl Default for Settings {
             hit_slots: 4,
             max_eye_depth: 16,
             max_photon_depth: 64,
+            specialize: true,
         }
     }
 }

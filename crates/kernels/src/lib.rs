@@ -17,6 +17,8 @@ pub mod reflected {
         pub name: &'static str,
         /// The folder under shaders/: the pipeline stage.
         pub stage: &'static str,
+        /// Its source file, relative to shaders/.
+        pub source: &'static str,
         pub spirv: &'static [u8],
         /// The names of its storage-buffer blocks, binding 0 first.
         pub bindings: &'static [&'static str],
@@ -36,6 +38,7 @@ pub mod photon;
 pub mod probe;
 pub mod ray;
 pub mod resolve;
+pub mod specialize;
 
 use anyhow::{Context as _, Result};
 use ppm_vk_device::{ComputePipeline, Context, PipelineDesc};
@@ -44,11 +47,17 @@ use ppm_vk_device::{ComputePipeline, Context, PipelineDesc};
 pub fn pipeline(ctx: &Context, k: &reflected::KernelInfo) -> Result<ComputePipeline> {
     let words = ash::util::read_spv(&mut std::io::Cursor::new(k.spirv))
         .with_context(|| format!("reading the SPIR-V of kernel {}", k.name))?;
+    pipeline_from(ctx, k, &words)
+}
+
+/// Creates a pipeline with `k`'s interface from other SPIR-V of the same kernel (a specialised variant,
+/// see [`specialize`]: it binds a subset of the same buffers).
+pub fn pipeline_from(ctx: &Context, k: &reflected::KernelInfo, words: &[u32]) -> Result<ComputePipeline> {
     ComputePipeline::new(
         ctx,
         &PipelineDesc {
             name: k.name,
-            spirv: &words,
+            spirv: words,
             bindings: k.bindings.len() as u32,
             push_size: k.push_size,
             local_size: k.local_size,

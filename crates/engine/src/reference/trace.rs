@@ -60,7 +60,7 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
     let pos = o + best * d;
     Some(if kind == 0 {
         let s = &g.spheres[i];
-        Hit { pos, normal: (pos - v3(s.center)) / s.radius, material: s.material }
+        Hit { pos, normal: (pos - v3(s.center)) * (1.0 / s.radius), material: s.material }
     } else {
         Hit { pos, normal: v3(g.quads[i].normal), material: g.quads[i].material }
     })
