@@ -264,18 +264,12 @@ fn print_stage_summary(history: &[PassStats], full: bool) {
     let parts: Vec<String> = names.iter().map(|k| format!("{k} {:.2}", mean(k))).collect();
     println!("mean GPU ms per pass: {} | wall {:.2}", parts.join(", "), wall);
     if full {
-        println!("{:>6} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9}", "pass", "records", "photon", "lookup", "gather", "update", "wall");
+        let cols = ["photon", "lookup/count", "lookup/scan", "lookup/scatter", "gather", "update"];
+        let head: Vec<String> = cols.iter().map(|c| format!("{:>14}", c)).collect();
+        println!("{:>6} {:>10} {} {:>9}", "pass", "records", head.join(""), "wall");
         for s in history {
-            println!(
-                "{:>6} {:>10} {:>9.2} {:>9.2} {:>9.2} {:>9.2} {:>9.2}",
-                s.index,
-                s.records,
-                s.stage_ms("photon"),
-                s.stage_ms("lookup"),
-                s.stage_ms("gather"),
-                s.stage_ms("update"),
-                s.wall_ms
-            );
+            let row: Vec<String> = cols.iter().map(|c| format!("{:>14.2}", s.stage_ms(c))).collect();
+            println!("{:>6} {:>10} {} {:>9.2}", s.index, s.records, row.join(""), s.wall_ms);
         }
     }
 }

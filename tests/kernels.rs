@@ -13,7 +13,7 @@ use std::collections::HashMap;
 
 use common::*;
 use glam::Vec3;
-use ppm_vk_engine::layout::{HitPoint, HitStats, PassAccum, Photon, FIXED_ONE};
+use ppm_vk_engine::layout::{HitPoint, HitStats, PassAccum, Photon};
 use ppm_vk_engine::reference::{self, trace};
 use ppm_vk_engine::{Renderer, Settings};
 use ppm_vk_kernels::photon::{SALT_EYE, SALT_PHOTON};
@@ -294,7 +294,7 @@ fn photon_records_match_reference_unspecialized() {
 }
 
 /// Compares the GPU's pass accumulators with a brute-force gather over the GPU's own records.
-fn check_gather(label: &str, accum: &[PassAccum], hits: &[HitPoint], stats: &[HitStats], records: &[Photon], cone_k: f32) {
+fn check_gather(label: &str, accum: &[PassAccum], hits: &[HitPoint], stats: &[HitStats], records: &[Photon], cone_k: f32, flux_fixed: f32) {
     let cpu = reference::gather(hits, stats, records, cone_k);
     assert_eq!(cpu.len(), accum.len());
     let slots = accum.len();
@@ -307,10 +307,11 @@ fn check_gather(label: &str, accum: &[PassAccum], hits: &[HitPoint], stats: &[Hi
             continue;
         }
         m_equal += 1;
-        // Flux: the GPU adds f32 flux*w truncated to 32.32 fixed point (error < 2^-32 per photon), the
-        // CPU sums flux*w in f64 with w from the same f32 operations; 1e-5 relative covers the f32
-        // rounding of flux*w, 1e-6 the truncation of up to ~4000 photons.
-        let g = [a.flux_r, a.flux_g, a.flux_b].map(|f| f as f64 / FIXED_ONE);
+        // Flux: the GPU adds f32 flux*w rounded to fixed point (flux_fixed units per unit, 2^25 for this
+        // scene: error <= 2^-26 per photon), the CPU sums flux*w in f64 with w from the same f32
+        // operations; 1e-5 relative covers the f32 rounding of flux*w, 1e-6 the rounding of dozens of
+        // photons, whose errors are unbiased and partly cancel.
+        let g = [a.flux_r, a.flux_g, a.flux_b].map(|f| f as f64 / flux_fixed as f64);
         let c = sum.to_array();
         for ch in 0..3 {
             assert!(close(g[ch], c[ch], 1e-5, 1e-6), "{label} slot {i} channel {ch}: GPU {} CPU {} (M {})", g[ch], c[ch], a.m);
@@ -350,7 +351,7 @@ fn gather_case(cone_k: Option<f32>) {
         Some(k) => format!("gather, cone k = {k}"),
         None => "gather".to_string(),
     };
-    check_gather(&label, &accum, &hits, &stats, &records, cone_k.unwrap_or(0.0));
+    check_gather(&label, &accum, &hits, &stats, &records, cone_k.unwrap_or(0.0), r.gpu_scene().params.flux_fixed);
     assert_clean(&ctx);
 }
 
@@ -364,10 +365,10 @@ fn gather_with_cone_filter_matches_brute_force() {
     gather_case(Some(1.1));
 }
 
-fn check_update(label: &str, before: &[HitStats], accum: &[PassAccum], after: &[HitStats], alpha: f32) {
+fn check_update(label: &str, before: &[HitStats], accum: &[PassAccum], after: &[HitStats], alpha: f32, flux_fixed: f32) {
     let mut updated = 0;
     for (i, ((s, a), g)) in before.iter().zip(accum).zip(after).enumerate() {
-        let c = reference::update(s, a, alpha);
+        let c = reference::update(s, a, alpha, flux_fixed);
         updated += (a.m > 0) as usize;
         // Both in f64 with the same operations: 1e-12 relative leaves room only for a differently
         // rounded division; exact zeros must stay exact.
@@ -392,7 +393,7 @@ fn update_matches_reference() {
         let accum = r.read_accum().unwrap();
         r.update_only().unwrap();
         let after = r.read_stats().unwrap();
-        check_update(&format!("update round {round}"), &before, &accum, &after, alpha);
+        check_update(&format!("update round {round}"), &before, &accum, &after, alpha, r.gpu_scene().params.flux_fixed);
         // The update clears the accumulators for the next pass.
         let cleared = r.read_accum().unwrap();
         assert!(cleared.iter().all(|a| *a == PassAccum::default()), "round {round}: accumulators not cleared");

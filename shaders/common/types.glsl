@@ -70,7 +70,8 @@ struct RenderParams {
     uint hit_slots;  // hit points per pixel (glass splits the eye path into both Fresnel branches)
     uint photon_capacity; // photon records one batch can hold
     uint seed;
-    uint pad0;
+    float flux_fixed; // fixed-point units per unit of flux in PassAccum: a power of two, 2^30 / (largest
+                      // flux a photon can carry) rounded down, so one photon's contribution fits an int32
     uint pad1;
 };
 
@@ -95,8 +96,9 @@ struct HitStats {
     double probe;    // lambda / r^2 from the probe pass (eq. 7), or 0 without probing
 };
 
-// What this pass's photons gave a hit point: M and tau_M, flux in 32.32 fixed point so the sum is exact
-// and independent of the order photons are visited in.
+// What this pass's photons gave a hit point: M and tau_M, flux in fixed point (RenderParams.flux_fixed
+// units per unit) so the sum is exact and independent of the order photons are visited in. Each photon
+// converts to int32 (a vector instruction; float to int64 is not one on AVX2) and sums into int64.
 struct PassAccum {
     int64_t flux_r;
     int64_t flux_g;
@@ -113,5 +115,5 @@ struct Photon {
     uint dir;        // direction of travel, octahedral snorm 2x16
 };
 
-const float FIXED_ONE = 4294967296.0; // 2^32: the fixed-point scale of PassAccum
+const float PROBE_FIXED = 1073741824.0; // 2^30: the probe's fixed-point scale for d^2 / r^2 in [0, 1]
 #endif

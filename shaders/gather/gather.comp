@@ -27,13 +27,16 @@ layout(push_constant) uniform GatherPush {
 uint m = 0u;
 int64_t fr = 0L, fg = 0L, fb = 0L;
 float inv_kr;
+float flux_fixed; // params.flux_fixed, read once: a storage-buffer read per photon costs lavapipe a gather
 
-void visit(Photon p, float d2) {
-    float w = 1.0 - sqrt(d2) * inv_kr; // eq. 10 (w = 1 without the filter)
+void visit(vec3 flux, float d2) {
+    // eq. 10; the weight folds into the fixed-point scale, and without the filter no root is taken.
+    float scale = inv_kr > 0.0 ? (1.0 - sqrt(d2) * inv_kr) * flux_fixed : flux_fixed;
+    ivec3 f = ivec3(flux * scale + 0.5); // round to nearest: flux and weight are never negative
     m++;
-    fr += int64_t(p.flux.r * w * FIXED_ONE);
-    fg += int64_t(p.flux.g * w * FIXED_ONE);
-    fb += int64_t(p.flux.b * w * FIXED_ONE);
+    fr += int64_t(f.r);
+    fg += int64_t(f.g);
+    fb += int64_t(f.b);
 }
 
 void main() {
@@ -42,6 +45,7 @@ void main() {
     uint i = order[t];
     HitPoint hp = hit_points[i];
     float r2 = float(stats[i].r2);
+    flux_fixed = params.flux_fixed;
     inv_kr = pc.cone_k > 0.0 ? 1.0 / (pc.cone_k * sqrt(r2)) : 0.0;
     for_each_photon_near(hp.pos, hp.normal, r2);
     if (m > 0u) {

@@ -11,6 +11,8 @@ layout(std430, binding = 2) readonly buffer Order { uint order[]; };
 layout(push_constant) uniform UpdatePush {
     uint count;      // entries of `order` (the non-empty hit-point slots)
     float alpha;     // the fraction of new photons kept, in (0, 1)
+    float flux_fixed; // RenderParams.flux_fixed
+    uint pad0;
 } pc;
 #include "invocation.glsl"
 
@@ -24,9 +26,10 @@ void main() {
     double m = double(a.m);
     double ratio = (s.n + double(pc.alpha) * m) / (s.n + m);
     s.r2 *= ratio;                                                   // eq. 3 (squared)
-    s.tau_r = (s.tau_r + double(a.flux_r) / double(FIXED_ONE)) * ratio; // eq. 6 / eq. 14
-    s.tau_g = (s.tau_g + double(a.flux_g) / double(FIXED_ONE)) * ratio;
-    s.tau_b = (s.tau_b + double(a.flux_b) / double(FIXED_ONE)) * ratio;
+    double unit = 1.0 / double(pc.flux_fixed); // exact: a power of two
+    s.tau_r = (s.tau_r + double(a.flux_r) * unit) * ratio; // eq. 6 / eq. 14
+    s.tau_g = (s.tau_g + double(a.flux_g) * unit) * ratio;
+    s.tau_b = (s.tau_b + double(a.flux_b) * unit) * ratio;
     s.n += double(pc.alpha) * m;
     stats[i] = s;
     accum[i] = PassAccum(0L, 0L, 0L, 0u, 0u);

@@ -1,7 +1,7 @@
 // Pass 2, photon probing (run once, after the ray pass): how spread out the probe photons inside each hit
 // point's sphere are (eq. 7), and from that its starting radius (eq. 9). Two phases, by push constant:
 //   0: per batch of probe photons, add to the hit point's accumulator the count N and the sum of d^2 / r^2
-//      of the photons inside its sphere of radius r (arriving from the side it is seen from), in 32.32
+//      of the photons inside its sphere of radius r (arriving from the side it is seen from), in 2.30
 //      fixed point: exact, order-independent, and in units of r^2 so it does not depend on the scene's scale;
 //   1: lambda / r^2 = sum / N (eq. 7; no photon counts as sparse: lambda = r^2), then
 //      paper (mode 1):      r' = r                  if lambda / r <= beta, else r (1 + lambda / r)    (eq. 9)
@@ -32,9 +32,9 @@ uint m = 0u;
 int64_t sum = 0L;
 float inv_r2;
 
-void visit(Photon p, float d2) {
+void visit(vec3 flux, float d2) {
     m++;
-    sum += int64_t(d2 * inv_r2 * FIXED_ONE); // eq. 7's |t_p - g|^2, in units of r^2
+    sum += int64_t(int(d2 * inv_r2 * PROBE_FIXED + 0.5)); // eq. 7's |t_p - g|^2, in units of r^2
 }
 
 void main() {
@@ -45,7 +45,7 @@ void main() {
     if (pc.phase == 1u) {
         PassAccum a = accum[i];
         // eq. 7, in units of r^2; a hit point no probe photon reached is sparse (ALGORITHM.md)
-        double ratio = a.m > 0u ? double(a.flux_r) / double(FIXED_ONE) / double(a.m) : 1.0;
+        double ratio = a.m > 0u ? double(a.flux_r) / double(PROBE_FIXED) / double(a.m) : 1.0;
         double r = sqrt(s.r2);
         double grow = 1.0;
         if (ratio > double(pc.beta_frac)) {

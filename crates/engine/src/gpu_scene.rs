@@ -103,6 +103,13 @@ impl GpuScene {
             last.cdf = 1.0; // no photon may fall past the last light through rounding
         }
 
+        // No photon carries more flux than it leaves its light with (roulette divides by the largest
+        // albedo, mirrors and glass never amplify), so this bounds one photon's share of a fixed-point sum.
+        let max_flux = lights.iter().flat_map(|l| l.power.map(|p| p as f64 / l.prob as f64)).fold(0f64, f64::max);
+        let flux_fixed = 2f64.powi((2f64.powi(30) / max_flux).log2().floor() as i32) as f32;
+        if !(flux_fixed.is_finite() && flux_fixed > 0.0) {
+            bail!("scene {}: light power {max_flux} W is out of the representable range", scene.name);
+        }
         let (lo, hi) = scene.bounds();
         let extent = (hi - lo).max_element();
         let initial_radius = settings.initial_radius.unwrap_or_else(|| default_radius(scene));
@@ -138,6 +145,7 @@ impl GpuScene {
             hit_slots: settings.hit_slots,
             photon_capacity,
             seed: settings.seed,
+            flux_fixed,
             ..Default::default()
         };
         Ok(GpuScene { params, materials, spheres, quads, lights, initial_radius, total_power })

@@ -40,9 +40,13 @@ pub struct PassStats {
 }
 
 impl PassStats {
-    /// GPU milliseconds of the stages named `name`, summed over batches.
+    /// GPU milliseconds of the stages named `name`, or `name/...` (its steps), summed over batches.
     pub fn stage_ms(&self, name: &str) -> f64 {
-        self.stages.iter().filter(|s| s.name == name).map(|s| s.duration_ms).sum()
+        self.stages
+            .iter()
+            .filter(|s| s.name == name || s.name.strip_prefix(name).is_some_and(|rest| rest.starts_with('/')))
+            .map(|s| s.duration_ms)
+            .sum()
     }
 }
 
@@ -218,7 +222,7 @@ impl Renderer {
             counter: storage("photon counter", 4)?,
             batch_log: storage("batch log", MAX_BATCHES as u64 * 4)?,
             grid: Grid::new(ctx, cells, capacity)?,
-            profiler: Profiler::new(ctx, 8 + 4 * MAX_BATCHES)?,
+            profiler: Profiler::new(ctx, 8 + 7 * MAX_BATCHES)?,
             batch: settings.photons_per_pass,
             passes: 0,
             emitted: 0,
@@ -288,9 +292,7 @@ impl Renderer {
         })?;
         barrier(ctx, cmd);
         self.counter.cmd_copy(cmd, &self.batch_log, 0, log_index as u64 * 4, 4);
-        self.profiler.scope(cmd, "lookup", || {
-            k.lookup.record(ctx, cmd, &self.params, &self.photons, &self.counter, &self.grid, capacity)
-        })?;
+        k.lookup.record(ctx, cmd, &self.profiler, &self.params, &self.photons, &self.counter, &self.grid, capacity)?;
         barrier(ctx, cmd);
         match use_ {
             GridUse::Gather => {
@@ -304,6 +306,10 @@ impl Renderer {
         }
         barrier(ctx, cmd);
         Ok(())
+    }
+
+    fn update_push(&self) -> UpdatePush {
+        UpdatePush { count: self.active, alpha: self.settings.alpha, flux_fixed: self.gpu.params.flux_fixed, pad0: 0 }
     }
 
     fn probe_push(&self, phase: u32) -> ProbePush {
@@ -371,7 +377,7 @@ impl Renderer {
         let (mut stages, records, batches) = self.run_batches(self.emitted, total, GridUse::Gather)?;
         // The update in its own submission, so an overflowed try above never touches the statistics.
         self.profiler.reset();
-        let push = UpdatePush { count: self.active, alpha: self.settings.alpha };
+        let push = self.update_push();
         let hits = self.hit_buffers();
         let (profiler, k) = (&self.profiler, &self.kernels);
         self.ctx.run(|cmd| profiler.scope(cmd, "update", || gather::record_update(&k.update, cmd, &hits, &push)))?;
@@ -496,7 +502,7 @@ impl Renderer {
 
     /// Runs the update kernel alone (after `trace_and_gather`).
     pub fn update_only(&mut self) -> Result<()> {
-        let push = UpdatePush { count: self.active, alpha: self.settings.alpha };
+        let push = self.update_push();
         let hits = self.hit_buffers();
         let k = &self.kernels;
         self.ctx.run(|cmd| gather::record_update(&k.update, cmd, &hits, &push))

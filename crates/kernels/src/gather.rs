@@ -23,6 +23,9 @@ push_struct!(GatherPush, GATHER);
 pub struct UpdatePush {
     pub count: u32,
     pub alpha: f32,
+    /// `RenderParams::flux_fixed`.
+    pub flux_fixed: f32,
+    pub pad0: u32,
 }
 push_struct!(UpdatePush, UPDATE);
 

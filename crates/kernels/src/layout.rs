@@ -10,8 +10,8 @@ pub const SURFACE_MIRROR: u32 = 1;
 pub const SURFACE_GLASS: u32 = 2;
 /// `HitPoint::pixel` of an empty slot.
 pub const EMPTY_SLOT: u32 = u32::MAX;
-/// The fixed-point scale of [`PassAccum`] flux sums (32.32).
-pub const FIXED_ONE: f64 = 4294967296.0;
+/// The probe pass's fixed-point scale for d^2 / r^2 (2^30).
+pub const PROBE_FIXED: f64 = 1073741824.0;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -86,13 +86,14 @@ pub struct RenderParams {
     pub hit_slots: u32,
     pub photon_capacity: u32,
     pub seed: u32,
-    pub pad0: u32,
+    /// Fixed-point units per unit of flux in [`PassAccum`] (a power of two).
+    pub flux_fixed: f32,
     pub pad1: u32,
 }
 gpu_struct!(RenderParams {
     eye, tan_half_fov, right, aspect, up, width, forward, height, grid_min, cell_size, grid_mask,
     num_spheres, num_quads, num_lights, eps, max_photon_depth, max_eye_depth, hit_slots, photon_capacity,
-    seed, pad0, pad1
+    seed, flux_fixed, pad1
 });
 
 #[repr(C)]

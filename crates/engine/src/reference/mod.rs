@@ -6,7 +6,7 @@ pub mod rng;
 pub mod trace;
 
 use glam::{DVec3, Vec3};
-use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon, EMPTY_SLOT, FIXED_ONE, SURFACE_DIFFUSE, SURFACE_MIRROR};
+use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon, EMPTY_SLOT, SURFACE_DIFFUSE, SURFACE_MIRROR};
 use ppm_vk_kernels::photon::MAX_RECORDS;
 
 use crate::gpu_scene::GpuScene;
@@ -184,25 +184,27 @@ pub fn gather_one(hp: &HitPoint, r2: f64, photons: &[Photon], cone_k: f32) -> (u
     (m, sum)
 }
 
-/// `gather_one` for every slot, as pass accumulators (flux in the same 32.32 fixed point).
+/// `gather_one` for every slot.
 pub fn gather(hits: &[HitPoint], stats: &[HitStats], photons: &[Photon], cone_k: f32) -> Vec<(u32, DVec3)> {
     hits.iter().zip(stats).map(|(h, s)| gather_one(h, s.r2, photons, cone_k)).collect()
 }
 
-/// The progressive update of one hit point (eq. 3, 6; eq. 14 with the cone filter's sums), in f64.
-pub fn update(s: &HitStats, a: &PassAccum, alpha: f32) -> HitStats {
+/// The progressive update of one hit point (eq. 3, 6; eq. 14 with the cone filter's sums), in f64;
+/// `flux_fixed` is the accumulator's fixed-point scale (`RenderParams::flux_fixed`).
+pub fn update(s: &HitStats, a: &PassAccum, alpha: f32, flux_fixed: f32) -> HitStats {
     if a.m == 0 {
         return *s;
     }
     let m = a.m as f64;
     let alpha = alpha as f64;
     let ratio = (s.n + alpha * m) / (s.n + m);
+    let unit = 1.0 / flux_fixed as f64;
     HitStats {
         n: s.n + alpha * m,
         r2: s.r2 * ratio, // eq. 3, squared
-        tau_r: (s.tau_r + a.flux_r as f64 / FIXED_ONE) * ratio, // eq. 6
-        tau_g: (s.tau_g + a.flux_g as f64 / FIXED_ONE) * ratio,
-        tau_b: (s.tau_b + a.flux_b as f64 / FIXED_ONE) * ratio,
+        tau_r: (s.tau_r + a.flux_r as f64 * unit) * ratio, // eq. 6
+        tau_g: (s.tau_g + a.flux_g as f64 * unit) * ratio,
+        tau_b: (s.tau_b + a.flux_b as f64 * unit) * ratio,
         probe: s.probe,
     }
 }
