@@ -3,10 +3,11 @@
 // shipped, they read the buffers; the renderer recompiles the tracing kernels with SCENE_CONSTANTS defined
 // and the primitives written out as constants (crates/kernels/src/specialize.rs), so the unrolled loops
 // need no loads at all. Only loop indices may index the constants: a dynamic index into a constant array
-// makes lavapipe copy it per invocation, so materials and lights are always read from their buffers.
+// makes lavapipe copy it per invocation, so materials are read from their buffer (a chain of selects over
+// constants measured no faster).
 #ifndef BINDINGS_GLSL
 #define BINDINGS_GLSL
-layout(std430, binding = 0) readonly buffer Params { RenderParams params; };
+#include "params.glsl"
 layout(std430, binding = 1) readonly buffer Spheres { Sphere spheres[]; };
 layout(std430, binding = 2) readonly buffer Quads { Quad quads[]; };
 layout(std430, binding = 3) readonly buffer Materials { Material materials[]; };

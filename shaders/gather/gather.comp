@@ -9,7 +9,7 @@
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 64) in;
 #include "types.glsl"
-layout(std430, binding = 0) readonly buffer Params { RenderParams params; };
+#include "params.glsl"
 layout(std430, binding = 1) readonly buffer HitPoints { HitPoint hit_points[]; };
 layout(std430, binding = 2) readonly buffer Stats { HitStats stats[]; };
 layout(std430, binding = 3) buffer Accum { PassAccum accum[]; };
@@ -40,6 +40,7 @@ void visit(vec3 flux, float d2) {
 }
 
 void main() {
+    load_params();
     uint t = invocation_index();
     if (t >= pc.count) return;
     uint i = order[t];

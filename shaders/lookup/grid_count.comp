@@ -3,13 +3,14 @@
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 256) in;
 #include "types.glsl"
-layout(std430, binding = 0) readonly buffer Params { RenderParams params; };
+#include "params.glsl"
 layout(std430, binding = 1) readonly buffer Photons { Photon photons[]; };
 layout(std430, binding = 2) readonly buffer Counter { uint photon_count; };
 layout(std430, binding = 3) buffer CellCount { uint cell_count[]; };
 #include "invocation.glsl"
 
 void main() {
+    load_params();
     uint i = invocation_index();
     if (i >= min(photon_count, params.photon_capacity)) return;
     atomicAdd(cell_count[photons[i].cell], 1u);

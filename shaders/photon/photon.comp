@@ -42,6 +42,7 @@ void emit(Photon rec) {
 const uint PER_THREAD = 8u;
 
 void main() {
+    load_params();
     uint t = invocation_index();
     uint threads = (pc.count + PER_THREAD - 1u) / PER_THREAD;
     if (t >= threads) return;

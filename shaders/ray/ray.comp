@@ -26,6 +26,7 @@ const uint MAX_SLOTS = 8u;
 struct Pending { vec3 o; vec3 d; vec3 thr; uint depth; };
 
 void main() {
+    load_params();
     uint pixel = invocation_index();
     if (pixel >= params.width * params.height) return;
     uint px = pixel % params.width;

@@ -5,7 +5,7 @@
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 64) in;
 #include "types.glsl"
-layout(std430, binding = 0) readonly buffer Params { RenderParams params; };
+#include "params.glsl"
 layout(std430, binding = 1) readonly buffer HitPoints { HitPoint hit_points[]; };
 layout(std430, binding = 2) readonly buffer Stats { HitStats stats[]; };
 layout(std430, binding = 3) readonly buffer Direct { vec4 direct[]; };
@@ -19,6 +19,7 @@ layout(push_constant) uniform ResolvePush {
 #include "invocation.glsl"
 
 void main() {
+    load_params();
     uint pixel = invocation_index();
     if (pixel >= params.width * params.height) return;
     dvec3 sum = dvec3(0.0);
