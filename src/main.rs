@@ -9,7 +9,7 @@ use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_vk_engine::metrics::{compare, cornell_regions, Reference};
-use ppm_vk_engine::{Context, ContextOptions, PassStats, Renderer, Scene, Settings};
+use ppm_vk_engine::{Context, ContextOptions, PassStats, ProbeMode, Renderer, Scene, Settings};
 
 mod bench;
 
@@ -75,6 +75,18 @@ struct RenderArgs {
     /// Hit points per pixel (glass splits an eye path into both Fresnel branches up to this many).
     #[arg(long, default_value_t = 4)]
     hit_slots: u32,
+    /// Photon probing (eq. 7-9): `paper` is eq. 9 as printed, `scale-free` is r' = r (1 + lambda / r^2).
+    #[arg(long, value_enum, default_value_t = ProbeArg::Off)]
+    probe: ProbeArg,
+    /// beta of eq. 9 as a fraction of r (the paper's best: 0.2 = r/5).
+    #[arg(long, default_value_t = 0.2)]
+    beta: f32,
+    /// Photons the probe pass emits (default: --photons-per-pass, as in the paper).
+    #[arg(long)]
+    probe_photons: Option<u32>,
+    /// Cone filter (eq. 10-14): its constant k >= 1, or `off`.
+    #[arg(long, default_value = "off", value_parser = parse_cone)]
+    cone: Cone,
     /// Output image: .exr (linear HDR) or .png (tone-mapped sRGB).
     #[arg(long, short, default_value = "out.png")]
     out: PathBuf,
@@ -89,6 +101,38 @@ struct RenderArgs {
     checkpoint: f64,
     #[command(flatten)]
     device: DeviceArgs,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum ProbeArg {
+    Off,
+    Paper,
+    ScaleFree,
+}
+
+impl From<ProbeArg> for ProbeMode {
+    fn from(p: ProbeArg) -> ProbeMode {
+        match p {
+            ProbeArg::Off => ProbeMode::Off,
+            ProbeArg::Paper => ProbeMode::Paper,
+            ProbeArg::ScaleFree => ProbeMode::ScaleFree,
+        }
+    }
+}
+
+/// `--cone`: a filter constant, or none.
+#[derive(Clone, Copy, Debug)]
+struct Cone(Option<f32>);
+
+fn parse_cone(s: &str) -> Result<Cone, String> {
+    if s.eq_ignore_ascii_case("off") {
+        return Ok(Cone(None));
+    }
+    let k: f32 = s.parse().map_err(|e| format!("{s:?}: {e} (expected a number k >= 1, or `off`)"))?;
+    if !(k.is_finite() && k >= 1.0) {
+        return Err(format!("the cone filter constant must be >= 1, got {s}"));
+    }
+    Ok(Cone(Some(k)))
 }
 
 fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
@@ -159,6 +203,10 @@ fn render(args: RenderArgs) -> Result<()> {
         seed: args.seed,
         initial_radius: args.radius,
         hit_slots: args.hit_slots,
+        probe: args.probe.into(),
+        probe_beta: args.beta,
+        probe_photons: args.probe_photons,
+        cone_k: args.cone.0,
         ..Settings::default()
     };
     // Ctrl-C ends the render after the pass in flight; the image is written as usual.
@@ -192,6 +240,13 @@ fn render(args: RenderArgs) -> Result<()> {
         renderer.ray_ms()
     );
 
+    if let Some(p) = renderer.probe_report() {
+        let q = p.lambda_ratio_quantiles;
+        eprintln!(
+            "probe: {} photons, {} of {} hit points enlarged ({} reached by none), lambda/r^2 min {:.3} q1 {:.3} median {:.3} q3 {:.3} max {:.3}, mean radius {:.3} r, {:.1} ms GPU",
+            p.photons, p.enlarged, p.hit_points, p.empty, q[0], q[1], q[2], q[3], q[4], p.mean_radius_ratio, p.gpu_ms
+        );
+    }
     let budget = args.time.map(Duration::from_secs_f64);
     let passes = args.passes.unwrap_or(if budget.is_some() { u64::MAX } else { 100 });
     let bar = if budget.is_some() { ProgressBar::new(1000) } else { ProgressBar::new(passes) };

@@ -10,6 +10,7 @@ use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon, EMPTY_SLOT, 
 use ppm_vk_kernels::photon::MAX_RECORDS;
 
 use crate::gpu_scene::GpuScene;
+use crate::settings::ProbeMode;
 use rng::Rng;
 use trace::{cosine_direction, fresnel_dielectric, intersect_scene, oct_decode, oct_encode, reflect, v3, PI};
 
@@ -230,4 +231,138 @@ pub fn resolve(g: &GpuScene, hits: &[HitPoint], stats: &[HitStats], direct: &[[f
             [sum.x + d[0] as f64, sum.y + d[1] as f64, sum.z + d[2] as f64]
         })
         .collect()
+}
+
+/// Eq. 7 in units of r^2: lambda / r^2 = (1/N) sum |t_p - g|^2 / r^2 over the `d2` (squared distances) of
+/// the photons inside the sphere; 1 (sparse) when there is none (ALGORITHM.md).
+pub fn lambda_ratio(d2: &[f64], r2: f64) -> f64 {
+    if d2.is_empty() {
+        return 1.0;
+    }
+    d2.iter().sum::<f64>() / d2.len() as f64 / r2
+}
+
+/// Eq. 9: the starting radius from r and lambda / r^2, with beta = `beta_frac` r. The test lambda / r <=
+/// beta is lambda / r^2 <= beta_frac in both modes; above it the paper enlarges to r (1 + lambda / r), the
+/// scale-free variant to r (1 + lambda / r^2).
+pub fn probe_radius(r: f64, ratio: f64, mode: ProbeMode, beta_frac: f64) -> f64 {
+    if mode == ProbeMode::Off || ratio <= beta_frac {
+        return r;
+    }
+    match mode {
+        ProbeMode::Paper => r * (1.0 + ratio * r), // lambda / r = ratio * r
+        _ => r * (1.0 + ratio),
+    }
+}
+
+/// The probe pass over `photons` for every slot, as probe.comp computes it: (lambda / r^2, new r^2).
+pub fn probe(hits: &[HitPoint], stats: &[HitStats], photons: &[Photon], mode: ProbeMode, beta_frac: f32) -> Vec<(f64, f64)> {
+    hits.iter()
+        .zip(stats)
+        .map(|(hp, st)| {
+            if hp.pixel == EMPTY_SLOT {
+                return (0.0, st.r2);
+            }
+            let r2f = st.r2 as f32;
+            let pos = v3(hp.pos);
+            let n = v3(hp.normal);
+            let d2: Vec<f64> = photons
+                .iter()
+                .filter_map(|p| {
+                    let dv = v3(p.pos) - pos;
+                    let d2 = dv.dot(dv);
+                    (d2 <= r2f && oct_decode(p.dir).dot(n) < 0.0).then_some(d2 as f64)
+                })
+                .collect();
+            let ratio = lambda_ratio(&d2, st.r2);
+            let r = probe_radius(st.r2.sqrt(), ratio, mode, beta_frac as f64);
+            (ratio, r * r)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Deterministic points uniform on a disc of radius r (a Fibonacci spiral: equal area per point).
+    fn disc(r: f64, n: usize) -> Vec<f64> {
+        (0..n).map(|i| r * r * (i as f64 + 0.5) / n as f64).collect() // squared radii, uniform in area
+    }
+
+    #[test]
+    fn lambda_of_a_uniform_disc_is_half_r_squared() {
+        // E|t - g|^2 over a uniform disc of radius r is r^2 / 2 (eq. 7's closed form).
+        let r = 0.37;
+        assert!((lambda_ratio(&disc(r, 100_000), r * r) - 0.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn lambda_of_photons_at_the_centre_is_zero_and_of_none_is_sparse() {
+        assert_eq!(lambda_ratio(&[0.0; 10], 0.01), 0.0);
+        assert_eq!(lambda_ratio(&[], 0.01), 1.0);
+    }
+
+    #[test]
+    fn eq9_branches_at_the_boundary() {
+        let r = 0.5;
+        for mode in [ProbeMode::Paper, ProbeMode::ScaleFree] {
+            // lambda / r <= beta keeps r, exactly at the boundary too.
+            assert_eq!(probe_radius(r, 0.2, mode, 0.2), r);
+            assert_eq!(probe_radius(r, 0.0, mode, 0.2), r);
+        }
+        // Just above: the paper adds lambda (an area) to r: r (1 + lambda / r) = r + lambda.
+        let ratio = 0.2 + 1e-12;
+        assert!((probe_radius(r, ratio, ProbeMode::Paper, 0.2) - (r + ratio * r * r)).abs() < 1e-15);
+        assert!((probe_radius(r, ratio, ProbeMode::ScaleFree, 0.2) - r * (1.0 + ratio)).abs() < 1e-15);
+        // The scale-free rule does not depend on units; the paper's does.
+        let (a, b) = (probe_radius(1.0, 0.5, ProbeMode::ScaleFree, 0.2), probe_radius(1000.0, 0.5, ProbeMode::ScaleFree, 0.2));
+        assert!((b / a - 1000.0).abs() < 1e-9);
+        let (a, b) = (probe_radius(1.0, 0.5, ProbeMode::Paper, 0.2), probe_radius(1000.0, 0.5, ProbeMode::Paper, 0.2));
+        assert!((b / a - 1000.0).abs() > 100.0, "paper rule: {a} vs {b}");
+        assert_eq!(probe_radius(r, 0.9, ProbeMode::Off, 0.2), r);
+    }
+
+    #[test]
+    fn cone_filter_normalisation_is_unbiased_for_a_uniform_density() {
+        // The mean of w = 1 - d / (k r) over a uniform disc is 1 - 2 / (3k) (eq. 11): E[d] = 2r/3.
+        for k in [1.0f64, 1.1, 2.0] {
+            let d2 = disc(1.0, 200_000);
+            let mean_w = d2.iter().map(|d2| 1.0 - d2.sqrt() / k).sum::<f64>() / d2.len() as f64;
+            assert!((mean_w - (1.0 - 2.0 / (3.0 * k))).abs() < 1e-5, "k {k}: {mean_w}");
+        }
+    }
+
+    #[test]
+    fn cone_filter_progressive_estimate_is_unbiased() {
+        // Photons of flux 1 uniform on a plane at density rho per unit area; the filtered progressive
+        // estimate tau / ((1 - 2/(3k)) pi R^2 N_emitted / M_per_unit) must converge to rho over many
+        // passes (eq. 12-14), with R shrinking by eq. 3.
+        let (k, alpha, rho) = (1.1f64, 0.7f64, 4000.0f64);
+        let norm = 1.0 - 2.0 / (3.0 * k);
+        let mut rng = rng::Rng::new(3, 9);
+        let mut s = HitStats { r2: 0.01, ..Default::default() };
+        let mut emitted = 0f64;
+        for _ in 0..400 {
+            // One pass: photons uniform on a 1x1 square around the hit point (Poisson count ~ rho).
+            let count = rho as usize;
+            emitted += count as f64;
+            let r = s.r2.sqrt();
+            let (mut m, mut tau_m) = (0u32, 0f64);
+            for _ in 0..count {
+                let (x, y) = (rng.float() as f64 - 0.5, rng.float() as f64 - 0.5);
+                let d = (x * x + y * y).sqrt();
+                if d * d <= s.r2 {
+                    m += 1;
+                    tau_m += 1.0 - d / (k * r); // eq. 10
+                }
+            }
+            let acc = PassAccum { flux_r: (tau_m * 65536.0).round() as i64, m, ..Default::default() };
+            s = update(&s, &acc, alpha as f32, 65536.0);
+        }
+        // Radiance-like estimate of the density: tau / (norm pi R^2) per emitted photon, times the
+        // photons per pass per unit area (rho photons over an area of 1).
+        let estimate = s.tau_r / (norm * std::f64::consts::PI * s.r2 * emitted) * rho;
+        assert!((estimate / rho - 1.0).abs() < 0.03, "estimate {estimate} vs {rho}");
+    }
 }

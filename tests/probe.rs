@@ -1,0 +1,116 @@
+//! Photon probing (eq. 7-9) on the GPU against the CPU reference, and how both probe rules behave when the
+//! scene's units change.
+
+mod common;
+
+use common::{assert_clean, cornell, ctx};
+use ppm_vk_engine::reference;
+use ppm_vk_engine::{ProbeMode, Renderer, Settings};
+use ppm_vk_kernels::photon::SALT_PROBE;
+
+const RES: u32 = 32;
+const PROBE_PHOTONS: u32 = 20_000;
+
+fn settings(probe: ProbeMode) -> Settings {
+    Settings { photons_per_pass: 20_000, probe, probe_photons: Some(PROBE_PHOTONS), ..Settings::default() }
+}
+
+fn probe_case(mode: ProbeMode) {
+    let ctx = ctx();
+    let scene = cornell(RES, RES);
+    let r = Renderer::new(&ctx, &scene, settings(mode)).unwrap();
+    let g = r.gpu_scene().clone();
+    let hits = r.read_hit_points().unwrap();
+    let gpu = r.read_stats().unwrap();
+    // The CPU traces the same probe photons (same streams) and probes every hit point by brute force.
+    let photons = reference::photon_pass(&g, 0, PROBE_PHOTONS, SALT_PROBE);
+    let r0 = g.initial_radius as f64;
+    let start = vec![ppm_vk_engine::layout::HitStats { r2: r0 * r0, ..Default::default() }; hits.len()];
+    let cpu = reference::probe(&hits, &start, &photons, mode, r.settings().probe_beta);
+    let (mut live, mut agree, mut enlarged, mut worst) = (0usize, 0usize, 0usize, 0f64);
+    for (i, (h, (s, (ratio, r2)))) in hits.iter().zip(gpu.iter().zip(&cpu)).enumerate() {
+        if h.is_empty() {
+            continue;
+        }
+        live += 1;
+        enlarged += (s.r2 > r0 * r0 * (1.0 + 1e-9)) as usize;
+        // lambda / r^2 is a mean of d^2 / r^2 over the photons in the sphere (hundreds here: r is eq. 8's
+        // 0.17 m at 32 pixels wide). Positions differ between GPU and CPU by f32 rounding (~1e-7 m, so
+        // d^2 / r^2 by ~1e-6 per photon), and ~0.2% of records belong to paths that diverged at a
+        // threshold, each moving a mean of N values in [0, 1] by at most 1/N: 1e-4 absolute covers the
+        // first, and 95% of hit points without a diverged record the second (measured: 98-99%).
+        // r'^2 = r^2 (1 + lambda / r^2)^2 (scale-free) turns a difference of lambda / r^2 into up to twice
+        // that, relative.
+        let same = (s.probe - ratio).abs() <= 1e-4 && (s.r2 - r2).abs() <= 2e-4 * r2;
+        agree += same as usize;
+        worst = worst.max((s.probe - ratio).abs());
+        assert!(s.probe.is_finite() && (0.0..=1.0).contains(&s.probe), "slot {i}: lambda/r^2 {}", s.probe);
+        assert!(s.r2 >= r0 * r0 * (1.0 - 1e-12), "slot {i}: the probe shrank a radius");
+    }
+    println!("{mode:?}: {agree} of {live} hit points agree with the CPU probe (worst |d lambda/r^2| {worst:.2e}), {enlarged} enlarged");
+    assert!(agree * 100 >= live * 95, "{mode:?}: only {agree} of {live} hit points agree");
+    // A diverged record moves one mean by at most 1/N with N in the hundreds: never by 0.02.
+    assert!(worst < 0.02, "{mode:?}: a hit point's lambda/r^2 differs by {worst}");
+    assert!(enlarged > 0, "{mode:?}: the probe enlarged nothing");
+    let report = r.probe_report().expect("a probe report");
+    assert_eq!(report.hit_points as usize, live);
+    assert_eq!(report.enlarged as usize, enlarged);
+    let q = report.lambda_ratio_quantiles;
+    assert!(q.windows(2).all(|w| w[0] <= w[1]), "quantiles not ordered: {q:?}");
+    // Over flat walls photons are uniform in the disc: the median lambda / r^2 is near 1/2 (eq. 7's closed
+    // form for a uniform disc), the spread coming from the ~20 photons each estimate averages.
+    assert!((q[2] - 0.5).abs() < 0.1, "median lambda/r^2 {} is not near 1/2", q[2]);
+    assert_clean(&ctx);
+}
+
+#[test]
+fn probe_paper_matches_reference() {
+    probe_case(ProbeMode::Paper);
+}
+
+#[test]
+fn probe_scale_free_matches_reference() {
+    probe_case(ProbeMode::ScaleFree);
+}
+
+/// The mean radiance of a render of cornell-spheres scaled by `s`.
+fn render_scaled(s: f32, probe: ProbeMode) -> ([f64; 3], f64) {
+    let ctx = ctx();
+    let scene = cornell(RES, RES).scaled(s);
+    let mut r = Renderer::new(&ctx, &scene, Settings { photons_per_pass: 50_000, ..settings(probe) }).unwrap();
+    for _ in 0..4 {
+        r.pass().unwrap();
+    }
+    let image = r.image().unwrap();
+    assert_eq!(image.count_non_finite(), 0);
+    let growth = r.probe_report().map(|p| p.mean_radius_ratio).unwrap_or(1.0);
+    assert_clean(&ctx);
+    (image.mean(), growth)
+}
+
+#[test]
+fn scale_free_probe_renders_the_same_at_any_scale() {
+    // Radiance does not depend on units: every ray offset, radius and grid cell is relative to the scene,
+    // and the scale-free rule enlarges by the same factor at every scale.
+    let (base, g1) = render_scaled(1.0, ProbeMode::ScaleFree);
+    for s in [1e-3f32, 1e3] {
+        let (m, g) = render_scaled(s, ProbeMode::ScaleFree);
+        // 1%: the same photons at every scale, up to f32 rounding that moves a few paths.
+        for c in 0..3 {
+            assert!((m[c] / base[c] - 1.0).abs() < 0.01, "scale {s}: mean {m:?} vs {base:?}");
+        }
+        assert!((g / g1 - 1.0).abs() < 0.01, "scale {s}: radius growth {g} vs {g1}");
+    }
+}
+
+#[test]
+fn paper_probe_depends_on_the_scene_units() {
+    // Eq. 9 as printed enlarges r to r (1 + lambda / r) = r + lambda: with lambda ~ r^2 / 2 the growth
+    // is ~1 + r / 2, so it follows the units. At 32 pixels wide eq. 8 gives r = 0.17 in metres (growth
+    // ~1.08) and 167 in millimetres (growth ~80). Documented, not fixed: that is what --probe paper means.
+    let (_, g1) = render_scaled(1.0, ProbeMode::Paper);
+    let (_, g1000) = render_scaled(1e3, ProbeMode::Paper);
+    println!("paper probe: mean radius growth {g1:.4} in metres, {g1000:.3} in millimetres");
+    assert!((1.02..1.2).contains(&g1), "in metres: growth {g1}, expected ~1 + r/2 = 1.08");
+    assert!(g1000 > 20.0, "in millimetres the paper's rule should enlarge r tens of times: {g1000}");
+}
