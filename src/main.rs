@@ -9,9 +9,10 @@ use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_vk_engine::metrics::{compare, cornell_regions, Reference};
-use ppm_vk_engine::{Context, ContextOptions, PassStats, ProbeMode, Renderer, Scene, Settings};
+use ppm_vk_engine::{Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings};
 
 mod bench;
+mod compare;
 
 #[derive(Parser)]
 #[command(name = "ppm-vk", version = concat!(env!("CARGO_PKG_VERSION"), " (", env!("PPM_VK_GIT_REV"), ")"))]
@@ -29,6 +30,8 @@ enum Command {
     Devices,
     /// Time each stage on a fixed set of cases; prints a table and writes JSON.
     Bench(bench::BenchArgs),
+    /// Render variants for equal wall time each and score them against a reference.
+    Compare(compare::CompareArgs),
 }
 
 #[derive(Args, Clone)]
@@ -51,6 +54,10 @@ impl DeviceArgs {
 struct RenderArgs {
     /// Scene file (TOML; see docs/scene-format.md).
     scene: PathBuf,
+    /// `ppm`: hit points fixed at pixel centres; `sppm`: stochastic PPM, new hit points every pass at a
+    /// random point of each pixel (anti-aliased, box filter).
+    #[arg(long, value_enum, default_value_t = ModeArg::Ppm)]
+    mode: ModeArg,
     /// Photon passes to run (default 100 unless --time is given).
     #[arg(long, conflicts_with = "time")]
     passes: Option<u64>,
@@ -104,6 +111,12 @@ struct RenderArgs {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum ModeArg {
+    Ppm,
+    Sppm,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 enum ProbeArg {
     Off,
     Paper,
@@ -135,7 +148,7 @@ fn parse_cone(s: &str) -> Result<Cone, String> {
     Ok(Cone(Some(k)))
 }
 
-fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;
     let parse = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("{v:?}: {e}"));
     let (w, h) = (parse(w)?, parse(h)?);
@@ -151,6 +164,7 @@ fn main() {
         Command::Render(args) => render(args),
         Command::Devices => devices(),
         Command::Bench(args) => bench::run(args),
+        Command::Compare(args) => compare::run(args),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
@@ -198,6 +212,10 @@ fn render(args: RenderArgs) -> Result<()> {
         None => None,
     };
     let settings = Settings {
+        mode: match args.mode {
+            ModeArg::Ppm => Mode::Ppm,
+            ModeArg::Sppm => Mode::Sppm,
+        },
         photons_per_pass: args.photons_per_pass,
         alpha: args.alpha,
         seed: args.seed,

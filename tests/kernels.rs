@@ -55,7 +55,7 @@ fn ray_pass_matches_reference_case(specialize: bool) {
     let g = r.gpu_scene();
     let gpu_hits = r.read_hit_points().unwrap();
     let gpu_direct = r.read_direct().unwrap();
-    let (cpu_hits, cpu_direct) = reference::ray_pass(g, [0.5, 0.5], SALT_EYE);
+    let (cpu_hits, cpu_direct) = reference::ray_pass(g, [0.5, 0.5], SALT_EYE, 0);
     assert_eq!(gpu_hits.len(), cpu_hits.len());
     assert_eq!(gpu_hits.len(), (RES * RES * g.params.hit_slots) as usize);
 
@@ -365,10 +365,10 @@ fn gather_with_cone_filter_matches_brute_force() {
     gather_case(Some(1.1));
 }
 
-fn check_update(label: &str, before: &[HitStats], accum: &[PassAccum], after: &[HitStats], alpha: f32, flux_fixed: f32) {
+fn check_update(label: &str, hits: &[HitPoint], before: &[HitStats], accum: &[PassAccum], after: &[HitStats], alpha: f32, flux_fixed: f32) {
     let mut updated = 0;
-    for (i, ((s, a), g)) in before.iter().zip(accum).zip(after).enumerate() {
-        let c = reference::update(s, a, alpha, flux_fixed);
+    for (i, (((s, a), g), h)) in before.iter().zip(accum).zip(after).zip(hits).enumerate() {
+        let c = reference::update(s, a, h.weight, alpha, flux_fixed);
         updated += (a.m > 0) as usize;
         // Both in f64 with the same operations: 1e-12 relative leaves room only for a differently
         // rounded division; exact zeros must stay exact.
@@ -393,7 +393,8 @@ fn update_matches_reference() {
         let accum = r.read_accum().unwrap();
         r.update_only().unwrap();
         let after = r.read_stats().unwrap();
-        check_update(&format!("update round {round}"), &before, &accum, &after, alpha, r.gpu_scene().params.flux_fixed);
+        let hits = r.read_hit_points().unwrap();
+        check_update(&format!("update round {round}"), &hits, &before, &accum, &after, alpha, r.gpu_scene().params.flux_fixed);
         // The update clears the accumulators for the next pass.
         let cleared = r.read_accum().unwrap();
         assert!(cleared.iter().all(|a| *a == PassAccum::default()), "round {round}: accumulators not cleared");
@@ -412,7 +413,6 @@ fn resolve_case(cone_k: Option<f32>) {
     let g = r.gpu_scene();
     let cpu = reference::resolve(
         g,
-        &r.read_hit_points().unwrap(),
         &r.read_stats().unwrap(),
         &r.read_direct().unwrap(),
         r.emitted() as f64,

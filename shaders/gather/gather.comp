@@ -45,6 +45,7 @@ void main() {
     if (t >= pc.count) return;
     uint i = order[t];
     HitPoint hp = hit_points[i];
+    if (hp.pixel == 0xffffffffu) return; // SPPM: this pass's eye path found no diffuse surface
     float r2 = float(stats[i].r2);
     flux_fixed = params.flux_fixed;
     inv_kr = pc.cone_k > 0.0 ? 1.0 / (pc.cone_k * sqrt(r2)) : 0.0;

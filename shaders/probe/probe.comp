@@ -61,6 +61,7 @@ void main() {
         return;
     }
     HitPoint hp = hit_points[i];
+    if (hp.pixel == 0xffffffffu) return;
     float r2 = float(s.r2);
     inv_r2 = 1.0 / r2;
     for_each_photon_near(hp.pos, hp.normal, r2);

@@ -1,7 +1,9 @@
 // Pass 1, the ray (eye) pass: one camera ray per pixel, followed through mirrors and glass to the first
 // diffuse surface, where it leaves a hit point. Glass splits the path into both Fresnel branches while the
 // pixel has hit-point slots left; beyond that one branch is chosen at random (ALGORITHM.md, "Glass in the
-// ray pass"). Emission seen directly or through specular paths goes into `direct`.
+// ray pass"). Emission seen directly or through specular paths is added to `direct` (rgb), whose w counts
+// the eye passes: PPM runs this once, at pixel centres; SPPM once per pass, at a random point of each
+// pixel, with one slot (one branch at glass).
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 64) in;
@@ -9,11 +11,12 @@ layout(local_size_x = 64) in;
 #include "types.glsl"
 #include "bindings.glsl"
 layout(std430, binding = 4) writeonly buffer HitPoints { HitPoint hit_points[]; };
-layout(std430, binding = 5) writeonly buffer Direct { vec4 direct[]; };
+layout(std430, binding = 5) buffer Direct { vec4 direct[]; };
 layout(push_constant) uniform RayPush {
-    vec2 jitter;     // sample position inside the pixel, in [0,1)^2 (0.5, 0.5: the centre)
+    vec2 jitter;     // sample position inside the pixel, in [0,1)^2 (0.5, 0.5: the centre); negative:
+                     // a random position per pixel (box filter)
     uint salt;       // random stream family
-    uint pad0;
+    uint pass;       // eye pass index: pixel p of pass k draws from stream k * pixels + p
 } pc;
 
 #include "rng.glsl"
@@ -31,11 +34,17 @@ void main() {
     if (pixel >= params.width * params.height) return;
     uint px = pixel % params.width;
     uint py = pixel / params.width;
-    float sx = (2.0 * (float(px) + pc.jitter.x) / float(params.width) - 1.0) * params.aspect * params.tan_half_fov;
-    float sy = (1.0 - 2.0 * (float(py) + pc.jitter.y) / float(params.height)) * params.tan_half_fov;
+    uint64_t pixels = uint64_t(params.width * params.height);
+    Rng rng = rng_new(uint64_t(params.seed) | (uint64_t(pc.salt) << 32), uint64_t(pc.pass) * pixels + uint64_t(pixel));
+    vec2 jitter = pc.jitter;
+    if (jitter.x < 0.0) {
+        jitter.x = rng_float(rng);
+        jitter.y = rng_float(rng);
+    }
+    float sx = (2.0 * (float(px) + jitter.x) / float(params.width) - 1.0) * params.aspect * params.tan_half_fov;
+    float sy = (1.0 - 2.0 * (float(py) + jitter.y) / float(params.height)) * params.tan_half_fov;
     vec3 dir = normalize(params.forward + sx * params.right + sy * params.up);
 
-    Rng rng = rng_new(uint64_t(params.seed) | (uint64_t(pc.salt) << 32), uint64_t(pixel));
     Pending stack[MAX_SLOTS];
     uint sp = 0u;
     stack[sp++] = Pending(params.eye, dir, vec3(1.0), 0u);
@@ -93,5 +102,5 @@ void main() {
     for (; slot < params.hit_slots; slot++) {
         hit_points[base + slot] = HitPoint(vec3(0.0), 0xffffffffu, vec3(0.0), 0u, vec3(0.0), 0u);
     }
-    direct[pixel] = vec4(emitted, 1.0);
+    direct[pixel] += vec4(emitted, 1.0);
 }

@@ -1,15 +1,15 @@
-// Pass 5, resolve: pixel radiance = directly seen emission + sum over the pixel's hit points of
-// w f_r tau / (pi R^2 N_emitted) (eq. 1-2), with the cone filter's normalisation (1 - 2/(3k)) pi R^2
-// (eq. 11) when it is on.
+// Pass 5, resolve: pixel radiance = directly seen emission (averaged over eye passes) + sum over the
+// pixel's hit points of tau / (pi R^2 N_emitted) (eq. 1-2; tau already carries w f_r), with the cone
+// filter's normalisation (1 - 2/(3k)) pi R^2 (eq. 11) when it is on. Slots whose statistics never
+// received a photon contribute nothing, whatever their hit point now is.
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 64) in;
 #include "types.glsl"
 #include "params.glsl"
-layout(std430, binding = 1) readonly buffer HitPoints { HitPoint hit_points[]; };
-layout(std430, binding = 2) readonly buffer Stats { HitStats stats[]; };
-layout(std430, binding = 3) readonly buffer Direct { vec4 direct[]; };
-layout(std430, binding = 4) writeonly buffer Image { vec4 image[]; };
+layout(std430, binding = 1) readonly buffer Stats { HitStats stats[]; };
+layout(std430, binding = 2) readonly buffer Direct { vec4 direct[]; };
+layout(std430, binding = 3) writeonly buffer Image { vec4 image[]; };
 layout(push_constant) uniform ResolvePush {
     double emitted;  // photons emitted by all photon passes so far (exact in double up to 2^53)
     float norm;      // 1, or 1 - 2/(3k) with the cone filter (eq. 11)
@@ -25,13 +25,11 @@ void main() {
     dvec3 sum = dvec3(0.0);
     if (pc.emitted > 0.0) {
         for (uint s = 0u; s < params.hit_slots; s++) {
-            uint i = pixel * params.hit_slots + s;
-            HitPoint hp = hit_points[i];
-            if (hp.pixel == 0xffffffffu) continue;
-            HitStats st = stats[i];
+            HitStats st = stats[pixel * params.hit_slots + s];
             double area = double(pc.norm) * double(PI) * st.r2;
-            sum += dvec3(hp.weight) * dvec3(st.tau_r, st.tau_g, st.tau_b) / (area * pc.emitted);
+            sum += dvec3(st.tau_r, st.tau_g, st.tau_b) / (area * pc.emitted);
         }
     }
-    image[pixel] = vec4(vec3(sum) + direct[pixel].rgb, 1.0);
+    vec4 d = direct[pixel];
+    image[pixel] = vec4(vec3(sum) + d.rgb / max(d.w, 1.0), 1.0);
 }

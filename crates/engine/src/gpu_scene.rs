@@ -142,7 +142,7 @@ impl GpuScene {
             eps: 1e-4 * extent,
             max_photon_depth: settings.max_photon_depth,
             max_eye_depth: settings.max_eye_depth,
-            hit_slots: settings.hit_slots,
+            hit_slots: settings.slots(),
             photon_capacity,
             seed: settings.seed,
             flux_fixed,

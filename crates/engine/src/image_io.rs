@@ -108,6 +108,16 @@ impl RgbImage {
         Ok(out)
     }
 
+    /// Each pixel repeated k x k times (nearest neighbour), for figures of small crops.
+    pub fn upscale(&self, k: u32) -> Result<Self> {
+        if k == 0 {
+            bail!("upscale factor must be at least 1");
+        }
+        let (w, h) = (self.width * k, self.height * k);
+        let pixels = (0..h).flat_map(|y| (0..w).map(move |x| (x / k, y / k))).map(|(x, y)| self.get(x, y)).collect();
+        Ok(RgbImage { width: w, height: h, pixels })
+    }
+
     /// The `w` x `h` rectangle whose top-left pixel is (`x0`, `y0`).
     pub fn crop(&self, x0: u32, y0: u32, w: u32, h: u32) -> Result<Self> {
         // u64 so that huge requests fail the bounds check instead of overflowing.

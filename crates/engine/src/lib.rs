@@ -31,4 +31,4 @@ pub use ppm_vk_device::{Context, ContextOptions, DeviceInfo, ScopeTiming};
 pub use ppm_vk_kernels::layout;
 pub use renderer::{PassStats, ProbeReport, Renderer};
 pub use scene::Scene;
-pub use settings::{ProbeMode, Settings};
+pub use settings::{Mode, ProbeMode, Settings};

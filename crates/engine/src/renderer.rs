@@ -10,7 +10,7 @@ use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon};
 use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PhotonPush, MAX_RECORDS, SALT_EYE, SALT_PHOTON, SALT_PROBE};
 use ppm_vk_kernels::probe::{self, ProbePush, MODE_PAPER, MODE_SCALE_FREE};
-use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers};
+use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers, JITTER_RANDOM};
 use ppm_vk_kernels::resolve::{self, ResolvePush};
 use ppm_vk_kernels::specialize::{self, MAX_INLINE_PRIMITIVES};
 use ppm_vk_kernels::{pipeline, pipeline_from, reflected};
@@ -18,7 +18,7 @@ use ppm_vk_kernels::{pipeline, pipeline_from, reflected};
 use crate::gpu_scene::GpuScene;
 use crate::image_io::RgbImage;
 use crate::scene::Scene;
-use crate::settings::{ProbeMode, Settings};
+use crate::settings::{Mode, ProbeMode, Settings};
 
 /// What one photon pass did and what it cost.
 #[derive(Clone, Debug)]
@@ -176,7 +176,7 @@ impl Renderer {
                     max_range >> 20,
                     gpu.params.width,
                     gpu.params.height,
-                    settings.hit_slots
+                    settings.slots()
                 );
             }
             Ok(())
@@ -233,7 +233,21 @@ impl Renderer {
             kernels,
         };
         drop(stats_init);
-        r.ray_pass()?;
+        r.ctx.run(|cmd| {
+            r.accum.cmd_fill(cmd, 0);
+            r.direct.cmd_fill(cmd, 0);
+            Ok(())
+        })?;
+        r.ray_ms = r.ray_pass(0)?.iter().map(|s| s.duration_ms).sum();
+        // The gather walks the hit points in Morton order, so neighbouring threads read the same buckets.
+        // PPM's hit points never move: order them by position once, on the host. SPPM's move every pass:
+        // order the pixels by their screen position, which is nearly as coherent and never changes.
+        let order = match r.settings.mode {
+            Mode::Ppm => morton_order(&r.read_hit_points()?),
+            Mode::Sppm => pixel_order(r.gpu.params.width, r.gpu.params.height),
+        };
+        r.active = order.len() as u32;
+        r.ctx.upload(&r.order, bytemuck::cast_slice(&order))?;
         if r.settings.probe != ProbeMode::Off {
             r.probe_pass()?;
         }
@@ -248,28 +262,25 @@ impl Renderer {
         HitBuffers { hit_points: &self.hit_points, stats: &self.stats, accum: &self.accum, order: &self.order }
     }
 
-    /// Pass 1: hit points through each pixel's centre.
-    fn ray_pass(&mut self) -> Result<()> {
+    /// Pass 1, eye pass number `eye_pass`: PPM's one pass through pixel centres, or one of SPPM's, through
+    /// a random point of each pixel.
+    fn ray_pass(&mut self, eye_pass: u32) -> Result<Vec<ScopeTiming>> {
         self.profiler.reset();
-        let push = RayPush { jitter: [0.5, 0.5], salt: SALT_EYE, pad0: 0 };
+        let jitter = match self.settings.mode {
+            Mode::Ppm => [0.5, 0.5],
+            Mode::Sppm => JITTER_RANDOM,
+        };
+        let push = RayPush { jitter, salt: SALT_EYE, pass: eye_pass };
         let pixels = self.gpu.pixels();
         let scene = self.scene_buffers();
         let (profiler, k) = (&self.profiler, &self.kernels);
-        let (hit_points, direct, accum) = (&self.hit_points, &self.direct, &self.accum);
+        let (hit_points, direct) = (&self.hit_points, &self.direct);
         self.ctx.run(|cmd| {
-            accum.cmd_fill(cmd, 0);
             profiler.scope(cmd, "ray", || ray::record(&k.ray, cmd, &scene, hit_points, direct, pixels, &push))?;
             barrier(&self.ctx, cmd);
             Ok(())
         })?;
-        self.ray_ms = self.profiler.read()?.iter().map(|s| s.duration_ms).sum();
-        // The gather walks the hit points in Morton order, so neighbouring threads read the same buckets.
-        // Done once per render on the host: the hit points of PPM never move.
-        let hits = self.read_hit_points()?;
-        let order = morton_order(&hits);
-        self.active = order.len() as u32;
-        self.ctx.upload(&self.order, bytemuck::cast_slice(&order))?;
-        Ok(())
+        self.profiler.read()
     }
 
     /// Records photon tracing, the grid build and what uses the grid (the gather, or the probe's first
@@ -374,7 +385,14 @@ impl Renderer {
     pub fn pass(&mut self) -> Result<PassStats> {
         let start = Instant::now();
         let total = self.settings.photons_per_pass;
-        let (mut stages, records, batches) = self.run_batches(self.emitted, total, GridUse::Gather)?;
+        // SPPM traces new hit points before every photon pass but the first, which uses the eye pass the
+        // renderer was made with (and probed).
+        let mut stages = Vec::new();
+        if self.settings.mode == Mode::Sppm && self.passes > 0 {
+            stages = self.ray_pass(self.passes as u32)?;
+        }
+        let (batch_stages, records, batches) = self.run_batches(self.emitted, total, GridUse::Gather)?;
+        stages.extend(batch_stages);
         // The update in its own submission, so an overflowed try above never touches the statistics.
         self.profiler.reset();
         let push = self.update_push();
@@ -401,11 +419,9 @@ impl Renderer {
         let push = ResolvePush { emitted: self.emitted as f64, norm: self.settings.cone_norm(), pad0: 0.0 };
         let pixels = self.gpu.pixels();
         let (profiler, k) = (&self.profiler, &self.kernels);
-        let (params, hp, stats, direct, image) = (&self.params, &self.hit_points, &self.stats, &self.direct, &self.image);
+        let (params, stats, direct, image) = (&self.params, &self.stats, &self.direct, &self.image);
         self.ctx.run(|cmd| {
-            profiler.scope(cmd, "resolve", || {
-                resolve::record(&k.resolve, cmd, params, hp, stats, direct, image, pixels, &push)
-            })?;
+            profiler.scope(cmd, "resolve", || resolve::record(&k.resolve, cmd, params, stats, direct, image, pixels, &push))?;
             barrier(&self.ctx, cmd);
             Ok(())
         })?;
@@ -512,6 +528,21 @@ impl Renderer {
     pub fn set_emitted(&mut self, emitted: u64) {
         self.emitted = emitted;
     }
+}
+
+/// Every pixel, in Morton order of its (x, y).
+fn pixel_order(width: u32, height: u32) -> Vec<u32> {
+    fn spread(v: u32) -> u64 {
+        let mut x = v as u64 & 0xffff;
+        x = (x | (x << 8)) & 0x00ff00ff;
+        x = (x | (x << 4)) & 0x0f0f0f0f;
+        x = (x | (x << 2)) & 0x33333333;
+        (x | (x << 1)) & 0x55555555
+    }
+    let mut keyed: Vec<(u64, u32)> =
+        (0..width * height).map(|p| (spread(p % width) | (spread(p / width) << 1), p)).collect();
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, p)| p).collect()
 }
 
 /// Indices of the non-empty slots sorted by the Morton code of their position in a 2^10 grid over the

@@ -2,6 +2,18 @@
 
 use anyhow::{bail, Result};
 
+/// Which progressive photon mapping.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Mode {
+    /// PPM (Hachisuka et al. 2008): one eye pass at pixel centres, hit points fixed for the render, glass
+    /// split into both Fresnel branches.
+    Ppm,
+    /// Stochastic PPM (Hachisuka and Jensen 2009): an eye pass before every photon pass, at a random point
+    /// of each pixel, one hit point per pixel, one branch at glass chosen by Fresnel.
+    Sppm,
+}
+
 /// How the probe pass (eq. 7-9) sets the starting radii.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -17,6 +29,8 @@ pub enum ProbeMode {
 /// How to render. `Settings::default()` is the paper's setting for plain PPM.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Settings {
+    /// PPM or stochastic PPM.
+    pub mode: Mode,
     /// Photons emitted per photon pass (the paper: 1M).
     pub photons_per_pass: u32,
     /// The fraction of new photons kept by the progressive update (eq. 3, 6); Hachisuka 2008: 0.7.
@@ -33,7 +47,8 @@ pub struct Settings {
     pub probe_beta: f32,
     /// Photons the probe pass emits; `None`: `photons_per_pass`, as in the paper.
     pub probe_photons: Option<u32>,
-    /// Hit points per pixel: glass splits an eye path into both Fresnel branches up to this many leaves.
+    /// Hit points per pixel: glass splits an eye path into both Fresnel branches up to this many leaves
+    /// (PPM; SPPM always has one).
     pub hit_slots: u32,
     /// Specular bounces an eye path may take before it is dropped.
     pub max_eye_depth: u32,
@@ -47,6 +62,7 @@ pub struct Settings {
 impl Default for Settings {
     fn default() -> Self {
         Settings {
+            mode: Mode::Ppm,
             photons_per_pass: 1_000_000,
             alpha: 0.7,
             seed: 0,
@@ -103,6 +119,14 @@ impl Settings {
             ProbeMode::Off => 1.0,
             ProbeMode::Paper => 1.0 + r,
             ProbeMode::ScaleFree => 2.0,
+        }
+    }
+
+    /// Hit points per pixel as the renderer uses them.
+    pub fn slots(&self) -> u32 {
+        match self.mode {
+            Mode::Ppm => self.hit_slots,
+            Mode::Sppm => 1,
         }
     }
 

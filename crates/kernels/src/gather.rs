@@ -56,5 +56,5 @@ pub fn record_gather(
 }
 
 pub fn record_update(k: &ComputePipeline, cmd: vk::CommandBuffer, hits: &HitBuffers, push: &UpdatePush) -> Result<()> {
-    k.dispatch(cmd, &[hits.stats, hits.accum, hits.order], bytemuck::bytes_of(push), push.count as u64)
+    k.dispatch(cmd, &[hits.stats, hits.accum, hits.order, hits.hit_points], bytemuck::bytes_of(push), push.count as u64)
 }

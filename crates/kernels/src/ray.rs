@@ -9,11 +9,16 @@ use crate::push_struct;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct RayPush {
-    /// Sample position inside the pixel, [0,1)^2; (0.5, 0.5) is the centre.
+    /// Sample position inside the pixel, [0,1)^2; (0.5, 0.5) is the centre; negative: a random position
+    /// per pixel ([`JITTER_RANDOM`]).
     pub jitter: [f32; 2],
     pub salt: u32,
-    pub pad0: u32,
+    /// Eye pass index: pixel p of pass k draws from random stream k * pixels + p.
+    pub pass: u32,
 }
+
+/// `RayPush::jitter` for a random position in every pixel (SPPM's box filter).
+pub const JITTER_RANDOM: [f32; 2] = [-1.0, -1.0];
 push_struct!(RayPush, RAY);
 
 /// The scene as the tracing kernels see it (bindings 0-3 of `ray` and `photon`).
@@ -24,7 +29,8 @@ pub struct SceneBuffers<'a> {
     pub materials: &'a Buffer,
 }
 
-/// Writes `hit_slots` hit points per pixel into `hit_points` and the directly seen emission into `direct`.
+/// Writes `hit_slots` hit points per pixel into `hit_points` and adds the directly seen emission to
+/// `direct` (rgb) and 1 to its w.
 pub fn record(
     k: &ComputePipeline,
     cmd: vk::CommandBuffer,

@@ -22,12 +22,11 @@ pub fn record(
     k: &ComputePipeline,
     cmd: vk::CommandBuffer,
     params: &Buffer,
-    hit_points: &Buffer,
     stats: &Buffer,
     direct: &Buffer,
     image: &Buffer,
     pixels: u32,
     push: &ResolvePush,
 ) -> Result<()> {
-    k.dispatch(cmd, &[params, hit_points, stats, direct, image], bytemuck::bytes_of(push), pixels as u64)
+    k.dispatch(cmd, &[params, stats, direct, image], bytemuck::bytes_of(push), pixels as u64)
 }

@@ -14,8 +14,9 @@ use crate::settings::ProbeMode;
 use rng::Rng;
 use trace::{cosine_direction, fresnel_dielectric, intersect_scene, oct_decode, oct_encode, reflect, v3, PI};
 
-/// Hit points (`hit_slots` per pixel) and directly seen emission per pixel, as `ray.comp` makes them.
-pub fn ray_pass(g: &GpuScene, jitter: [f32; 2], salt: u32) -> (Vec<HitPoint>, Vec<[f32; 4]>) {
+/// Hit points (`hit_slots` per pixel) and directly seen emission per pixel (rgb, w = 1), as `ray.comp`
+/// makes them in eye pass `pass`; a negative `jitter` draws a random position in each pixel.
+pub fn ray_pass(g: &GpuScene, jitter: [f32; 2], salt: u32, pass: u32) -> (Vec<HitPoint>, Vec<[f32; 4]>) {
     let p = &g.params;
     let slots = p.hit_slots as usize;
     let mut hits = vec![HitPoint::default(); g.slots() as usize];
@@ -23,10 +24,16 @@ pub fn ray_pass(g: &GpuScene, jitter: [f32; 2], salt: u32) -> (Vec<HitPoint>, Ve
     for pixel in 0..g.pixels() {
         let px = pixel % p.width;
         let py = pixel / p.width;
-        let sx = (2.0 * (px as f32 + jitter[0]) / p.width as f32 - 1.0) * p.aspect * p.tan_half_fov;
-        let sy = (1.0 - 2.0 * (py as f32 + jitter[1]) / p.height as f32) * p.tan_half_fov;
+        let stream = pass as u64 * g.pixels() as u64 + pixel as u64;
+        let mut rng = Rng::new(p.seed as u64 | ((salt as u64) << 32), stream);
+        let mut j = jitter;
+        if j[0] < 0.0 {
+            j[0] = rng.float();
+            j[1] = rng.float();
+        }
+        let sx = (2.0 * (px as f32 + j[0]) / p.width as f32 - 1.0) * p.aspect * p.tan_half_fov;
+        let sy = (1.0 - 2.0 * (py as f32 + j[1]) / p.height as f32) * p.tan_half_fov;
         let dir = (v3(p.forward) + sx * v3(p.right) + sy * v3(p.up)).normalize();
-        let mut rng = Rng::new(p.seed as u64 | ((salt as u64) << 32), pixel as u64);
         // (origin, direction, throughput, depth)
         let mut stack: Vec<(Vec3, Vec3, Vec3, u32)> = vec![(v3(p.eye), dir, Vec3::ONE, 0)];
         let mut slot = 0usize;
@@ -191,44 +198,42 @@ pub fn gather(hits: &[HitPoint], stats: &[HitStats], photons: &[Photon], cone_k:
 }
 
 /// The progressive update of one hit point (eq. 3, 6; eq. 14 with the cone filter's sums), in f64;
-/// `flux_fixed` is the accumulator's fixed-point scale (`RenderParams::flux_fixed`).
-pub fn update(s: &HitStats, a: &PassAccum, alpha: f32, flux_fixed: f32) -> HitStats {
+/// `flux_fixed` is the accumulator's fixed-point scale (`RenderParams::flux_fixed`). tau takes the new
+/// flux times the hit point's `weight` (w f_r).
+pub fn update(s: &HitStats, a: &PassAccum, weight: [f32; 3], alpha: f32, flux_fixed: f32) -> HitStats {
     if a.m == 0 {
         return *s;
     }
     let m = a.m as f64;
     let alpha = alpha as f64;
     let ratio = (s.n + alpha * m) / (s.n + m);
-    let unit = 1.0 / flux_fixed as f64;
+    let w = v3(weight).as_dvec3() / flux_fixed as f64;
     HitStats {
         n: s.n + alpha * m,
         r2: s.r2 * ratio, // eq. 3, squared
-        tau_r: (s.tau_r + a.flux_r as f64 * unit) * ratio, // eq. 6
-        tau_g: (s.tau_g + a.flux_g as f64 * unit) * ratio,
-        tau_b: (s.tau_b + a.flux_b as f64 * unit) * ratio,
+        tau_r: (s.tau_r + a.flux_r as f64 * w.x) * ratio, // eq. 6
+        tau_g: (s.tau_g + a.flux_g as f64 * w.y) * ratio,
+        tau_b: (s.tau_b + a.flux_b as f64 * w.z) * ratio,
         probe: s.probe,
     }
 }
 
-/// Pixel radiance from the statistics (eq. 1-2; eq. 11's normalisation `norm`).
-pub fn resolve(g: &GpuScene, hits: &[HitPoint], stats: &[HitStats], direct: &[[f32; 4]], emitted: f64, norm: f32) -> Vec<[f64; 3]> {
+/// Pixel radiance from the statistics (eq. 1-2; eq. 11's normalisation `norm`); `direct` holds emission
+/// summed over eye passes (rgb) and their count (w).
+pub fn resolve(g: &GpuScene, stats: &[HitStats], direct: &[[f32; 4]], emitted: f64, norm: f32) -> Vec<[f64; 3]> {
     let slots = g.params.hit_slots as usize;
     (0..g.pixels() as usize)
         .map(|pixel| {
             let mut sum = DVec3::ZERO;
             if emitted > 0.0 {
-                for s in 0..slots {
-                    let i = pixel * slots + s;
-                    if hits[i].pixel == EMPTY_SLOT {
-                        continue;
-                    }
-                    let st = &stats[i];
+                for st in &stats[pixel * slots..(pixel + 1) * slots] {
                     let area = norm as f64 * std::f64::consts::PI * st.r2;
-                    sum += v3(hits[i].weight).as_dvec3() * DVec3::new(st.tau_r, st.tau_g, st.tau_b) / (area * emitted);
+                    sum += DVec3::new(st.tau_r, st.tau_g, st.tau_b) / (area * emitted);
                 }
             }
             let d = direct[pixel];
-            [sum.x + d[0] as f64, sum.y + d[1] as f64, sum.z + d[2] as f64]
+            let passes = d[3].max(1.0) as f64;
+            [sum.x + d[0] as f64 / passes, sum.y + d[1] as f64 / passes, sum.z + d[2] as f64 / passes]
         })
         .collect()
 }
@@ -358,7 +363,7 @@ mod tests {
                 }
             }
             let acc = PassAccum { flux_r: (tau_m * 65536.0).round() as i64, m, ..Default::default() };
-            s = update(&s, &acc, alpha as f32, 65536.0);
+            s = update(&s, &acc, [1.0; 3], alpha as f32, 65536.0);
         }
         // Radiance-like estimate of the density: tau / (norm pi R^2) per emitted photon, times the
         // photons per pass per unit area (rho photons over an area of 1).
