@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use clap::Args;
-use ppm_vk_engine::{PassStats, Renderer, Scene, Settings};
+use ppm_vk_engine::{Mode, PassStats, Renderer, Scene, Settings};
 use serde_json::json;
 
 use crate::DeviceArgs;
@@ -25,6 +25,9 @@ pub struct BenchArgs {
     /// Passes timed per case (the median is reported).
     #[arg(long, default_value_t = 5)]
     passes: u32,
+    /// `ppm` or `sppm` (SPPM adds an eye pass to every pass).
+    #[arg(long, default_value = "ppm")]
+    mode: String,
     /// Where to write the JSON results.
     #[arg(long, default_value = "bench.json")]
     json: PathBuf,
@@ -76,25 +79,30 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-const STAGES: [&str; 4] = ["photon", "lookup", "gather", "update"];
+const STAGES: [&str; 5] = ["ray", "photon", "lookup", "gather", "update"];
 
 pub fn run(args: BenchArgs) -> Result<()> {
     if args.passes == 0 {
         bail!("--passes must be at least 1");
     }
     let cases = parse_cases(&args.cases)?;
+    let mode = match args.mode.as_str() {
+        "ppm" => Mode::Ppm,
+        "sppm" => Mode::Sppm,
+        other => bail!("--mode {other:?}: expected ppm or sppm"),
+    };
     let base = Scene::load(&args.scene)?;
     let ctx = args.device.open()?;
     let info = ctx.info().clone();
     println!("device: {} ({}, {})", info.name, info.kind, info.driver);
     println!(
-        "{:>10} {:>11} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9}",
-        "photons", "resolution", "ray ms", "photon", "lookup", "gather", "update", "pass ms", "M photons/s", "resolve"
+        "{:>10} {:>11} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9}",
+        "photons", "resolution", "first ray", "ray", "photon", "lookup", "gather", "update", "pass ms", "M photons/s", "resolve"
     );
     let mut results = Vec::new();
     for case in &cases {
         let scene = base.with_resolution(case.width, case.height);
-        let settings = Settings { photons_per_pass: case.photons, ..Settings::default() };
+        let settings = Settings { photons_per_pass: case.photons, mode, ..Settings::default() };
         let mut renderer = Renderer::new(&ctx, &scene, settings)?;
         for _ in 0..args.warmup {
             renderer.pass()?;
@@ -107,7 +115,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         let rate = case.photons as f64 / (wall * 1e-3) / 1e6;
         let records = median(measured.iter().map(|p| p.records as f64).collect());
         println!(
-            "{:>10} {:>11} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>11.3} {:>9.1}",
+            "{:>10} {:>11} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>11.3} {:>9.1}",
             case.photons,
             format!("{}x{}", case.width, case.height),
             renderer.ray_ms(),
@@ -115,6 +123,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             stage[1],
             stage[2],
             stage[3],
+            stage[4],
             wall,
             rate,
             resolve_ms
@@ -140,6 +149,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         "device": { "name": info.name, "kind": info.kind, "driver": info.driver, "api": info.api_version },
         "git_revision": env!("PPM_VK_GIT_REV"),
         "scene": args.scene.display().to_string(),
+        "mode": args.mode,
         "warmup_passes": args.warmup,
         "measured_passes": args.passes,
         "cases": results,

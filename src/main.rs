@@ -9,6 +9,7 @@ use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_vk_engine::metrics::{compare, cornell_regions, Reference};
+use ppm_vk_engine::report::{file_sha256, PassRecord, RunHeader, RunReport, SCHEMA};
 use ppm_vk_engine::{Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings};
 
 mod bench;
@@ -103,6 +104,16 @@ struct RenderArgs {
     /// Reference image (EXR) to measure error against at the end.
     #[arg(long)]
     reference: Option<PathBuf>,
+    /// Evaluate the error against --reference after every N passes (it reads the image back; the
+    /// overhead is printed).
+    #[arg(long, default_value_t = 1)]
+    error_every: u64,
+    /// Write a run report: per pass wall time, GPU time per stage, photons, errors (.json or .csv).
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Write the per-pass stage timeline as a Chrome trace (opens in Perfetto or chrome://tracing).
+    #[arg(long)]
+    trace: Option<PathBuf>,
     /// Also write the image every N seconds while rendering (0: only at the end).
     #[arg(long, default_value_t = 0.0)]
     checkpoint: f64,
@@ -198,6 +209,12 @@ fn render(args: RenderArgs) -> Result<()> {
     if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
         bail!("--out {}: the extension must be .exr or .png", args.out.display());
     }
+    if let Some(report) = &args.report {
+        let ext = report.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+        if !matches!(ext.as_deref(), Some("json") | Some("csv")) {
+            bail!("--report {}: the extension must be .json or .csv", report.display());
+        }
+    }
     if let Some(t) = args.time {
         if !(t.is_finite() && t > 0.0) {
             bail!("--time must be a positive number of seconds, got {t}");
@@ -265,6 +282,26 @@ fn render(args: RenderArgs) -> Result<()> {
             p.photons, p.enlarged, p.hit_points, p.empty, q[0], q[1], q[2], q[3], q[4], p.mean_radius_ratio, p.gpu_ms
         );
     }
+    if args.error_every == 0 {
+        bail!("--error-every must be at least 1");
+    }
+    let mut report = RunReport::new(RunHeader {
+        schema: SCHEMA.into(),
+        git_revision: env!("PPM_VK_GIT_REV").into(),
+        device: info.name.clone(),
+        device_kind: info.kind.clone(),
+        driver: info.driver.clone(),
+        scene_path: args.scene.display().to_string(),
+        scene_name: scene.name.clone(),
+        scene_sha256: file_sha256(&args.scene)?,
+        width: scene.camera.width,
+        height: scene.camera.height,
+        settings: renderer.settings().clone(),
+        ray_ms: renderer.ray_ms(),
+        probe: renderer.probe_report().cloned(),
+    });
+    let regions = if scene.name == "cornell-spheres" { cornell_regions() } else { Vec::new() };
+    let (mut gpu_origin, mut eval_s, mut evals) = (None, 0f64, 0u32);
     let budget = args.time.map(Duration::from_secs_f64);
     let passes = args.passes.unwrap_or(if budget.is_some() { u64::MAX } else { 100 });
     let bar = if budget.is_some() { ProgressBar::new(1000) } else { ProgressBar::new(passes) };
@@ -293,6 +330,21 @@ fn render(args: RenderArgs) -> Result<()> {
             None => bar.set_position(history.len() as u64 + 1),
         }
         bar.set_message(format!("pass {} | {:.2} M photons/s | {:.1} ms/pass", s.index, rate, s.wall_ms));
+        let origin = *gpu_origin.get_or_insert(s.stages.first().map(|t| t.start_ms).unwrap_or(0.0));
+        let mut record = PassRecord::new(&s, started.elapsed().as_secs_f64(), origin);
+        if let Some(reference) = &reference {
+            if s.index % args.error_every == 0 {
+                let t = Instant::now();
+                let image = renderer.image()?;
+                record.error = Some(compare(&image, reference, None, true)?);
+                for r in &regions {
+                    record.region_errors.insert(r.name.clone(), compare(&image, reference, Some(r), true)?);
+                }
+                eval_s += t.elapsed().as_secs_f64();
+                evals += 1;
+            }
+        }
+        report.passes.push(record);
         history.push(s);
         if args.checkpoint > 0.0 && last_checkpoint.elapsed().as_secs_f64() >= args.checkpoint {
             renderer.image()?.save(&args.out)?;
@@ -322,6 +374,21 @@ fn render(args: RenderArgs) -> Result<()> {
     print_stage_summary(&history, args.profile);
     if let Some(reference) = reference {
         report_error(&image, &reference, &scene)?;
+        if evals > 0 {
+            println!(
+                "error evaluated after {evals} passes: {:.1} ms each, {:.1}% of the render's wall time",
+                eval_s / evals as f64 * 1e3,
+                eval_s / loop_s.max(1e-9) * 100.0
+            );
+        }
+    }
+    if let Some(path) = &args.report {
+        report.save(path)?;
+        println!("report: {}", path.display());
+    }
+    if let Some(path) = &args.trace {
+        report.save_chrome_trace(path)?;
+        println!("trace: {}", path.display());
     }
     Ok(())
 }

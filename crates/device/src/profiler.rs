@@ -11,7 +11,8 @@ use crate::context::Context;
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScopeTiming {
     pub name: &'static str,
-    /// Start relative to the first timestamp of the command buffer, in milliseconds.
+    /// Start on the device's timestamp clock, in milliseconds (comparable across command buffers of one
+    /// device; its origin is the device's).
     pub start_ms: f64,
     pub duration_ms: f64,
 }
@@ -77,7 +78,6 @@ impl Profiler {
         let bits = self.ctx.timestamp_valid_bits();
         let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
         let period_ms = self.ctx.timestamp_period() * 1e-6;
-        let t0 = ticks[0] & mask;
         Ok(self
             .scopes
             .borrow()
@@ -87,7 +87,7 @@ impl Profiler {
                 let b = ticks[i as usize + 1] & mask;
                 ScopeTiming {
                     name,
-                    start_ms: a.wrapping_sub(t0) as f64 * period_ms,
+                    start_ms: a as f64 * period_ms,
                     duration_ms: b.wrapping_sub(a) as f64 * period_ms,
                 }
             })

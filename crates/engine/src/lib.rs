@@ -23,6 +23,7 @@ pub mod image_io;
 pub mod metrics;
 pub mod reference;
 pub mod renderer;
+pub mod report;
 pub mod scene;
 pub mod settings;
 

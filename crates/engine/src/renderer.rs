@@ -45,8 +45,7 @@ impl PassStats {
         self.stages
             .iter()
             .filter(|s| s.name == name || s.name.strip_prefix(name).is_some_and(|rest| rest.starts_with('/')))
-            .map(|s| s.duration_ms)
-            .sum()
+            .fold(0.0, |sum, s| sum + s.duration_ms) // not sum(): an empty f64 sum is -0.0
     }
 }
 
@@ -115,7 +114,7 @@ enum GridUse {
 }
 
 /// What the probe pass did (eq. 7-9).
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ProbeReport {
     pub photons: u32,
     pub hit_points: u32,
