@@ -4,7 +4,9 @@
 //!
 //! A variant is `+`-joined words: `ppm` (plain) or `sppm` (stochastic), `probe` (eq. 9 as printed), `probe-sf` (scale-free),
 //! `cone` (k = 1.1) or `cone=K`, `beta=F` (fraction of r), `alpha=A`. The clock of a variant starts before
-//! its renderer is made, so the probe pass and kernel compilation count against it.
+//! its renderer is made, so the probe pass and kernel compilation count against it. The error is also
+//! sampled at roughly logarithmic times for the error-against-time plot; those evaluations (an image
+//! read back and compared) are timed and left out of the variant's clock.
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -107,15 +109,29 @@ pub fn run(args: CompareArgs) -> Result<()> {
     let budget = Duration::from_secs_f64(args.time);
     let mut rows = Vec::new();
     let mut images: Vec<(String, RgbImage)> = Vec::new();
+    let mut curves = Vec::new();
     for v in &variants {
         let start = Instant::now();
         let mut renderer = Renderer::new(&ctx, &scene, v.settings.clone())?;
         let setup_s = start.elapsed().as_secs_f64();
-        while start.elapsed() < budget {
+        // The variant's clock: wall time less the time spent measuring its error along the way.
+        let mut excluded = Duration::ZERO;
+        let clock = |excluded: Duration| start.elapsed().saturating_sub(excluded);
+        let mut next_sample = 0.5f64;
+        let mut curve = Vec::new();
+        while clock(excluded) < budget {
             renderer.pass()?;
+            let t = clock(excluded).as_secs_f64();
+            if t >= next_sample && clock(excluded) < budget {
+                let t0 = Instant::now();
+                curve.push((t, compare(&renderer.image()?, &reference, None, true)?.rel_mse));
+                excluded += t0.elapsed();
+                next_sample = t * 1.25;
+            }
         }
         let image = renderer.image()?;
-        let wall = start.elapsed().as_secs_f64();
+        let wall = clock(excluded).as_secs_f64();
+        curve.push((wall, compare(&image, &reference, None, true)?.rel_mse));
         let stem = args.out.join(file_name(&v.name));
         image.save(&stem.with_extension("exr"))?;
         image.save(&stem.with_extension("png"))?;
@@ -133,7 +149,9 @@ pub fn run(args: CompareArgs) -> Result<()> {
             "whole": whole,
             "regions": per_region.iter().map(|(n, e)| (n.clone(), json!(e))).collect::<serde_json::Map<_, _>>(),
             "probe": renderer.probe_report(),
+            "rel_mse_curve": curve,
         }));
+        curves.push(crate::plot::Series { name: v.name.clone(), points: curve });
         images.push((v.name.clone(), image));
         crate::check_validation(&ctx)?;
     }
@@ -194,6 +212,11 @@ pub fn run(args: CompareArgs) -> Result<()> {
         let refs: Vec<&RgbImage> = crops.iter().collect();
         // Enlarged 4x and 2 stops darker, so the caustic's structure is not clipped away.
         RgbImage::hstack(&refs)?.upscale(4)?.save_png(&args.out.join(format!("crops-{}.png", r.name)), -2.0)?;
+    }
+    let title = format!("{} {}x{}, {} photons/pass, {}", scene.name, scene.camera.width, scene.camera.height, args.photons_per_pass, info.name);
+    match crate::plot::error_plot(&args.out.join("error-vs-time.png"), &title, "relMSE vs reference", &curves) {
+        Ok(()) => {}
+        Err(e) => eprintln!("warning: no plot: {e:#} (the table, JSON and images are written)"),
     }
     println!("{md}");
     println!(

@@ -14,6 +14,7 @@ use ppm_vk_engine::{Context, ContextOptions, Mode, PassStats, ProbeMode, Rendere
 
 mod bench;
 mod compare;
+mod plot;
 
 #[derive(Parser)]
 #[command(name = "ppm-vk", version = concat!(env!("CARGO_PKG_VERSION"), " (", env!("PPM_VK_GIT_REV"), ")"))]

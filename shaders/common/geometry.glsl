@@ -3,6 +3,14 @@
 #ifndef GEOMETRY_GLSL
 #define GEOMETRY_GLSL
 
+// A point moved off a surface along n, far enough that the next ray does not hit the surface it left: a
+// multiple of the f32 spacing at the point's coordinates (which grows with its distance from the origin)
+// plus a small floor relative to the scene. Both follow a uniform scale of the scene. (A fixed fraction of
+// the scene's size was wrong for a scene with one huge primitive: a 1000 m floor made it 10 cm.)
+vec3 offset_ray(vec3 p, vec3 n) {
+    return p + (params.eps_rel * max(max(abs(p.x), abs(p.y)), abs(p.z)) + params.eps) * n;
+}
+
 struct Hit {
     float t;
     vec3 pos;

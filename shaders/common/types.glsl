@@ -64,7 +64,7 @@ struct RenderParams {
     uint num_spheres;
     uint num_quads;
     uint num_lights;
-    float eps;       // ray offset, relative to the scene's size
+    float eps;       // ray offset floor, relative to the scene's size (see offset_ray)
     uint max_photon_depth;
     uint max_eye_depth;
     uint hit_slots;  // hit points per pixel (glass splits the eye path into both Fresnel branches)
@@ -72,7 +72,7 @@ struct RenderParams {
     uint seed;
     float flux_fixed; // fixed-point units per unit of flux in PassAccum: a power of two, 2^30 / (largest
                       // flux a photon can carry) rounded down, so one photon's contribution fits an int32
-    uint pad1;
+    float eps_rel;   // ray offset per unit of the point's largest coordinate (see offset_ray)
 };
 
 // A diffuse point seen from a pixel (PPM pass 1). Fixed for the whole render.

@@ -66,7 +66,7 @@ void main() {
             Quad q = quads[light.quad];
             float a = rng_float(rng);
             float b = rng_float(rng);
-            o = q.origin + a * q.edge_u + b * q.edge_v + params.eps * q.normal;
+            o = offset_ray(q.origin + a * q.edge_u + b * q.edge_v, q.normal);
             float u1 = rng_float(rng);
             float u2 = rng_float(rng);
             d = cosine_direction(q.normal, u1, u2);
@@ -95,11 +95,11 @@ void main() {
             float v1 = rng_float(rng);
             float v2 = rng_float(rng);
             d = cosine_direction(nf, v1, v2);
-            o = h.pos + params.eps * nf;
+            o = offset_ray(h.pos, nf);
         } else if (m.surface == SURFACE_MIRROR) {
             flux *= m.color;
             d = reflect(d, nf);
-            o = h.pos + params.eps * nf;
+            o = offset_ray(h.pos, nf);
         } else {
             float eta = front ? 1.0 / m.ior : m.ior;
             float cos_i = -dot(d, nf);
@@ -107,10 +107,10 @@ void main() {
             float f = fresnel_dielectric(cos_i, eta, cos_t);
             if (rng_float(rng) < f) {
                 d = reflect(d, nf);
-                o = h.pos + params.eps * nf;
+                o = offset_ray(h.pos, nf);
             } else {
                 d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
-                o = h.pos - params.eps * nf;
+                o = offset_ray(h.pos, -nf);
             }
         }
     }

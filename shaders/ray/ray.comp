@@ -72,7 +72,7 @@ void main() {
             if (m.surface == SURFACE_MIRROR) {
                 r.thr *= m.color;
                 r.d = reflect(r.d, nf);
-                r.o = h.pos + params.eps * nf;
+                r.o = offset_ray(h.pos, nf);
                 continue;
             }
             // Glass: the exact Fresnel split.
@@ -84,18 +84,18 @@ void main() {
             vec3 refr = normalize(eta * r.d + (eta * cos_i - cos_t) * nf);
             if (f >= 1.0) {
                 r.d = refl;
-                r.o = h.pos + params.eps * nf;
+                r.o = offset_ray(h.pos, nf);
             } else if (slot + sp + 1u < params.hit_slots) {
-                stack[sp++] = Pending(h.pos + params.eps * nf, refl, r.thr * f, r.depth);
+                stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * f, r.depth);
                 r.thr *= 1.0 - f;
                 r.d = refr;
-                r.o = h.pos - params.eps * nf;
+                r.o = offset_ray(h.pos, -nf);
             } else if (rng_float(rng) < f) {
                 r.d = refl;
-                r.o = h.pos + params.eps * nf;
+                r.o = offset_ray(h.pos, nf);
             } else {
                 r.d = refr;
-                r.o = h.pos - params.eps * nf;
+                r.o = offset_ray(h.pos, -nf);
             }
         }
     }

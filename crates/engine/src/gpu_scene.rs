@@ -138,8 +138,10 @@ impl GpuScene {
             num_spheres: spheres.len() as u32,
             num_quads: quads.len() as u32,
             num_lights: lights.len() as u32,
-            // Ray offsets scale with the scene, so a scene in millimetres or kilometres renders alike.
-            eps: 1e-4 * extent,
+            // Ray offsets (offset_ray in geometry.glsl): 2^-14 of the point's largest coordinate, ~500 f32
+            // ulps, plus 1e-7 of the scene's size for points near the origin. Both scale with the scene.
+            eps: 1e-7 * extent,
+            eps_rel: 1.0 / 16384.0,
             max_photon_depth: settings.max_photon_depth,
             max_eye_depth: settings.max_eye_depth,
             hit_slots: settings.slots(),

@@ -503,6 +503,14 @@ impl Renderer {
         self.ctx.upload(&self.stats, bytemuck::cast_slice(stats))
     }
 
+    /// Overwrites the pass accumulators (tests feed the update chosen inputs this way).
+    pub fn write_accum(&self, accum: &[PassAccum]) -> Result<()> {
+        if accum.len() != self.gpu.slots() as usize {
+            bail!("write_accum: {} entries for {} slots", accum.len(), self.gpu.slots());
+        }
+        self.ctx.upload(&self.accum, bytemuck::cast_slice(accum))
+    }
+
     /// Traces and gathers one batch of photons with global indices `first..first+count` without the
     /// update, and returns the batch's records (the pass accumulators keep the gathered sums).
     pub fn trace_and_gather(&mut self, first: u64, count: u32) -> Result<Vec<Photon>> {

@@ -88,12 +88,13 @@ pub struct RenderParams {
     pub seed: u32,
     /// Fixed-point units per unit of flux in [`PassAccum`] (a power of two).
     pub flux_fixed: f32,
-    pub pad1: u32,
+    /// Ray offset per unit of the point's largest coordinate.
+    pub eps_rel: f32,
 }
 gpu_struct!(RenderParams {
     eye, tan_half_fov, right, aspect, up, width, forward, height, grid_min, cell_size, grid_mask,
     num_spheres, num_quads, num_lights, eps, max_photon_depth, max_eye_depth, hit_slots, photon_capacity,
-    seed, flux_fixed, pad1
+    seed, flux_fixed, eps_rel
 });
 
 #[repr(C)]

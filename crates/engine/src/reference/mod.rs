@@ -12,7 +12,7 @@ use ppm_vk_kernels::photon::MAX_RECORDS;
 use crate::gpu_scene::GpuScene;
 use crate::settings::ProbeMode;
 use rng::Rng;
-use trace::{cosine_direction, fresnel_dielectric, intersect_scene, oct_decode, oct_encode, reflect, v3, PI};
+use trace::{cosine_direction, fresnel_dielectric, intersect_scene, oct_decode, oct_encode, offset_ray, reflect, v3, PI};
 
 /// Hit points (`hit_slots` per pixel) and directly seen emission per pixel (rgb, w = 1), as `ray.comp`
 /// makes them in eye pass `pass`; a negative `jitter` draws a random position in each pixel.
@@ -66,7 +66,7 @@ pub fn ray_pass(g: &GpuScene, jitter: [f32; 2], salt: u32, pass: u32) -> (Vec<Hi
                 if m.surface == SURFACE_MIRROR {
                     thr *= v3(m.color);
                     d = reflect(d, nf);
-                    o = h.pos + p.eps * nf;
+                    o = offset_ray(g, h.pos, nf);
                     continue;
                 }
                 let eta = if front { 1.0 / m.ior } else { m.ior };
@@ -76,18 +76,18 @@ pub fn ray_pass(g: &GpuScene, jitter: [f32; 2], salt: u32, pass: u32) -> (Vec<Hi
                 let refr = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
                 if f >= 1.0 {
                     d = refl;
-                    o = h.pos + p.eps * nf;
+                    o = offset_ray(g, h.pos, nf);
                 } else if slot + stack.len() + 1 < slots {
-                    stack.push((h.pos + p.eps * nf, refl, thr * f, depth));
+                    stack.push((offset_ray(g, h.pos, nf), refl, thr * f, depth));
                     thr *= 1.0 - f;
                     d = refr;
-                    o = h.pos - p.eps * nf;
+                    o = offset_ray(g, h.pos, -nf);
                 } else if rng.float() < f {
                     d = refl;
-                    o = h.pos + p.eps * nf;
+                    o = offset_ray(g, h.pos, nf);
                 } else {
                     d = refr;
-                    o = h.pos - p.eps * nf;
+                    o = offset_ray(g, h.pos, -nf);
                 }
             }
         }
@@ -112,7 +112,7 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
     let q = &g.quads[light.quad as usize];
     let a = rng.float();
     let b = rng.float();
-    let mut o = v3(q.origin) + a * v3(q.edge_u) + b * v3(q.edge_v) + p.eps * v3(q.normal);
+    let mut o = offset_ray(g, v3(q.origin) + a * v3(q.edge_u) + b * v3(q.edge_v), v3(q.normal));
     let u1 = rng.float();
     let u2 = rng.float();
     let mut d = cosine_direction(v3(q.normal), u1, u2);
@@ -138,21 +138,21 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             let v1 = rng.float();
             let v2 = rng.float();
             d = cosine_direction(nf, v1, v2);
-            o = h.pos + p.eps * nf;
+            o = offset_ray(g, h.pos, nf);
         } else if m.surface == SURFACE_MIRROR {
             flux *= v3(m.color);
             d = reflect(d, nf);
-            o = h.pos + p.eps * nf;
+            o = offset_ray(g, h.pos, nf);
         } else {
             let eta = if front { 1.0 / m.ior } else { m.ior };
             let cos_i = -d.dot(nf);
             let (f, cos_t) = fresnel_dielectric(cos_i, eta);
             if rng.float() < f {
                 d = reflect(d, nf);
-                o = h.pos + p.eps * nf;
+                o = offset_ray(g, h.pos, nf);
             } else {
                 d = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
-                o = h.pos - p.eps * nf;
+                o = offset_ray(g, h.pos, -nf);
             }
         }
     }

@@ -66,6 +66,11 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
     })
 }
 
+/// `offset_ray` of geometry.glsl.
+pub fn offset_ray(g: &GpuScene, p: Vec3, n: Vec3) -> Vec3 {
+    p + (g.params.eps_rel * p.abs().max_element() + g.params.eps) * n
+}
+
 /// GLSL's reflect(d, n) = d - 2 dot(n, d) n.
 pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
     d - 2.0 * n.dot(d) * n
