@@ -38,7 +38,11 @@ pub struct HitBuffers<'a> {
     pub order: &'a Buffer,
 }
 
-#[allow(clippy::too_many_arguments)]
+/// The bindings of the kernels that read the photon grid per hit point (gather.comp and probe.comp).
+pub fn grid_reader_bindings<'a>(params: &'a Buffer, hits: &HitBuffers<'a>, grid: &'a Grid) -> [&'a Buffer; 7] {
+    [params, hits.hit_points, hits.stats, hits.accum, &grid.sorted, &grid.cell_start, hits.order]
+}
+
 pub fn record_gather(
     k: &ComputePipeline,
     cmd: vk::CommandBuffer,
@@ -47,12 +51,7 @@ pub fn record_gather(
     grid: &Grid,
     push: &GatherPush,
 ) -> Result<()> {
-    k.dispatch(
-        cmd,
-        &[params, hits.hit_points, hits.stats, hits.accum, &grid.sorted, &grid.cell_start, hits.order],
-        bytemuck::bytes_of(push),
-        push.count as u64,
-    )
+    k.dispatch(cmd, &grid_reader_bindings(params, hits, grid), bytemuck::bytes_of(push), push.count as u64)
 }
 
 pub fn record_update(k: &ComputePipeline, cmd: vk::CommandBuffer, hits: &HitBuffers, push: &UpdatePush) -> Result<()> {

@@ -34,10 +34,5 @@ pub fn record(
     grid: &Grid,
     push: &ProbePush,
 ) -> Result<()> {
-    k.dispatch(
-        cmd,
-        &[params, hits.hit_points, hits.stats, hits.accum, &grid.sorted, &grid.cell_start, hits.order],
-        bytemuck::bytes_of(push),
-        push.count as u64,
-    )
+    k.dispatch(cmd, &crate::gather::grid_reader_bindings(params, hits, grid), bytemuck::bytes_of(push), push.count as u64)
 }

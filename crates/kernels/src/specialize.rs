@@ -63,17 +63,6 @@ pub fn scene_constants(spheres: &[Sphere], quads: &[Quad]) -> String {
     s
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn literals_round_trip_through_double() {
-        for x in [0.725f32, -1.0, 1.0 / 3.0, 3.4e-38, 1.99, -0.0, 16777217.0, 0.0104166670] {
-            let text = super::f(x);
-            assert_eq!((text.parse::<f64>().unwrap() as f32).to_bits(), x.to_bits(), "{x} -> {text}");
-        }
-    }
-}
-
 /// Compiles `kernel` with `SCENE_CONSTANTS` defined and `constants` as scene_constants.glsl.
 pub fn compile(kernel: &KernelInfo, constants: &str) -> Result<Vec<u32>> {
     let source = |path: &str| SOURCES.iter().find(|(p, _)| *p == path).map(|(_, s)| *s);
@@ -100,4 +89,15 @@ pub fn compile(kernel: &KernelInfo, constants: &str) -> Result<Vec<u32>> {
         .compile_into_spirv(text, shaderc::ShaderKind::Compute, kernel.source, "main", Some(&options))
         .with_context(|| format!("compiling kernel {} for this scene", kernel.name))?;
     Ok(artifact.as_binary().to_vec())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn literals_round_trip_through_double() {
+        for x in [0.725f32, -1.0, 1.0 / 3.0, 3.4e-38, 1.99, -0.0, 16777217.0, 0.0104166670] {
+            let text = super::f(x);
+            assert_eq!((text.parse::<f64>().unwrap() as f32).to_bits(), x.to_bits(), "{x} -> {text}");
+        }
+    }
 }
