@@ -286,7 +286,7 @@ impl Renderer {
     /// phase) for one batch of photons `first..first+count` (global indices).
     fn record_batch(&self, cmd: vk::CommandBuffer, first: u64, count: u32, log_index: u32, use_: GridUse) -> Result<()> {
         let ctx = &self.ctx;
-        let scene = SceneBuffers { params: &self.params, spheres: &self.spheres, quads: &self.quads, materials: &self.materials };
+        let scene = self.scene_buffers();
         let hits = self.hit_buffers();
         let k = &self.kernels;
         let capacity = self.gpu.params.photon_capacity;
