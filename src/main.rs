@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use ppm_vk_engine::metrics::{compare, cornell_regions, Reference};
+use ppm_vk_engine::metrics::{compare, cornell_regions, Reference, Region};
 use ppm_vk_engine::report::{file_sha256, PassRecord, RunHeader, RunReport, SCHEMA};
 use ppm_vk_engine::{Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings};
 
@@ -105,6 +105,10 @@ struct RenderArgs {
     /// Reference image (EXR) to measure error against at the end.
     #[arg(long)]
     reference: Option<PathBuf>,
+    /// A region to score separately against --reference, NAME:X0,Y0,W,H in the reference's pixels (origin
+    /// top left); repeatable. cornell-spheres has its own regions by default.
+    #[arg(long = "region", value_parser = parse_region)]
+    regions: Vec<Region>,
     /// Evaluate the error against --reference after every N passes (it reads the image back; the
     /// overhead is printed).
     #[arg(long, default_value_t = 1)]
@@ -142,6 +146,18 @@ impl From<ProbeArg> for ProbeMode {
             ProbeArg::Paper => ProbeMode::Paper,
             ProbeArg::ScaleFree => ProbeMode::ScaleFree,
         }
+    }
+}
+
+fn parse_region(s: &str) -> Result<Region, String> {
+    let (name, rect) = s.split_once(':').ok_or_else(|| format!("{s:?}: expected NAME:X0,Y0,W,H"))?;
+    let v: Vec<u32> = rect
+        .split(',')
+        .map(|x| x.trim().parse::<u32>().map_err(|e| format!("{s:?}: {x:?}: {e}")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [x0, y0, w, h] if w > 0 && h > 0 && !name.is_empty() => Ok(Region { name: name.to_string(), x0, y0, w, h }),
+        _ => Err(format!("{s:?}: expected NAME:X0,Y0,W,H with W, H > 0")),
     }
 }
 
@@ -301,7 +317,13 @@ fn render(args: RenderArgs) -> Result<()> {
         ray_ms: renderer.ray_ms(),
         probe: renderer.probe_report().cloned(),
     });
-    let regions = if scene.name == "cornell-spheres" { cornell_regions() } else { Vec::new() };
+    let regions = if !args.regions.is_empty() {
+        args.regions.clone()
+    } else if scene.name == "cornell-spheres" {
+        cornell_regions()
+    } else {
+        Vec::new()
+    };
     let (mut gpu_origin, mut eval_s, mut evals) = (None, 0f64, 0u32);
     let budget = args.time.map(Duration::from_secs_f64);
     let passes = args.passes.unwrap_or(if budget.is_some() { u64::MAX } else { 100 });
@@ -374,7 +396,7 @@ fn render(args: RenderArgs) -> Result<()> {
     );
     print_stage_summary(&history, args.profile);
     if let Some(reference) = reference {
-        report_error(&image, &reference, &scene)?;
+        report_error(&image, &reference, &regions)?;
         if evals > 0 {
             println!(
                 "error evaluated after {evals} passes: {:.1} ms each, {:.1}% of the render's wall time",
@@ -415,14 +437,12 @@ fn print_stage_summary(history: &[PassStats], full: bool) {
     }
 }
 
-fn report_error(image: &ppm_vk_engine::RgbImage, reference: &Reference, scene: &Scene) -> Result<()> {
+fn report_error(image: &ppm_vk_engine::RgbImage, reference: &Reference, regions: &[Region]) -> Result<()> {
     let whole = compare(image, reference, None, true)?;
     println!("error vs reference (its own noise removed): RMSE {:.4}, relMSE {:.5}, bias {:+.4}", whole.rmse, whole.rel_mse, whole.mean_bias);
-    if scene.name == "cornell-spheres" {
-        for r in cornell_regions() {
-            let e = compare(image, reference, Some(&r), true)?;
-            println!("  {:<12} RMSE {:.4}, relMSE {:.5}, bias {:+.4}", r.name, e.rmse, e.rel_mse, e.mean_bias);
-        }
+    for r in regions {
+        let e = compare(image, reference, Some(r), true)?;
+        println!("  {:<12} RMSE {:.4}, relMSE {:.5}, bias {:+.4}", r.name, e.rmse, e.rel_mse, e.mean_bias);
     }
     Ok(())
 }

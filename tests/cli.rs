@@ -27,7 +27,7 @@ fn render_writes_image_report_and_trace() {
     let (out, report, trace) = (dir.join("img.exr"), dir.join("run.json"), dir.join("run.trace.json"));
     let run = bin()
         .args(["render", CORNELL, "--passes", "3", "--photons-per-pass", "20000", "--resolution", "32x32", "--validate"])
-        .args(["--reference", CORNELL_REFERENCE, "--probe", "scale-free", "--cone", "1.1"])
+        .args(["--reference", CORNELL_REFERENCE, "--probe", "scale-free", "--cone", "1.1", "--region", "mine:0,0,256,256"])
         .arg("--out")
         .arg(&out)
         .arg("--report")
@@ -56,7 +56,8 @@ fn render_writes_image_report_and_trace() {
         assert_eq!(p.photons_total, 20_000 * (k as u64 + 1));
         let e = p.error.expect("an error per pass");
         assert!(e.rmse.is_finite() && e.rmse > 0.0 && e.rel_mse > 0.0);
-        assert!(p.region_errors.contains_key("caustic"));
+        // A --region replaces the scene's own regions.
+        assert!(p.region_errors.contains_key("mine") && !p.region_errors.contains_key("caustic"), "{:?}", p.region_errors.keys());
         // Timings: every stage positive; stages in pipeline order on the GPU clock; passes in order on the
         // wall clock; and the GPU time of a pass fits inside its wall time. 1 ms of slack: the GPU and host
         // clocks agree within ~0.3 ms on lavapipe (../shared/notes/TOOLCHAIN.md), and a pass has three
@@ -121,6 +122,8 @@ fn bad_input_is_a_clear_error() {
     assert!(e.contains("alpha"), "{e}");
     let e = fails(&["render", CORNELL, "--time=-3"]);
     assert!(e.contains("--time"), "{e}");
+    let e = fails(&["render", CORNELL, "--region", "a:1,2,3"]);
+    assert!(e.contains("NAME:X0,Y0,W,H"), "{e}");
     let e = fails(&["render", CORNELL, "--resolution", "0x10"]);
     assert!(e.contains("resolution"), "{e}");
     let e = fails(&["render", CORNELL, "--report", "/tmp/r.txt", "--passes", "1", "--photons-per-pass", "1000", "--resolution", "8x8", "--out", "/tmp/ppm-vk-never.png"]);
