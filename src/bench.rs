@@ -26,7 +26,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 5)]
     passes: u32,
     /// `ppm` or `sppm` (SPPM adds an eye pass to every pass).
-    #[arg(long, default_value = "ppm")]
+    #[arg(long, default_value = "sppm")]
     mode: String,
     /// Where to write the JSON results.
     #[arg(long, default_value = "bench.json")]

@@ -18,7 +18,7 @@ const EXPECTED: f64 = 2.0;
 fn white_furnace_converges_to_le_over_one_minus_rho() {
     let ctx = ctx();
     let scene = furnace(RES, RES);
-    let mut r = Renderer::new(&ctx, &scene, Settings { photons_per_pass: PHOTONS, ..Settings::default() }).unwrap();
+    let mut r = Renderer::new(&ctx, &scene, Settings { mode: ppm_vk_engine::Mode::Ppm, photons_per_pass: PHOTONS, ..Settings::default() }).unwrap();
 
     // The directly seen emission alone is exactly Le = 1 at every pixel (every pixel sees a wall).
     let direct = r.read_direct().unwrap();

@@ -15,14 +15,14 @@ use common::*;
 use glam::Vec3;
 use ppm_vk_engine::layout::{HitPoint, HitStats, PassAccum, Photon};
 use ppm_vk_engine::reference::{self, trace};
-use ppm_vk_engine::{Renderer, Settings};
+use ppm_vk_engine::{Mode, Renderer, Settings};
 use ppm_vk_kernels::photon::{SALT_EYE, SALT_PHOTON};
 
 const RES: u32 = 32;
 const PHOTONS: u32 = 20_000;
 
 fn settings() -> Settings {
-    Settings { photons_per_pass: PHOTONS, ..Settings::default() }
+    Settings { mode: Mode::Ppm, photons_per_pass: PHOTONS, ..Settings::default() }
 }
 
 fn scene_extent(s: &ppm_vk_engine::Scene) -> f32 {

@@ -12,7 +12,7 @@ const RES: u32 = 32;
 const PROBE_PHOTONS: u32 = 20_000;
 
 fn settings(probe: ProbeMode) -> Settings {
-    Settings { photons_per_pass: 20_000, probe, probe_photons: Some(PROBE_PHOTONS), ..Settings::default() }
+    Settings { mode: ppm_vk_engine::Mode::Ppm, photons_per_pass: 20_000, probe, probe_photons: Some(PROBE_PHOTONS), ..Settings::default() }
 }
 
 fn probe_case(mode: ProbeMode) {

@@ -92,7 +92,7 @@ fn render() -> &'static (RgbImage, Vec<String>) {
     IMAGE.get_or_init(|| {
         let ctx = ctx();
         let scene = cornell(RES, RES);
-        let mut r = Renderer::new(&ctx, &scene, Settings { photons_per_pass: PHOTONS, ..Settings::default() }).unwrap();
+        let mut r = Renderer::new(&ctx, &scene, Settings { mode: ppm_vk_engine::Mode::Ppm, photons_per_pass: PHOTONS, ..Settings::default() }).unwrap();
         let t = std::time::Instant::now();
         for _ in 0..PASSES {
             r.pass().unwrap();

@@ -88,7 +88,7 @@ fn sppm_converges_to_the_box_filtered_reference_at_edges() {
         r.image().unwrap()
     };
     let s = render(sppm(50_000), 40);
-    let p = render(Settings { photons_per_pass: 50_000, ..Settings::default() }, 40);
+    let p = render(Settings { mode: Mode::Ppm, photons_per_pass: 50_000, ..Settings::default() }, 40);
     assert_eq!(s.count_non_finite(), 0);
     let es = compare(&s, &reference, None, true).unwrap();
     let ep = compare(&p, &reference, None, true).unwrap();

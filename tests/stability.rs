@@ -9,7 +9,7 @@ use ppm_vk_engine::{reference, Renderer, RgbImage, Scene, Settings};
 use ppm_vk_kernels::photon::SALT_PHOTON;
 
 fn small(photons: u32) -> Settings {
-    Settings { photons_per_pass: photons, ..Settings::default() }
+    Settings { mode: ppm_vk_engine::Mode::Ppm, photons_per_pass: photons, ..Settings::default() }
 }
 
 fn render(scene: &Scene, settings: Settings, passes: u32) -> RgbImage {
