@@ -63,6 +63,45 @@ fn probe_case(mode: ProbeMode) {
     assert_clean(&ctx);
 }
 
+/// The probe kernel on the very records the GPU traced (no diverged path can differ): M per hit point
+/// exactly, lambda / r^2 and the new radius to rounding.
+fn probe_identical_photons(mode: ProbeMode) {
+    let ctx = ctx();
+    let mut r = Renderer::new(&ctx, &cornell(RES, RES), settings(mode)).unwrap();
+    let g = r.gpu_scene().clone();
+    let r0 = g.initial_radius as f64;
+    let start = vec![ppm_vk_engine::layout::HitStats { r2: r0 * r0, ..Default::default() }; g.slots() as usize];
+    r.write_stats(&start).unwrap(); // undo the probe Renderer::new ran
+    let records = r.trace_and_probe(0, PROBE_PHOTONS).unwrap();
+    let accum = r.read_accum().unwrap();
+    let hits = r.read_hit_points().unwrap();
+    r.finish_probe().unwrap();
+    let after = r.read_stats().unwrap();
+    let cpu = reference::probe(&hits, &start, &records, mode, r.settings().probe_beta);
+    let mut live = 0;
+    for (i, h) in hits.iter().enumerate() {
+        if h.is_empty() {
+            continue;
+        }
+        live += 1;
+        // The same distance and front-side tests in f32 on the same records: the same photons, exactly.
+        let (m, _) = reference::gather_one(h, start[i].r2, &records, 0.0);
+        assert_eq!(accum[i].m, m, "{mode:?} slot {i}: M");
+        // d^2 / r^2 per photon in f32 rounded to 2.30 fixed point against f64: 1e-6 covers both.
+        let (ratio, r2) = cpu[i];
+        assert!((after[i].probe - ratio).abs() <= 1e-6, "{mode:?} slot {i}: lambda/r^2 GPU {} CPU {ratio}", after[i].probe);
+        assert!((after[i].r2 - r2).abs() <= 2e-6 * r2, "{mode:?} slot {i}: r'^2 GPU {} CPU {r2}", after[i].r2);
+    }
+    assert!(live > 1000, "only {live} hit points");
+    assert_clean(&ctx);
+}
+
+#[test]
+fn probe_kernel_matches_reference_on_identical_photons() {
+    probe_identical_photons(ProbeMode::Paper);
+    probe_identical_photons(ProbeMode::ScaleFree);
+}
+
 #[test]
 fn probe_paper_matches_reference() {
     probe_case(ProbeMode::Paper);

@@ -514,11 +514,30 @@ impl Renderer {
     /// Traces and gathers one batch of photons with global indices `first..first+count` without the
     /// update, and returns the batch's records (the pass accumulators keep the gathered sums).
     pub fn trace_and_gather(&mut self, first: u64, count: u32) -> Result<Vec<Photon>> {
+        self.trace_batch(first, count, GridUse::Gather)
+    }
+
+    /// Traces one batch of probe photons (the probe's random streams) and runs the probe's first phase
+    /// (per hit point N and the sum of d^2 / r^2 into the pass accumulators) without setting radii;
+    /// returns the batch's records. `finish_probe` sets the radii (eq. 9).
+    pub fn trace_and_probe(&mut self, first: u64, count: u32) -> Result<Vec<Photon>> {
+        self.trace_batch(first, count, GridUse::Probe)
+    }
+
+    /// The probe's second phase: lambda (eq. 7) and the starting radii (eq. 9) from the accumulators.
+    pub fn finish_probe(&mut self) -> Result<()> {
+        let push = self.probe_push(1);
+        let hits = self.hit_buffers();
+        let (k, params, grid) = (&self.kernels, &self.params, &self.grid);
+        self.ctx.run(|cmd| probe::record(&k.probe, cmd, params, &hits, grid, &push))
+    }
+
+    fn trace_batch(&mut self, first: u64, count: u32, use_: GridUse) -> Result<Vec<Photon>> {
         self.profiler.reset();
-        self.ctx.run(|cmd| self.record_batch(cmd, first, count, 0, GridUse::Gather))?;
+        self.ctx.run(|cmd| self.record_batch(cmd, first, count, 0, use_))?;
         let n: Vec<u32> = self.ctx.download_prefix(&self.counter, 1)?;
         if n[0] > self.gpu.params.photon_capacity {
-            bail!("trace_and_gather: {} records overflow the capacity {}", n[0], self.gpu.params.photon_capacity);
+            bail!("a test batch of {count} photons left {} records, over the capacity {}", n[0], self.gpu.params.photon_capacity);
         }
         self.ctx.download_prefix(&self.photons, n[0] as usize)
     }
