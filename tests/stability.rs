@@ -254,3 +254,154 @@ fn albedo_one_box_and_camera_inside_glass_stay_finite() {
     let image = render(&inside, small(20_000), 3);
     assert!(image.mean().iter().all(|&c| c > 0.0), "camera inside glass: black image");
 }
+
+/// `scene` moved by `t` (geometry and camera).
+fn translated(scene: &Scene, t: glam::Vec3) -> Scene {
+    let mut s = scene.clone();
+    for q in &mut s.quads {
+        q.origin += t;
+    }
+    for p in &mut s.spheres {
+        p.center += t;
+    }
+    s.camera.eye += t;
+    s.camera.look_at += t;
+    s
+}
+
+#[test]
+fn furnace_far_from_the_origin_loses_no_energy() {
+    // Every photon bounce starts on a surface: an offset too small for the coordinates' f32 spacing makes a
+    // path hit the wall it left (a lost or extra record), one too large skips past corners. Both move the
+    // furnace away from Le / (1 - rho) = 2. 1 km from the origin the spacing is 6e-5 m against a 2 m box.
+    let scene = translated(&furnace(16, 16), glam::Vec3::splat(1000.0));
+    let m = render(&scene, small(100_000), 12).mean();
+    println!("furnace at (1000, 1000, 1000): mean {m:?}");
+    for c in 0..3 {
+        // 2%: as the furnace test at the origin (measured there: 2.001).
+        assert!((m[c] / 2.0 - 1.0).abs() < 0.02, "mean {m:?}, expected 2");
+    }
+}
+
+const THIN_WALL: &str = r#"
+# One two-sided diffuse wall of no thickness in the plane z = 0, lit from the front (z > 0) by a light
+# facing it; the camera looks at its back. Nothing else exists: every photon that reaches the back's hit
+# points lands on the front, at distance 0 from them, and must not count.
+[camera]
+eye = [0.0, 0.0, -1.0]
+look_at = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+vfov = 40.0
+resolution = [16, 16]
+[materials.wall]
+diffuse = [0.8, 0.8, 0.8]
+[materials.light]
+emission = [5.0, 5.0, 5.0]
+[[quad]]
+origin = [-1.0, -1.0, 0.0]
+edge_u = [2.0, 0.0, 0.0]
+edge_v = [0.0, 2.0, 0.0]
+material = "wall"
+[[quad]]
+origin = [-0.2, -0.2, 0.5]
+edge_u = [0.4, 0.0, 0.0]
+edge_v = [0.0, 0.4, 0.0]
+material = "light"
+"#;
+
+#[test]
+fn photons_behind_a_thin_wall_do_not_count() {
+    let scene = Scene::parse(THIN_WALL, "thin-wall.toml").unwrap();
+    // The light's front normal is edge_u x edge_v = +z: turn it to face the wall (-z).
+    let mut scene = scene;
+    let light = scene.quads[1];
+    scene.quads[1].origin = light.origin + light.edge_u;
+    scene.quads[1].edge_u = -light.edge_u;
+    let back = render(&scene, small(50_000), 3);
+    assert_eq!(back.mean(), [0.0; 3], "the wall's back received light from its front");
+    // The front, seen from the light's side, is lit: the photons are there.
+    // From between the light and the wall (the light's black back would fill the view from further out).
+    let mut front = scene.clone();
+    front.camera.eye = glam::Vec3::new(0.0, 0.0, 0.3);
+    let lit = render(&front, small(50_000), 3).mean();
+    assert!(lit.iter().all(|&c| c > 0.01), "the front is dark: {lit:?}");
+}
+
+#[test]
+fn a_light_touching_a_wall_leaks_no_photon() {
+    // cornell-spheres with its light moved against the right wall (x up to 1): photons start within an
+    // offset of the wall and must all stay inside the box.
+    let mut scene = cornell(16, 16);
+    let li = scene.lights()[0] as usize;
+    scene.quads[li].origin.x = 1.0 - scene.quads[li].edge_u.x.abs().max(scene.quads[li].edge_v.x.abs());
+    let ctx = ctx();
+    let mut r = Renderer::new(&ctx, &scene, small(20_000)).unwrap();
+    let records = r.trace_and_gather(0, 20_000).unwrap();
+    let (lo, hi) = scene.bounds();
+    let tol = 1e-5 * (hi - lo).max_element();
+    let outside = records
+        .iter()
+        .filter(|p| {
+            let v = glam::Vec3::from_array(p.pos);
+            v.cmplt(lo - glam::Vec3::splat(tol)).any() || v.cmpgt(hi + glam::Vec3::splat(tol)).any()
+        })
+        .count();
+    assert_eq!(outside, 0, "{outside} of {} records outside the box", records.len());
+    r.pass().unwrap();
+    assert_eq!(r.image().unwrap().count_non_finite(), 0);
+    assert_clean(&ctx);
+}
+
+const HOT_SPOT: &str = r#"
+# A small bright light above a glass sphere (a ball lens: focal length n R / (2 (n - 1)) = 0.3 from its
+# centre, on the floor) that focuses it onto the floor: thousands of photons land in a few hit points.
+[camera]
+eye = [0.0, 0.3, 0.0]
+look_at = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+vfov = 20.0
+resolution = [16, 16]
+[materials.floor]
+diffuse = [0.7, 0.7, 0.7]
+[materials.glass]
+glass = 1.5
+[materials.light]
+emission = [2000.0, 2000.0, 2000.0]
+[[quad]]
+origin = [-2.0, 0.0, -2.0]
+edge_u = [0.0, 0.0, 4.0]
+edge_v = [4.0, 0.0, 0.0]
+material = "floor"
+[[quad]]
+origin = [-0.02, 1.0, -0.02]
+edge_u = [0.04, 0.0, 0.0]
+edge_v = [0.0, 0.0, 0.04]
+material = "light"
+[[sphere]]
+center = [0.0, 0.3, 0.0]
+radius = 0.2
+material = "glass"
+"#;
+
+#[test]
+fn hot_spot_sums_match_an_f64_brute_force() {
+    let scene = Scene::parse(HOT_SPOT, "hot-spot.toml").unwrap();
+    let ctx = ctx();
+    let mut r = Renderer::new(&ctx, &scene, Settings { initial_radius: Some(0.01), ..small(200_000) }).unwrap();
+    let records = r.trace_and_gather(0, 200_000).unwrap();
+    let accum = r.read_accum().unwrap();
+    let hits = r.read_hit_points().unwrap();
+    let stats = r.read_stats().unwrap();
+    let flux_fixed = r.gpu_scene().params.flux_fixed as f64;
+    let cpu = reference::gather(&hits, &stats, &records, 0.0);
+    let hottest = accum.iter().map(|a| a.m).max().unwrap();
+    println!("hot spot: {} records, the hottest hit point gathered {hottest}", records.len());
+    assert!(hottest > 1000, "not a hot spot: at most {hottest} photons per hit point");
+    for (i, (a, (m, sum))) in accum.iter().zip(&cpu).enumerate() {
+        assert_eq!(a.m, *m, "slot {i}: M");
+        // Fixed point rounds each photon by at most 1/(2 flux_fixed): exact otherwise, whatever the order.
+        let bound = *m as f64 / (2.0 * flux_fixed) + 1e-6 * sum.x;
+        assert!((a.flux_r as f64 / flux_fixed - sum.x).abs() <= bound, "slot {i}: GPU {} CPU {}", a.flux_r as f64 / flux_fixed, sum.x);
+    }
+    assert_clean(&ctx);
+}
