@@ -4,15 +4,14 @@
 #ifndef NEIGHBOURS_GLSL
 #define NEIGHBOURS_GLSL
 #include "grid.glsl"
+#include "sampling.glsl"
 
 void visit(vec3 flux, float d2);
 
-// Sign of dot(direction, n) for an octahedral-encoded direction: the vector needs no normalising.
+// Whether a photon travelling along `dir` (octahedral-encoded) arrives at a surface of normal n from
+// its front: only the sign matters, so the direction needs no normalising.
 bool arrives_from_front(uint dir, vec3 n) {
-    vec2 e = unpackSnorm2x16(dir);
-    vec3 d = vec3(e, 1.0 - abs(e.x) - abs(e.y));
-    if (d.z < 0.0) d.xy = (1.0 - abs(d.yx)) * vec2(d.x >= 0.0 ? 1.0 : -1.0, d.y >= 0.0 ? 1.0 : -1.0);
-    return dot(d, n) < 0.0;
+    return dot(oct_decode_unnormalized(dir), n) < 0.0;
 }
 
 // Each field is read only when needed: most photons of a bucket fail the distance test, and every read

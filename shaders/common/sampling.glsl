@@ -42,12 +42,14 @@ uint oct_encode(vec3 v) {
     return packSnorm2x16(p);
 }
 
-vec3 oct_decode(uint e) {
+// The inverse, not normalised: the direction's length is between 1/sqrt(3) and 1, and the one use (the
+// sign of a dot product in neighbours.glsl) needs no more.
+vec3 oct_decode_unnormalized(uint e) {
     vec2 p = unpackSnorm2x16(e);
     vec3 v = vec3(p, 1.0 - abs(p.x) - abs(p.y));
     if (v.z < 0.0) {
         v.xy = (1.0 - abs(v.yx)) * vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0);
     }
-    return normalize(v);
+    return v;
 }
 #endif
