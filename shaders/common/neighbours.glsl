@@ -1,57 +1,131 @@
-// Visits the photons of this batch within sqrt(r2) of a hit point that arrive from the side it is seen
-// from, calling the including kernel's `visit(flux, d2)` for each. Needs `sorted` (records grouped by
-// bucket), `cell_start` and `params` declared before it.
+// The photons of this batch near a group of hit points. A thread gathers for GROUP hit points at once
+// (consecutive entries of the spatially sorted order, so usually neighbours on one surface) and tests each
+// photon it reads against all of them: on lavapipe every read from a storage buffer is a gather per lane,
+// and the group shares its reads. Calls the including kernel's `visit(j, flux, d2)` for each photon within
+// sqrt(q_r2[j]) of hit point j that arrives from the side it is seen from. Needs `sorted` (records grouped
+// by bucket), `cell_start` and `params` declared before it.
 #ifndef NEIGHBOURS_GLSL
 #define NEIGHBOURS_GLSL
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_EXT_control_flow_attributes : require
 #include "grid.glsl"
 #include "sampling.glsl"
 
-void visit(vec3 flux, float d2);
+const uint GROUP = 4u; // gather::GROUP on the host
 
-// Whether a photon travelling along `dir` (octahedral-encoded) arrives at a surface of normal n from
-// its front: only the sign matters, so the direction needs no normalising.
-bool arrives_from_front(uint dir, vec3 n) {
-    return dot(oct_decode_unnormalized(dir), n) < 0.0;
+// Loop steps this subgroup's lookups took, each counted by one lane. lavapipe ends every loop of a SIMD
+// group (its subgroup) once they have taken 65535 steps in all (LP_MAX_TGSI_LOOP_ITERATIONS), an exit
+// the compiler cannot see, so a loop cannot tell it was cut. Counting the steps can: a loop runs as
+// many steps as its longest active lane, which subgroupMax gives. lookup_may_be_cut() compares the
+// total with the limit, so a cut lookup is an error, never a silently darker image.
+uint lookup_steps = 0u;
+
+void count_steps(uint n) {
+    if (subgroupElect()) lookup_steps += n;
 }
 
-// Each field is read only when needed: most photons of a bucket fail the distance test, and every read
-// from a storage buffer is a gather per lane on lavapipe.
-void visit_bucket(uint h, vec3 pos, vec3 normal, float r2) {
+// The group, set by the including kernel; q_r2[j] < 0 marks an unused member.
+vec3 q_pos[GROUP];
+vec3 q_normal[GROUP];
+float q_r2[GROUP];
+
+void visit(uint j, vec3 flux, float d2);
+
+// The photons of cell `key` (its bucket may hold other cells' too) for the members in bit set `select`.
+// Fields are read only when needed: most photons of a bucket are outside every sphere.
+void visit_cell(uint key, uint select) {
+    uint h = grid_bucket(key);
     uint end = cell_start[h + 1u];
-    for (uint k = cell_start[h]; k < end; k++) {
-        vec3 dv = sorted[k].pos - pos;
-        float d2 = dot(dv, dv);
-        if (d2 > r2) continue;
-        // The BRDF is zero for light arriving from behind the surface (ALGORITHM.md).
-        if (!arrives_from_front(sorted[k].dir, normal)) continue;
-        visit(sorted[k].flux, d2);
+    uint k = cell_start[h];
+    count_steps(subgroupMax(end - k) + 1u);
+    for (; k < end; k++) {
+        vec3 p = sorted[k].pos;
+        float d2[GROUP];
+        bool inside[GROUP];
+        bool any_inside = false;
+        [[unroll]] for (uint j = 0u; j < GROUP; j++) {
+            vec3 dv = p - q_pos[j];
+            d2[j] = dot(dv, dv);
+            inside[j] = (select & (1u << j)) != 0u && d2[j] <= q_r2[j];
+            any_inside = any_inside || inside[j];
+        }
+        if (!any_inside) continue;
+        // Another cell's photon in a shared bucket: it is counted when its own cell is visited.
+        if (sorted[k].cell != key) continue;
+        // The BRDF is zero for light arriving from behind the surface (ALGORITHM.md); only the sign of
+        // the dot product matters, so the direction needs no normalising.
+        vec3 dir = oct_decode_unnormalized(sorted[k].dir);
+        vec3 flux = sorted[k].flux;
+        [[unroll]] for (uint j = 0u; j < GROUP; j++) {
+            if (inside[j] && dot(dir, q_normal[j]) < 0.0) visit(j, flux, d2[j]);
+        }
     }
 }
 
-// Cells are at least twice the largest radius wide (GpuScene), so the sphere overlaps at most 2x2x2 of
-// them. Their 8 buckets are visited once each: a cell outside the sphere's range takes the hash of the
-// first, and a bucket two cells share is skipped the second time (written out, not as an array: lavapipe
-// keeps indexed private arrays in memory).
-void for_each_photon_near(vec3 pos, vec3 normal, float r2) {
-    float r = sqrt(r2);
-    ivec3 lo = grid_cell(pos - vec3(r));
-    bvec3 two = greaterThan(grid_cell(pos + vec3(r)), lo);
-    uint h0 = grid_hash(lo);
-    uint h1 = two.x ? grid_hash(lo + ivec3(1, 0, 0)) : h0;
-    uint h2 = two.y ? grid_hash(lo + ivec3(0, 1, 0)) : h0;
-    uint h3 = two.x && two.y ? grid_hash(lo + ivec3(1, 1, 0)) : h0;
-    uint h4 = two.z ? grid_hash(lo + ivec3(0, 0, 1)) : h0;
-    uint h5 = two.x && two.z ? grid_hash(lo + ivec3(1, 0, 1)) : h0;
-    uint h6 = two.y && two.z ? grid_hash(lo + ivec3(0, 1, 1)) : h0;
-    uint h7 = all(two) ? grid_hash(lo + ivec3(1, 1, 1)) : h0;
-    visit_bucket(h0, pos, normal, r2);
-    if (h1 != h0) visit_bucket(h1, pos, normal, r2);
-    if (h2 != h0 && h2 != h1) visit_bucket(h2, pos, normal, r2);
-    if (h3 != h0 && h3 != h1 && h3 != h2) visit_bucket(h3, pos, normal, r2);
-    uvec3 a = uvec3(h0, h1, h2);
-    if (!any(equal(a, uvec3(h4))) && h4 != h3) visit_bucket(h4, pos, normal, r2);
-    if (!any(equal(a, uvec3(h5))) && h5 != h3 && h5 != h4) visit_bucket(h5, pos, normal, r2);
-    if (!any(equal(a, uvec3(h6))) && !any(equal(uvec3(h3, h4, h5), uvec3(h6)))) visit_bucket(h6, pos, normal, r2);
-    if (!any(equal(a, uvec3(h7))) && !any(equal(uvec4(h3, h4, h5, h6), uvec4(h7)))) visit_bucket(h7, pos, normal, r2);
+int window_cells(ivec3 lo, ivec3 hi) {
+    ivec3 e = min(hi - lo + 1, ivec3(1024)); // saturates (members far apart) instead of overflowing
+    return e.x * e.y * e.z;
+}
+
+// Visits the cells lo..hi that the sphere of at least one selected member touches.
+void visit_window(ivec3 lo, ivec3 hi, uint select) {
+    vec3 rel[GROUP];    // members in cell units
+    float r2c[GROUP];   // their r^2 in cell units
+    float inv = 1.0 / params.cell_size;
+    [[unroll]] for (uint j = 0u; j < GROUP; j++) {
+        rel[j] = (q_pos[j] - params.grid_min) * inv;
+        r2c[j] = q_r2[j] * inv * inv;
+    }
+    for (int z = lo.z; z <= hi.z; z++) {
+        count_steps(1u);
+        for (int y = lo.y; y <= hi.y; y++) {
+            count_steps(1u);
+            for (int x = lo.x; x <= hi.x; x++) {
+                count_steps(1u);
+                vec3 c = vec3(x, y, z);
+                bool touched = false;
+                [[unroll]] for (uint j = 0u; j < GROUP; j++) {
+                    vec3 out_of_cell = max(max(c - rel[j], rel[j] - (c + 1.0)), 0.0); // distance to the cell
+                    touched = touched || ((select & (1u << j)) != 0u && dot(out_of_cell, out_of_cell) <= r2c[j]);
+                }
+                if (touched) visit_cell(grid_key(ivec3(x, y, z)), select);
+            }
+        }
+    }
+}
+
+// Each member's window is the cells its sphere's bounding box overlaps (2x2x2 at most: cells are at least
+// twice the largest radius wide). Members close together share one window, the union of theirs; where the
+// union is larger than their windows together (members on different surfaces), each gets its own.
+void for_each_photon_near_group() {
+    ivec3 lo[GROUP], hi[GROUP];
+    ivec3 ulo = ivec3(0x7fffffff), uhi = ivec3(-0x7fffffff);
+    uint live = 0u;
+    int separate = 0;
+    [[unroll]] for (uint j = 0u; j < GROUP; j++) {
+        float r = sqrt(max(q_r2[j], 0.0));
+        lo[j] = grid_cell(q_pos[j] - vec3(r));
+        hi[j] = grid_cell(q_pos[j] + vec3(r));
+        if (q_r2[j] < 0.0) continue;
+        live |= 1u << j;
+        ulo = min(ulo, lo[j]);
+        uhi = max(uhi, hi[j]);
+        separate += window_cells(lo[j], hi[j]);
+    }
+    if (live == 0u) return;
+    if (window_cells(ulo, uhi) <= separate) {
+        visit_window(ulo, uhi, live);
+        return;
+    }
+    [[unroll]] for (uint j = 0u; j < GROUP; j++) {
+        if ((live & (1u << j)) != 0u) visit_window(lo[j], hi[j], 1u << j);
+    }
+}
+
+// Whether this subgroup's lookups may have run into lavapipe's loop limit (with a margin for the
+// kernel's other loops).
+bool lookup_may_be_cut() {
+    return subgroupAdd(lookup_steps) >= 60000u;
 }
 #endif

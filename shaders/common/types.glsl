@@ -59,7 +59,7 @@ struct RenderParams {
     vec3 forward;
     uint height;
     vec3 grid_min;   // origin of the photon grid's cells
-    float cell_size; // at least twice the largest search radius, so a sphere overlaps at most 2x2x2 cells
+    float cell_size; // edge of a grid cell: set per pass from the search radii (Renderer::pass)
     uint grid_mask;  // hash table size - 1 (a power of two)
     uint num_spheres;
     uint num_quads;
@@ -110,7 +110,7 @@ struct PassAccum {
 // A photon deposited on a diffuse surface.
 struct Photon {
     vec3 pos;
-    uint cell;       // hash bucket of pos in the photon grid
+    uint cell;       // key of the grid cell holding pos (grid_key in grid.glsl)
     vec3 flux;       // un-normalised: light power * path throughput / light choice probability
     uint dir;        // direction of travel, octahedral snorm 2x16
 };

@@ -3,8 +3,9 @@
 // w = 1 - d / (k R) when the filter is on (eq. 10, 12-13). Sums go into PassAccum in fixed point, so the
 // result does not depend on the order of photons in a bucket.
 //
-// Threads walk `order`, the non-empty hit-point slots sorted along a Morton curve, so the lanes of a
-// subgroup read the same buckets.
+// Each thread takes GROUP consecutive entries of `order`, the non-empty hit-point slots sorted along a
+// Morton curve, so a thread's hit points are usually neighbours and share the photons they read
+// (neighbours.glsl), and the lanes of a subgroup read the same buckets.
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 64) in;
@@ -16,6 +17,7 @@ layout(std430, binding = 3) buffer Accum { PassAccum accum[]; };
 layout(std430, binding = 4) readonly buffer Sorted { Photon sorted[]; };   // records grouped by bucket
 layout(std430, binding = 5) readonly buffer CellStart { uint cell_start[]; };
 layout(std430, binding = 6) readonly buffer Order { uint order[]; };
+layout(std430, binding = 7) writeonly buffer Status { uint lookup_status; }; // 1: a lookup was cut short
 layout(push_constant) uniform GatherPush {
     uint count;      // entries of `order`
     float cone_k;    // cone filter constant k >= 1; 0: off
@@ -23,37 +25,52 @@ layout(push_constant) uniform GatherPush {
 #include "neighbours.glsl"
 #include "invocation.glsl"
 
-// This invocation's sums over the visited photons.
-uint m = 0u;
-int64_t fr = 0L, fg = 0L, fb = 0L;
-float inv_kr;
+// Each member's sums over the photons it received.
+uint m[GROUP];
+int64_t fr[GROUP], fg[GROUP], fb[GROUP];
+float inv_kr[GROUP];
 float flux_fixed; // params.flux_fixed, read once: a storage-buffer read per photon costs lavapipe a gather
 
-void visit(vec3 flux, float d2) {
+void visit(uint j, vec3 flux, float d2) {
     // eq. 10; the weight folds into the fixed-point scale, and without the filter no root is taken.
-    float scale = inv_kr > 0.0 ? (1.0 - sqrt(d2) * inv_kr) * flux_fixed : flux_fixed;
+    float scale = inv_kr[j] > 0.0 ? (1.0 - sqrt(d2) * inv_kr[j]) * flux_fixed : flux_fixed;
     ivec3 f = ivec3(flux * scale + 0.5); // round to nearest: flux and weight are never negative
-    m++;
-    fr += int64_t(f.r);
-    fg += int64_t(f.g);
-    fb += int64_t(f.b);
+    m[j]++;
+    fr[j] += int64_t(f.r);
+    fg[j] += int64_t(f.g);
+    fb[j] += int64_t(f.b);
 }
 
 void main() {
     load_params();
-    uint t = invocation_index();
-    if (t >= pc.count) return;
-    uint i = order[t];
-    HitPoint hp = hit_points[i];
-    if (hp.pixel == 0xffffffffu) return; // SPPM: this pass's eye path found no diffuse surface
-    float r2 = float(stats[i].r2);
+    uint first = invocation_index() * GROUP;
+    if (first >= pc.count) return;
     flux_fixed = params.flux_fixed;
-    inv_kr = pc.cone_k > 0.0 ? 1.0 / (pc.cone_k * sqrt(r2)) : 0.0;
-    for_each_photon_near(hp.pos, hp.normal, r2);
-    if (m > 0u) {
-        accum[i].m += m;
-        accum[i].flux_r += fr;
-        accum[i].flux_g += fg;
-        accum[i].flux_b += fb;
+    uint slot[GROUP];
+    [[unroll]] for (uint j = 0u; j < GROUP; j++) {
+        m[j] = 0u;
+        fr[j] = 0L;
+        fg[j] = 0L;
+        fb[j] = 0L;
+        q_r2[j] = -1.0;
+        inv_kr[j] = 0.0;
+        slot[j] = first + j < pc.count ? order[first + j] : 0xffffffffu;
+        if (slot[j] == 0xffffffffu) continue;
+        HitPoint hp = hit_points[slot[j]];
+        if (hp.pixel == 0xffffffffu) continue; // SPPM: this pass's eye path found no diffuse surface
+        q_pos[j] = hp.pos;
+        q_normal[j] = hp.normal;
+        q_r2[j] = float(stats[slot[j]].r2);
+        if (pc.cone_k > 0.0) inv_kr[j] = 1.0 / (pc.cone_k * sqrt(q_r2[j]));
+    }
+    for_each_photon_near_group();
+    if (lookup_may_be_cut()) lookup_status = 1u;
+    [[unroll]] for (uint j = 0u; j < GROUP; j++) {
+        if (m[j] == 0u) continue;
+        uint i = slot[j];
+        accum[i].m += m[j];
+        accum[i].flux_r += fr[j];
+        accum[i].flux_g += fg[j];
+        accum[i].flux_b += fb[j];
     }
 }

@@ -7,11 +7,12 @@ layout(local_size_x = 256) in;
 layout(std430, binding = 1) readonly buffer Photons { Photon photons[]; };
 layout(std430, binding = 2) readonly buffer Counter { uint photon_count; };
 layout(std430, binding = 3) buffer CellCount { uint cell_count[]; };
+#include "grid.glsl"
 #include "invocation.glsl"
 
 void main() {
     load_params();
     uint i = invocation_index();
     if (i >= min(photon_count, params.photon_capacity)) return;
-    atomicAdd(cell_count[photons[i].cell], 1u);
+    atomicAdd(cell_count[grid_bucket(photons[i].cell)], 1u);
 }

@@ -11,6 +11,7 @@ layout(std430, binding = 2) readonly buffer Counter { uint photon_count; };
 layout(std430, binding = 3) buffer CellCount { uint cell_count[]; };
 layout(std430, binding = 4) readonly buffer CellStart { uint cell_start[]; };
 layout(std430, binding = 5) writeonly buffer Sorted { Photon sorted[]; };
+#include "grid.glsl"
 #include "invocation.glsl"
 
 void main() {
@@ -18,6 +19,7 @@ void main() {
     uint i = invocation_index();
     if (i >= min(photon_count, params.photon_capacity)) return;
     Photon p = photons[i];
-    uint k = atomicAdd(cell_count[p.cell], 0xffffffffu) - 1u;
-    sorted[cell_start[p.cell] + k] = p;
+    uint h = grid_bucket(p.cell);
+    uint k = atomicAdd(cell_count[h], 0xffffffffu) - 1u;
+    sorted[cell_start[h] + k] = p;
 }

@@ -87,7 +87,7 @@ void main() {
         if (m.surface == SURFACE_DIFFUSE) {
             float p = max(m.color.r, max(m.color.g, m.color.b));
             if (p <= 0.0) { alive = false; continue; } // a black emitter absorbs
-            emit(Photon(h.pos, grid_hash(grid_cell(h.pos)), flux, oct_encode(d)));
+            emit(Photon(h.pos, grid_key(grid_cell(h.pos)), flux, oct_encode(d)));
             n++;
             // Russian roulette: survive with the largest albedo.
             if (n == MAX_RECORDS || rng_float(rng) >= p) { alive = false; continue; }

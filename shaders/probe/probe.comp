@@ -19,6 +19,7 @@ layout(std430, binding = 3) buffer Accum { PassAccum accum[]; };
 layout(std430, binding = 4) readonly buffer Sorted { Photon sorted[]; };
 layout(std430, binding = 5) readonly buffer CellStart { uint cell_start[]; };
 layout(std430, binding = 6) readonly buffer Order { uint order[]; };
+layout(std430, binding = 7) writeonly buffer Status { uint lookup_status; }; // 1: a lookup was cut short
 layout(push_constant) uniform ProbePush {
     uint count;      // entries of `order`
     uint phase;
@@ -28,45 +29,64 @@ layout(push_constant) uniform ProbePush {
 #include "neighbours.glsl"
 #include "invocation.glsl"
 
-uint m = 0u;
-int64_t sum = 0L;
-float inv_r2;
+// Each member's count and fixed-point sum of d^2 / r^2.
+uint m[GROUP];
+int64_t sum[GROUP];
+float inv_r2[GROUP];
 
-void visit(vec3 flux, float d2) {
-    m++;
-    sum += int64_t(int(d2 * inv_r2 * PROBE_FIXED + 0.5)); // eq. 7's |t_p - g|^2, in units of r^2
+void visit(uint j, vec3 flux, float d2) {
+    m[j]++;
+    sum[j] += int64_t(int(d2 * inv_r2[j] * PROBE_FIXED + 0.5)); // eq. 7's |t_p - g|^2, in units of r^2
+}
+
+// Phase 1, one thread per hit point.
+void set_radius(uint i) {
+    HitStats s = stats[i];
+    PassAccum a = accum[i];
+    // eq. 7, in units of r^2; a hit point no probe photon reached is sparse (ALGORITHM.md)
+    double ratio = a.m > 0u ? double(a.flux_r) / double(PROBE_FIXED) / double(a.m) : 1.0;
+    double r = sqrt(s.r2);
+    double grow = 1.0;
+    if (ratio > double(pc.beta_frac)) {
+        double lambda = ratio * s.r2;
+        grow = pc.mode == 1u ? 1.0 + lambda / r   // eq. 9 as printed: adds an area to a length
+                             : 1.0 + ratio;       // the scale-free variant
+    }
+    s.r2 *= grow * grow;
+    s.probe = ratio;
+    stats[i] = s;
+    accum[i] = PassAccum(0L, 0L, 0L, 0u, 0u);
 }
 
 void main() {
     load_params();
     uint t = invocation_index();
-    if (t >= pc.count) return;
-    uint i = order[t];
-    HitStats s = stats[i];
     if (pc.phase == 1u) {
-        PassAccum a = accum[i];
-        // eq. 7, in units of r^2; a hit point no probe photon reached is sparse (ALGORITHM.md)
-        double ratio = a.m > 0u ? double(a.flux_r) / double(PROBE_FIXED) / double(a.m) : 1.0;
-        double r = sqrt(s.r2);
-        double grow = 1.0;
-        if (ratio > double(pc.beta_frac)) {
-            double lambda = ratio * s.r2;
-            grow = pc.mode == 1u ? 1.0 + lambda / r   // eq. 9 as printed: adds an area to a length
-                                 : 1.0 + ratio;       // the scale-free variant
-        }
-        s.r2 *= grow * grow;
-        s.probe = ratio;
-        stats[i] = s;
-        accum[i] = PassAccum(0L, 0L, 0L, 0u, 0u);
+        if (t < pc.count) set_radius(order[t]);
         return;
     }
-    HitPoint hp = hit_points[i];
-    if (hp.pixel == 0xffffffffu) return;
-    float r2 = float(s.r2);
-    inv_r2 = 1.0 / r2;
-    for_each_photon_near(hp.pos, hp.normal, r2);
-    if (m > 0u) {
-        accum[i].m += m;
-        accum[i].flux_r += sum;
+    // Phase 0, one thread per GROUP hit points (neighbours.glsl).
+    uint first = t * GROUP;
+    if (first >= pc.count) return;
+    uint slot[GROUP];
+    [[unroll]] for (uint j = 0u; j < GROUP; j++) {
+        m[j] = 0u;
+        sum[j] = 0L;
+        q_r2[j] = -1.0;
+        slot[j] = first + j < pc.count ? order[first + j] : 0xffffffffu;
+        if (slot[j] == 0xffffffffu) continue;
+        HitPoint hp = hit_points[slot[j]];
+        if (hp.pixel == 0xffffffffu) continue;
+        q_pos[j] = hp.pos;
+        q_normal[j] = hp.normal;
+        q_r2[j] = float(stats[slot[j]].r2);
+        inv_r2[j] = 1.0 / q_r2[j];
+    }
+    for_each_photon_near_group();
+    if (lookup_may_be_cut()) lookup_status = 1u;
+    [[unroll]] for (uint j = 0u; j < GROUP; j++) {
+        if (m[j] == 0u) continue;
+        accum[slot[j]].m += m[j];
+        accum[slot[j]].flux_r += sum[j];
     }
 }

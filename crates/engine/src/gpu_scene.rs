@@ -21,6 +21,14 @@ pub struct GpuScene {
     pub initial_radius: f32,
     /// Total emitted power of all lights, per channel (W, un-normalised photon flux sums to this).
     pub total_power: [f64; 3],
+    /// Lower corner of the scene's bounds.
+    pub lo: [f32; 3],
+    /// Area of all surfaces (photons land only on them): sizes the grid's hash table.
+    pub surface_area: f64,
+    /// Buckets allocated for the photon grid; `params.grid_mask + 1` of them are in use.
+    pub grid_allocated: u32,
+    /// The table size was set by `Settings::grid_buckets`, not from the cell size.
+    pub grid_fixed: bool,
 }
 
 fn arr(v: Vec3) -> [f32; 3] {
@@ -116,9 +124,19 @@ impl GpuScene {
         if !(initial_radius.is_finite() && initial_radius > 0.0) {
             bail!("initial radius must be positive and finite, got {initial_radius}");
         }
-        // Cells at least twice the largest radius a hit point can ever have: 2x2x2 cells per lookup.
-        let cell_size = 2.0 * initial_radius * settings.radius_growth_bound(initial_radius);
-        let grid_cells = grid_buckets(scene, cell_size, photon_capacity);
+        // Cells twice the starting radius: 2x2x2 cells per lookup. The probe may enlarge radii; the
+        // renderer then widens the cells to twice the largest (GpuScene::set_grid_cell).
+        let cell_size = 2.0 * initial_radius;
+        // A lookup window must stay under 1024 cells a side (grid_key in grid.glsl).
+        let cell_size = match settings.grid_cell {
+            Some(c) if !(c.is_finite() && c > 0.0 && c * 256.0 >= cell_size) => {
+                bail!("grid cell {c} must be positive and at least 1/256 of {cell_size} (twice the starting radius)")
+            }
+            Some(c) => c,
+            None => cell_size,
+        };
+        let surface_area = scene_surface_area(scene);
+        let grid_allocated = settings.grid_buckets.unwrap_or_else(|| grid_buckets(surface_area, cell_size, photon_capacity));
         let cam = &scene.camera;
         let forward = (cam.look_at - cam.eye).normalize();
         let right = forward.cross(cam.up).normalize();
@@ -132,9 +150,6 @@ impl GpuScene {
             width: cam.width,
             forward: arr(forward),
             height: cam.height,
-            grid_min: arr(lo - Vec3::splat(cell_size)),
-            cell_size,
-            grid_mask: grid_cells - 1,
             num_spheres: spheres.len() as u32,
             num_quads: quads.len() as u32,
             num_lights: lights.len() as u32,
@@ -154,7 +169,33 @@ impl GpuScene {
             flux_fixed,
             ..Default::default()
         };
-        Ok(GpuScene { params, materials, spheres, quads, lights, initial_radius, total_power })
+        let mut g = GpuScene {
+            params,
+            materials,
+            spheres,
+            quads,
+            lights,
+            initial_radius,
+            total_power,
+            lo: arr(lo),
+            surface_area,
+            grid_allocated,
+            grid_fixed: settings.grid_buckets.is_some(),
+        };
+        g.set_grid_cell(cell_size, photon_capacity);
+        Ok(g)
+    }
+
+    /// Sets the photon grid's cell size (and with it the grid's origin and the part of the hash table in
+    /// use). Lookups need cells at least twice the largest search radius.
+    pub fn set_grid_cell(&mut self, cell_size: f32, photon_capacity: u32) {
+        self.params.cell_size = cell_size;
+        self.params.grid_min = arr(Vec3::from(self.lo) - Vec3::splat(cell_size));
+        let buckets = match self.grid_fixed {
+            true => self.grid_allocated,
+            false => grid_buckets(self.surface_area, cell_size, photon_capacity).min(self.grid_allocated),
+        };
+        self.params.grid_mask = buckets - 1;
     }
 
     pub fn pixels(&self) -> u32 {
@@ -166,14 +207,17 @@ impl GpuScene {
     }
 }
 
+fn scene_surface_area(scene: &Scene) -> f64 {
+    scene.quads.iter().map(|q| q.area() as f64).sum::<f64>()
+        + scene.spheres.iter().map(|s| 4.0 * std::f64::consts::PI * (s.radius as f64).powi(2)).sum::<f64>()
+}
+
 /// Buckets of the photon grid's hash table. Photons lie on surfaces, so the cells that ever hold one
 /// are about (surface area / cell^2) times a small factor for cells a surface cuts at a slant; two
 /// buckets per such cell keeps collisions rare while the table stays small enough to be cached (a table
 /// sized by the photon count was 40x larger and its scan and atomics cost more than its collisions saved).
-pub fn grid_buckets(scene: &Scene, cell_size: f32, photon_capacity: u32) -> u32 {
-    let area: f64 = scene.quads.iter().map(|q| q.area() as f64).sum::<f64>()
-        + scene.spheres.iter().map(|s| 4.0 * std::f64::consts::PI * (s.radius as f64).powi(2)).sum::<f64>();
-    let cells = 1.5 * area / (cell_size as f64).powi(2);
+pub fn grid_buckets(surface_area: f64, cell_size: f32, photon_capacity: u32) -> u32 {
+    let cells = 1.5 * surface_area / (cell_size as f64).powi(2);
     let wanted = (2.0 * cells).min(2.0 * photon_capacity as f64).max(1.0);
     (wanted as u64).next_power_of_two().clamp(SCAN_BLOCK as u64, SCAN_BLOCK as u64 * 65536) as u32
 }

@@ -163,7 +163,7 @@ impl Renderer {
         let capacity = wanted.min(max_range / record_size).min(u32::MAX as u64 / 2) as u32;
         let capacity = capacity.max(MAX_RECORDS * 64);
         let gpu = GpuScene::new(scene, &settings, capacity)?;
-        let cells = gpu.params.grid_mask + 1;
+        let cells = gpu.grid_allocated;
         let slots = gpu.slots() as u64;
         let pixels = gpu.pixels() as u64;
         let need = |what: &str, bytes: u64| -> Result<()> {
@@ -232,6 +232,7 @@ impl Renderer {
             kernels,
         };
         drop(stats_init);
+        r.grid.set_cells(r.gpu.params.grid_mask + 1)?;
         r.ctx.run(|cmd| {
             r.accum.cmd_fill(cmd, 0);
             r.direct.cmd_fill(cmd, 0);
@@ -351,6 +352,7 @@ impl Renderer {
                 Ok(())
             })?;
             let log: Vec<u32> = self.ctx.download_prefix(&self.batch_log, batches as usize)?;
+            self.check_lookups()?;
             if log.iter().all(|&n| n as u64 <= capacity) {
                 return Ok((self.profiler.read()?, log.iter().map(|&n| n as u64).sum(), batches));
             }
@@ -365,6 +367,21 @@ impl Renderer {
         }
     }
 
+    /// Fails if a gather or probe lookup may have stopped early: lavapipe ends every loop of a SIMD group
+    /// after 65535 iterations in all, and a cut lookup would silently lose photons.
+    fn check_lookups(&self) -> Result<()> {
+        let status: Vec<u32> = self.ctx.download_prefix(&self.grid.status, 1)?;
+        if status[0] != 0 {
+            bail!(
+                "a photon lookup reached the device's limit on loop iterations (lavapipe: 65535 per SIMD \
+                 group) and may have been cut short: too many photons in the grid cells one subgroup reads; \
+                 lower --photons-per-pass (now {})",
+                self.settings.photons_per_pass
+            );
+        }
+        Ok(())
+    }
+
     /// Pass 2, once: photon probing sets each hit point's starting radius (eq. 7-9).
     fn probe_pass(&mut self) -> Result<()> {
         let photons = self.settings.probe_photons.unwrap_or(self.settings.photons_per_pass);
@@ -376,7 +393,18 @@ impl Renderer {
         self.ctx.run(|cmd| profiler.scope(cmd, "probe", || probe::record(&k.probe, cmd, params, &hits, grid, &push)))?;
         stages.extend(self.profiler.read()?);
         let gpu_ms = stages.iter().map(|s| s.duration_ms).sum();
-        self.probe_report = Some(ProbeReport::new(&self.read_stats()?, &self.read_hit_points()?, self.gpu.initial_radius, photons, gpu_ms));
+        let (stats, hits) = (self.read_stats()?, self.read_hit_points()?);
+        self.probe_report = Some(ProbeReport::new(&stats, &hits, self.gpu.initial_radius, photons, gpu_ms));
+        // Cells twice the largest radius the probe left, so lookups stay within 2x2x2 cells.
+        if self.settings.grid_cell.is_none() {
+            let r2_max = stats.iter().zip(&hits).filter(|(_, h)| h.pixel != u32::MAX).map(|(s, _)| s.r2).fold(0f64, f64::max);
+            let cell = 2.0 * (r2_max.sqrt() as f32) * (1.0 + f32::EPSILON * 4.0);
+            if cell > self.gpu.params.cell_size {
+                self.gpu.set_grid_cell(cell, self.gpu.params.photon_capacity);
+                self.grid.set_cells(self.gpu.params.grid_mask + 1)?;
+                self.ctx.upload(&self.params, bytemuck::bytes_of(&self.gpu.params))?;
+            }
+        }
         Ok(())
     }
 
@@ -536,6 +564,7 @@ impl Renderer {
         self.profiler.reset();
         self.ctx.run(|cmd| self.record_batch(cmd, first, count, 0, use_))?;
         let n: Vec<u32> = self.ctx.download_prefix(&self.counter, 1)?;
+        self.check_lookups()?;
         if n[0] > self.gpu.params.photon_capacity {
             bail!("a test batch of {count} photons left {} records, over the capacity {}", n[0], self.gpu.params.photon_capacity);
         }

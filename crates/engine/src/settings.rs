@@ -1,6 +1,7 @@
 //! Render settings and their defaults.
 
 use anyhow::{bail, Result};
+use ppm_vk_kernels::lookup::SCAN_BLOCK;
 
 /// Which progressive photon mapping.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -58,6 +59,13 @@ pub struct Settings {
     /// Compile the tracing kernels with the scene inlined as constants (faster; same results up to the
     /// last bit of a fused multiply-add). `false` uses the kernels as built.
     pub specialize: bool,
+    /// Buckets of the photon grid's hash table (a power of two, at least 1024); `None` sizes it from the
+    /// scene's surface area. Results do not depend on it; a small table makes grid cells share buckets,
+    /// which the tests use to exercise that case.
+    pub grid_buckets: Option<u32>,
+    /// Edge of a photon-grid cell in scene units; `None`: twice the largest radius a hit point can have,
+    /// so a lookup spans at most 2x2x2 cells. Smaller cells mean wider lookups (tests use them for that).
+    pub grid_cell: Option<f32>,
 }
 
 impl Default for Settings {
@@ -76,6 +84,8 @@ impl Default for Settings {
             max_eye_depth: 16,
             max_photon_depth: 64,
             specialize: true,
+            grid_buckets: None,
+            grid_cell: None,
         }
     }
 }
@@ -107,20 +117,15 @@ impl Settings {
         if !(1..=8).contains(&self.hit_slots) {
             bail!("hit slots per pixel must be in 1..=8, got {}", self.hit_slots);
         }
+        if let Some(b) = self.grid_buckets {
+            if !b.is_power_of_two() || !(SCAN_BLOCK..=SCAN_BLOCK * 65536).contains(&b) {
+                bail!("photon grid buckets must be a power of two in [{SCAN_BLOCK}, {}], got {b}", SCAN_BLOCK as u64 * 65536);
+            }
+        }
         if self.max_eye_depth == 0 || self.max_photon_depth == 0 {
             bail!("path depth limits must be at least 1");
         }
         Ok(())
-    }
-
-    /// The most a hit point's radius can grow above its start `r` (radii only shrink in plain PPM; the probe
-    /// can enlarge them once, by at most 1 + lambda / r <= 1 + r (paper, lambda <= r^2) or 2 (scale-free)).
-    pub fn radius_growth_bound(&self, r: f32) -> f32 {
-        match self.probe {
-            ProbeMode::Off => 1.0,
-            ProbeMode::Paper => 1.0 + r,
-            ProbeMode::ScaleFree => 2.0,
-        }
     }
 
     /// Hit points per pixel as the renderer uses them.

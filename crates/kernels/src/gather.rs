@@ -39,9 +39,12 @@ pub struct HitBuffers<'a> {
 }
 
 /// The bindings of the kernels that read the photon grid per hit point (gather.comp and probe.comp).
-pub fn grid_reader_bindings<'a>(params: &'a Buffer, hits: &HitBuffers<'a>, grid: &'a Grid) -> [&'a Buffer; 7] {
-    [params, hits.hit_points, hits.stats, hits.accum, &grid.sorted, &grid.cell_start, hits.order]
+pub fn grid_reader_bindings<'a>(params: &'a Buffer, hits: &HitBuffers<'a>, grid: &'a Grid) -> [&'a Buffer; 8] {
+    [params, hits.hit_points, hits.stats, hits.accum, &grid.sorted, &grid.cell_start, hits.order, &grid.status]
 }
+
+/// Hit points one gather or probe thread takes together (`GROUP` in shaders/common/neighbours.glsl).
+pub const GROUP: u32 = 4;
 
 pub fn record_gather(
     k: &ComputePipeline,
@@ -51,7 +54,7 @@ pub fn record_gather(
     grid: &Grid,
     push: &GatherPush,
 ) -> Result<()> {
-    k.dispatch(cmd, &grid_reader_bindings(params, hits, grid), bytemuck::bytes_of(push), push.count as u64)
+    k.dispatch(cmd, &grid_reader_bindings(params, hits, grid), bytemuck::bytes_of(push), push.count.div_ceil(GROUP) as u64)
 }
 
 pub fn record_update(k: &ComputePipeline, cmd: vk::CommandBuffer, hits: &HitBuffers, push: &UpdatePush) -> Result<()> {

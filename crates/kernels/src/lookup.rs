@@ -18,9 +18,11 @@ pub struct ScanPush {
 }
 push_struct!(ScanPush, GRID_SCAN);
 
-/// The grid's buffers for a table of `cells` buckets.
+/// The grid's buffers for a table of up to `allocated` buckets, `cells` of them in use.
 pub struct Grid {
+    /// Buckets in use (the hash's mask + 1).
     pub cells: u32,
+    pub allocated: u32,
     /// Per bucket: records in it while building; zero between batches.
     pub cell_count: Buffer,
     /// Per bucket: index of its first record in `sorted`; `cells + 1` entries.
@@ -28,6 +30,9 @@ pub struct Grid {
     pub block_sums: Buffer,
     /// The records, grouped by bucket.
     pub sorted: Buffer,
+    /// One word the kernels that read the grid set to 1 when a lookup loop stopped early (lavapipe's
+    /// limit on loop iterations); zero otherwise.
+    pub status: Buffer,
 }
 
 impl Grid {
@@ -37,12 +42,15 @@ impl Grid {
             bail!("photon grid: {cells} buckets is not a power of two in [{SCAN_BLOCK}, {}]", SCAN_BLOCK as u64 * 65536);
         }
         let cell_count = Buffer::new(ctx, "grid cell_count", cells as u64 * 4, BufferKind::Storage)?;
+        let status = Buffer::new(ctx, "grid lookup status", 4, BufferKind::Storage)?;
         ctx.run(|cmd| {
             cell_count.cmd_fill(cmd, 0);
+            status.cmd_fill(cmd, 0);
             Ok(())
         })?;
         Ok(Grid {
             cells,
+            allocated: cells,
             cell_count,
             cell_start: Buffer::new(ctx, "grid cell_start", (cells as u64 + 1) * 4, BufferKind::Storage)?,
             block_sums: Buffer::new(ctx, "grid block_sums", (cells / SCAN_BLOCK) as u64 * 4, BufferKind::Storage)?,
@@ -52,7 +60,19 @@ impl Grid {
                 capacity as u64 * std::mem::size_of::<crate::layout::Photon>() as u64,
                 BufferKind::Storage,
             )?,
+            status,
         })
+    }
+}
+
+impl Grid {
+    /// Uses the first `cells` buckets (the kernels' hash mask must agree).
+    pub fn set_cells(&mut self, cells: u32) -> Result<()> {
+        if !cells.is_power_of_two() || cells < SCAN_BLOCK || cells > self.allocated {
+            bail!("photon grid: {cells} buckets in use is not a power of two in [{SCAN_BLOCK}, {}]", self.allocated);
+        }
+        self.cells = cells;
+        Ok(())
     }
 }
 

@@ -34,5 +34,7 @@ pub fn record(
     grid: &Grid,
     push: &ProbePush,
 ) -> Result<()> {
-    k.dispatch(cmd, &crate::gather::grid_reader_bindings(params, hits, grid), bytemuck::bytes_of(push), push.count as u64)
+    // Phase 0 takes GROUP hit points per thread (neighbours.glsl), phase 1 one.
+    let threads = if push.phase == 0 { push.count.div_ceil(crate::gather::GROUP) } else { push.count };
+    k.dispatch(cmd, &crate::gather::grid_reader_bindings(params, hits, grid), bytemuck::bytes_of(push), threads as u64)
 }

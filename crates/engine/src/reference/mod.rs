@@ -129,7 +129,7 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             if pr <= 0.0 {
                 break;
             }
-            out.push(Photon { pos: h.pos.to_array(), cell: trace::grid_hash(g, h.pos), flux: flux.to_array(), dir: oct_encode(d) });
+            out.push(Photon { pos: h.pos.to_array(), cell: trace::grid_key(g, h.pos), flux: flux.to_array(), dir: oct_encode(d) });
             n += 1;
             if n == MAX_RECORDS || rng.float() >= pr {
                 break;

@@ -140,10 +140,16 @@ pub fn oct_decode(e: u32) -> Vec3 {
     v.normalize()
 }
 
-/// `grid_hash(grid_cell(p))` of grid.glsl.
-pub fn grid_hash(g: &GpuScene, p: Vec3) -> u32 {
+/// `grid_key(grid_cell(p))` of grid.glsl: the cell's coordinates modulo 1024, packed 10 bits each.
+pub fn grid_key(g: &GpuScene, p: Vec3) -> u32 {
     let c = ((p - v3(g.params.grid_min)) / g.params.cell_size).floor();
-    let (x, y, z) = (c.x as i32 as u32, c.y as i32 as u32, c.z as i32 as u32);
+    let (x, y, z) = (c.x as i32 as u32 & 1023, c.y as i32 as u32 & 1023, c.z as i32 as u32 & 1023);
+    x | (y << 10) | (z << 20)
+}
+
+/// `grid_bucket(key)` of grid.glsl: the hash-table bucket of a cell key.
+pub fn grid_bucket(g: &GpuScene, key: u32) -> u32 {
+    let (x, y, z) = (key & 1023, (key >> 10) & 1023, key >> 20);
     (x.wrapping_mul(73856093) ^ y.wrapping_mul(19349663) ^ z.wrapping_mul(83492791)) & g.params.grid_mask
 }
 
