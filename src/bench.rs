@@ -1,6 +1,8 @@
 //! `ppm-vk bench`: a fixed, documented set of cases, each rendered for a few warm-up passes (excluded:
 //! they include the pipelines' first-dispatch compile) and then timed over measured passes. Reports the
-//! median per stage (GPU timestamps) and of the wall time per pass, prints a table and writes JSON.
+//! median per stage (GPU timestamps) and of the wall time per pass, the peak device memory and host
+//! resident memory of each case, and whether either grew over the measured passes; prints a table and
+//! writes JSON.
 
 use std::path::PathBuf;
 
@@ -9,7 +11,11 @@ use clap::Args;
 use ppm_vk_engine::{Mode, PassStats, Renderer, Scene, Settings};
 use serde_json::json;
 
-use crate::DeviceArgs;
+use crate::{Cone, DeviceArgs, ProbeArg};
+
+/// The issue's matrix: 0.1M, 1M and 4M photons per pass at 256^2, 512^2 and 1024^2.
+const DEFAULT_CASES: &str = "100k@256x256,1M@256x256,4M@256x256,100k@512x512,1M@512x512,4M@512x512,\
+                             100k@1024x1024,1M@1024x1024,4M@1024x1024";
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -17,7 +23,7 @@ pub struct BenchArgs {
     #[arg(long, default_value = "scenes/cornell-spheres.toml")]
     scene: PathBuf,
     /// Cases as PHOTONS@WIDTHxHEIGHT, comma-separated (photon counts accept k and M suffixes).
-    #[arg(long, default_value = "100k@512x512,1M@512x512")]
+    #[arg(long, default_value = DEFAULT_CASES)]
     cases: String,
     /// Passes run before timing starts.
     #[arg(long, default_value_t = 2)]
@@ -28,6 +34,12 @@ pub struct BenchArgs {
     /// `ppm` or `sppm` (SPPM adds an eye pass to every pass).
     #[arg(long, default_value = "sppm")]
     mode: String,
+    /// Photon probing (eq. 7-9), as for `render`.
+    #[arg(long, value_enum, default_value_t = ProbeArg::Off)]
+    probe: ProbeArg,
+    /// Cone filter constant k >= 1, or `off`, as for `render`.
+    #[arg(long, default_value = "off", value_parser = crate::parse_cone)]
+    cone: Cone,
     /// Where to write the JSON results.
     #[arg(long, default_value = "bench.json")]
     json: PathBuf,
@@ -81,6 +93,26 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 const STAGES: [&str; 5] = ["ray", "photon", "lookup", "gather", "update"];
 
+/// This process's resident memory now and its peak since the last [`reset_peak_rss`], in bytes (Linux's
+/// /proc/self/status VmRSS and VmHWM; `None` elsewhere).
+fn host_rss() -> Option<(u64, u64)> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let field = |name: &str| -> Option<u64> {
+        let line = status.lines().find(|l| l.starts_with(name))?;
+        Some(line[name.len()..].trim().trim_end_matches("kB").trim().parse::<u64>().ok()? * 1024)
+    };
+    Some((field("VmRSS:")?, field("VmHWM:")?))
+}
+
+/// Restarts the peak resident set (VmHWM) from the current one (Linux: `5` into /proc/self/clear_refs).
+fn reset_peak_rss() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+fn mib(bytes: u64) -> f64 {
+    bytes as f64 / (1u64 << 20) as f64
+}
+
 pub fn run(args: BenchArgs) -> Result<()> {
     if args.passes == 0 {
         bail!("--passes must be at least 1");
@@ -96,26 +128,58 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let info = ctx.info().clone();
     println!("device: {} ({}, {})", info.name, info.kind, info.driver);
     println!(
-        "{:>10} {:>11} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9}",
-        "photons", "resolution", "first ray", "ray", "photon", "lookup", "gather", "update", "pass ms", "M photons/s", "resolve"
+        "mode {}, probe {:?}, cone {}; {} warm-up passes, median of {}",
+        args.mode,
+        args.probe,
+        args.cone.0.map_or("off".to_string(), |k| k.to_string()),
+        args.warmup,
+        args.passes
+    );
+    println!(
+        "{:>10} {:>11} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>9}",
+        "photons",
+        "resolution",
+        "first ray",
+        "ray",
+        "photon",
+        "lookup",
+        "gather",
+        "update",
+        "pass ms",
+        "M photons/s",
+        "resolve",
+        "dev MiB",
+        "RSS MiB"
     );
     let mut results = Vec::new();
     for case in &cases {
         let scene = base.with_resolution(case.width, case.height);
-        let settings = Settings { photons_per_pass: case.photons, mode, ..Settings::default() };
+        let settings = Settings {
+            photons_per_pass: case.photons,
+            mode,
+            probe: args.probe.into(),
+            cone_k: args.cone.0,
+            ..Settings::default()
+        };
+        ctx.reset_memory_peak();
+        reset_peak_rss();
         let mut renderer = Renderer::new(&ctx, &scene, settings)?;
         for _ in 0..args.warmup {
             renderer.pass()?;
         }
+        // Memory after the warm-up and after the measured passes: nothing should grow with passes.
+        let (dev_before, rss_before) = (ctx.memory_usage(), host_rss());
         let measured: Vec<PassStats> = (0..args.passes).map(|_| renderer.pass()).collect::<Result<_>>()?;
+        let (dev_after, rss_after) = (ctx.memory_usage(), host_rss());
         renderer.resolve()?; // the first resolve compiles its pipeline
         let resolve_ms = median((0..3).map(|_| renderer.resolve()).collect::<Result<Vec<_>>>()?);
         let stage: Vec<f64> = STAGES.iter().map(|s| median(measured.iter().map(|p| p.stage_ms(s)).collect())).collect();
         let wall = median(measured.iter().map(|p| p.wall_ms).collect());
         let rate = case.photons as f64 / (wall * 1e-3) / 1e6;
         let records = median(measured.iter().map(|p| p.records as f64).collect());
+        let rss_peak = rss_after.map(|r| r.1);
         println!(
-            "{:>10} {:>11} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>11.3} {:>9.1}",
+            "{:>10} {:>11} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>11.3} {:>9.1} {:>9.0} {:>9}",
             case.photons,
             format!("{}x{}", case.width, case.height),
             renderer.ray_ms(),
@@ -126,7 +190,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
             stage[4],
             wall,
             rate,
-            resolve_ms
+            resolve_ms,
+            mib(dev_after.peak_reserved_bytes),
+            rss_peak.map_or("-".to_string(), |b| format!("{:.0}", mib(b)))
         );
         results.push(json!({
             "photons_per_pass": case.photons,
@@ -141,6 +207,16 @@ pub fn run(args: BenchArgs) -> Result<()> {
             "pass_wall_ms_all": measured.iter().map(|p| p.wall_ms).collect::<Vec<_>>(),
             "resolve_ms_median": resolve_ms,
             "photons_per_second": rate * 1e6,
+            "device_memory": {
+                "peak_reserved_bytes": dev_after.peak_reserved_bytes,
+                "in_use_bytes_after_warmup": dev_before.in_use_bytes,
+                "in_use_bytes_after_measured": dev_after.in_use_bytes,
+            },
+            "host_rss": {
+                "peak_bytes": rss_peak,
+                "bytes_after_warmup": rss_before.map(|r| r.0),
+                "bytes_after_measured": rss_after.map(|r| r.0),
+            },
         }));
         crate::check_validation(&ctx)?;
     }
@@ -150,6 +226,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
         "git_revision": env!("PPM_VK_GIT_REV"),
         "scene": args.scene.display().to_string(),
         "mode": args.mode,
+        "probe": format!("{:?}", args.probe),
+        "cone_k": args.cone.0,
         "warmup_passes": args.warmup,
         "measured_passes": args.passes,
         "cases": results,

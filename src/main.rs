@@ -133,7 +133,7 @@ enum ModeArg {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-enum ProbeArg {
+pub(crate) enum ProbeArg {
     Off,
     Paper,
     ScaleFree,
@@ -163,9 +163,9 @@ fn parse_region(s: &str) -> Result<Region, String> {
 
 /// `--cone`: a filter constant, or none.
 #[derive(Clone, Copy, Debug)]
-struct Cone(Option<f32>);
+pub(crate) struct Cone(pub(crate) Option<f32>);
 
-fn parse_cone(s: &str) -> Result<Cone, String> {
+pub(crate) fn parse_cone(s: &str) -> Result<Cone, String> {
     if s.eq_ignore_ascii_case("off") {
         return Ok(Cone(None));
     }

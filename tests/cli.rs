@@ -101,6 +101,44 @@ fn csv_report_has_a_row_per_pass() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+#[test]
+fn bench_writes_cases_with_stages_and_memory() {
+    let dir = scratch("bench");
+    let json_path = dir.join("bench.json");
+    let run = bin()
+        .args(["bench", "--cases", "10k@16x16,20k@32x32", "--warmup", "1", "--passes", "3", "--mode", "ppm"])
+        .args(["--probe", "scale-free", "--cone", "1.1", "--validate", "--json"])
+        .arg(&json_path)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(run.status.success(), "bench failed:\n{stdout}\n{}", String::from_utf8_lossy(&run.stderr));
+    assert!(stdout.contains("probe ScaleFree, cone 1.1"), "settings line missing:\n{stdout}");
+    let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+    assert_eq!(doc["schema"], "ppm-vk-bench/1");
+    let cases = doc["cases"].as_array().unwrap();
+    assert_eq!(cases.len(), 2);
+    for c in cases {
+        for stage in ["photon", "lookup", "gather", "update"] {
+            let ms = c["stage_ms_median"][stage].as_f64().unwrap();
+            assert!(ms > 0.0 && ms.is_finite(), "{stage}: {ms} ms in {c}");
+        }
+        assert_eq!(c["pass_wall_ms_all"].as_array().unwrap().len(), 3);
+        assert!(c["photons_per_second"].as_f64().unwrap() > 0.0);
+        // Memory is bounded: the passes allocate nothing that outlives them.
+        let dev = &c["device_memory"];
+        assert!(dev["peak_reserved_bytes"].as_u64().unwrap() >= dev["in_use_bytes_after_measured"].as_u64().unwrap());
+        assert_eq!(dev["in_use_bytes_after_warmup"], dev["in_use_bytes_after_measured"], "device memory grew: {dev}");
+        if cfg!(target_os = "linux") {
+            let rss = &c["host_rss"];
+            let (before, after) = (rss["bytes_after_warmup"].as_u64().unwrap(), rss["bytes_after_measured"].as_u64().unwrap());
+            // Resident memory may move by allocator noise (a few pages), not by a pass's buffers.
+            assert!(after <= before + (8 << 20), "host RSS grew from {before} to {after} over 3 passes");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Runs the binary expecting failure; returns stderr.
 fn fails(args: &[&str]) -> String {
     let run = bin().args(args).output().unwrap();

@@ -57,19 +57,20 @@ impl Buffer {
         let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         let raw = unsafe { device.create_buffer(&info, None) }.with_context(|| format!("creating buffer {name:?}"))?;
         let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
-        let allocation = shared
-            .allocator
-            .lock()
-            .map_err(|_| anyhow!("allocator lock poisoned"))?
-            .as_mut()
-            .ok_or_else(|| anyhow!("allocator already destroyed"))?
-            .allocate(&AllocationCreateDesc {
+        let allocation = {
+            let mut guard = shared.allocator.lock().map_err(|_| anyhow!("allocator lock poisoned"))?;
+            let allocator = guard.as_mut().ok_or_else(|| anyhow!("allocator already destroyed"))?;
+            let a = allocator.allocate(&AllocationCreateDesc {
                 name,
                 requirements,
                 location,
                 linear: true,
                 allocation_scheme: AllocationScheme::GpuAllocatorManaged,
             });
+            let reserved = allocator.generate_report().total_capacity_bytes;
+            shared.peak_reserved.fetch_max(reserved, std::sync::atomic::Ordering::Relaxed);
+            a
+        };
         let allocation = match allocation {
             Ok(a) => a,
             Err(e) => {

@@ -29,10 +29,23 @@ pub struct DeviceInfo {
     pub missing: Vec<String>,
 }
 
+/// Device memory of one context, from its allocator.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MemoryUsage {
+    /// Bytes the live buffers occupy.
+    pub in_use_bytes: u64,
+    /// Bytes of device memory the allocator holds in blocks (what the device has given it).
+    pub reserved_bytes: u64,
+    /// The most `reserved_bytes` has been since the context opened or the last reset.
+    pub peak_reserved_bytes: u64,
+}
+
 /// State shared by every object made from a [`Context`], so RAII handles can free themselves.
 pub(crate) struct Shared {
     pub(crate) device: ash::Device,
     pub(crate) allocator: Mutex<Option<Allocator>>,
+    /// The most device memory the allocator has held in blocks at once, in bytes (since the last reset).
+    pub(crate) peak_reserved: std::sync::atomic::AtomicU64,
     pub(crate) push_descriptor: ash::khr::push_descriptor::Device,
     pub(crate) validation: Option<Arc<Mutex<Vec<String>>>>,
 }
@@ -310,6 +323,7 @@ impl Context {
         let shared = Arc::new(Shared {
             device,
             allocator: Mutex::new(Some(allocator)),
+            peak_reserved: Default::default(),
             push_descriptor,
             validation: options.validation.then(|| sink.clone()),
         });
@@ -340,6 +354,26 @@ impl Context {
 
     pub fn info(&self) -> &DeviceInfo {
         &self.inner.info
+    }
+
+    /// Device memory held by this context's buffers now, and the most its allocator has held at once.
+    pub fn memory_usage(&self) -> MemoryUsage {
+        let shared = self.shared();
+        let (in_use, reserved) = match shared.allocator.lock().ok().as_deref().and_then(|a| a.as_ref()) {
+            Some(a) => {
+                let r = a.generate_report();
+                (r.total_allocated_bytes, r.total_capacity_bytes)
+            }
+            None => (0, 0),
+        };
+        let peak = shared.peak_reserved.load(std::sync::atomic::Ordering::Relaxed).max(reserved);
+        MemoryUsage { in_use_bytes: in_use, reserved_bytes: reserved, peak_reserved_bytes: peak }
+    }
+
+    /// Starts a new peak: [`MemoryUsage::peak_reserved_bytes`] counts from what is held now.
+    pub fn reset_memory_peak(&self) {
+        let now = self.memory_usage().reserved_bytes;
+        self.shared().peak_reserved.store(now, std::sync::atomic::Ordering::Relaxed);
     }
 
     pub fn limits(&self) -> &vk::PhysicalDeviceLimits {

@@ -10,7 +10,7 @@ mod pipeline;
 mod profiler;
 
 pub use buffer::{Buffer, BufferKind};
-pub use context::{Context, ContextOptions, DeviceInfo};
+pub use context::{Context, ContextOptions, DeviceInfo, MemoryUsage};
 pub use pipeline::{barrier, ComputePipeline, PipelineDesc};
 pub use profiler::{Profiler, ScopeTiming};
 
