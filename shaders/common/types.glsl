@@ -38,6 +38,17 @@ struct Quad {
     float pad1;
 };
 
+// A light as the photon kernel samples it: its quad and the flux a photon leaves it with (power / prob).
+// Never stored in a buffer: the scene-specialised kernels hold their lights as constants of this type.
+struct Emitter {
+    vec3 origin;
+    vec3 edge_u;
+    vec3 edge_v;
+    vec3 normal;
+    vec3 flux;
+    float cdf;
+};
+
 // A light to emit photons from, chosen with probability `prob` (proportional to power).
 struct Light {
     uint quad;

@@ -6,6 +6,7 @@
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_EXT_control_flow_attributes : require
 layout(local_size_x = 64) in;
 
 #include "types.glsl"
@@ -37,10 +38,35 @@ void emit(Photon rec) {
     if (at < params.photon_capacity) photons[at] = rec;
 }
 
+// The light a photon leaves, for the uniform number u (the first of its stream): the first whose running
+// cdf exceeds u.
+#ifdef SCENE_CONSTANTS
+// The lights are constants: a chain of selects, unrolled, reads no memory (a dynamically indexed constant
+// array would be copied per invocation).
+Emitter choose_emitter(float u) {
+    Emitter e = SCENE_EMITTERS[0];
+    [[unroll]] for (uint i = 1u; i < NUM_LIGHTS; i++) {
+        if (u >= SCENE_EMITTERS[i - 1u].cdf) e = SCENE_EMITTERS[i];
+    }
+    return e;
+}
+#else
+Emitter choose_emitter(float u) {
+    uint li = 0u;
+    while (li + 1u < params.num_lights && u >= lights[li].cdf) li++;
+    Light light = lights[li];
+    Quad q = quads[light.quad];
+    return Emitter(q.origin, q.edge_u, q.edge_v, q.normal, light.power / light.prob, light.cdf);
+}
+#endif
+
 // Photons per thread. A thread starts its next photon as soon as a path ends ("path regeneration"), so
 // the lanes of a subgroup stay busy instead of waiting for the longest of their paths.
 const uint PER_THREAD = 8u;
 
+// lavapipe runs both sides of every branch under a mask, so the loop below is written to have as little
+// inside branches as it can: the cosine-weighted direction that a new photon and a diffuse bounce both
+// need is drawn once per step, after either.
 void main() {
     load_params();
     uint t = invocation_index();
@@ -50,6 +76,8 @@ void main() {
     bool alive = false;
     Rng rng;
     vec3 o, d, flux;
+    vec3 lobe;               // the normal a direction is still to be drawn about (pending)
+    bool pending = false;
     uint depth = 0u;
     uint n = 0u;             // records of the current path
     for (;;) {
@@ -59,21 +87,22 @@ void main() {
             if (next == PER_THREAD || i >= pc.count) break;
             next++;
             rng = rng_new(uint64_t(params.seed) | (uint64_t(pc.salt) << 32), pc.first + uint64_t(i));
-            float u = rng_float(rng);
-            uint li = 0u;
-            while (li + 1u < params.num_lights && u >= lights[li].cdf) li++;
-            Light light = lights[li];
-            Quad q = quads[light.quad];
+            Emitter e = choose_emitter(rng_float(rng));
             float a = rng_float(rng);
             float b = rng_float(rng);
-            o = offset_ray(q.origin + a * q.edge_u + b * q.edge_v, q.normal);
-            float u1 = rng_float(rng);
-            float u2 = rng_float(rng);
-            d = cosine_direction(q.normal, u1, u2);
-            flux = light.power / light.prob;
+            o = offset_ray(e.origin + a * e.edge_u + b * e.edge_v, e.normal);
+            lobe = e.normal;
+            pending = true;
+            flux = e.flux;
             depth = 0u;
             n = 0u;
             alive = true;
+        }
+        if (pending) {
+            float u1 = rng_float(rng);
+            float u2 = rng_float(rng);
+            d = cosine_direction(lobe, u1, u2);
+            pending = false;
         }
         Hit h;
         if (depth >= params.max_photon_depth || !intersect_scene(o, d, 0.0, 1e30, h)) {
@@ -92,9 +121,8 @@ void main() {
             // Russian roulette: survive with the largest albedo.
             if (n == MAX_RECORDS || rng_float(rng) >= p) { alive = false; continue; }
             flux *= m.color / p;
-            float v1 = rng_float(rng);
-            float v2 = rng_float(rng);
-            d = cosine_direction(nf, v1, v2);
+            lobe = nf;
+            pending = true;
             o = offset_ray(h.pos, nf);
         } else if (m.surface == SURFACE_MIRROR) {
             flux *= m.color;

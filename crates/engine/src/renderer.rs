@@ -188,7 +188,7 @@ impl Renderer {
             if gpu.spheres.len() + gpu.quads.len() > MAX_INLINE_PRIMITIVES || !settings.specialize {
                 return pipeline(ctx, k);
             }
-            let constants = specialize::scene_constants(&gpu.spheres, &gpu.quads);
+            let constants = specialize::scene_constants(&gpu.spheres, &gpu.quads, &gpu.lights);
             pipeline_from(ctx, k, &specialize::compile(k, &constants)?)
         };
         let kernels = Kernels {
