@@ -339,6 +339,8 @@ struct GridShape {
     cell_of_radius: Option<f32>,
     /// Photons of the checked batch, if not PHOTONS.
     photons: Option<u32>,
+    /// SPPM instead of PPM: one hit point per pixel, four per gather thread (PPM's threads take one).
+    sppm: bool,
 }
 
 fn gather_case(cone_k: Option<f32>, grid: GridShape) {
@@ -347,8 +349,9 @@ fn gather_case(cone_k: Option<f32>, grid: GridShape) {
     let r0 = Renderer::new(&ctx, &scene, settings()).unwrap().gpu_scene().initial_radius;
     let grid_cell = grid.cell_of_radius.map(|f| f * r0);
     let photons_per_pass = grid.photons.unwrap_or(PHOTONS);
-    let mut r = Renderer::new(&ctx, &scene, Settings { cone_k, grid_buckets: grid.buckets, grid_cell, photons_per_pass, ..settings() })
-        .unwrap();
+    let mode = if grid.sppm { Mode::Sppm } else { Mode::Ppm };
+    let settings = Settings { cone_k, grid_buckets: grid.buckets, grid_cell, photons_per_pass, mode, ..settings() };
+    let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
     // Two full passes first, so radii differ between hit points (the update has shrunk them unevenly).
     r.pass().unwrap();
     r.pass().unwrap();
@@ -370,6 +373,9 @@ fn gather_case(cone_k: Option<f32>, grid: GridShape) {
     if let (Some(b), Some(c)) = (grid.buckets, grid.cell_of_radius) {
         label += &format!(", {b} buckets, cells {c} r");
     }
+    if grid.sppm {
+        label += ", SPPM";
+    }
     check_gather(&label, &accum, &hits, &stats, &records, cone_k.unwrap_or(0.0), r.gpu_scene().params.flux_fixed);
     assert_clean(&ctx);
 }
@@ -377,6 +383,7 @@ fn gather_case(cone_k: Option<f32>, grid: GridShape) {
 #[test]
 fn gather_matches_brute_force() {
     gather_case(None, GridShape::default());
+    gather_case(None, GridShape { sppm: true, ..GridShape::default() });
 }
 
 /// Cells half the radius wide in the smallest hash table: a lookup spans about 5x5 cells (the general
@@ -385,18 +392,26 @@ fn gather_matches_brute_force() {
 /// smaller batch keeps the crowded buckets inside lavapipe's loop budget (lookup_cut_short_is_an_error).
 #[test]
 fn gather_with_wide_windows_and_shared_buckets_matches_brute_force() {
-    gather_case(None, GridShape { buckets: Some(ppm_vk_kernels::lookup::SCAN_BLOCK), cell_of_radius: Some(0.5), photons: Some(5000) });
+    for sppm in [false, true] {
+        let shape = GridShape { buckets: Some(ppm_vk_kernels::lookup::SCAN_BLOCK), cell_of_radius: Some(0.5), photons: Some(5000), sppm };
+        gather_case(None, shape);
+    }
 }
 
-/// A quarter-radius cell in the smallest table puts tens of thousands of photons in one SIMD group's
-/// lookups, past lavapipe's 65535 loop iterations: the renderer must refuse, not return a darker image.
+/// A quarter-radius cell in the smallest table with 100k photons puts tens of thousands of photons in
+/// one SIMD group's lookups, past lavapipe's 65535 loop iterations: the renderer must refuse, not return a darker image.
 /// (On a device without such a limit the lookup completes and matches the brute force.)
 #[test]
 fn lookup_cut_short_is_an_error() {
     let ctx = ctx();
     let scene = cornell(RES, RES);
     let r0 = Renderer::new(&ctx, &scene, settings()).unwrap().gpu_scene().initial_radius;
-    let grid = Settings { grid_buckets: Some(ppm_vk_kernels::lookup::SCAN_BLOCK), grid_cell: Some(0.25 * r0), ..settings() };
+    let grid = Settings {
+        grid_buckets: Some(ppm_vk_kernels::lookup::SCAN_BLOCK),
+        grid_cell: Some(0.25 * r0),
+        photons_per_pass: 100_000,
+        ..settings()
+    };
     let result = Renderer::new(&ctx, &scene, grid).and_then(|mut r| r.pass());
     if ctx.info().name.contains("llvmpipe") {
         let err = format!("{:#}", result.expect_err("lavapipe cut the lookups short, and the pass did not say so"));

@@ -12,7 +12,12 @@
 #include "grid.glsl"
 #include "sampling.glsl"
 
-const uint GROUP = 4u; // gather::GROUP on the host
+// Hit points per thread: 4 as built (gather::GROUP); the renderer compiles PPM's variant with 1, which
+// measured faster for its hit points (README, speed).
+#ifndef GROUP_SIZE
+#define GROUP_SIZE 4
+#endif
+const uint GROUP = GROUP_SIZE;
 
 // Loop steps this subgroup's lookups took, each counted by one lane. lavapipe ends every loop of a SIMD
 // group (its subgroup) once they have taken 65535 steps in all (LP_MAX_TGSI_LOOP_ITERATIONS), an exit
