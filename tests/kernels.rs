@@ -339,7 +339,7 @@ struct GridShape {
     cell_of_radius: Option<f32>,
     /// Photons of the checked batch, if not PHOTONS.
     photons: Option<u32>,
-    /// SPPM instead of PPM: one hit point per pixel, four per gather thread (PPM's threads take one).
+    /// SPPM instead of PPM: one hit point per pixel, in pixel order.
     sppm: bool,
 }
 

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context as _, Result};
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
-use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers, UpdatePush};
+use ppm_vk_kernels::gather::{self, GatherPush, HitBuffers, UpdatePush};
 use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon};
 use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PhotonPush, MAX_RECORDS, SALT_EYE, SALT_PHOTON, SALT_PROBE};
@@ -51,10 +51,10 @@ impl PassStats {
 
 struct Kernels {
     ray: ComputePipeline,
-    probe: GridReader,
+    probe: ComputePipeline,
     photon: ComputePipeline,
     lookup: Lookup,
-    gather: GridReader,
+    gather: ComputePipeline,
     update: ComputePipeline,
     resolve: ComputePipeline,
 }
@@ -191,18 +191,12 @@ impl Renderer {
             let constants = specialize::scene_constants(&gpu.spheres, &gpu.quads, &gpu.lights);
             pipeline_from(ctx, k, &specialize::compile(k, &constants)?)
         };
-        // Hit points per gather thread: SPPM's (one per pixel, in pixel order) share photon reads best in
-        // fours; PPM's measured fastest one at a time (README, speed).
-        let group = match settings.mode {
-            Mode::Ppm => 1,
-            Mode::Sppm => gather::GROUP,
-        };
         let kernels = Kernels {
             ray: traced(&reflected::RAY)?,
-            probe: gather::with_group(ctx, &reflected::PROBE, group)?,
+            probe: pipeline(ctx, &reflected::PROBE)?,
             photon: traced(&reflected::PHOTON)?,
             lookup: Lookup::new(ctx)?,
-            gather: gather::with_group(ctx, &reflected::GATHER, group)?,
+            gather: pipeline(ctx, &reflected::GATHER)?,
             update: pipeline(ctx, &reflected::UPDATE)?,
             resolve: pipeline(ctx, &reflected::RESOLVE)?,
         };
