@@ -12,10 +12,13 @@
 #include "grid.glsl"
 #include "sampling.glsl"
 
-// Hit points per thread (gather::GROUP on the host). Measured per 1M-photon pass at 512^2 against one
-// per thread: SPPM 305 against 338 ms, PPM with the scale-free probe 647 against 820 ms; only PPM without
-// the probe was faster one at a time (395-415 against 457 ms).
-const uint GROUP = 4u;
+// Hit points per thread: 4 as built (gather::GROUP), 1 where the renderer compiles it so. Measured per
+// 1M-photon pass at 512^2, four against one: SPPM 305 against 338 ms, PPM with the scale-free probe 647
+// against 820 ms, but PPM without the probe 457 against 395-415 ms (Renderer::new picks by that).
+#ifndef GROUP_SIZE
+#define GROUP_SIZE 4
+#endif
+const uint GROUP = GROUP_SIZE;
 
 // Loop steps this subgroup's lookups took, each counted by one lane. lavapipe ends every loop of a SIMD
 // group (its subgroup) once they have taken 65535 steps in all (LP_MAX_TGSI_LOOP_ITERATIONS), an exit

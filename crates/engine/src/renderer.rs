@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context as _, Result};
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
-use ppm_vk_kernels::gather::{self, GatherPush, HitBuffers, UpdatePush};
+use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers, UpdatePush};
 use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon};
 use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PhotonPush, MAX_RECORDS, SALT_EYE, SALT_PHOTON, SALT_PROBE};
@@ -51,10 +51,10 @@ impl PassStats {
 
 struct Kernels {
     ray: ComputePipeline,
-    probe: ComputePipeline,
+    probe: GridReader,
     photon: ComputePipeline,
     lookup: Lookup,
-    gather: ComputePipeline,
+    gather: GridReader,
     update: ComputePipeline,
     resolve: ComputePipeline,
 }
@@ -191,12 +191,18 @@ impl Renderer {
             let constants = specialize::scene_constants(&gpu.spheres, &gpu.quads, &gpu.lights);
             pipeline_from(ctx, k, &specialize::compile(k, &constants)?)
         };
+        // Hit points per gather thread (measured, shaders/common/neighbours.glsl): four share their photon
+        // reads, except PPM's without the probe, which gather fastest one at a time.
+        let group = match (settings.mode, settings.probe) {
+            (Mode::Ppm, ProbeMode::Off) => 1,
+            _ => gather::GROUP,
+        };
         let kernels = Kernels {
             ray: traced(&reflected::RAY)?,
-            probe: pipeline(ctx, &reflected::PROBE)?,
+            probe: gather::with_group(ctx, &reflected::PROBE, group)?,
             photon: traced(&reflected::PHOTON)?,
             lookup: Lookup::new(ctx)?,
-            gather: pipeline(ctx, &reflected::GATHER)?,
+            gather: gather::with_group(ctx, &reflected::GATHER, group)?,
             update: pipeline(ctx, &reflected::UPDATE)?,
             resolve: pipeline(ctx, &reflected::RESOLVE)?,
         };

@@ -43,18 +43,35 @@ pub fn grid_reader_bindings<'a>(params: &'a Buffer, hits: &HitBuffers<'a>, grid:
     [params, hits.hit_points, hits.stats, hits.accum, &grid.sorted, &grid.cell_start, hits.order, &grid.status]
 }
 
-/// Hit points one gather or probe thread takes together (`GROUP` in shaders/common/neighbours.glsl).
+/// Hit points one gather or probe thread takes together in the kernels as built (`GROUP` in
+/// shaders/common/neighbours.glsl); [`with_group`] compiles a variant with another count.
 pub const GROUP: u32 = 4;
 
+/// A kernel that reads the photon grid (gather or probe) compiled to take `group` hit points per thread.
+pub fn with_group(ctx: &ppm_vk_device::Context, k: &crate::reflected::KernelInfo, group: u32) -> Result<GridReader> {
+    let pipeline = match group {
+        GROUP => crate::pipeline(ctx, k)?,
+        _ => crate::pipeline_from(ctx, k, &crate::specialize::compile_with(k, &[("GROUP_SIZE", &group.to_string())], "")?)?,
+    };
+    Ok(GridReader { pipeline, group })
+}
+
+/// A gather or probe pipeline and the hit points each of its threads takes.
+pub struct GridReader {
+    pub pipeline: ComputePipeline,
+    pub group: u32,
+}
+
 pub fn record_gather(
-    k: &ComputePipeline,
+    k: &GridReader,
     cmd: vk::CommandBuffer,
     params: &Buffer,
     hits: &HitBuffers,
     grid: &Grid,
     push: &GatherPush,
 ) -> Result<()> {
-    k.dispatch(cmd, &grid_reader_bindings(params, hits, grid), bytemuck::bytes_of(push), push.count.div_ceil(GROUP) as u64)
+    let threads = push.count.div_ceil(k.group) as u64;
+    k.pipeline.dispatch(cmd, &grid_reader_bindings(params, hits, grid), bytemuck::bytes_of(push), threads)
 }
 
 pub fn record_update(k: &ComputePipeline, cmd: vk::CommandBuffer, hits: &HitBuffers, push: &UpdatePush) -> Result<()> {

@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
-use ppm_vk_device::{vk, Buffer, ComputePipeline};
+use ppm_vk_device::{vk, Buffer};
 
 use crate::gather::HitBuffers;
 use crate::lookup::Grid;
@@ -27,7 +27,7 @@ pub struct ProbePush {
 push_struct!(ProbePush, PROBE);
 
 pub fn record(
-    k: &ComputePipeline,
+    k: &crate::gather::GridReader,
     cmd: vk::CommandBuffer,
     params: &Buffer,
     hits: &HitBuffers,
@@ -35,6 +35,6 @@ pub fn record(
     push: &ProbePush,
 ) -> Result<()> {
     // Phase 0 takes GROUP hit points per thread (neighbours.glsl), phase 1 one.
-    let threads = if push.phase == 0 { push.count.div_ceil(crate::gather::GROUP) } else { push.count };
-    k.dispatch(cmd, &crate::gather::grid_reader_bindings(params, hits, grid), bytemuck::bytes_of(push), threads as u64)
+    let threads = if push.phase == 0 { push.count.div_ceil(k.group) } else { push.count };
+    k.pipeline.dispatch(cmd, &crate::gather::grid_reader_bindings(params, hits, grid), bytemuck::bytes_of(push), threads as u64)
 }

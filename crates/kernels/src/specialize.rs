@@ -81,13 +81,21 @@ pub fn scene_constants(spheres: &[Sphere], quads: &[Quad], lights: &[Light]) -> 
 
 /// Compiles `kernel` with `SCENE_CONSTANTS` defined and `constants` as scene_constants.glsl.
 pub fn compile(kernel: &KernelInfo, constants: &str) -> Result<Vec<u32>> {
+    compile_with(kernel, &[("SCENE_CONSTANTS", "1")], constants)
+}
+
+/// Compiles `kernel` again with `defines` (name, value) added, and `constants` as scene_constants.glsl
+/// for kernels that include it.
+pub fn compile_with(kernel: &KernelInfo, defines: &[(&str, &str)], constants: &str) -> Result<Vec<u32>> {
     let source = |path: &str| SOURCES.iter().find(|(p, _)| *p == path).map(|(_, s)| *s);
     let text = source(kernel.source).ok_or_else(|| anyhow!("no embedded source for kernel {}", kernel.name))?;
     let compiler = shaderc::Compiler::new().map_err(|e| anyhow!("shaderc: {e}"))?;
     let mut options = shaderc::CompileOptions::new().map_err(|e| anyhow!("shaderc options: {e}"))?;
     options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
     options.set_optimization_level(shaderc::OptimizationLevel::Performance);
-    options.add_macro_definition("SCENE_CONSTANTS", None);
+    for (name, value) in defines {
+        options.add_macro_definition(name, Some(value));
+    }
     let stage_dir = kernel.stage.to_string();
     let constants = constants.to_string();
     options.set_include_callback(move |requested, _, requester, _| {
