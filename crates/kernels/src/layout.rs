@@ -148,3 +148,5 @@ pub struct Photon {
     pub dir: u32,
 }
 gpu_struct!(Photon { pos, cell, flux, dir });
+// grid_scatter.comp copies a Photon as four 64-bit words and reads `cell` as the high half of the second.
+const _: () = assert!(std::mem::offset_of!(Photon, cell) == 12 && std::mem::size_of::<Photon>() == 32);
