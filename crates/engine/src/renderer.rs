@@ -402,14 +402,17 @@ impl Renderer {
         let (stats, hits) = (self.read_stats()?, self.read_hit_points()?);
         self.probe_report = Some(ProbeReport::new(&stats, &hits, self.gpu.initial_radius, photons, gpu_ms));
         // Cells twice the largest radius the probe left, so lookups stay within 2x2x2 cells.
-        if self.settings.grid_cell.is_none() {
-            let r2_max = stats.iter().zip(&hits).filter(|(_, h)| h.pixel != u32::MAX).map(|(s, _)| s.r2).fold(0f64, f64::max);
-            let cell = 2.0 * (r2_max.sqrt() as f32) * (1.0 + f32::EPSILON * 4.0);
-            if cell > self.gpu.params.cell_size {
-                self.gpu.set_grid_cell(cell, self.gpu.params.photon_capacity);
-                self.grid.set_cells(self.gpu.params.grid_mask + 1)?;
-                self.ctx.upload(&self.params, bytemuck::bytes_of(&self.gpu.params))?;
+        let r2_max = stats.iter().zip(&hits).filter(|(_, h)| h.pixel != u32::MAX).map(|(s, _)| s.r2).fold(0f64, f64::max);
+        let cell = 2.0 * (r2_max.sqrt() as f32) * (1.0 + f32::EPSILON * 4.0);
+        if let Some(c) = self.settings.grid_cell {
+            // A set cell size must keep lookups under 1024 cells a side (grid_key in grid.glsl).
+            if cell > 512.0 * c {
+                bail!("grid cell {c} is under 1/512 of twice the largest radius after the probe ({cell})");
             }
+        } else if cell > self.gpu.params.cell_size {
+            self.gpu.set_grid_cell(cell, self.gpu.params.photon_capacity);
+            self.grid.set_cells(self.gpu.params.grid_mask + 1)?;
+            self.ctx.upload(&self.params, bytemuck::bytes_of(&self.gpu.params))?;
         }
         Ok(())
     }
