@@ -57,7 +57,7 @@ struct RenderArgs {
     /// Scene file (TOML; see docs/scene-format.md).
     scene: PathBuf,
     /// `sppm`: stochastic PPM, new hit points every pass at a random point of each pixel (anti-aliased, box
-    /// filter; the lower error at equal time from 30 s on); `ppm`: hit points fixed at pixel centres.
+    /// filter; the lower error at equal time from 10 s on); `ppm`: hit points fixed at pixel centres.
     #[arg(long, value_enum, default_value_t = ModeArg::Sppm)]
     mode: ModeArg,
     /// Photon passes to run (default 100 unless --time is given).
