@@ -346,7 +346,7 @@ struct GridShape {
 fn gather_case(cone_k: Option<f32>, grid: GridShape) {
     let ctx = ctx();
     let scene = cornell(RES, RES);
-    let r0 = Renderer::new(&ctx, &scene, settings()).unwrap().gpu_scene().initial_radius;
+    let r0 = ppm_vk_engine::gpu_scene::default_radius(&scene); // eq. 8, the starting radius
     let grid_cell = grid.cell_of_radius.map(|f| f * r0);
     let photons_per_pass = grid.photons.unwrap_or(PHOTONS);
     let mode = if grid.sppm { Mode::Sppm } else { Mode::Ppm };
@@ -405,7 +405,7 @@ fn gather_with_wide_windows_and_shared_buckets_matches_brute_force() {
 fn lookup_cut_short_is_an_error() {
     let ctx = ctx();
     let scene = cornell(RES, RES);
-    let r0 = Renderer::new(&ctx, &scene, settings()).unwrap().gpu_scene().initial_radius;
+    let r0 = ppm_vk_engine::gpu_scene::default_radius(&scene); // eq. 8, the starting radius
     let grid = Settings {
         grid_buckets: Some(ppm_vk_kernels::lookup::SCAN_BLOCK),
         grid_cell: Some(0.25 * r0),
