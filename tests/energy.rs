@@ -22,7 +22,7 @@ fn white_furnace_converges_to_le_over_one_minus_rho() {
 
     // The directly seen emission alone is exactly Le = 1 at every pixel (every pixel sees a wall).
     let direct = r.read_direct().unwrap();
-    assert!(direct.iter().all(|d| d[..3] == [1.0, 1.0, 1.0]), "direct emission is not 1 everywhere");
+    assert!(direct.iter().all(|d| d[3] > 0.0 && d[..3].iter().all(|&c| c == d[3])), "direct emission is not 1 everywhere");
 
     for _ in 0..PASSES {
         r.pass().unwrap();

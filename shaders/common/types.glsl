@@ -126,5 +126,12 @@ struct Photon {
     uint dir;        // direction of travel, octahedral snorm 2x16
 };
 
+// Paths the tracing kernels ended at their depth backstop (RenderParams.max_photon_depth, max_eye_depth)
+// rather than by roulette, absorption or escape: each such path is a (bounded) loss the renderer reports.
+struct PathCounters {
+    uint photon_paths;
+    uint eye_paths;
+};
+
 const float PROBE_FIXED = 1073741824.0; // 2^30: the probe's fixed-point scale for d^2 / r^2 in [0, 1]
 #endif

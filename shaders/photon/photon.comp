@@ -14,10 +14,14 @@ layout(local_size_x = 64) in;
 layout(std430, binding = 4) readonly buffer Lights { Light lights[]; };
 layout(std430, binding = 5) writeonly buffer Photons { Photon photons[]; };
 layout(std430, binding = 6) buffer Counter { uint photon_count; };
+layout(std430, binding = 7) buffer Cut { PathCounters cut; };
 layout(push_constant) uniform PhotonPush {
     uint64_t first;  // global index of this batch's first photon: its random stream
     uint count;      // photons in this batch
     uint salt;       // random stream family (photon passes and the probe pass differ)
+    uint per_thread; // photons per thread, set with params.max_photon_depth so that no SIMD group can
+                     // exceed the device's loop budget (crates/kernels/src/photon.rs, PathLimits)
+    uint pad0;
 } pc;
 
 #include "rng.glsl"
@@ -25,9 +29,6 @@ layout(push_constant) uniform PhotonPush {
 #include "sampling.glsl"
 #include "grid.glsl"
 #include "invocation.glsl"
-
-// Records one path may leave; a path is ended at this many (ALGORITHM.md: bounded paths).
-const uint MAX_RECORDS = 16u;
 
 // Appends a record; the active lanes of a subgroup reserve their slots with one atomic.
 void emit(Photon rec) {
@@ -60,17 +61,19 @@ Emitter choose_emitter(float u) {
 }
 #endif
 
-// Photons per thread. A thread starts its next photon as soon as a path ends ("path regeneration"), so
-// the lanes of a subgroup stay busy instead of waiting for the longest of their paths.
-const uint PER_THREAD = 8u;
-
+// A thread traces pc.per_thread photons and starts its next one as soon as a path ends ("path
+// regeneration"), so the lanes of a subgroup stay busy instead of waiting for the longest of their paths.
+// Paths end by Russian roulette only; params.max_photon_depth (surface interactions) is a backstop that
+// keeps every SIMD group inside lavapipe's loop budget. A path that reaches it between diffuse surfaces
+// has survived roulette at each, which happens with probability at most rho_max^depth (< 1e-15 at rho 0.95
+// and the depths PathLimits picks); such a path is counted in cut.photon_paths, never dropped silently.
 // lavapipe runs both sides of every branch under a mask, so the loop below is written to have as little
 // inside branches as it can: the cosine-weighted direction that a new photon and a diffuse bounce both
 // need is drawn once per step, after either.
 void main() {
     load_params();
     uint t = invocation_index();
-    uint threads = (pc.count + PER_THREAD - 1u) / PER_THREAD;
+    uint threads = (pc.count + pc.per_thread - 1u) / pc.per_thread;
     if (t >= threads) return;
     uint next = 0u;          // photons of this thread started so far
     bool alive = false;
@@ -79,12 +82,11 @@ void main() {
     vec3 lobe;               // the normal a direction is still to be drawn about (pending)
     bool pending = false;
     uint depth = 0u;
-    uint n = 0u;             // records of the current path
     for (;;) {
         if (!alive) {
             // Photon t + k * threads: consecutive threads start consecutive photons.
             uint i = t + next * threads;
-            if (next == PER_THREAD || i >= pc.count) break;
+            if (next == pc.per_thread || i >= pc.count) break;
             next++;
             rng = rng_new(uint64_t(params.seed) | (uint64_t(pc.salt) << 32), pc.first + uint64_t(i));
             Emitter e = choose_emitter(rng_float(rng));
@@ -95,7 +97,6 @@ void main() {
             pending = true;
             flux = e.flux;
             depth = 0u;
-            n = 0u;
             alive = true;
         }
         if (pending) {
@@ -104,8 +105,13 @@ void main() {
             d = cosine_direction(lobe, u1, u2);
             pending = false;
         }
+        if (depth >= params.max_photon_depth) {
+            atomicAdd(cut.photon_paths, 1u);
+            alive = false;
+            continue;
+        }
         Hit h;
-        if (depth >= params.max_photon_depth || !intersect_scene(o, d, 0.0, 1e30, h)) {
+        if (!intersect_scene(o, d, 0.0, 1e30, h)) {
             alive = false;
             continue;
         }
@@ -117,9 +123,9 @@ void main() {
             float p = max(m.color.r, max(m.color.g, m.color.b));
             if (p <= 0.0) { alive = false; continue; } // a black emitter absorbs
             emit(Photon(h.pos, grid_key(grid_cell(h.pos)), flux, oct_encode(d)));
-            n++;
-            // Russian roulette: survive with the largest albedo.
-            if (n == MAX_RECORDS || rng_float(rng) >= p) { alive = false; continue; }
+            // Russian roulette: survive with the largest albedo; flux *= albedo / p keeps every channel
+            // unbiased (its expectation is flux * albedo), and never grows (albedo <= p per channel).
+            if (rng_float(rng) >= p) { alive = false; continue; }
             flux *= m.color / p;
             lobe = nf;
             pending = true;

@@ -39,8 +39,11 @@ void visit(uint j, vec3 flux, float d2) {
     sum[j] += int64_t(int(d2 * inv_r2[j] * PROBE_FIXED + 0.5)); // eq. 7's |t_p - g|^2, in units of r^2
 }
 
-// Phase 1, one thread per hit point.
+// Phase 1, one thread per hit point. An empty slot (in SPPM, a pixel whose first eye path saw the light or
+// died in glass) has no hit point whose density could be probed: it keeps r. (The sparse rule, lambda = r^2,
+// is for hit points no probe photon reached.)
 void set_radius(uint i) {
+    if (hit_points[i].pixel == 0xffffffffu) return;
     HitStats s = stats[i];
     PassAccum a = accum[i];
     // eq. 7, in units of r^2; a hit point no probe photon reached is sparse (ALGORITHM.md)

@@ -1,9 +1,18 @@
 // Pass 1, the ray (eye) pass: one camera ray per pixel, followed through mirrors and glass to the first
 // diffuse surface, where it leaves a hit point. Glass splits the path into both Fresnel branches while the
 // pixel has hit-point slots left; beyond that one branch is chosen at random (ALGORITHM.md, "Glass in the
-// ray pass"). Emission seen directly or through specular paths is added to `direct` (rgb), whose w counts
-// the eye passes: PPM runs this once, at pixel centres; SPPM once per pass, at a random point of each
-// pixel, with one slot (one branch at glass).
+// ray pass"). PPM runs the hit-point path once, at pixel centres; SPPM once per pass, at a random point of
+// each pixel, with one slot (one branch at glass).
+//
+// Emission seen directly or through mirrors and glass is estimated apart from the hit points, and gets
+// more samples: a pixel's value is the integral over the pixel of (a) the emission met along the specular
+// chain of the eye path through each point and (b) the radiance reflected at the chain's first diffuse
+// vertex. The photon estimate at the hit points covers (b). Term (a) has the sharp edges (the light and
+// its images in mirrors and glass), so each eye pass also traces pc.emission_samples paths through
+// uniformly random points of the pixel, one Fresnel branch each chosen with probability f (weight f / f
+// = 1): each is an unbiased sample of (a), independent of (b). `direct` sums them in double over all
+// eye passes (rgb) with their count (w); the resolve divides. The hit-point path's own emission is one
+// more such sample when its position is random (SPPM), or the only one when there are no others.
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 64) in;
@@ -11,12 +20,15 @@ layout(local_size_x = 64) in;
 #include "types.glsl"
 #include "bindings.glsl"
 layout(std430, binding = 4) writeonly buffer HitPoints { HitPoint hit_points[]; };
-layout(std430, binding = 5) buffer Direct { vec4 direct[]; };
+layout(std430, binding = 5) buffer Direct { dvec4 direct[]; };
+layout(std430, binding = 6) buffer Cut { PathCounters cut; };
 layout(push_constant) uniform RayPush {
     vec2 jitter;     // sample position inside the pixel, in [0,1)^2 (0.5, 0.5: the centre); negative:
                      // a random position per pixel (box filter)
-    uint salt;       // random stream family
+    uint salt;       // random stream family of the hit-point path (the emission samples use SALT_EMISSION)
     uint pass;       // eye pass index: pixel p of pass k draws from stream k * pixels + p
+    uint emission_samples; // extra paths per pixel that only collect emission (term (a) above)
+    uint trace_hits; // 0: only the emission samples (PPM's passes after the first keep their hit points)
 } pc;
 
 #include "rng.glsl"
@@ -25,8 +37,52 @@ layout(push_constant) uniform RayPush {
 #include "invocation.glsl"
 
 const uint MAX_SLOTS = 8u;
+const uint SALT_EMISSION = 4u;
 
 struct Pending { vec3 o; vec3 d; vec3 thr; uint depth; };
+
+vec3 camera_ray(uint px, uint py, vec2 jitter) {
+    float sx = (2.0 * (float(px) + jitter.x) / float(params.width) - 1.0) * params.aspect * params.tan_half_fov;
+    float sy = (1.0 - 2.0 * (float(py) + jitter.y) / float(params.height)) * params.tan_half_fov;
+    return normalize(params.forward + sx * params.right + sy * params.up);
+}
+
+// One emission sample: the emission met along the specular chain from the eye through `jitter`.
+vec3 emission_sample(uint px, uint py, inout Rng rng) {
+    vec2 jitter = vec2(rng_float(rng), rng_float(rng));
+    vec3 o = params.eye;
+    vec3 d = camera_ray(px, py, jitter);
+    vec3 thr = vec3(1.0);
+    for (uint depth = 0u;; depth++) {
+        if (depth >= params.max_eye_depth) { atomicAdd(cut.eye_paths, 1u); break; }
+        Hit h;
+        if (!intersect_scene(o, d, 0.0, 1e30, h)) break;
+        Material m = materials[h.material];
+        bool front = dot(d, h.normal) < 0.0;
+        vec3 nf = front ? h.normal : -h.normal;
+        if (m.surface == SURFACE_DIFFUSE) {
+            return front ? thr * m.emission : vec3(0.0); // emitters are one-sided
+        }
+        if (m.surface == SURFACE_MIRROR) {
+            thr *= m.color;
+            d = reflect(d, nf);
+            o = offset_ray(h.pos, nf);
+            continue;
+        }
+        float eta = front ? 1.0 / m.ior : m.ior;
+        float cos_i = -dot(d, nf);
+        float cos_t;
+        float f = fresnel_dielectric(cos_i, eta, cos_t);
+        if (rng_float(rng) < f) {
+            d = reflect(d, nf);
+            o = offset_ray(h.pos, nf);
+        } else {
+            d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
+            o = offset_ray(h.pos, -nf);
+        }
+    }
+    return vec3(0.0);
+}
 
 void main() {
     load_params();
@@ -35,72 +91,87 @@ void main() {
     uint px = pixel % params.width;
     uint py = pixel / params.width;
     uint64_t pixels = uint64_t(params.width * params.height);
-    Rng rng = rng_new(uint64_t(params.seed) | (uint64_t(pc.salt) << 32), uint64_t(pc.pass) * pixels + uint64_t(pixel));
-    vec2 jitter = pc.jitter;
-    if (jitter.x < 0.0) {
-        jitter.x = rng_float(rng);
-        jitter.y = rng_float(rng);
-    }
-    float sx = (2.0 * (float(px) + jitter.x) / float(params.width) - 1.0) * params.aspect * params.tan_half_fov;
-    float sy = (1.0 - 2.0 * (float(py) + jitter.y) / float(params.height)) * params.tan_half_fov;
-    vec3 dir = normalize(params.forward + sx * params.right + sy * params.up);
+    uint64_t stream = uint64_t(pc.pass) * pixels + uint64_t(pixel);
+    dvec3 emitted = dvec3(0.0);
+    uint samples = 0u;
 
-    Pending stack[MAX_SLOTS];
-    uint sp = 0u;
-    stack[sp++] = Pending(params.eye, dir, vec3(1.0), 0u);
-    uint slot = 0u;
-    vec3 emitted = vec3(0.0);
-    uint base = pixel * params.hit_slots;
+    if (pc.trace_hits != 0u) {
+        Rng rng = rng_new(uint64_t(params.seed) | (uint64_t(pc.salt) << 32), stream);
+        vec2 jitter = pc.jitter;
+        if (jitter.x < 0.0) {
+            jitter.x = rng_float(rng);
+            jitter.y = rng_float(rng);
+        }
+        Pending stack[MAX_SLOTS];
+        uint sp = 0u;
+        stack[sp++] = Pending(params.eye, camera_ray(px, py, jitter), vec3(1.0), 0u);
+        uint slot = 0u;
+        vec3 hit_emitted = vec3(0.0);
+        uint base = pixel * params.hit_slots;
 
-    while (sp > 0u) {
-        Pending r = stack[--sp];
-        while (r.depth < params.max_eye_depth) {
-            Hit h;
-            if (!intersect_scene(r.o, r.d, 0.0, 1e30, h)) break;
-            Material m = materials[h.material];
-            bool front = dot(r.d, h.normal) < 0.0;
-            vec3 nf = front ? h.normal : -h.normal;
-            if (m.surface == SURFACE_DIFFUSE) {
-                if (front) emitted += r.thr * m.emission; // emitters are one-sided
-                if (max(m.color.r, max(m.color.g, m.color.b)) > 0.0 && slot < params.hit_slots) {
-                    hit_points[base + slot] = HitPoint(h.pos, pixel, nf, 0u, r.thr * m.color / PI, 0u);
-                    slot++;
+        while (sp > 0u) {
+            Pending r = stack[--sp];
+            for (;;) {
+                if (r.depth >= params.max_eye_depth) { atomicAdd(cut.eye_paths, 1u); break; }
+                Hit h;
+                if (!intersect_scene(r.o, r.d, 0.0, 1e30, h)) break;
+                Material m = materials[h.material];
+                bool front = dot(r.d, h.normal) < 0.0;
+                vec3 nf = front ? h.normal : -h.normal;
+                if (m.surface == SURFACE_DIFFUSE) {
+                    if (front) hit_emitted += r.thr * m.emission; // emitters are one-sided
+                    if (max(m.color.r, max(m.color.g, m.color.b)) > 0.0 && slot < params.hit_slots) {
+                        hit_points[base + slot] = HitPoint(h.pos, pixel, nf, 0u, r.thr * m.color / PI, 0u);
+                        slot++;
+                    }
+                    break;
                 }
-                break;
-            }
-            r.depth++;
-            if (m.surface == SURFACE_MIRROR) {
-                r.thr *= m.color;
-                r.d = reflect(r.d, nf);
-                r.o = offset_ray(h.pos, nf);
-                continue;
-            }
-            // Glass: the exact Fresnel split.
-            float eta = front ? 1.0 / m.ior : m.ior;
-            float cos_i = -dot(r.d, nf);
-            float cos_t;
-            float f = fresnel_dielectric(cos_i, eta, cos_t);
-            vec3 refl = reflect(r.d, nf);
-            vec3 refr = normalize(eta * r.d + (eta * cos_i - cos_t) * nf);
-            if (f >= 1.0) {
-                r.d = refl;
-                r.o = offset_ray(h.pos, nf);
-            } else if (slot + sp + 1u < params.hit_slots) {
-                stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * f, r.depth);
-                r.thr *= 1.0 - f;
-                r.d = refr;
-                r.o = offset_ray(h.pos, -nf);
-            } else if (rng_float(rng) < f) {
-                r.d = refl;
-                r.o = offset_ray(h.pos, nf);
-            } else {
-                r.d = refr;
-                r.o = offset_ray(h.pos, -nf);
+                r.depth++;
+                if (m.surface == SURFACE_MIRROR) {
+                    r.thr *= m.color;
+                    r.d = reflect(r.d, nf);
+                    r.o = offset_ray(h.pos, nf);
+                    continue;
+                }
+                // Glass: the exact Fresnel split.
+                float eta = front ? 1.0 / m.ior : m.ior;
+                float cos_i = -dot(r.d, nf);
+                float cos_t;
+                float f = fresnel_dielectric(cos_i, eta, cos_t);
+                vec3 refl = reflect(r.d, nf);
+                vec3 refr = normalize(eta * r.d + (eta * cos_i - cos_t) * nf);
+                if (f >= 1.0) {
+                    r.d = refl;
+                    r.o = offset_ray(h.pos, nf);
+                } else if (slot + sp + 1u < params.hit_slots) {
+                    stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * f, r.depth);
+                    r.thr *= 1.0 - f;
+                    r.d = refr;
+                    r.o = offset_ray(h.pos, -nf);
+                } else if (rng_float(rng) < f) {
+                    r.d = refl;
+                    r.o = offset_ray(h.pos, nf);
+                } else {
+                    r.d = refr;
+                    r.o = offset_ray(h.pos, -nf);
+                }
             }
         }
+        for (; slot < params.hit_slots; slot++) {
+            hit_points[base + slot] = HitPoint(vec3(0.0), 0xffffffffu, vec3(0.0), 0u, vec3(0.0), 0u);
+        }
+        // A sample at a fixed point of the pixel (PPM's centre) would bias the box-filtered term (a):
+        // it counts only when no random sample does.
+        if (pc.jitter.x < 0.0 || pc.emission_samples == 0u) {
+            emitted += dvec3(hit_emitted);
+            samples++;
+        }
     }
-    for (; slot < params.hit_slots; slot++) {
-        hit_points[base + slot] = HitPoint(vec3(0.0), 0xffffffffu, vec3(0.0), 0u, vec3(0.0), 0u);
+
+    Rng erng = rng_new(uint64_t(params.seed) | (uint64_t(SALT_EMISSION) << 32), stream);
+    for (uint s = 0u; s < pc.emission_samples; s++) {
+        emitted += dvec3(emission_sample(px, py, erng));
     }
-    direct[pixel] += vec4(emitted, 1.0);
+    samples += pc.emission_samples;
+    if (samples > 0u) direct[pixel] += dvec4(emitted, double(samples));
 }

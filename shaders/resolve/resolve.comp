@@ -1,4 +1,4 @@
-// Pass 5, resolve: pixel radiance = directly seen emission (averaged over eye passes) + sum over the
+// Pass 5, resolve: pixel radiance = directly seen emission (the mean of its samples, ray.comp) + sum over the
 // pixel's hit points of tau / (pi R^2 N_emitted) (eq. 1-2; tau already carries w f_r), with the cone
 // filter's normalisation (1 - 2/(3k)) pi R^2 (eq. 11) when it is on. Slots whose statistics never
 // received a photon contribute nothing, whatever their hit point now is.
@@ -8,7 +8,7 @@ layout(local_size_x = 64) in;
 #include "types.glsl"
 #include "params.glsl"
 layout(std430, binding = 1) readonly buffer Stats { HitStats stats[]; };
-layout(std430, binding = 2) readonly buffer Direct { vec4 direct[]; };
+layout(std430, binding = 2) readonly buffer Direct { dvec4 direct[]; }; // emission samples (rgb), count (w)
 layout(std430, binding = 3) writeonly buffer Image { vec4 image[]; };
 layout(push_constant) uniform ResolvePush {
     double emitted;  // photons emitted by all photon passes so far (exact in double up to 2^53)
@@ -30,6 +30,6 @@ void main() {
             sum += dvec3(st.tau_r, st.tau_g, st.tau_b) / (area * pc.emitted);
         }
     }
-    vec4 d = direct[pixel];
-    image[pixel] = vec4(vec3(sum) + d.rgb / max(d.w, 1.0), 1.0);
+    dvec4 d = direct[pixel];
+    image[pixel] = vec4(vec3(sum + d.rgb / max(d.w, 1.0)), 1.0);
 }

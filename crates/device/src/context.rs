@@ -25,6 +25,10 @@ pub struct DeviceInfo {
     pub kind: String,
     pub api_version: String,
     pub driver: String,
+    /// Loop iterations a SIMD group of a shader may run in all, where the driver ends loops silently past
+    /// a limit: lavapipe (llvmpipe) stops every loop after 65535 (gallivm's LP_MAX_TGSI_LOOP_ITERATIONS).
+    /// `None`: no such limit is known for this driver.
+    pub loop_budget: Option<u32>,
     /// Whether it has everything the kernels need; if not, what is missing.
     pub missing: Vec<String>,
 }
@@ -131,6 +135,9 @@ fn missing_features(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Vec<Str
     missing
 }
 
+/// lavapipe's limit on the loop iterations of one SIMD group (LP_MAX_TGSI_LOOP_ITERATIONS in Mesa's gallivm).
+pub const LAVAPIPE_LOOP_BUDGET: u32 = 65535;
+
 fn describe(instance: &ash::Instance, index: usize, pd: vk::PhysicalDevice) -> DeviceInfo {
     let props = unsafe { instance.get_physical_device_properties(pd) };
     let name = props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
@@ -149,12 +156,14 @@ fn describe(instance: &ash::Instance, index: usize, pd: vk::PhysicalDevice) -> D
         vk::PhysicalDeviceType::CPU => "CPU",
         _ => "other",
     };
+    let loop_budget = (driver_props.driver_id == vk::DriverId::MESA_LLVMPIPE).then_some(LAVAPIPE_LOOP_BUDGET);
     DeviceInfo {
         index,
         name,
         kind: kind.into(),
         api_version: api_string(props.api_version),
         driver: driver.trim().to_string(),
+        loop_budget,
         missing: missing_features(instance, pd),
     }
 }

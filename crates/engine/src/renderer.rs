@@ -6,9 +6,9 @@ use std::time::Instant;
 use anyhow::{bail, Context as _, Result};
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
 use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers, UpdatePush};
-use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon};
+use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon};
 use ppm_vk_kernels::lookup::{Grid, Lookup};
-use ppm_vk_kernels::photon::{self, PhotonPush, MAX_RECORDS, SALT_EYE, SALT_PHOTON, SALT_PROBE};
+use ppm_vk_kernels::photon::{self, PathLimits, PhotonPush, SALT_EYE, SALT_PHOTON, SALT_PROBE};
 use ppm_vk_kernels::probe::{self, ProbePush, MODE_PAPER, MODE_SCALE_FREE};
 use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers, JITTER_RANDOM};
 use ppm_vk_kernels::resolve::{self, ResolvePush};
@@ -33,6 +33,11 @@ pub struct PassStats {
     pub records: u64,
     /// Batches the pass was split into to fit the record buffer.
     pub batches: u32,
+    /// Photon paths of the whole render so far that reached the depth backstop (`PathLimits`) instead of
+    /// ending by roulette: 0 unless the scene traps light (mirrors facing each other, albedo 1).
+    pub photon_paths_cut: u64,
+    /// Eye paths of the whole render so far that reached the depth backstop.
+    pub eye_paths_cut: u64,
     /// Host wall time of the pass, submission to completion.
     pub wall_ms: f64,
     /// GPU time of each stage (timestamp queries), in order.
@@ -84,6 +89,9 @@ pub struct Renderer {
     quads: Buffer,
     materials: Buffer,
     lights: Buffer,
+    /// `PathCounters`: paths cut at the depth backstops, over the whole render.
+    cut: Buffer,
+    limits: PathLimits,
     hit_points: Buffer,
     stats: Buffer,
     accum: Buffer,
@@ -161,8 +169,20 @@ impl Renderer {
         // into batches, so this bounds memory, never correctness.
         let wanted = settings.photons_per_pass as u64 * 4;
         let capacity = wanted.min(max_range / record_size).min(u32::MAX as u64 / 2) as u32;
-        let capacity = capacity.max(MAX_RECORDS * 64);
-        let gpu = GpuScene::new(scene, &settings, capacity)?;
+        let capacity = capacity.max(1024);
+        let mut gpu = GpuScene::new(scene, &settings, capacity)?;
+        // Depth backstops and photons per thread that keep every loop inside the device's budget. The
+        // intersection loops are counted as loops even where the specialised kernels unroll them.
+        let limits = PathLimits::new(
+            ctx.info().loop_budget,
+            gpu.params.num_spheres + gpu.params.num_quads,
+            gpu.params.num_lights,
+            settings.slots() + settings.emission_samples,
+            settings.max_photon_depth,
+            settings.max_eye_depth,
+        )?;
+        gpu.params.max_photon_depth = limits.photon_depth;
+        gpu.params.max_eye_depth = limits.eye_depth;
         let cells = gpu.grid_allocated;
         let slots = gpu.slots() as u64;
         let pixels = gpu.pixels() as u64;
@@ -216,12 +236,14 @@ impl Renderer {
             quads: ctx.buffer_from("quads", &gpu.quads)?,
             materials: ctx.buffer_from("materials", &gpu.materials)?,
             lights: ctx.buffer_from("lights", &gpu.lights)?,
+            cut: ctx.buffer_from("path counters", &[PathCounters::default()])?,
+            limits,
             hit_points: storage("hit points", slots * std::mem::size_of::<HitPoint>() as u64)?,
             stats: ctx.buffer_from("hit stats", &stats_init)?,
             accum: storage("pass accumulators", slots * std::mem::size_of::<PassAccum>() as u64)?,
             order: storage("hit-point order", slots * 4)?,
             active: 0,
-            direct: storage("direct emission", pixels * 16)?,
+            direct: storage("direct emission", pixels * 32)?,
             image: storage("image", pixels * 16)?,
             photons: storage("photon records", capacity as u64 * record_size)?,
             counter: storage("photon counter", 4)?,
@@ -244,7 +266,7 @@ impl Renderer {
             r.direct.cmd_fill(cmd, 0);
             Ok(())
         })?;
-        r.ray_ms = r.ray_pass(0)?.iter().map(|s| s.duration_ms).sum();
+        r.ray_ms = r.ray_pass(0, true)?.iter().map(|s| s.duration_ms).sum();
         // The gather walks the hit points in Morton order, so neighbouring threads read the same buckets.
         // PPM's hit points never move: order them by position once, on the host. SPPM's move every pass:
         // order the pixels by their screen position, which is nearly as coherent and never changes.
@@ -260,6 +282,21 @@ impl Renderer {
         Ok(r)
     }
 
+    /// The ray kernel's push constants for eye pass `eye_pass` (the CPU reference takes the same).
+    pub fn ray_push(&self, eye_pass: u32, trace_hits: bool) -> RayPush {
+        let jitter = match self.settings.mode {
+            Mode::Ppm => [0.5, 0.5],
+            Mode::Sppm => JITTER_RANDOM,
+        };
+        RayPush {
+            jitter,
+            salt: SALT_EYE,
+            pass: eye_pass,
+            emission_samples: self.settings.emission_samples,
+            trace_hits: trace_hits as u32,
+        }
+    }
+
     fn scene_buffers(&self) -> SceneBuffers<'_> {
         SceneBuffers { params: &self.params, spheres: &self.spheres, quads: &self.quads, materials: &self.materials }
     }
@@ -269,20 +306,16 @@ impl Renderer {
     }
 
     /// Pass 1, eye pass number `eye_pass`: PPM's one pass through pixel centres, or one of SPPM's, through
-    /// a random point of each pixel.
-    fn ray_pass(&mut self, eye_pass: u32) -> Result<Vec<ScopeTiming>> {
+    /// a random point of each pixel; with `trace_hits` false only the emission samples (PPM's later passes).
+    fn ray_pass(&mut self, eye_pass: u32, trace_hits: bool) -> Result<Vec<ScopeTiming>> {
         self.profiler.reset();
-        let jitter = match self.settings.mode {
-            Mode::Ppm => [0.5, 0.5],
-            Mode::Sppm => JITTER_RANDOM,
-        };
-        let push = RayPush { jitter, salt: SALT_EYE, pass: eye_pass };
+        let push = self.ray_push(eye_pass, trace_hits);
         let pixels = self.gpu.pixels();
         let scene = self.scene_buffers();
         let (profiler, k) = (&self.profiler, &self.kernels);
-        let (hit_points, direct) = (&self.hit_points, &self.direct);
+        let (hit_points, direct, cut) = (&self.hit_points, &self.direct, &self.cut);
         self.ctx.run(|cmd| {
-            profiler.scope(cmd, "ray", || ray::record(&k.ray, cmd, &scene, hit_points, direct, pixels, &push))?;
+            profiler.scope(cmd, "ray", || ray::record(&k.ray, cmd, &scene, hit_points, direct, cut, pixels, &push))?;
             barrier(&self.ctx, cmd);
             Ok(())
         })?;
@@ -303,9 +336,9 @@ impl Renderer {
             GridUse::Gather => SALT_PHOTON,
             GridUse::Probe => SALT_PROBE,
         };
-        let push = PhotonPush { first, count, salt };
+        let push = PhotonPush { first, count, salt, per_thread: self.limits.per_thread, pad0: 0 };
         self.profiler.scope(cmd, "photon", || {
-            photon::record(&k.photon, cmd, &scene, &self.lights, &self.photons, &self.counter, &push)
+            photon::record(&k.photon, cmd, &scene, &self.lights, &self.photons, &self.counter, &self.cut, &push)
         })?;
         barrier(ctx, cmd);
         self.counter.cmd_copy(cmd, &self.batch_log, 0, log_index as u64 * 4, 4);
@@ -423,9 +456,14 @@ impl Renderer {
         let total = self.settings.photons_per_pass;
         // SPPM traces new hit points before every photon pass but the first, which uses the eye pass the
         // renderer was made with (and probed).
+        // PPM keeps its hit points; its later eye passes only add emission samples.
         let mut stages = Vec::new();
-        if self.settings.mode == Mode::Sppm && self.passes > 0 {
-            stages = self.ray_pass(self.passes as u32)?;
+        if self.passes > 0 {
+            match self.settings.mode {
+                Mode::Sppm => stages = self.ray_pass(self.passes as u32, true)?,
+                Mode::Ppm if self.settings.emission_samples > 0 => stages = self.ray_pass(self.passes as u32, false)?,
+                Mode::Ppm => {}
+            }
         }
         let (batch_stages, records, batches) = self.run_batches(self.emitted, total, GridUse::Gather)?;
         stages.extend(batch_stages);
@@ -438,12 +476,15 @@ impl Renderer {
         stages.extend(self.profiler.read()?);
         self.passes += 1;
         self.emitted += total as u64;
+        let cut = self.path_counters()?;
         Ok(PassStats {
             index: self.passes,
             photons: total as u64,
             emitted_total: self.emitted,
             records,
             batches,
+            photon_paths_cut: cut.photon_paths as u64,
+            eye_paths_cut: cut.eye_paths as u64,
             wall_ms: start.elapsed().as_secs_f64() * 1e3,
             stages,
         })
@@ -509,6 +550,17 @@ impl Renderer {
         self.active
     }
 
+    /// The depth backstops and photons per thread this render uses.
+    pub fn path_limits(&self) -> PathLimits {
+        self.limits
+    }
+
+    /// Paths cut at the depth backstops so far (photon passes including the probe's, and eye passes).
+    pub fn path_counters(&self) -> Result<PathCounters> {
+        let c: Vec<PathCounters> = self.ctx.download_prefix(&self.cut, 1)?;
+        Ok(c[0])
+    }
+
     /// Photons per batch the passes currently use.
     pub fn batch_size(&self) -> u32 {
         self.batch
@@ -528,7 +580,8 @@ impl Renderer {
         self.ctx.download_prefix(&self.accum, self.gpu.slots() as usize)
     }
 
-    pub fn read_direct(&self) -> Result<Vec<[f32; 4]>> {
+    /// Per pixel: the emission samples' sum (rgb) and count (w).
+    pub fn read_direct(&self) -> Result<Vec<[f64; 4]>> {
         self.ctx.download_prefix(&self.direct, self.gpu.pixels() as usize)
     }
 

@@ -46,6 +46,11 @@ pub struct PassRecord {
     pub photons_total: u64,
     pub records: u64,
     pub batches: u32,
+    /// Photon and eye paths of the render so far cut at the depth backstops (`PassStats`).
+    #[serde(default)]
+    pub photon_paths_cut: u64,
+    #[serde(default)]
+    pub eye_paths_cut: u64,
     /// GPU milliseconds per stage, steps summed into their stage (`lookup/count` into `lookup`).
     pub stage_ms: BTreeMap<String, f64>,
     /// GPU start of each stage in milliseconds since the render's first timestamp, for traces.
@@ -83,6 +88,8 @@ impl PassRecord {
             photons_total: stats.emitted_total,
             records: stats.records,
             batches: stats.batches,
+            photon_paths_cut: stats.photon_paths_cut,
+            eye_paths_cut: stats.eye_paths_cut,
             stage_ms,
             stage_start_ms,
             error: None,
@@ -187,6 +194,8 @@ mod tests {
             emitted_total: 1000,
             records: 2800,
             batches: 1,
+            photon_paths_cut: 0,
+            eye_paths_cut: 0,
             wall_ms: 12.5,
             stages: vec![
                 ScopeTiming { name: "photon", start_ms: 100.0, duration_ms: 3.0 },

@@ -3,6 +3,9 @@
 use anyhow::{bail, Result};
 use ppm_vk_kernels::lookup::SCAN_BLOCK;
 
+/// Most emission samples per pixel and eye pass (`Settings::emission_samples`).
+pub const MAX_EMISSION_SAMPLES: u32 = 64;
+
 /// Which progressive photon mapping.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -52,10 +55,18 @@ pub struct Settings {
     /// Hit points per pixel: glass splits an eye path into both Fresnel branches up to this many leaves
     /// (PPM; SPPM always has one).
     pub hit_slots: u32,
-    /// Specular bounces an eye path may take before it is dropped.
+    /// Most specular bounces of an eye path. Eye paths end at diffuse surfaces or by escaping; this is a
+    /// backstop (for a camera between parallel mirrors), lowered where the device's loop budget needs it
+    /// (`PathLimits`). Paths cut there are counted in `PassStats::eye_paths_cut`.
     pub max_eye_depth: u32,
-    /// Bounces a photon path may take (diffuse records are further bounded by 16 per path).
+    /// Most surface interactions of a photon path. Paths end by Russian roulette; this is a backstop,
+    /// lowered where the device's loop budget needs it, never below a depth that keeps the loss under 0.1%
+    /// at albedo 0.95 (`PathLimits`). Paths cut there are counted in `PassStats::photon_paths_cut`.
     pub max_photon_depth: u32,
+    /// Eye paths per pixel and eye pass that only collect the emission seen directly or through mirrors
+    /// and glass (ray.comp): the light's edges and its images get this many more samples than the photon
+    /// estimate's one hit point per pixel. 0: only the hit-point path's own sample.
+    pub emission_samples: u32,
     /// Compile the tracing kernels with the scene inlined as constants (faster; same results up to the
     /// last bit of a fused multiply-add). `false` uses the kernels as built.
     pub specialize: bool,
@@ -82,8 +93,9 @@ impl Default for Settings {
             probe_beta: 0.2,
             probe_photons: None,
             hit_slots: 4,
-            max_eye_depth: 16,
-            max_photon_depth: 64,
+            max_eye_depth: 1024,
+            max_photon_depth: 4096,
+            emission_samples: 4,
             specialize: true,
             grid_buckets: None,
             grid_cell: None,
@@ -125,6 +137,9 @@ impl Settings {
         }
         if self.max_eye_depth == 0 || self.max_photon_depth == 0 {
             bail!("path depth limits must be at least 1");
+        }
+        if self.emission_samples > MAX_EMISSION_SAMPLES {
+            bail!("emission samples per pixel and pass must be at most {MAX_EMISSION_SAMPLES}, got {}", self.emission_samples);
         }
         Ok(())
     }

@@ -150,3 +150,12 @@ pub struct Photon {
 gpu_struct!(Photon { pos, cell, flux, dir });
 // grid_scatter.comp copies a Photon as four 64-bit words and reads `cell` as the high half of the second.
 const _: () = assert!(std::mem::offset_of!(Photon, cell) == 12 && std::mem::size_of::<Photon>() == 32);
+
+/// Paths the tracing kernels ended at their depth backstops (`PathLimits`), cumulative over a render.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct PathCounters {
+    pub photon_paths: u32,
+    pub eye_paths: u32,
+}
+gpu_struct!(PathCounters { photon_paths, eye_paths });

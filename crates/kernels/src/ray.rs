@@ -15,6 +15,10 @@ pub struct RayPush {
     pub salt: u32,
     /// Eye pass index: pixel p of pass k draws from random stream k * pixels + p.
     pub pass: u32,
+    /// Paths per pixel that only collect the emission seen through mirrors and glass (ray.comp).
+    pub emission_samples: u32,
+    /// 1: trace the hit-point path; 0: only the emission samples.
+    pub trace_hits: u32,
 }
 
 /// `RayPush::jitter` for a random position in every pixel (SPPM's box filter).
@@ -29,20 +33,23 @@ pub struct SceneBuffers<'a> {
     pub materials: &'a Buffer,
 }
 
-/// Writes `hit_slots` hit points per pixel into `hit_points` and adds the directly seen emission to
-/// `direct` (rgb) and 1 to its w.
+/// Writes `hit_slots` hit points per pixel into `hit_points` (with `push.trace_hits`), adds the emission
+/// samples to `direct` (rgb, double) and their count to its w, and counts eye paths cut at the depth
+/// backstop in `cut`.
+#[allow(clippy::too_many_arguments)]
 pub fn record(
     k: &ComputePipeline,
     cmd: vk::CommandBuffer,
     scene: &SceneBuffers,
     hit_points: &Buffer,
     direct: &Buffer,
+    cut: &Buffer,
     pixels: u32,
     push: &RayPush,
 ) -> Result<()> {
     k.dispatch(
         cmd,
-        &[scene.params, scene.spheres, scene.quads, scene.materials, hit_points, direct],
+        &[scene.params, scene.spheres, scene.quads, scene.materials, hit_points, direct, cut],
         bytemuck::bytes_of(push),
         pixels as u64,
     )

@@ -7,100 +7,178 @@ pub mod trace;
 
 use glam::{DVec3, Vec3};
 use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon, EMPTY_SLOT, SURFACE_DIFFUSE, SURFACE_MIRROR};
-use ppm_vk_kernels::photon::MAX_RECORDS;
+use ppm_vk_kernels::photon::SALT_EMISSION;
+use ppm_vk_kernels::ray::RayPush;
 
 use crate::gpu_scene::GpuScene;
 use crate::settings::ProbeMode;
 use rng::Rng;
 use trace::{cosine_direction, fresnel_dielectric, intersect_scene, oct_decode, oct_encode, offset_ray, reflect, v3, PI};
 
-/// Hit points (`hit_slots` per pixel) and directly seen emission per pixel (rgb, w = 1), as `ray.comp`
-/// makes them in eye pass `pass`; a negative `jitter` draws a random position in each pixel.
-pub fn ray_pass(g: &GpuScene, jitter: [f32; 2], salt: u32, pass: u32) -> (Vec<HitPoint>, Vec<[f32; 4]>) {
+/// The camera ray through point `jitter` of pixel (px, py), as ray.comp's `camera_ray`.
+fn camera_ray(g: &GpuScene, px: u32, py: u32, j: [f32; 2]) -> Vec3 {
+    let p = &g.params;
+    let sx = (2.0 * (px as f32 + j[0]) / p.width as f32 - 1.0) * p.aspect * p.tan_half_fov;
+    let sy = (1.0 - 2.0 * (py as f32 + j[1]) / p.height as f32) * p.tan_half_fov;
+    (v3(p.forward) + sx * v3(p.right) + sy * v3(p.up)).normalize()
+}
+
+/// One emission-only eye sample of ray.comp's `emission_sample`: the emission met along the specular chain
+/// through a random point of the pixel, one Fresnel branch chosen with probability f. `cut` counts a path
+/// ended at the depth backstop.
+fn emission_sample(g: &GpuScene, px: u32, py: u32, rng: &mut Rng, cut: &mut u32) -> Vec3 {
+    let j = [rng.float(), rng.float()];
+    let mut o = v3(g.params.eye);
+    let mut d = camera_ray(g, px, py, j);
+    let mut thr = Vec3::ONE;
+    for _ in 0..g.params.max_eye_depth {
+        let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else { return Vec3::ZERO };
+        let m = &g.materials[h.material as usize];
+        let front = d.dot(h.normal) < 0.0;
+        let nf = if front { h.normal } else { -h.normal };
+        if m.surface == SURFACE_DIFFUSE {
+            return if front { thr * v3(m.emission) } else { Vec3::ZERO };
+        }
+        if m.surface == SURFACE_MIRROR {
+            thr *= v3(m.color);
+            d = reflect(d, nf);
+            o = offset_ray(g, h.pos, nf);
+            continue;
+        }
+        let eta = if front { 1.0 / m.ior } else { m.ior };
+        let cos_i = -d.dot(nf);
+        let (f, cos_t) = fresnel_dielectric(cos_i, eta);
+        if rng.float() < f {
+            d = reflect(d, nf);
+            o = offset_ray(g, h.pos, nf);
+        } else {
+            d = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
+            o = offset_ray(g, h.pos, -nf);
+        }
+    }
+    *cut += 1;
+    Vec3::ZERO
+}
+
+/// What one eye pass of `ray.comp` makes.
+pub struct EyePass {
+    /// `hit_slots` per pixel (empty when the pass traced no hit points).
+    pub hits: Vec<HitPoint>,
+    /// Per pixel: the sum of this pass's emission samples (rgb) and their count (w).
+    pub direct: Vec<[f64; 4]>,
+    /// Eye paths ended at the depth backstop.
+    pub cut: u32,
+}
+
+/// Eye pass `push.pass` as `ray.comp` runs it: hit points (with `push.trace_hits`; a negative `jitter`
+/// draws a random position in each pixel) and the emission samples.
+pub fn ray_pass(g: &GpuScene, push: &RayPush) -> EyePass {
     let p = &g.params;
     let slots = p.hit_slots as usize;
-    let mut hits = vec![HitPoint::default(); g.slots() as usize];
-    let mut direct = vec![[0f32; 4]; g.pixels() as usize];
+    let trace_hits = push.trace_hits != 0;
+    let mut out = EyePass {
+        hits: if trace_hits { vec![HitPoint::default(); g.slots() as usize] } else { Vec::new() },
+        direct: vec![[0f64; 4]; g.pixels() as usize],
+        cut: 0,
+    };
     for pixel in 0..g.pixels() {
         let px = pixel % p.width;
         let py = pixel / p.width;
-        let stream = pass as u64 * g.pixels() as u64 + pixel as u64;
-        let mut rng = Rng::new(p.seed as u64 | ((salt as u64) << 32), stream);
-        let mut j = jitter;
-        if j[0] < 0.0 {
-            j[0] = rng.float();
-            j[1] = rng.float();
-        }
-        let sx = (2.0 * (px as f32 + j[0]) / p.width as f32 - 1.0) * p.aspect * p.tan_half_fov;
-        let sy = (1.0 - 2.0 * (py as f32 + j[1]) / p.height as f32) * p.tan_half_fov;
-        let dir = (v3(p.forward) + sx * v3(p.right) + sy * v3(p.up)).normalize();
-        // (origin, direction, throughput, depth)
-        let mut stack: Vec<(Vec3, Vec3, Vec3, u32)> = vec![(v3(p.eye), dir, Vec3::ONE, 0)];
-        let mut slot = 0usize;
-        let mut emitted = Vec3::ZERO;
-        let base = pixel as usize * slots;
-        while let Some((mut o, mut d, mut thr, mut depth)) = stack.pop() {
-            while depth < p.max_eye_depth {
-                let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else { break };
-                let m = &g.materials[h.material as usize];
-                let front = d.dot(h.normal) < 0.0;
-                let nf = if front { h.normal } else { -h.normal };
-                if m.surface == SURFACE_DIFFUSE {
-                    if front {
-                        emitted += thr * v3(m.emission);
+        let stream = push.pass as u64 * g.pixels() as u64 + pixel as u64;
+        let mut emitted = glam::DVec3::ZERO;
+        let mut samples = 0u32;
+        if trace_hits {
+            let mut rng = Rng::new(p.seed as u64 | ((push.salt as u64) << 32), stream);
+            let mut j = push.jitter;
+            if j[0] < 0.0 {
+                j[0] = rng.float();
+                j[1] = rng.float();
+            }
+            // (origin, direction, throughput, depth)
+            let mut stack: Vec<(Vec3, Vec3, Vec3, u32)> = vec![(v3(p.eye), camera_ray(g, px, py, j), Vec3::ONE, 0)];
+            let mut slot = 0usize;
+            let mut hit_emitted = Vec3::ZERO;
+            let base = pixel as usize * slots;
+            while let Some((mut o, mut d, mut thr, mut depth)) = stack.pop() {
+                loop {
+                    if depth >= p.max_eye_depth {
+                        out.cut += 1;
+                        break;
                     }
-                    let c = v3(m.color);
-                    if c.max_element() > 0.0 && slot < slots {
-                        hits[base + slot] = HitPoint {
-                            pos: h.pos.to_array(),
-                            pixel,
-                            normal: nf.to_array(),
-                            weight: (thr * c / PI).to_array(),
-                            ..Default::default()
-                        };
-                        slot += 1;
+                    let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else { break };
+                    let m = &g.materials[h.material as usize];
+                    let front = d.dot(h.normal) < 0.0;
+                    let nf = if front { h.normal } else { -h.normal };
+                    if m.surface == SURFACE_DIFFUSE {
+                        if front {
+                            hit_emitted += thr * v3(m.emission);
+                        }
+                        let c = v3(m.color);
+                        if c.max_element() > 0.0 && slot < slots {
+                            out.hits[base + slot] = HitPoint {
+                                pos: h.pos.to_array(),
+                                pixel,
+                                normal: nf.to_array(),
+                                weight: (thr * c / PI).to_array(),
+                                ..Default::default()
+                            };
+                            slot += 1;
+                        }
+                        break;
                     }
-                    break;
-                }
-                depth += 1;
-                if m.surface == SURFACE_MIRROR {
-                    thr *= v3(m.color);
-                    d = reflect(d, nf);
-                    o = offset_ray(g, h.pos, nf);
-                    continue;
-                }
-                let eta = if front { 1.0 / m.ior } else { m.ior };
-                let cos_i = -d.dot(nf);
-                let (f, cos_t) = fresnel_dielectric(cos_i, eta);
-                let refl = reflect(d, nf);
-                let refr = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
-                if f >= 1.0 {
-                    d = refl;
-                    o = offset_ray(g, h.pos, nf);
-                } else if slot + stack.len() + 1 < slots {
-                    stack.push((offset_ray(g, h.pos, nf), refl, thr * f, depth));
-                    thr *= 1.0 - f;
-                    d = refr;
-                    o = offset_ray(g, h.pos, -nf);
-                } else if rng.float() < f {
-                    d = refl;
-                    o = offset_ray(g, h.pos, nf);
-                } else {
-                    d = refr;
-                    o = offset_ray(g, h.pos, -nf);
+                    depth += 1;
+                    if m.surface == SURFACE_MIRROR {
+                        thr *= v3(m.color);
+                        d = reflect(d, nf);
+                        o = offset_ray(g, h.pos, nf);
+                        continue;
+                    }
+                    let eta = if front { 1.0 / m.ior } else { m.ior };
+                    let cos_i = -d.dot(nf);
+                    let (f, cos_t) = fresnel_dielectric(cos_i, eta);
+                    let refl = reflect(d, nf);
+                    let refr = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
+                    if f >= 1.0 {
+                        d = refl;
+                        o = offset_ray(g, h.pos, nf);
+                    } else if slot + stack.len() + 1 < slots {
+                        stack.push((offset_ray(g, h.pos, nf), refl, thr * f, depth));
+                        thr *= 1.0 - f;
+                        d = refr;
+                        o = offset_ray(g, h.pos, -nf);
+                    } else if rng.float() < f {
+                        d = refl;
+                        o = offset_ray(g, h.pos, nf);
+                    } else {
+                        d = refr;
+                        o = offset_ray(g, h.pos, -nf);
+                    }
                 }
             }
+            for s in slot..slots {
+                out.hits[base + s] = HitPoint { pixel: EMPTY_SLOT, ..Default::default() };
+            }
+            // A fixed point of the pixel counts only when no random sample does (ray.comp).
+            if push.jitter[0] < 0.0 || push.emission_samples == 0 {
+                emitted += hit_emitted.as_dvec3();
+                samples += 1;
+            }
         }
-        for s in slot..slots {
-            hits[base + s] = HitPoint { pixel: EMPTY_SLOT, ..Default::default() };
+        let mut rng = Rng::new(p.seed as u64 | ((SALT_EMISSION as u64) << 32), stream);
+        for _ in 0..push.emission_samples {
+            emitted += emission_sample(g, px, py, &mut rng, &mut out.cut).as_dvec3();
         }
-        direct[pixel as usize] = [emitted.x, emitted.y, emitted.z, 1.0];
+        samples += push.emission_samples;
+        if samples > 0 {
+            out.direct[pixel as usize] = [emitted.x, emitted.y, emitted.z, samples as f64];
+        }
     }
-    (hits, direct)
+    out
 }
 
-/// The records of photon `index` (global), as `photon.comp` leaves them.
-pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) {
+/// The records of photon `index` (global), as `photon.comp` leaves them; returns false if the path was
+/// ended at the depth backstop (`RenderParams::max_photon_depth`) rather than by roulette or escape.
+pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) -> bool {
     let p = &g.params;
     let mut rng = Rng::new(p.seed as u64 | ((salt as u64) << 32), index);
     let u = rng.float();
@@ -117,9 +195,8 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
     let u2 = rng.float();
     let mut d = cosine_direction(v3(q.normal), u1, u2);
     let mut flux = v3(light.power) / light.prob;
-    let mut n = 0;
     for _ in 0..p.max_photon_depth {
-        let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else { break };
+        let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else { return true };
         let m = &g.materials[h.material as usize];
         let front = d.dot(h.normal) < 0.0;
         let nf = if front { h.normal } else { -h.normal };
@@ -127,12 +204,11 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             let c = v3(m.color);
             let pr = c.max_element();
             if pr <= 0.0 {
-                break;
+                return true;
             }
             out.push(Photon { pos: h.pos.to_array(), cell: trace::grid_key(g, h.pos), flux: flux.to_array(), dir: oct_encode(d) });
-            n += 1;
-            if n == MAX_RECORDS || rng.float() >= pr {
-                break;
+            if rng.float() >= pr {
+                return true;
             }
             flux *= c / pr;
             let v1 = rng.float();
@@ -156,6 +232,7 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             }
         }
     }
+    false
 }
 
 /// All records of photons `first..first+count`, in photon order.
@@ -218,9 +295,9 @@ pub fn update(s: &HitStats, a: &PassAccum, weight: [f32; 3], alpha: f32, flux_fi
     }
 }
 
-/// Pixel radiance from the statistics (eq. 1-2; eq. 11's normalisation `norm`); `direct` holds emission
-/// summed over eye passes (rgb) and their count (w).
-pub fn resolve(g: &GpuScene, stats: &[HitStats], direct: &[[f32; 4]], emitted: f64, norm: f32) -> Vec<[f64; 3]> {
+/// Pixel radiance from the statistics (eq. 1-2; eq. 11's normalisation `norm`); `direct` holds the
+/// emission samples summed over eye passes (rgb) and their count (w).
+pub fn resolve(g: &GpuScene, stats: &[HitStats], direct: &[[f64; 4]], emitted: f64, norm: f32) -> Vec<[f64; 3]> {
     let slots = g.params.hit_slots as usize;
     (0..g.pixels() as usize)
         .map(|pixel| {
@@ -232,8 +309,8 @@ pub fn resolve(g: &GpuScene, stats: &[HitStats], direct: &[[f32; 4]], emitted: f
                 }
             }
             let d = direct[pixel];
-            let passes = d[3].max(1.0) as f64;
-            [sum.x + d[0] as f64 / passes, sum.y + d[1] as f64 / passes, sum.z + d[2] as f64 / passes]
+            let samples = d[3].max(1.0);
+            [sum.x + d[0] / samples, sum.y + d[1] / samples, sum.z + d[2] / samples]
         })
         .collect()
 }
