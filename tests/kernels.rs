@@ -600,3 +600,72 @@ fn pass_equals_trace_gather_update() {
     drop((a, b));
     assert_clean(&ctx);
 }
+
+/// A pass whose records overflow the record buffer is split into batches; the split must neither drop
+/// nor repeat photons. A bright furnace (albedo 0.95: ~20 records per photon, 5x the buffer sized for 4)
+/// forces it. The batched pass must leave bit for bit the statistics of the same photons gathered chunk by
+/// chunk through the hooks, and as many records as the CPU reference traces for those photons.
+#[test]
+fn a_pass_split_into_batches_loses_and_repeats_no_photon() {
+    let ctx = ctx();
+    let mut scene = load(FURNACE).with_resolution(16, 16);
+    for m in &mut scene.materials {
+        m.surface = ppm_vk_engine::scene::Surface::Diffuse { albedo: glam::Vec3::splat(0.95) };
+    }
+    let settings = Settings { photons_per_pass: 4_000, emission_samples: 0, ..settings() };
+    let mut a = Renderer::new(&ctx, &scene, settings.clone()).unwrap();
+    let stats = a.pass().unwrap();
+    let batch = a.batch_size();
+    println!("{} records in {} batches of {batch} photons", stats.records, stats.batches);
+    assert!(stats.batches >= 3, "the pass was not split ({} batches)", stats.batches);
+    assert_eq!(stats.batches, 4_000u32.div_ceil(batch));
+
+    let mut b = Renderer::new(&ctx, &scene, settings).unwrap();
+    let mut records = 0u64;
+    for first in (0..4_000u32).step_by(batch as usize) {
+        records += b.trace_and_gather(first as u64, batch.min(4_000 - first)).unwrap().len() as u64;
+    }
+    b.update_only().unwrap();
+    assert_eq!(stats.records, records, "records of the batched pass vs chunk by chunk");
+    let (sa, sb) = (a.read_stats().unwrap(), b.read_stats().unwrap());
+    assert_eq!(sa.iter().zip(&sb).filter(|(x, y)| x != y).count(), 0, "statistics differ");
+    // Independent of the batching: the CPU traces the same 4000 photons (threshold divergence aside).
+    let cpu = reference::photon_pass(a.gpu_scene(), 0, 4_000, SALT_PHOTON).len() as f64;
+    assert!(close(records as f64, cpu, 5e-3, 0.0), "GPU {records} records, CPU {cpu}");
+    drop((a, b));
+    assert_clean(&ctx);
+}
+
+/// A scene of 70 primitives keeps the buffer-reading kernels (over 64), whose intersection loops count
+/// against lavapipe's loop budget: PathLimits gives one photon per thread and a shallower backstop. The
+/// records are still those of the CPU reference (streams are per photon, not per thread).
+#[test]
+fn photon_records_match_reference_with_one_photon_per_thread() {
+    let ctx = ctx();
+    let mut scene = cornell(RES, RES);
+    let white = scene.spheres[0].material;
+    for i in 0..60 {
+        let (x, z) = ((i % 10) as f32 * 0.18 - 0.85, (i / 10) as f32 * 0.3 + 1.2);
+        scene.spheres.push(ppm_vk_engine::scene::Sphere { center: Vec3::new(x, 0.06, z), radius: 0.05, material: white });
+    }
+    let mut r = Renderer::new(&ctx, &scene, settings()).unwrap();
+    let limits = r.path_limits();
+    println!("{limits:?}");
+    if ctx.info().loop_budget.is_some() {
+        assert_eq!(limits.per_thread, 1, "70 primitives should leave one photon per thread on lavapipe");
+        assert!(limits.photon_depth >= ppm_vk_kernels::photon::MIN_DEPTH);
+    }
+    let gpu = r.trace_and_gather(0, PHOTONS).unwrap();
+    let cpu = reference::photon_pass(r.gpu_scene(), 0, PHOTONS, SALT_PHOTON);
+    let matched = match_records(&gpu, &cpu, 1e-4 * scene_extent(&scene));
+    let loose = match_records(&gpu, &cpu, 4e-3 * scene_extent(&scene));
+    println!("records: GPU {}, CPU {}, matched {matched} (within 4e-3: {loose})", gpu.len(), cpu.len());
+    assert!(close(gpu.len() as f64, cpu.len() as f64, 5e-3, 0.0));
+    // Small spheres seen from afar lose digits in the discriminant near their silhouettes, so more paths
+    // diverge than in cornell-spheres (99.8%): measured 98.8% matched (99.3% within 4e-3), and 98.9% for
+    // 50 spheres through the specialised kernels at 2 photons per thread, so the divergence is the scene's,
+    // not the thread count's. A photon lost or repeated per thread would cost far more.
+    assert!(matched * 1000 >= cpu.len() * 985, "only {matched} of {} CPU records have a GPU twin", cpu.len());
+    drop(r);
+    assert_clean(&ctx);
+}

@@ -159,3 +159,35 @@ fn paper_probe_depends_on_the_scene_units() {
     assert!((1.02..1.2).contains(&g1), "in metres: growth {g1}, expected ~1 + r/2 = 1.08");
     assert!(g1000 > 20.0, "in millimetres the paper's rule should enlarge r tens of times: {g1000}");
 }
+
+/// SPPM with the probe: a pixel whose first eye path left no hit point (it saw the light, or its glass
+/// path died) has no density to probe and keeps r, on the GPU as in the CPU reference. (The GPU used to
+/// treat such pixels as sparse and double their radius, blurring every later sample there.) Pixels with a
+/// hit point follow the CPU probe as in PPM.
+#[test]
+fn sppm_probe_leaves_pixels_without_a_hit_point_at_r() {
+    let ctx = ctx();
+    let scene = cornell(RES, RES);
+    let settings = Settings { mode: ppm_vk_engine::Mode::Sppm, ..settings(ProbeMode::ScaleFree) };
+    let r = Renderer::new(&ctx, &scene, settings).unwrap();
+    let g = r.gpu_scene().clone();
+    let hits = r.read_hit_points().unwrap();
+    let gpu = r.read_stats().unwrap();
+    let photons = reference::photon_pass(&g, 0, PROBE_PHOTONS, SALT_PROBE);
+    let r0 = g.initial_radius as f64;
+    let start = vec![ppm_vk_engine::layout::HitStats { r2: r0 * r0, ..Default::default() }; hits.len()];
+    let cpu = reference::probe(&hits, &start, &photons, ProbeMode::ScaleFree, r.settings().probe_beta);
+    let empty: Vec<usize> = (0..hits.len()).filter(|&i| hits[i].is_empty()).collect();
+    println!("{} of {} pixels have no hit point", empty.len(), hits.len());
+    assert!(!empty.is_empty(), "the test needs pixels without a hit point (the light is in view)");
+    for &i in &empty {
+        assert_eq!(gpu[i].r2, r0 * r0, "pixel {i}: no hit point, yet its radius changed");
+        assert_eq!(cpu[i].1, r0 * r0);
+    }
+    let live = hits.len() - empty.len();
+    let agree = (0..hits.len()).filter(|&i| !hits[i].is_empty() && (gpu[i].r2 - cpu[i].1).abs() <= 2e-4 * cpu[i].1).count();
+    // As in PPM (probe_case): paths that diverged at a threshold move some hit points' means; 90%.
+    assert!(agree * 100 >= live * 90, "only {agree} of {live} hit points agree with the CPU probe");
+    drop(r);
+    assert_clean(&ctx);
+}
