@@ -84,6 +84,12 @@ struct RenderArgs {
     /// Hit points per pixel (glass splits an eye path into both Fresnel branches up to this many).
     #[arg(long, default_value_t = 4)]
     hit_slots: u32,
+    /// Eye paths per pixel and pass that only collect the emission seen directly or through mirrors and
+    /// glass: the light's edges and its images converge this many times faster (0: the hit-point path's
+    /// own sample only).
+    #[arg(long, default_value_t = Settings::default().emission_samples,
+          value_parser = clap::value_parser!(u32).range(0..=ppm_vk_engine::settings::MAX_EMISSION_SAMPLES as i64))]
+    emission_samples: u32,
     /// Photon probing (eq. 7-9): `paper` is eq. 9 as printed, `scale-free` is r' = r (1 + lambda / r^2).
     #[arg(long, value_enum, default_value_t = ProbeArg::Off)]
     probe: ProbeArg,
@@ -259,6 +265,7 @@ fn render(args: RenderArgs) -> Result<()> {
         probe_beta: args.beta,
         probe_photons: args.probe_photons,
         cone_k: args.cone.0,
+        emission_samples: args.emission_samples,
         ..Settings::default()
     };
     // Ctrl-C ends the render after the pass in flight; the image is written as usual.
@@ -395,6 +402,17 @@ fn render(args: RenderArgs) -> Result<()> {
         args.out.display()
     );
     print_stage_summary(&history, args.profile);
+    if let Some(last) = history.last() {
+        if last.photon_paths_cut + last.eye_paths_cut > 0 {
+            let l = renderer.path_limits();
+            eprintln!(
+                "warning: {} photon paths reached {} surface interactions and {} eye paths {} specular bounces, \
+                 and were ended there: the scene traps light (facing mirrors, albedo near 1); the energy they \
+                 still carried is missing from the image",
+                last.photon_paths_cut, l.photon_depth, last.eye_paths_cut, l.eye_depth
+            );
+        }
+    }
     if let Some(reference) = reference {
         report_error(&image, &reference, &regions)?;
         if evals > 0 {
