@@ -202,6 +202,10 @@ pub(super) fn import(
     let mut triangles: Vec<([u32; 3], u32)> = Vec::new();
     for model in &models {
         let m = &model.mesh;
+        // tobj ends the file with a model even when no face follows the last `o` or `usemtl`.
+        if m.indices.is_empty() {
+            continue;
+        }
         let material = material_of(m.material_id, &model.name)?;
         let base =
             u32::try_from(positions.len()).map_err(|_| anyhow!("{shown}: too many vertices"))?;
@@ -965,6 +969,25 @@ newmtl plain\nNs 10\n";
             "{:?}",
             s.warnings
         );
+    }
+
+    #[test]
+    fn objects_without_faces_are_ignored() {
+        // A trailing `o` and `usemtl` with no face after them: tobj still makes a (faceless) model.
+        let mtl = "newmtl m\nKd 0.5 0.5 0.5\nnewmtl unused\nKd 0.1 0.1 0.1\n";
+        let obj = format!("mtllib a.mtl\nusemtl m\n{TRI}f 1 2 3\no empty\nusemtl unused\n");
+        let dir = TempDir::new("obj-empty-object");
+        let s = import_into(&dir, &obj, Some(mtl), &ObjImport::default()).expect("loads");
+        assert_eq!(s.meshes[0].indices.len(), 1);
+        assert_eq!(s.materials.len(), 2, "white and m only: {:?}", s.materials);
+        let s = import_into(
+            &dir,
+            &format!("mtllib a.mtl\nusemtl m\n{TRI}f 1 2 3\no tail\n"),
+            Some(mtl),
+            &ObjImport::default(),
+        )
+        .expect("loads");
+        assert_eq!(s.meshes[0].indices.len(), 1);
     }
 
     #[test]
