@@ -764,7 +764,8 @@ mod tests {
 
     #[test]
     fn validate_refuses_bad_meshes() {
-        let cases: Vec<(fn(&mut Scene), &str)> = vec![
+        type Edit = fn(&mut Scene);
+        let cases: Vec<(Edit, &str)> = vec![
             (
                 |s| s.meshes[0].indices[1][2] = 4,
                 "triangle 1 has vertex index 4, out of range (4 vertices)",

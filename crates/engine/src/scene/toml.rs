@@ -569,7 +569,8 @@ fn mesh_transform(src: &Source, r: &RawMesh, p: &str) -> anyhow::Result<DAffine3
         let det = m3.determinant();
         // Scale-free, as for quads: the volume of the columns against the product of their lengths.
         let lengths = col(0).length() * col(1).length() * col(2).length();
-        if !(det.abs() > 1e-6 * lengths) {
+        // Both finite: the entries are.
+        if det.abs() <= 1e-6 * lengths {
             return Err(src.error(
                 mx.span(),
                 Some(&mp),
