@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use clap::Args;
-use ppm_vk_engine::{Mode, PassStats, Renderer, Scene, Settings};
+use ppm_vk_engine::{Mode, PassStats, Renderer, Settings};
 use serde_json::json;
 
 use crate::{Cone, DeviceArgs, ProbeArg};
@@ -123,7 +123,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         "sppm" => Mode::Sppm,
         other => bail!("--mode {other:?}: expected ppm or sppm"),
     };
-    let base = Scene::load(&args.scene)?;
+    let base = crate::load_scene(&args.scene)?;
     let ctx = args.device.open()?;
     let info = ctx.info().clone();
     println!("device: {} ({}, {})", info.name, info.kind, info.driver);

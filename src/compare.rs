@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use ppm_vk_engine::metrics::{compare, cornell_regions, ErrorStats, Reference, Region};
-use ppm_vk_engine::{Mode, ProbeMode, Renderer, RgbImage, Scene, Settings};
+use ppm_vk_engine::{Mode, ProbeMode, Renderer, RgbImage, Settings};
 use serde_json::json;
 
 use crate::DeviceArgs;
@@ -89,7 +89,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
     if !(args.time.is_finite() && args.time > 0.0) {
         bail!("--time must be a positive number of seconds");
     }
-    let mut scene = Scene::load(&args.scene)?;
+    let mut scene = crate::load_scene(&args.scene)?;
     if let Some((w, h)) = args.resolution {
         scene = scene.with_resolution(w, h);
     }

@@ -218,6 +218,15 @@ fn devices() -> Result<()> {
     Ok(())
 }
 
+/// Loads a scene and writes what loading approximated (MTL features, dropped triangles) to stderr.
+pub fn load_scene(path: &std::path::Path) -> Result<Scene> {
+    let scene = Scene::load(path)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(scene)
+}
+
 /// Fails if the validation layer said anything (only when it is on).
 pub fn check_validation(ctx: &Context) -> Result<()> {
     let msgs = ctx.validation_messages();
@@ -243,7 +252,7 @@ fn render(args: RenderArgs) -> Result<()> {
             bail!("--time must be a positive number of seconds, got {t}");
         }
     }
-    let mut scene = Scene::load(&args.scene)?;
+    let mut scene = load_scene(&args.scene)?;
     if let Some((w, h)) = args.resolution {
         scene = scene.with_resolution(w, h);
     }

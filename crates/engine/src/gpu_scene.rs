@@ -46,6 +46,16 @@ pub fn default_radius(scene: &Scene) -> f32 {
 impl GpuScene {
     /// `photon_capacity` sizes the photon batch buffers (see `Renderer`).
     pub fn new(scene: &Scene, settings: &Settings, photon_capacity: u32) -> Result<GpuScene> {
+        // Refused rather than drawn without them: the kernels read spheres and quads only, so far.
+        if !scene.meshes.is_empty() {
+            bail!(
+                "scene {}: triangle meshes are not rendered yet ({} triangles in {} meshes): the \
+                 kernels trace spheres and quads only",
+                scene.name,
+                scene.triangle_count(),
+                scene.meshes.len()
+            );
+        }
         let materials: Vec<Material> = scene
             .materials
             .iter()

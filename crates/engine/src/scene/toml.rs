@@ -1,198 +1,38 @@
-//! Scene format: a small TOML file with a camera, named materials, spheres and
-//! quads (parallelograms). See `docs/scene-format.md` for the user-facing spec.
+//! The scene file: a small TOML file with a camera, named materials, spheres, quads (parallelograms)
+//! and `[[mesh]]` entries that import OBJ files. See `docs/scene-format.md` for the user-facing spec.
 //!
-//! Parsing is two-stage: serde deserialises the file into `Raw*` structs whose
-//! leaves are `toml::Spanned` (so every value keeps its byte range), then
-//! `validate` checks the physics/geometry constraints and builds the public
-//! types. Every error is reported as `<origin>:<line>:<col>: <field path>: <what>`.
+//! Parsing is two-stage: serde deserialises the file into `Raw*` structs whose leaves are
+//! `toml::Spanned` (so every value keeps its byte range), then `build` makes the [`Scene`] and runs
+//! [`Scene::check`] on it; the field path of a failed check is mapped back to the span it came from.
+//! What only the file can get wrong (unknown material names, two surface kinds in one material, a mesh
+//! transform) is checked here. Every error is reported as `<origin>:<line>:<col>: <field path>: <what>`.
 
 use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
 use std::ops::Range;
 use std::path::Path;
 
+use ::toml::Spanned;
 use anyhow::anyhow;
-use glam::{DVec3, Vec3};
+use glam::{DAffine3, DMat3, DVec3, Vec3};
 use serde::Deserialize;
-use toml::Spanned;
 
-/// Largest accepted image side; larger is almost certainly a typo and would
-/// exhaust GPU memory long before rendering anything useful.
-pub const MAX_RESOLUTION: u32 = 16384;
+use super::{obj, Camera, Material, ObjImport, Quad, Scene, Sphere, Surface, MAX_TRIANGLES};
 
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Camera {
-    pub eye: Vec3,
-    pub look_at: Vec3,
-    pub up: Vec3,
-    /// Vertical field of view in degrees, in (0, 180).
-    pub vfov_deg: f32,
-    pub width: u32,
-    pub height: u32,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Surface {
-    /// Lambertian reflector; albedo components in [0, 1].
-    Diffuse { albedo: Vec3 },
-    /// Perfect specular reflector; reflectance components in [0, 1].
-    Mirror { reflectance: Vec3 },
-    /// Smooth dielectric; `ior` is the index inside, the outside is 1.
-    Glass { ior: f32 },
-}
-
-#[derive(Clone, Debug, PartialEq)]
-pub struct Material {
-    pub name: String,
-    pub surface: Surface,
-    /// Emitted radiance (linear RGB); zero means the material is not a light.
-    pub emission: Vec3,
-}
-
-impl Material {
-    pub fn is_light(&self) -> bool {
-        self.emission.max_element() > 0.0
+/// [`Scene::parse`]: mesh files are found relative to the directory of `origin`.
+pub(super) fn parse(text: &str, origin: &str) -> anyhow::Result<Scene> {
+    let src = Source { origin, text };
+    if is_blank(text) {
+        return Err(src.error(
+            0..0,
+            None,
+            "file is empty: a scene needs a [camera], materials and at least one light \
+             (an emitting quad or mesh)",
+        ));
     }
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sphere {
-    pub center: Vec3,
-    pub radius: f32,
-    /// Index into `Scene::materials`.
-    pub material: u32,
-}
-
-/// Parallelogram `origin + s*edge_u + t*edge_v`, `s, t` in [0, 1].
-/// Front normal is `normalize(edge_u x edge_v)`; emission leaves the front side only.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Quad {
-    pub origin: Vec3,
-    pub edge_u: Vec3,
-    pub edge_v: Vec3,
-    /// Index into `Scene::materials`.
-    pub material: u32,
-}
-
-impl Quad {
-    pub fn normal(&self) -> Vec3 {
-        self.edge_u.cross(self.edge_v).normalize()
-    }
-
-    pub fn area(&self) -> f32 {
-        self.edge_u.cross(self.edge_v).length()
-    }
-}
-
-#[derive(Clone, Debug, PartialEq)]
-pub struct Scene {
-    pub name: String,
-    pub camera: Camera,
-    /// In file order.
-    pub materials: Vec<Material>,
-    pub spheres: Vec<Sphere>,
-    pub quads: Vec<Quad>,
-}
-
-impl Scene {
-    /// Reads and parses a scene file; every error message starts with the path.
-    pub fn load(path: &Path) -> anyhow::Result<Scene> {
-        // The io error goes into the message itself (not only an anyhow context) so
-        // that `{}` formatting still says why the file could not be read.
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| anyhow!("{}: cannot read scene file: {e}", path.display()))?;
-        Scene::parse(&text, &path.display().to_string())
-    }
-
-    /// Parses scene text; `origin` (usually the file name) prefixes every error.
-    pub fn parse(text: &str, origin: &str) -> anyhow::Result<Scene> {
-        let src = Source { origin, text };
-        if is_blank(text) {
-            return Err(src.error(
-                0..0,
-                None,
-                "file is empty: a scene needs a [camera], materials and at least one emitting quad",
-            ));
-        }
-        let raw: RawScene = toml::from_str(text).map_err(|e| src.toml_error(&e))?;
-        validate(&src, raw)
-    }
-
-    /// Axis-aligned bounds `(min, max)` of all spheres and quads; `(0, 0)` for
-    /// an empty scene (a validated scene is never empty: it has a light).
-    pub fn bounds(&self) -> (Vec3, Vec3) {
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for s in &self.spheres {
-            lo = lo.min(s.center - Vec3::splat(s.radius));
-            hi = hi.max(s.center + Vec3::splat(s.radius));
-        }
-        for q in &self.quads {
-            for p in [
-                q.origin,
-                q.origin + q.edge_u,
-                q.origin + q.edge_v,
-                q.origin + q.edge_u + q.edge_v,
-            ] {
-                lo = lo.min(p);
-                hi = hi.max(p);
-            }
-        }
-        if lo.cmple(hi).all() {
-            (lo, hi)
-        } else {
-            (Vec3::ZERO, Vec3::ZERO)
-        }
-    }
-
-    /// Indices (into `quads`) of the quads whose material emits.
-    pub fn lights(&self) -> Vec<u32> {
-        self.quads
-            .iter()
-            .enumerate()
-            .filter(|(_, q)| {
-                self.materials
-                    .get(q.material as usize)
-                    .is_some_and(Material::is_light)
-            })
-            .map(|(i, _)| i as u32)
-            .collect()
-    }
-
-    /// Uniform scale about the world origin of all geometry and the camera
-    /// position/target; `s` must be positive and finite. Radiance (emission) is
-    /// unchanged, so a correct renderer produces the same image.
-    pub fn scaled(&self, s: f32) -> Scene {
-        debug_assert!(
-            s.is_finite() && s > 0.0,
-            "scale must be positive and finite, got {s}"
-        );
-        let mut out = self.clone();
-        out.camera.eye *= s;
-        out.camera.look_at *= s;
-        for sp in &mut out.spheres {
-            sp.center *= s;
-            sp.radius *= s;
-        }
-        for q in &mut out.quads {
-            q.origin *= s;
-            q.edge_u *= s;
-            q.edge_v *= s;
-        }
-        out
-    }
-
-    /// Same scene at another image size (both at least 1).
-    pub fn with_resolution(&self, w: u32, h: u32) -> Scene {
-        debug_assert!(
-            w >= 1 && h >= 1,
-            "resolution must be at least 1x1, got {w}x{h}"
-        );
-        let mut out = self.clone();
-        out.camera.width = w;
-        out.camera.height = h;
-        out
-    }
+    let raw: RawScene = ::toml::from_str(text).map_err(|e| src.toml_error(&e))?;
+    let base = Path::new(origin).parent().unwrap_or(Path::new(""));
+    build(&src, raw, base)
 }
 
 // ---------------------------------------------------------------------------
@@ -209,6 +49,8 @@ struct RawScene {
     sphere: Vec<Spanned<RawSphere>>,
     #[serde(default)]
     quad: Vec<Spanned<RawQuad>>,
+    #[serde(default)]
+    mesh: Vec<Spanned<RawMesh>>,
 }
 
 #[derive(Deserialize)]
@@ -245,6 +87,24 @@ struct RawQuad {
     edge_u: Spanned<[f32; 3]>,
     edge_v: Spanned<[f32; 3]>,
     material: Spanned<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMesh {
+    file: Spanned<String>,
+    translate: Option<Spanned<[f64; 3]>>,
+    rotate: Option<Spanned<[f64; 3]>>,
+    scale: Option<Spanned<RawScale>>,
+    matrix: Option<Spanned<[[f64; 4]; 4]>>,
+    material: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged, expecting = "a number or an array of 3 numbers")]
+enum RawScale {
+    Uniform(f64),
+    PerAxis([f64; 3]),
 }
 
 // ---------------------------------------------------------------------------
@@ -382,44 +242,40 @@ fn bracket_balance(s: &str) -> i32 {
         .sum()
 }
 
-fn fmt_vec(v: [f32; 3]) -> String {
-    format!("[{}, {}, {}]", v[0], v[1], v[2])
-}
-
 // ---------------------------------------------------------------------------
-// Validation.
+// From the raw file to a Scene.
 
-fn finite_vec(src: &Source, v: &Spanned<[f32; 3]>, path: &str) -> anyhow::Result<Vec3> {
-    let a = *v.get_ref();
-    if a.iter().all(|x| x.is_finite()) {
-        Ok(Vec3::from_array(a))
-    } else {
-        Err(src.error(
-            v.span(),
-            Some(path),
-            format!("every component must be finite, got {}", fmt_vec(a)),
-        ))
+/// Field path -> span of what the file wrote there, to locate a failed [`Scene::check`].
+#[derive(Default)]
+struct Spans(HashMap<String, Range<usize>>);
+
+impl Spans {
+    fn insert(&mut self, path: impl Into<String>, span: Range<usize>) {
+        self.0.insert(path.into(), span);
+    }
+
+    /// The span of `path`, else of its nearest enclosing field that has one (`mesh[0]` for
+    /// `mesh[0].x`), else of the empty path (the scene as a whole).
+    fn find(&self, mut path: &str) -> Range<usize> {
+        loop {
+            if let Some(s) = self.0.get(path) {
+                return s.clone();
+            }
+            match path.rfind('.') {
+                Some(i) => path = &path[..i],
+                None => break,
+            }
+        }
+        self.0.get("").cloned().unwrap_or(0..0)
     }
 }
 
-/// A finite vector with every component in [0, 1] (albedo, reflectance).
-fn unit_vec(src: &Source, v: &Spanned<[f32; 3]>, path: &str) -> anyhow::Result<Vec3> {
-    let out = finite_vec(src, v, path)?;
-    if out.cmpge(Vec3::ZERO).all() && out.cmple(Vec3::ONE).all() {
-        Ok(out)
-    } else {
-        Err(src.error(
-            v.span(),
-            Some(path),
-            format!(
-                "every component must be in [0, 1], got {}",
-                fmt_vec(*v.get_ref())
-            ),
-        ))
-    }
+fn vec3(v: &Spanned<[f32; 3]>) -> Vec3 {
+    Vec3::from_array(*v.get_ref())
 }
 
-fn validate(src: &Source, raw: RawScene) -> anyhow::Result<Scene> {
+fn build(src: &Source, raw: RawScene, base: &Path) -> anyhow::Result<Scene> {
+    let mut spans = Spans::default();
     let name = match &raw.name {
         Some(n) => n.get_ref().clone(),
         None => Path::new(src.origin)
@@ -428,202 +284,147 @@ fn validate(src: &Source, raw: RawScene) -> anyhow::Result<Scene> {
             .unwrap_or(src.origin)
             .to_string(),
     };
-    let camera = validate_camera(src, raw.camera.get_ref())?;
+
+    let c = raw.camera.get_ref();
+    for (field, span) in [
+        ("eye", c.eye.span()),
+        ("look_at", c.look_at.span()),
+        ("up", c.up.span()),
+        ("vfov", c.vfov.span()),
+        ("resolution", c.resolution.span()),
+    ] {
+        spans.insert(format!("camera.{field}"), span);
+    }
+    let [width, height] = *c.resolution.get_ref();
+    let camera = Camera {
+        eye: vec3(&c.eye),
+        look_at: vec3(&c.look_at),
+        up: vec3(&c.up),
+        vfov_deg: *c.vfov.get_ref(),
+        width,
+        height,
+    };
 
     // BTreeMap sorts by name; keep file order so material indices follow the file.
     let mut raw_materials: Vec<_> = raw.materials.iter().collect();
     raw_materials.sort_by_key(|(k, _)| k.span().start);
     let mut materials = Vec::with_capacity(raw_materials.len());
-    let mut spans = Vec::with_capacity(raw_materials.len());
     for (key, m) in raw_materials {
-        materials.push(validate_material(src, key.get_ref(), m)?);
-        spans.push(key.span());
+        materials.push(material(src, key.get_ref(), m, &mut spans)?);
     }
-    let lookup = |r: &Spanned<String>, path: &str| -> anyhow::Result<u32> {
-        match materials.iter().position(|m| m.name == *r.get_ref()) {
-            Some(i) => {
-                u32::try_from(i).map_err(|_| src.error(r.span(), Some(path), "too many materials"))
-            }
-            None => {
-                let known: Vec<String> = materials
-                    .iter()
-                    .map(|m| format!("\"{}\"", m.name))
-                    .collect();
-                let known = if known.is_empty() {
-                    "none are defined".to_string()
-                } else {
-                    format!("known: {}", known.join(", "))
-                };
-                Err(src.error(
-                    r.span(),
-                    Some(path),
-                    format!("unknown material \"{}\" ({known})", r.get_ref()),
-                ))
-            }
-        }
-    };
 
     let mut spheres = Vec::with_capacity(raw.sphere.len());
     for (i, s) in raw.sphere.iter().enumerate() {
-        let s = s.get_ref();
         let p = format!("sphere[{i}]");
-        let center = finite_vec(src, &s.center, &format!("{p}.center"))?;
-        let radius = *s.radius.get_ref();
-        if !(radius.is_finite() && radius > 0.0) {
-            return Err(src.error(
-                s.radius.span(),
-                Some(&format!("{p}.radius")),
-                format!("must be positive and finite, got {radius}"),
-            ));
-        }
-        let mpath = format!("{p}.material");
-        let material = lookup(&s.material, &mpath)?;
-        if materials[material as usize].is_light() {
-            return Err(src.error(
-                s.material.span(),
-                Some(&mpath),
-                format!(
-                    "material \"{}\" emits light, but only quads may be emitters \
-                     (spheres cannot be lights)",
-                    s.material.get_ref()
-                ),
-            ));
-        }
+        let r = s.get_ref();
+        spans.insert(p.clone(), s.span());
+        spans.insert(format!("{p}.center"), r.center.span());
+        spans.insert(format!("{p}.radius"), r.radius.span());
+        spans.insert(format!("{p}.material"), r.material.span());
         spheres.push(Sphere {
-            center,
-            radius,
-            material,
+            center: vec3(&r.center),
+            radius: *r.radius.get_ref(),
+            material: lookup(src, &materials, &r.material, &format!("{p}.material"))?,
         });
     }
 
     let mut quads = Vec::with_capacity(raw.quad.len());
     for (i, q) in raw.quad.iter().enumerate() {
-        let q = q.get_ref();
         let p = format!("quad[{i}]");
-        let origin = finite_vec(src, &q.origin, &format!("{p}.origin"))?;
-        let edge_u = finite_vec(src, &q.edge_u, &format!("{p}.edge_u"))?;
-        let edge_v = finite_vec(src, &q.edge_v, &format!("{p}.edge_v"))?;
-        // f64 so that huge (but finite) f32 edges cannot overflow the tests below.
-        let (u, v) = (edge_u.as_dvec3(), edge_v.as_dvec3());
-        for (len, span, field) in [
-            (u.length(), q.edge_u.span(), "edge_u"),
-            (v.length(), q.edge_v.span(), "edge_v"),
-        ] {
-            // Checked separately so the message can say which edge is at fault.
-            if len == 0.0 {
-                return Err(src.error(
-                    span,
-                    Some(&format!("{p}.{field}")),
-                    "edge has zero length (degenerate quad)",
-                ));
-            }
-        }
-        // Relative test: sin(angle between edges) below 1e-6 is parallel at f32 precision.
-        if u.cross(v).length() <= 1e-6 * u.length() * v.length() {
-            return Err(src.error(
-                q.edge_v.span(),
-                Some(&format!("{p}.edge_v")),
-                format!(
-                    "parallel to edge_u {} (zero-area, degenerate quad)",
-                    fmt_vec(*q.edge_u.get_ref())
-                ),
-            ));
-        }
-        let material = lookup(&q.material, &format!("{p}.material"))?;
+        let r = q.get_ref();
+        spans.insert(p.clone(), q.span());
+        spans.insert(format!("{p}.origin"), r.origin.span());
+        spans.insert(format!("{p}.edge_u"), r.edge_u.span());
+        spans.insert(format!("{p}.edge_v"), r.edge_v.span());
+        spans.insert(format!("{p}.material"), r.material.span());
         quads.push(Quad {
-            origin,
-            edge_u,
-            edge_v,
-            material,
+            origin: vec3(&r.origin),
+            edge_u: vec3(&r.edge_u),
+            edge_v: vec3(&r.edge_v),
+            material: lookup(src, &materials, &r.material, &format!("{p}.material"))?,
         });
     }
 
-    let scene = Scene {
+    let toml_materials = materials.len();
+    let mut scene = Scene {
         name,
         camera,
         materials,
         spheres,
         quads,
+        meshes: Vec::new(),
+        warnings: Vec::new(),
     };
-    if scene.lights().is_empty() {
-        let span = raw.quad.first().map_or(0..0, |q| q.span());
-        return Err(src.error(
-            span,
-            Some("quad"),
-            "no emitting quad: nothing to render (give a quad a material with positive `emission`)",
-        ));
+    for (i, m) in raw.mesh.iter().enumerate() {
+        import_mesh(src, &mut scene, i, m, base, toml_materials, &mut spans)?;
     }
+
+    // A problem of the whole scene (no light, too many triangles) points at the first quad, else the
+    // first mesh, else line 1.
+    let first = raw.quad.first().map(|q| q.span());
+    spans.insert(
+        "",
+        first.or(raw.mesh.first().map(|m| m.span())).unwrap_or(0..0),
+    );
+    scene
+        .check()
+        .map_err(|e| src.error(spans.find(&e.path), Some(&e.path), &e.message))?;
     Ok(scene)
 }
 
-fn validate_camera(src: &Source, c: &RawCamera) -> anyhow::Result<Camera> {
-    let eye = finite_vec(src, &c.eye, "camera.eye")?;
-    let look_at = finite_vec(src, &c.look_at, "camera.look_at")?;
-    let up = finite_vec(src, &c.up, "camera.up")?;
-    let vfov = *c.vfov.get_ref();
-    if !(vfov.is_finite() && vfov > 0.0 && vfov < 180.0) {
-        return Err(src.error(
-            c.vfov.span(),
-            Some("camera.vfov"),
-            format!("must be in (0, 180) degrees, got {vfov}"),
-        ));
+/// Index of the material `r` names among `materials`.
+fn lookup(
+    src: &Source,
+    materials: &[Material],
+    r: &Spanned<String>,
+    path: &str,
+) -> anyhow::Result<u32> {
+    match materials.iter().position(|m| m.name == *r.get_ref()) {
+        Some(i) => {
+            u32::try_from(i).map_err(|_| src.error(r.span(), Some(path), "too many materials"))
+        }
+        None => {
+            let known: Vec<String> = materials
+                .iter()
+                .map(|m| format!("\"{}\"", m.name))
+                .collect();
+            let known = if known.is_empty() {
+                "none are defined".to_string()
+            } else {
+                format!("known: {}", known.join(", "))
+            };
+            Err(src.error(
+                r.span(),
+                Some(path),
+                format!("unknown material \"{}\" ({known})", r.get_ref()),
+            ))
+        }
     }
-    let [width, height] = *c.resolution.get_ref();
-    if !(1..=MAX_RESOLUTION).contains(&width) || !(1..=MAX_RESOLUTION).contains(&height) {
-        return Err(src.error(
-            c.resolution.span(),
-            Some("camera.resolution"),
-            format!(
-                "width and height must each be in 1..={MAX_RESOLUTION}, got [{width}, {height}]"
-            ),
-        ));
-    }
-    // In f64 so that far-apart finite points cannot overflow; zero length gives zero.
-    let view = look_at.as_dvec3() - eye.as_dvec3();
-    let dir = view.normalize_or_zero();
-    if dir == DVec3::ZERO {
-        return Err(src.error(
-            c.look_at.span(),
-            Some("camera.look_at"),
-            format!(
-                "must differ from camera.eye, both are {}",
-                fmt_vec(*c.eye.get_ref())
-            ),
-        ));
-    }
-    let up_n = up.as_dvec3().normalize_or_zero();
-    if up_n == DVec3::ZERO {
-        return Err(src.error(c.up.span(), Some("camera.up"), "must be a non-zero vector"));
-    }
-    // ~0.006 degrees: closer than that the camera basis is numerically meaningless.
-    if dir.cross(up_n).length() < 1e-4 {
-        return Err(src.error(
-            c.up.span(),
-            Some("camera.up"),
-            format!(
-                "is parallel to the view direction (look_at - eye = {}); \
-                 choose an up vector not along it",
-                fmt_vec(view.as_vec3().to_array())
-            ),
-        ));
-    }
-    Ok(Camera {
-        eye,
-        look_at,
-        up,
-        vfov_deg: vfov,
-        width,
-        height,
-    })
 }
 
-fn validate_material(
+/// The material as written; its values are checked by `Scene::check`, what only the file can get
+/// wrong (two surface kinds, none, emission written beside mirror or glass) here.
+fn material(
     src: &Source,
     name: &str,
     m: &Spanned<RawMaterial>,
+    spans: &mut Spans,
 ) -> anyhow::Result<Material> {
     let p = format!("materials.{name}");
     let r = m.get_ref();
+    spans.insert(p.clone(), m.span());
+    for (field, v) in [
+        ("diffuse", &r.diffuse),
+        ("mirror", &r.mirror),
+        ("emission", &r.emission),
+    ] {
+        if let Some(v) = v {
+            spans.insert(format!("{p}.{field}"), v.span());
+        }
+    }
+    if let Some(g) = &r.glass {
+        spans.insert(format!("{p}.glass"), g.span());
+    }
     if let (Some(_), Some(g)) = (&r.mirror, &r.glass) {
         return Err(src.error(
             g.span(),
@@ -640,50 +441,25 @@ fn validate_material(
     ) {
         return Err(src.error(x, Some(&p), "give exactly one of diffuse, mirror, glass"));
     }
-    let emission = match &r.emission {
-        Some(e) => {
-            let ep = format!("{p}.emission");
-            let v = finite_vec(src, e, &ep)?;
-            if v.cmplt(Vec3::ZERO).any() {
-                return Err(src.error(
-                    e.span(),
-                    Some(&ep),
-                    format!(
-                        "every component must be >= 0, got {}",
-                        fmt_vec(*e.get_ref())
-                    ),
-                ));
-            }
-            if r.mirror.is_some() || r.glass.is_some() {
-                return Err(src.error(
-                    e.span(),
-                    Some(&ep),
-                    "emission can only be combined with diffuse (or stand alone), \
-                     not with mirror or glass",
-                ));
-            }
-            v
-        }
-        None => Vec3::ZERO,
-    };
-    let surface = if let Some(d) = &r.diffuse {
-        Surface::Diffuse {
-            albedo: unit_vec(src, d, &format!("{p}.diffuse"))?,
-        }
-    } else if let Some(mr) = &r.mirror {
-        Surface::Mirror {
-            reflectance: unit_vec(src, mr, &format!("{p}.mirror"))?,
-        }
-    } else if let Some(g) = &r.glass {
-        let ior = *g.get_ref();
-        if !(ior.is_finite() && ior >= 1.0) {
+    if let Some(e) = &r.emission {
+        // Refused even when zero: the file says something the engine cannot do.
+        if r.mirror.is_some() || r.glass.is_some() {
             return Err(src.error(
-                g.span(),
-                Some(&format!("{p}.glass")),
-                format!("index of refraction must be finite and >= 1, got {ior}"),
+                e.span(),
+                Some(&format!("{p}.emission")),
+                "emission can only be combined with diffuse (or stand alone), \
+                 not with mirror or glass",
             ));
         }
-        Surface::Glass { ior }
+    }
+    let surface = if let Some(d) = &r.diffuse {
+        Surface::Diffuse { albedo: vec3(d) }
+    } else if let Some(mr) = &r.mirror {
+        Surface::Mirror {
+            reflectance: vec3(mr),
+        }
+    } else if let Some(g) = &r.glass {
+        Surface::Glass { ior: *g.get_ref() }
     } else if r.emission.is_some() {
         // A pure emitter reflects nothing.
         Surface::Diffuse { albedo: Vec3::ZERO }
@@ -697,13 +473,156 @@ fn validate_material(
     Ok(Material {
         name: name.to_string(),
         surface,
-        emission,
+        emission: r.emission.as_ref().map_or(Vec3::ZERO, vec3),
     })
+}
+
+/// Reads `[[mesh]]` number `i` into `scene`: the OBJ file relative to `base`, its transform, and the
+/// material override (a TOML material: one of the first `toml_materials`).
+fn import_mesh(
+    src: &Source,
+    scene: &mut Scene,
+    i: usize,
+    m: &Spanned<RawMesh>,
+    base: &Path,
+    toml_materials: usize,
+    spans: &mut Spans,
+) -> anyhow::Result<()> {
+    let p = format!("mesh[{i}]");
+    let r = m.get_ref();
+    spans.insert(p.clone(), m.span());
+    let transform = mesh_transform(src, r, &p)?;
+    let material = match &r.material {
+        Some(name) => Some(lookup(
+            src,
+            &scene.materials[..toml_materials],
+            name,
+            &format!("{p}.material"),
+        )?),
+        None => None,
+    };
+    let fpath = format!("{p}.file");
+    let file = r.file.get_ref();
+    if file.trim().is_empty() {
+        return Err(src.error(r.file.span(), Some(&fpath), "must name an OBJ file"));
+    }
+    let before = scene.materials.len();
+    obj::import(
+        scene,
+        &base.join(file),
+        &ObjImport {
+            transform,
+            material,
+        },
+        MAX_TRIANGLES,
+    )
+    .map_err(|e| src.error(r.file.span(), Some(&fpath), format!("{e:#}")))?;
+    // Imported materials are located at the mesh that brought them.
+    for k in before..scene.materials.len() {
+        spans.insert(
+            format!("materials.{}", scene.materials[k].name),
+            r.file.span(),
+        );
+    }
+    Ok(())
+}
+
+fn finite_all(src: &Source, values: &[f64], span: Range<usize>, path: &str) -> anyhow::Result<()> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        let list: Vec<String> = values.iter().map(|v| v.to_string()).collect();
+        Err(src.error(
+            span,
+            Some(path),
+            format!("every component must be finite, got [{}]", list.join(", ")),
+        ))
+    }
+}
+
+/// Object to world: `matrix`, or translate * rotate (z * y * x) * scale.
+fn mesh_transform(src: &Source, r: &RawMesh, p: &str) -> anyhow::Result<DAffine3> {
+    if let Some(mx) = &r.matrix {
+        let mp = format!("{p}.matrix");
+        if r.translate.is_some() || r.rotate.is_some() || r.scale.is_some() {
+            return Err(src.error(
+                mx.span(),
+                Some(&mp),
+                "cannot be combined with translate, rotate or scale (the matrix is the whole \
+                 transform)",
+            ));
+        }
+        let rows = mx.get_ref();
+        finite_all(src, rows.as_flattened(), mx.span(), &mp)?;
+        if rows[3] != [0.0, 0.0, 0.0, 1.0] {
+            return Err(src.error(
+                mx.span(),
+                Some(&mp),
+                format!(
+                    "the last row must be [0, 0, 0, 1] (an affine transform), got {:?}",
+                    rows[3]
+                ),
+            ));
+        }
+        let col = |j: usize| DVec3::new(rows[0][j], rows[1][j], rows[2][j]);
+        let m3 = DMat3::from_cols(col(0), col(1), col(2));
+        let det = m3.determinant();
+        // Scale-free, as for quads: the volume of the columns against the product of their lengths.
+        let lengths = col(0).length() * col(1).length() * col(2).length();
+        // Both finite: the entries are.
+        if det.abs() <= 1e-6 * lengths {
+            return Err(src.error(
+                mx.span(),
+                Some(&mp),
+                format!("is not invertible (determinant {det}): it would flatten the mesh"),
+            ));
+        }
+        return Ok(DAffine3::from_mat3_translation(m3, col(3)));
+    }
+    let translate = match &r.translate {
+        Some(t) => {
+            finite_all(src, t.get_ref(), t.span(), &format!("{p}.translate"))?;
+            DVec3::from_array(*t.get_ref())
+        }
+        None => DVec3::ZERO,
+    };
+    let rotate = match &r.rotate {
+        Some(a) => {
+            finite_all(src, a.get_ref(), a.span(), &format!("{p}.rotate"))?;
+            let [x, y, z] = a.get_ref().map(f64::to_radians);
+            DMat3::from_rotation_z(z) * DMat3::from_rotation_y(y) * DMat3::from_rotation_x(x)
+        }
+        None => DMat3::IDENTITY,
+    };
+    let scale = match &r.scale {
+        Some(s) => {
+            let sp = format!("{p}.scale");
+            let v = match s.get_ref() {
+                RawScale::Uniform(k) => [*k; 3],
+                RawScale::PerAxis(a) => *a,
+            };
+            finite_all(src, &v, s.span(), &sp)?;
+            if v.contains(&0.0) {
+                return Err(src.error(
+                    s.span(),
+                    Some(&sp),
+                    "must be non-zero (a zero scale flattens the mesh)",
+                ));
+            }
+            DVec3::from_array(v)
+        }
+        None => DVec3::ONE,
+    };
+    Ok(DAffine3::from_mat3_translation(
+        rotate * DMat3::from_diagonal(scale),
+        translate,
+    ))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::TempDir;
 
     const CORNELL: &str = concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -1222,7 +1141,7 @@ material = "light"
             &text,
             25,
             "sphere[1].material",
-            "only quads may be emitters",
+            "spheres cannot be emitters",
         );
         let text = text.replace(
             "radius = 0.25\nmaterial = \"white\"",
@@ -1245,7 +1164,7 @@ material = "light"
             &edit(19, "material = \"light\""),
             19,
             "sphere[0].material",
-            "only quads may be emitters",
+            "spheres cannot be emitters",
         );
     }
 
@@ -1359,7 +1278,10 @@ material = "light"
     #[test]
     fn no_light() {
         let e = err(&edit(36, "material = \"white\""));
-        assert!(e.contains("no emitting quad: nothing to render"), "{e}");
+        assert!(
+            e.contains("no emitting quad or triangle: nothing to render"),
+            "{e}"
+        );
         assert!(e.starts_with("t.toml:"), "{e}");
         // No quads at all: same message.
         let text = BASE.split("[[quad]]").next().unwrap_or("").to_string();
@@ -1402,5 +1324,223 @@ material = "light"
         assert_eq!(src.line_col(7), (2, 4));
         assert_eq!(src.line_col(8), (3, 1));
         assert_eq!(src.line_col(100), (3, 2));
+    }
+
+    // --- [[mesh]] ---
+
+    /// A triangle in the yz plane (front normal -x) with one grey MTL material.
+    const OBJ: &str = "mtllib a.mtl\nusemtl m\nv 0 1 0\nv 0 0 0\nv 0 0 1\nf 1 2 3\n";
+
+    /// BASE (36 lines) and a blank line, then `[[mesh]]` on line 38 and `lines` from line 39,
+    /// parsed as `<dir>/t.toml`; `a.obj` and `a.mtl` are written into `dir`.
+    fn with_mesh(dir: &TempDir, lines: &str) -> anyhow::Result<Scene> {
+        dir.write("a.obj", OBJ);
+        dir.write("a.mtl", "newmtl m\nKd 0.5 0.5 0.5\n");
+        let text = format!("{BASE}\n[[mesh]]\n{lines}\n");
+        Scene::parse(&text, &dir.0.join("t.toml").display().to_string())
+    }
+
+    /// The error of [`with_mesh`], the temp dir cut out; asserts line and field as `assert_err`.
+    fn assert_mesh_err(lines: &str, line: usize, path: &str, needle: &str) {
+        let dir = TempDir::new("toml-mesh");
+        let e = match with_mesh(&dir, lines) {
+            Ok(_) => panic!("expected an error for\n{lines}"),
+            Err(e) => format!("{e:#}").replace(&format!("{}/", dir.0.display()), ""),
+        };
+        let prefix = format!("t.toml:{line}:");
+        assert!(
+            e.starts_with(&prefix),
+            "error {e:?} should start with {prefix:?}"
+        );
+        assert!(
+            e.contains(&format!(" {path}: ")),
+            "error {e:?} should name {path:?}"
+        );
+        assert!(e.contains(needle), "error {e:?} should contain {needle:?}");
+    }
+
+    fn positions(s: &Scene) -> Vec<Vec3> {
+        s.meshes[0].positions.clone()
+    }
+
+    #[test]
+    fn mesh_transform_scales_then_rotates_then_translates() {
+        let dir = TempDir::new("toml-mesh");
+        let s = with_mesh(
+            &dir,
+            "file = \"a.obj\"\nscale = 2\nrotate = [90, 90, 0]\ntranslate = [1, 2, 3]",
+        )
+        .expect("valid");
+        // Scale 2, then x by 90 degrees, then y by 90 (R = Ry Rx), then the translation.
+        let want = [
+            Vec3::new(3.0, 2.0, 3.0),
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(1.0, 0.0, 3.0),
+        ];
+        for (p, w) in positions(&s).iter().zip(want) {
+            assert!(p.abs_diff_eq(w, 1e-6), "{p} against {w}");
+        }
+        assert_eq!(s.meshes[0].name, dir.0.join("a.obj").display().to_string());
+        let m = &s.materials[s.meshes[0].materials[0] as usize];
+        assert_eq!(m.name, format!("{}:m", dir.0.join("a.obj").display()));
+        assert_eq!(s.triangle_count(), 1);
+        // The same transform as a matrix (rows, acting on [x, y, z, 1]).
+        let s2 = with_mesh(
+            &dir,
+            "file = \"a.obj\"\nmatrix = [\n  [0, 2, 0, 1],\n  [0, 0, -2, 2],\n  [-2, 0, 0, 3],\n  [0, 0, 0, 1],\n]",
+        )
+        .expect("valid");
+        for (p, w) in positions(&s2).iter().zip(want) {
+            assert!(p.abs_diff_eq(w, 1e-6), "{p} against {w}");
+        }
+        // No transform: the file's coordinates.
+        let s3 = with_mesh(&dir, "file = \"a.obj\"").expect("valid");
+        assert_eq!(positions(&s3), [Vec3::Y, Vec3::ZERO, Vec3::Z]);
+        assert_eq!(s3.meshes[0].triangle(0).normal(), Vec3::NEG_X);
+        // A mirroring scale keeps the front side.
+        let s4 = with_mesh(&dir, "file = \"a.obj\"\nscale = [1, -1, 1]").expect("valid");
+        assert_eq!(s4.meshes[0].triangle(0).normal(), Vec3::NEG_X);
+        assert!(positions(&s4).contains(&Vec3::NEG_Y));
+    }
+
+    #[test]
+    fn mesh_material_override_and_relative_paths() {
+        let dir = TempDir::new("toml-mesh");
+        std::fs::create_dir_all(dir.0.join("meshes")).expect("mkdir");
+        // No MTL next to this one: the override means it is not looked for.
+        dir.write(
+            "meshes/b.obj",
+            "mtllib gone.mtl\nusemtl x\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        );
+        let s = with_mesh(&dir, "file = \"meshes/b.obj\"\nmaterial = \"glass\"").expect("valid");
+        assert_eq!(s.meshes[0].materials, [2]);
+        assert_eq!(s.materials.len(), 3, "no MTL material added");
+        // A mesh may be the only light.
+        dir.write(
+            "lamp.obj",
+            "mtllib lamp.mtl\nusemtl lamp\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        );
+        dir.write("lamp.mtl", "newmtl lamp\nKe 2 2 2\n");
+        let text = edit(36, "material = \"white\"") + "[[mesh]]\nfile = \"lamp.obj\"\n";
+        let s = Scene::parse(&text, &dir.0.join("t.toml").display().to_string()).expect("valid");
+        assert!(s.lights().is_empty());
+        assert_eq!(s.emitting_triangles().len(), 1);
+        // Nothing emits at all: located at the first quad, as before meshes.
+        dir.write("lamp.mtl", "newmtl lamp\nKd 0.5 0.5 0.5\n");
+        let e = format!(
+            "{:#}",
+            Scene::parse(&text, &dir.0.join("t.toml").display().to_string()).unwrap_err()
+        );
+        assert!(
+            e.contains("t.toml:26:1: no emitting quad or triangle"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn mesh_errors_name_line_and_field() {
+        let f = "file = \"a.obj\"\n";
+        assert_mesh_err(
+            &format!("{f}scale = 0"),
+            40,
+            "mesh[0].scale",
+            "must be non-zero",
+        );
+        assert_mesh_err(
+            &format!("{f}scale = [1, 0, 1]"),
+            40,
+            "mesh[0].scale",
+            "must be non-zero",
+        );
+        assert_mesh_err(
+            &format!("{f}scale = \"big\""),
+            40,
+            "mesh[0].scale",
+            "a number or an array of 3 numbers",
+        );
+        assert_mesh_err(
+            &format!("{f}scale = [1, nan, 1]"),
+            40,
+            "mesh[0].scale",
+            "must be finite",
+        );
+        assert_mesh_err(
+            &format!("{f}translate = [nan, 0, 0]"),
+            40,
+            "mesh[0].translate",
+            "must be finite, got [NaN, 0, 0]",
+        );
+        assert_mesh_err(
+            &format!("{f}rotate = [0, inf, 0]"),
+            40,
+            "mesh[0].rotate",
+            "must be finite",
+        );
+        assert_mesh_err(
+            &format!("{f}rotate = [0, 0]"),
+            40,
+            "mesh[0].rotate",
+            "length 2",
+        );
+        let identity = "matrix = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]";
+        assert_mesh_err(
+            &format!("{f}translate = [1, 0, 0]\n{identity}"),
+            41,
+            "mesh[0].matrix",
+            "cannot be combined with translate, rotate or scale",
+        );
+        assert_mesh_err(
+            &format!("{f}{}", identity.replace("[0, 0, 1, 0]", "[0, 0, 0, 0]")),
+            40,
+            "mesh[0].matrix",
+            "is not invertible (determinant 0)",
+        );
+        assert_mesh_err(
+            &format!("{f}{}", identity.replace("[0, 0, 1, 0]", "[1, 1, 0, 0]")),
+            40,
+            "mesh[0].matrix",
+            "is not invertible",
+        );
+        assert_mesh_err(
+            &format!("{f}{}", identity.replace("[0, 1, 0, 0]", "[0, nan, 0, 0]")),
+            40,
+            "mesh[0].matrix",
+            "must be finite",
+        );
+        assert_mesh_err(
+            &format!("{f}{}", identity.replace("[0, 0, 0, 1]]", "[0, 0, 1, 1]]")),
+            40,
+            "mesh[0].matrix",
+            "the last row must be [0, 0, 0, 1]",
+        );
+        assert_mesh_err(
+            &format!("{f}rotation = [0, 0, 0]"),
+            40,
+            "mesh[0].rotation",
+            "unknown field `rotation`",
+        );
+        assert_mesh_err(
+            &format!("{f}material = \"nope\""),
+            40,
+            "mesh[0].material",
+            "unknown material \"nope\" (known: \"white\", \"light\", \"glass\")",
+        );
+        assert_mesh_err("scale = 1", 38, "mesh[0]", "missing field `file`");
+        assert_mesh_err("file = \"\"", 39, "mesh[0].file", "must name an OBJ file");
+        assert_mesh_err(
+            "file = \"none.obj\"",
+            39,
+            "mesh[0].file",
+            "none.obj: cannot read OBJ file: ",
+        );
+        // What the OBJ loader finds is reported under the mesh's `file`, with the OBJ's own line.
+        let dir = TempDir::new("toml-mesh");
+        dir.write("bad.obj", "mtllib a.mtl\nusemtl m\nv 0 0 0\nf 1 2 3\n");
+        let e = format!("{:#}", with_mesh(&dir, "file = \"bad.obj\"").unwrap_err());
+        let want = format!(
+            "{0}/t.toml:39:8: mesh[0].file: {0}/bad.obj:4: vertex index 2 out of range (1 in the file)",
+            dir.0.display()
+        );
+        assert_eq!(e, want);
     }
 }

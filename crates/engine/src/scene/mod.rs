@@ -1,0 +1,874 @@
+//! Scenes: a camera, named materials, spheres, quads (parallelograms) and triangle meshes.
+//! See `docs/scene-format.md` for the user-facing spec.
+//!
+//! Formats are loaders that all build this one [`Scene`]: `toml` reads the scene file,
+//! `obj` imports OBJ/MTL meshes through tobj, [`demo`] generates the demo meshes. Every value check
+//! lives once, in [`Scene::validate`], so a scene built in code, read from TOML or imported is checked
+//! the same way; the TOML loader maps a failed check's field path (`sphere[1].radius`) back to the line
+//! and column it came from.
+
+pub mod demo;
+mod obj;
+mod toml;
+
+use std::fmt;
+use std::path::Path;
+
+use glam::{DVec3, Vec3};
+
+pub use obj::ObjImport;
+
+/// Largest accepted image side; larger is almost certainly a typo and would
+/// exhaust GPU memory long before rendering anything useful.
+pub const MAX_RESOLUTION: u32 = 16384;
+
+/// Most triangles a scene (and so one OBJ file) may hold: 2^24 = 16,777,216. A sanity limit, not a
+/// format one: that many triangles already need over 1 GiB of vertex and BVH buffers, and an OBJ that
+/// large is far more likely a mistake than a scene meant for this renderer.
+pub const MAX_TRIANGLES: usize = 1 << 24;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub eye: Vec3,
+    pub look_at: Vec3,
+    pub up: Vec3,
+    /// Vertical field of view in degrees, in (0, 180).
+    pub vfov_deg: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Surface {
+    /// Lambertian reflector; albedo components in [0, 1].
+    Diffuse { albedo: Vec3 },
+    /// Perfect specular reflector; reflectance components in [0, 1].
+    Mirror { reflectance: Vec3 },
+    /// Smooth dielectric; `ior` is the index inside, the outside is 1.
+    Glass { ior: f32 },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Unique within a scene. Materials imported from an MTL are named `<OBJ path>:<MTL name>`.
+    pub name: String,
+    pub surface: Surface,
+    /// Emitted radiance (linear RGB); zero means the material is not a light.
+    pub emission: Vec3,
+}
+
+impl Material {
+    pub fn is_light(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    pub center: Vec3,
+    pub radius: f32,
+    /// Index into `Scene::materials`.
+    pub material: u32,
+}
+
+/// Parallelogram `origin + s*edge_u + t*edge_v`, `s, t` in [0, 1].
+/// Front normal is `normalize(edge_u x edge_v)`; emission leaves the front side only.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quad {
+    pub origin: Vec3,
+    pub edge_u: Vec3,
+    pub edge_v: Vec3,
+    /// Index into `Scene::materials`.
+    pub material: u32,
+}
+
+impl Quad {
+    pub fn normal(&self) -> Vec3 {
+        self.edge_u.cross(self.edge_v).normalize()
+    }
+
+    pub fn area(&self) -> f32 {
+        self.edge_u.cross(self.edge_v).length()
+    }
+}
+
+/// An indexed triangle mesh in world space (the scene file's transform already applied).
+///
+/// A triangle `[a, b, c]` is counter-clockwise seen from its front side, as in OBJ: its front normal is
+/// `normalize((p[b] - p[a]) x (p[c] - p[a]))`. Triangles reflect from both sides, emission leaves the
+/// front side only (as for quads), and a closed glass mesh has its front side outside.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mesh {
+    /// Where it came from: the OBJ path as opened, or any label for a mesh built in code.
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    /// Unit shading normals, one per position, when the OBJ gives one for every vertex. Only shading:
+    /// the front side is always the winding's.
+    pub normals: Option<Vec<Vec3>>,
+    /// Triangles as indices into `positions`.
+    pub indices: Vec<[u32; 3]>,
+    /// Material of each triangle (index into `Scene::materials`); as long as `indices`.
+    pub materials: Vec<u32>,
+}
+
+/// One triangle of a mesh, positions resolved.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    pub p: [Vec3; 3],
+    /// Index into `Scene::materials`.
+    pub material: u32,
+}
+
+impl Triangle {
+    /// `(p1 - p0) x (p2 - p0)`: along the front normal, twice the area long.
+    pub fn cross(&self) -> Vec3 {
+        (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0])
+    }
+
+    /// Front normal (counter-clockwise winding).
+    pub fn normal(&self) -> Vec3 {
+        self.cross().normalize()
+    }
+
+    pub fn area(&self) -> f32 {
+        0.5 * self.cross().length()
+    }
+
+    /// Zero area at f32 precision: no direction can be taken for its normal. The loader drops these;
+    /// `Scene::validate` refuses them.
+    pub fn is_degenerate(&self) -> bool {
+        self.cross().normalize_or_zero() == Vec3::ZERO
+    }
+}
+
+impl Mesh {
+    /// A mesh whose triangles all have one material.
+    pub fn with_material(
+        name: impl Into<String>,
+        positions: Vec<Vec3>,
+        indices: Vec<[u32; 3]>,
+        material: u32,
+    ) -> Mesh {
+        let materials = vec![material; indices.len()];
+        Mesh {
+            name: name.into(),
+            positions,
+            normals: None,
+            indices,
+            materials,
+        }
+    }
+
+    /// Triangle `i`. Panics when `i` or one of its vertex indices is out of range (a validated scene
+    /// has none out of range).
+    pub fn triangle(&self, i: usize) -> Triangle {
+        let [a, b, c] = self.indices[i];
+        Triangle {
+            p: [
+                self.positions[a as usize],
+                self.positions[b as usize],
+                self.positions[c as usize],
+            ],
+            material: self.materials[i],
+        }
+    }
+
+    pub fn triangles(&self) -> impl Iterator<Item = Triangle> + '_ {
+        (0..self.indices.len()).map(|i| self.triangle(i))
+    }
+}
+
+/// Names one triangle of a scene: `scene.meshes[mesh].triangle(triangle)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct TriangleRef {
+    pub mesh: u32,
+    pub triangle: u32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    pub name: String,
+    pub camera: Camera,
+    /// In file order (TOML materials first, then those imported with each mesh).
+    pub materials: Vec<Material>,
+    pub spheres: Vec<Sphere>,
+    pub quads: Vec<Quad>,
+    /// Triangle meshes, in world space.
+    pub meshes: Vec<Mesh>,
+    /// What loading approximated or dropped, one line each (an MTL feature the engine does not model,
+    /// once per material; degenerate triangles dropped, with their count). The library never prints
+    /// them: the CLI writes them to stderr.
+    pub warnings: Vec<String>,
+}
+
+/// A failed check of [`Scene::validate`]: the field it concerns, as a path (`sphere[1].radius`,
+/// `materials.white.diffuse`, `mesh[0]`; empty for the scene as a whole), and what is wrong.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Invalid {
+    pub path: String,
+    pub message: String,
+}
+
+impl fmt::Display for Invalid {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.path.is_empty() {
+            write!(f, "{}", self.message)
+        } else {
+            write!(f, "{}: {}", self.path, self.message)
+        }
+    }
+}
+
+impl std::error::Error for Invalid {}
+
+fn invalid(path: impl Into<String>, message: impl Into<String>) -> Invalid {
+    Invalid {
+        path: path.into(),
+        message: message.into(),
+    }
+}
+
+impl Scene {
+    /// Reads and parses a scene file; every error message starts with the path. Mesh files are found
+    /// relative to the scene file's directory.
+    pub fn load(path: &Path) -> anyhow::Result<Scene> {
+        // The io error goes into the message itself (not only an anyhow context) so
+        // that `{}` formatting still says why the file could not be read.
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| anyhow::anyhow!("{}: cannot read scene file: {e}", path.display()))?;
+        Scene::parse(&text, &path.display().to_string())
+    }
+
+    /// Parses scene text; `origin` (usually the file name) prefixes every error, and mesh files are
+    /// found relative to its directory.
+    pub fn parse(text: &str, origin: &str) -> anyhow::Result<Scene> {
+        toml::parse(text, origin)
+    }
+
+    /// Imports an OBJ file (and its MTL unless `import.material` is set) as a new mesh; returns its
+    /// index in `meshes`. Its MTL materials are appended to `materials` (named `<path>:<MTL name>`),
+    /// what was approximated to `warnings`. Call [`Scene::validate`] when the scene is complete.
+    pub fn import_obj(&mut self, path: &Path, import: &ObjImport) -> anyhow::Result<usize> {
+        obj::import(self, path, import, MAX_TRIANGLES)
+    }
+
+    /// Axis-aligned bounds `(min, max)` of all spheres, quads and mesh vertices; `(0, 0)` for an
+    /// empty scene (a validated scene is never empty: it has a light).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for s in &self.spheres {
+            lo = lo.min(s.center - Vec3::splat(s.radius));
+            hi = hi.max(s.center + Vec3::splat(s.radius));
+        }
+        for q in &self.quads {
+            for p in [
+                q.origin,
+                q.origin + q.edge_u,
+                q.origin + q.edge_v,
+                q.origin + q.edge_u + q.edge_v,
+            ] {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+        for p in self.meshes.iter().flat_map(|m| &m.positions) {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        if lo.cmple(hi).all() {
+            (lo, hi)
+        } else {
+            (Vec3::ZERO, Vec3::ZERO)
+        }
+    }
+
+    /// Indices (into `quads`) of the quads whose material emits.
+    pub fn lights(&self) -> Vec<u32> {
+        self.quads
+            .iter()
+            .enumerate()
+            .filter(|(_, q)| self.emits(q.material))
+            .map(|(i, _)| i as u32)
+            .collect()
+    }
+
+    /// The mesh triangles whose material emits, in mesh and triangle order (the triangle half of the
+    /// light list; [`Scene::lights`] is the quad half).
+    pub fn emitting_triangles(&self) -> Vec<TriangleRef> {
+        let mut out = Vec::new();
+        for (mi, m) in self.meshes.iter().enumerate() {
+            for (ti, &mat) in m.materials.iter().enumerate() {
+                if self.emits(mat) {
+                    out.push(TriangleRef {
+                        mesh: mi as u32,
+                        triangle: ti as u32,
+                    });
+                }
+            }
+        }
+        out
+    }
+
+    /// Triangles in all meshes.
+    pub fn triangle_count(&self) -> usize {
+        self.meshes.iter().map(|m| m.indices.len()).sum()
+    }
+
+    fn emits(&self, material: u32) -> bool {
+        self.materials
+            .get(material as usize)
+            .is_some_and(Material::is_light)
+    }
+
+    /// Uniform scale about the world origin of all geometry and the camera
+    /// position/target; `s` must be positive and finite. Radiance (emission) is
+    /// unchanged, so a correct renderer produces the same image.
+    pub fn scaled(&self, s: f32) -> Scene {
+        debug_assert!(
+            s.is_finite() && s > 0.0,
+            "scale must be positive and finite, got {s}"
+        );
+        let mut out = self.clone();
+        out.camera.eye *= s;
+        out.camera.look_at *= s;
+        for sp in &mut out.spheres {
+            sp.center *= s;
+            sp.radius *= s;
+        }
+        for q in &mut out.quads {
+            q.origin *= s;
+            q.edge_u *= s;
+            q.edge_v *= s;
+        }
+        // Normals are unchanged by a uniform positive scale.
+        for p in out.meshes.iter_mut().flat_map(|m| &mut m.positions) {
+            *p *= s;
+        }
+        out
+    }
+
+    /// Same scene at another image size (both at least 1).
+    pub fn with_resolution(&self, w: u32, h: u32) -> Scene {
+        debug_assert!(
+            w >= 1 && h >= 1,
+            "resolution must be at least 1x1, got {w}x{h}"
+        );
+        let mut out = self.clone();
+        out.camera.width = w;
+        out.camera.height = h;
+        out
+    }
+
+    /// Checks everything the renderer relies on: finite values, camera, material ranges (emission only
+    /// on diffuse surfaces), sphere radii, non-degenerate quads and triangles, indices in range, at
+    /// most [`MAX_TRIANGLES`], no emitting sphere, and at least one light (an emitting quad or mesh
+    /// triangle). The error is an [`Invalid`] (field path and message) under the scene's name.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        self.check()
+            .map_err(|e| anyhow::anyhow!("scene {}: {e}", self.name))
+    }
+
+    /// [`Scene::validate`] with the field path kept apart, for loaders that can locate it.
+    pub(crate) fn check(&self) -> Result<(), Invalid> {
+        check_camera(&self.camera)?;
+        for m in &self.materials {
+            check_material(m)?;
+        }
+        let material = |path: &str, i: u32| -> Result<&Material, Invalid> {
+            self.materials.get(i as usize).ok_or_else(|| {
+                invalid(
+                    path,
+                    format!(
+                        "material index {i} out of range ({} materials)",
+                        self.materials.len()
+                    ),
+                )
+            })
+        };
+        for (i, s) in self.spheres.iter().enumerate() {
+            let p = format!("sphere[{i}]");
+            finite_vec(s.center, &format!("{p}.center"))?;
+            if !(s.radius.is_finite() && s.radius > 0.0) {
+                return Err(invalid(
+                    format!("{p}.radius"),
+                    format!("must be positive and finite, got {}", s.radius),
+                ));
+            }
+            let mp = format!("{p}.material");
+            let m = material(&mp, s.material)?;
+            if m.is_light() {
+                return Err(invalid(
+                    mp,
+                    format!(
+                        "material \"{}\" emits light, but spheres cannot be emitters \
+                         (only quads and mesh triangles can)",
+                        m.name
+                    ),
+                ));
+            }
+        }
+        for (i, q) in self.quads.iter().enumerate() {
+            check_quad(q, &format!("quad[{i}]"))?;
+            material(&format!("quad[{i}].material"), q.material)?;
+        }
+        for (i, m) in self.meshes.iter().enumerate() {
+            check_mesh(m, &format!("mesh[{i}]"), self.materials.len())?;
+        }
+        let triangles = self.triangle_count();
+        if triangles > MAX_TRIANGLES {
+            return Err(invalid(
+                "",
+                format!("{triangles} triangles, more than MAX_TRIANGLES = {MAX_TRIANGLES}"),
+            ));
+        }
+        let emitting_triangle = self
+            .meshes
+            .iter()
+            .any(|m| m.materials.iter().any(|&k| self.emits(k)));
+        if self.lights().is_empty() && !emitting_triangle {
+            return Err(invalid(
+                "",
+                "no emitting quad or triangle: nothing to render (give a quad or a mesh a material \
+                 with positive `emission`, or Ke in its MTL)",
+            ));
+        }
+        Ok(())
+    }
+}
+
+pub(crate) fn fmt_vec(v: [f32; 3]) -> String {
+    format!("[{}, {}, {}]", v[0], v[1], v[2])
+}
+
+fn finite_vec(v: Vec3, path: &str) -> Result<(), Invalid> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(
+            path,
+            format!(
+                "every component must be finite, got {}",
+                fmt_vec(v.to_array())
+            ),
+        ))
+    }
+}
+
+/// A finite vector with every component in [0, 1] (albedo, reflectance).
+fn unit_vec(v: Vec3, path: &str) -> Result<(), Invalid> {
+    finite_vec(v, path)?;
+    if v.cmpge(Vec3::ZERO).all() && v.cmple(Vec3::ONE).all() {
+        Ok(())
+    } else {
+        Err(invalid(
+            path,
+            format!(
+                "every component must be in [0, 1], got {}",
+                fmt_vec(v.to_array())
+            ),
+        ))
+    }
+}
+
+fn check_camera(c: &Camera) -> Result<(), Invalid> {
+    finite_vec(c.eye, "camera.eye")?;
+    finite_vec(c.look_at, "camera.look_at")?;
+    finite_vec(c.up, "camera.up")?;
+    let vfov = c.vfov_deg;
+    if !(vfov.is_finite() && vfov > 0.0 && vfov < 180.0) {
+        return Err(invalid(
+            "camera.vfov",
+            format!("must be in (0, 180) degrees, got {vfov}"),
+        ));
+    }
+    let (width, height) = (c.width, c.height);
+    if !(1..=MAX_RESOLUTION).contains(&width) || !(1..=MAX_RESOLUTION).contains(&height) {
+        return Err(invalid(
+            "camera.resolution",
+            format!(
+                "width and height must each be in 1..={MAX_RESOLUTION}, got [{width}, {height}]"
+            ),
+        ));
+    }
+    // In f64 so that far-apart finite points cannot overflow; zero length gives zero.
+    let view = c.look_at.as_dvec3() - c.eye.as_dvec3();
+    let dir = view.normalize_or_zero();
+    if dir == DVec3::ZERO {
+        return Err(invalid(
+            "camera.look_at",
+            format!(
+                "must differ from camera.eye, both are {}",
+                fmt_vec(c.eye.to_array())
+            ),
+        ));
+    }
+    let up_n = c.up.as_dvec3().normalize_or_zero();
+    if up_n == DVec3::ZERO {
+        return Err(invalid("camera.up", "must be a non-zero vector"));
+    }
+    // ~0.006 degrees: closer than that the camera basis is numerically meaningless.
+    if dir.cross(up_n).length() < 1e-4 {
+        return Err(invalid(
+            "camera.up",
+            format!(
+                "is parallel to the view direction (look_at - eye = {}); \
+                 choose an up vector not along it",
+                fmt_vec(view.as_vec3().to_array())
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn check_material(m: &Material) -> Result<(), Invalid> {
+    let p = format!("materials.{}", m.name);
+    let ep = format!("{p}.emission");
+    finite_vec(m.emission, &ep)?;
+    if m.emission.cmplt(Vec3::ZERO).any() {
+        return Err(invalid(
+            ep,
+            format!(
+                "every component must be >= 0, got {}",
+                fmt_vec(m.emission.to_array())
+            ),
+        ));
+    }
+    match m.surface {
+        Surface::Diffuse { albedo } => unit_vec(albedo, &format!("{p}.diffuse"))?,
+        Surface::Mirror { reflectance } => unit_vec(reflectance, &format!("{p}.mirror"))?,
+        Surface::Glass { ior } => {
+            if !(ior.is_finite() && ior >= 1.0) {
+                return Err(invalid(
+                    format!("{p}.glass"),
+                    format!("index of refraction must be finite and >= 1, got {ior}"),
+                ));
+            }
+        }
+    }
+    if m.is_light() && !matches!(m.surface, Surface::Diffuse { .. }) {
+        return Err(invalid(
+            ep,
+            "emission can only be combined with diffuse (or stand alone), not with mirror or glass",
+        ));
+    }
+    Ok(())
+}
+
+fn check_quad(q: &Quad, p: &str) -> Result<(), Invalid> {
+    finite_vec(q.origin, &format!("{p}.origin"))?;
+    finite_vec(q.edge_u, &format!("{p}.edge_u"))?;
+    finite_vec(q.edge_v, &format!("{p}.edge_v"))?;
+    // f64 so that huge (but finite) f32 edges cannot overflow the tests below.
+    let (u, v) = (q.edge_u.as_dvec3(), q.edge_v.as_dvec3());
+    for (len, field) in [(u.length(), "edge_u"), (v.length(), "edge_v")] {
+        // Checked separately so the message can say which edge is at fault.
+        if len == 0.0 {
+            return Err(invalid(
+                format!("{p}.{field}"),
+                "edge has zero length (degenerate quad)",
+            ));
+        }
+    }
+    // Relative test: sin(angle between edges) below 1e-6 is parallel at f32 precision.
+    if u.cross(v).length() <= 1e-6 * u.length() * v.length() {
+        return Err(invalid(
+            format!("{p}.edge_v"),
+            format!(
+                "parallel to edge_u {} (zero-area, degenerate quad)",
+                fmt_vec(q.edge_u.to_array())
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn check_mesh(m: &Mesh, p: &str, num_materials: usize) -> Result<(), Invalid> {
+    let fail = |msg: String| Err(invalid(p, format!("{}: {msg}", m.name)));
+    if m.indices.is_empty() {
+        return fail("has no triangles".into());
+    }
+    if m.materials.len() != m.indices.len() {
+        return fail(format!(
+            "{} triangle materials for {} triangles",
+            m.materials.len(),
+            m.indices.len()
+        ));
+    }
+    if let Some(k) = m.positions.iter().position(|v| !v.is_finite()) {
+        return fail(format!(
+            "vertex {k} is not finite: {}",
+            fmt_vec(m.positions[k].to_array())
+        ));
+    }
+    if let Some(n) = &m.normals {
+        if n.len() != m.positions.len() {
+            return fail(format!(
+                "{} normals for {} vertices",
+                n.len(),
+                m.positions.len()
+            ));
+        }
+        if let Some(k) = n.iter().position(|v| v.normalize_or_zero() == Vec3::ZERO) {
+            return fail(format!(
+                "normal {k} is zero or not finite: {}",
+                fmt_vec(n[k].to_array())
+            ));
+        }
+    }
+    let nv = m.positions.len();
+    for (t, (tri, &mat)) in m.indices.iter().zip(&m.materials).enumerate() {
+        if let Some(&i) = tri.iter().find(|&&i| i as usize >= nv) {
+            return fail(format!(
+                "triangle {t} has vertex index {i}, out of range ({nv} vertices)"
+            ));
+        }
+        if mat as usize >= num_materials {
+            return fail(format!(
+                "triangle {t} has material index {mat}, out of range ({num_materials} materials)"
+            ));
+        }
+        if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] || m.triangle(t).is_degenerate()
+        {
+            return fail(format!(
+                "triangle {t} is degenerate (zero area or a repeated vertex)"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A fresh directory under the system temp dir for a test's files, removed on drop.
+#[cfg(test)]
+pub(crate) struct TempDir(pub std::path::PathBuf);
+
+#[cfg(test)]
+impl TempDir {
+    pub fn new(tag: &str) -> TempDir {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static NEXT: AtomicUsize = AtomicUsize::new(0);
+        let n = NEXT.fetch_add(1, Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("ppm-vk-{tag}-{}-{n}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("creating a temp dir");
+        TempDir(dir)
+    }
+
+    /// Writes `text` to `name` in the directory; returns its path.
+    pub fn write(&self, name: &str, text: &str) -> std::path::PathBuf {
+        let path = self.0.join(name);
+        std::fs::write(&path, text).expect("writing a temp file");
+        path
+    }
+}
+
+#[cfg(test)]
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A unit square light (two triangles facing -y at y = 1) over a diffuse floor quad.
+    fn small_scene() -> Scene {
+        Scene {
+            name: "code".into(),
+            camera: Camera {
+                eye: Vec3::new(0.0, 0.5, 3.0),
+                look_at: Vec3::new(0.0, 0.5, 0.0),
+                up: Vec3::Y,
+                vfov_deg: 40.0,
+                width: 8,
+                height: 8,
+            },
+            materials: vec![
+                Material {
+                    name: "white".into(),
+                    surface: Surface::Diffuse {
+                        albedo: Vec3::splat(0.5),
+                    },
+                    emission: Vec3::ZERO,
+                },
+                Material {
+                    name: "lamp".into(),
+                    surface: Surface::Diffuse { albedo: Vec3::ZERO },
+                    emission: Vec3::splat(5.0),
+                },
+            ],
+            spheres: vec![],
+            quads: vec![Quad {
+                origin: Vec3::new(-1.0, 0.0, -1.0),
+                edge_u: Vec3::new(0.0, 0.0, 2.0),
+                edge_v: Vec3::new(2.0, 0.0, 0.0),
+                material: 0,
+            }],
+            meshes: vec![Mesh::with_material(
+                "lamp",
+                vec![
+                    Vec3::new(0.0, 1.0, 0.0),
+                    Vec3::new(1.0, 1.0, 0.0),
+                    Vec3::new(1.0, 1.0, 1.0),
+                    Vec3::new(0.0, 1.0, 1.0),
+                ],
+                // Counter-clockwise seen from below: front normal -y.
+                vec![[0, 1, 2], [0, 2, 3]],
+                1,
+            )],
+            warnings: vec![],
+        }
+    }
+
+    fn check_err(s: &Scene) -> Invalid {
+        match s.check() {
+            Ok(()) => panic!("expected the scene to be refused: {s:?}"),
+            Err(e) => e,
+        }
+    }
+
+    #[test]
+    fn scene_built_in_code_validates() {
+        let s = small_scene();
+        s.validate().expect("valid");
+        assert_eq!(s.triangle_count(), 2);
+        assert!(s.lights().is_empty(), "no emitting quad");
+        assert_eq!(
+            s.emitting_triangles(),
+            [
+                TriangleRef {
+                    mesh: 0,
+                    triangle: 0
+                },
+                TriangleRef {
+                    mesh: 0,
+                    triangle: 1
+                }
+            ]
+        );
+        for t in s.meshes[0].triangles() {
+            assert_eq!(t.normal(), Vec3::NEG_Y);
+            assert!((t.area() - 0.5).abs() < 1e-6);
+        }
+        assert_eq!(
+            s.bounds(),
+            (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 1.0, 1.0))
+        );
+        let t = s.scaled(3.0);
+        assert_eq!(t.bounds(), (s.bounds().0 * 3.0, s.bounds().1 * 3.0));
+        assert!((t.meshes[0].triangle(1).area() - 4.5).abs() < 1e-5);
+        t.validate().expect("scaled scene valid");
+    }
+
+    #[test]
+    fn validate_refuses_bad_meshes() {
+        type Edit = fn(&mut Scene);
+        let cases: Vec<(Edit, &str)> = vec![
+            (
+                |s| s.meshes[0].indices[1][2] = 4,
+                "triangle 1 has vertex index 4, out of range (4 vertices)",
+            ),
+            (
+                |s| s.meshes[0].materials[0] = 7,
+                "triangle 0 has material index 7, out of range (2 materials)",
+            ),
+            (
+                |s| {
+                    s.meshes[0].materials.pop();
+                },
+                "1 triangle materials for 2 triangles",
+            ),
+            (
+                |s| s.meshes[0].positions[2].x = f32::NAN,
+                "vertex 2 is not finite",
+            ),
+            (
+                |s| s.meshes[0].positions[2].z = f32::INFINITY,
+                "vertex 2 is not finite",
+            ),
+            (
+                |s| s.meshes[0].indices[0] = [0, 1, 1],
+                "triangle 0 is degenerate",
+            ),
+            // Collinear: zero area though the indices differ.
+            (
+                |s| s.meshes[0].positions[2] = Vec3::new(2.0, 1.0, 0.0),
+                "triangle 0 is degenerate",
+            ),
+            (|s| s.meshes[0].indices.clear(), "has no triangles"),
+            (
+                |s| s.meshes[0].normals = Some(vec![Vec3::Y; 3]),
+                "3 normals for 4 vertices",
+            ),
+            (
+                |s| s.meshes[0].normals = Some(vec![Vec3::Y, Vec3::ZERO, Vec3::Y, Vec3::Y]),
+                "normal 1 is zero",
+            ),
+        ];
+        for (edit, needle) in cases {
+            let mut s = small_scene();
+            edit(&mut s);
+            let e = check_err(&s);
+            assert_eq!(e.path, "mesh[0]", "{e}");
+            assert!(e.message.starts_with("lamp: "), "{e}");
+            assert!(e.message.contains(needle), "{e} should contain {needle:?}");
+            let full = format!("{:#}", s.validate().unwrap_err());
+            assert!(full.starts_with("scene code: mesh[0]: lamp: "), "{full}");
+        }
+    }
+
+    #[test]
+    fn validate_needs_a_light_quad_or_triangle() {
+        let mut s = small_scene();
+        s.materials[1].emission = Vec3::ZERO;
+        let e = check_err(&s);
+        assert_eq!(e.path, "");
+        assert!(e.message.starts_with("no emitting quad or triangle"), "{e}");
+        // An emitting quad alone is enough, as before meshes.
+        s.meshes.clear();
+        s.quads[0].material = 1;
+        s.materials[1].emission = Vec3::ONE;
+        s.validate().expect("emitting quad");
+        assert!(s.emitting_triangles().is_empty());
+    }
+
+    #[test]
+    fn validate_checks_every_kind_of_value() {
+        let mut s = small_scene();
+        s.camera.vfov_deg = 180.0;
+        assert_eq!(check_err(&s).path, "camera.vfov");
+        let mut s = small_scene();
+        s.materials[0].surface = Surface::Mirror {
+            reflectance: Vec3::new(0.5, 1.5, 0.5),
+        };
+        let e = check_err(&s);
+        assert_eq!(
+            (e.path.as_str(), e.message.as_str()),
+            (
+                "materials.white.mirror",
+                "every component must be in [0, 1], got [0.5, 1.5, 0.5]"
+            )
+        );
+        let mut s = small_scene();
+        s.materials[1].surface = Surface::Glass { ior: 1.5 };
+        assert_eq!(check_err(&s).path, "materials.lamp.emission");
+        let mut s = small_scene();
+        s.spheres.push(Sphere {
+            center: Vec3::ZERO,
+            radius: 0.5,
+            material: 1,
+        });
+        let e = check_err(&s);
+        assert_eq!(e.path, "sphere[0].material");
+        assert!(e.message.contains("spheres cannot be emitters"), "{e}");
+        s.spheres[0].material = 2;
+        assert!(check_err(&s)
+            .message
+            .contains("material index 2 out of range"));
+        let mut s = small_scene();
+        s.quads[0].edge_v = s.quads[0].edge_u * 2.0;
+        assert_eq!(check_err(&s).path, "quad[0].edge_v");
+    }
+}

@@ -1,0 +1,1180 @@
+//! OBJ/MTL import through tobj (`triangulate`, `single_index`), into one world-space [`Mesh`].
+//!
+//! tobj reports errors without a line number and panics on a few malformed lines (a colour with fewer
+//! than three numbers in an MTL; a zero index in a debug build), so each file is first scanned here:
+//! every line tobj would refuse or mis-read is reported as `<file>:<line>: <what>`, and tobj only ever
+//! sees input it handles. MTL materials become engine materials by the table in
+//! `docs/scene-format.md`; what they cannot express is reported once per material in `Scene::warnings`.
+
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::panic::AssertUnwindSafe;
+use std::path::Path;
+
+use anyhow::{anyhow, bail, Result};
+use glam::{DAffine3, DVec3, Vec3};
+
+use super::{demo, fmt_vec, Material, Mesh, Scene, Surface, Triangle};
+
+/// How [`Scene::import_obj`] places and dresses an OBJ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ObjImport {
+    /// Object to world, applied to positions (and its inverse transpose to normals). A mirroring
+    /// transform (negative determinant) reverses the winding, so the front side stays the one the
+    /// file meant.
+    pub transform: DAffine3,
+    /// Every triangle gets this material (an index into `Scene::materials`); the MTL is not read.
+    pub material: Option<u32>,
+}
+
+impl Default for ObjImport {
+    fn default() -> Self {
+        ObjImport {
+            transform: DAffine3::IDENTITY,
+            material: None,
+        }
+    }
+}
+
+/// Albedo of an MTL material that gives neither Kd nor emission (Blender's default).
+const DEFAULT_KD: f32 = 0.8;
+/// Index of refraction of a glass MTL material without Ni.
+const DEFAULT_IOR: f32 = 1.5;
+
+pub(super) fn import(
+    scene: &mut Scene,
+    path: &Path,
+    import: &ObjImport,
+    max_triangles: usize,
+) -> Result<usize> {
+    let shown = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        let hint = if demo::is_generated(path) {
+            format!(
+                " (a generated demo mesh: run `{}` to write it)",
+                demo::COMMAND
+            )
+        } else {
+            String::new()
+        };
+        anyhow!("{shown}: cannot read OBJ file: {e}{hint}")
+    })?;
+    let stats = prescan(&text, &shown, max_triangles)?;
+    if stats.triangles == 0 {
+        bail!("{shown}: no faces: the mesh is empty");
+    }
+    if import.material.is_none() {
+        if stats.mtllibs.is_empty() {
+            bail!(
+                "{shown}: no materials: the OBJ names no MTL file (mtllib) and the scene gives the \
+                 mesh no `material`"
+            );
+        }
+        if let Some(line) = stats.first_bare_face {
+            bail!(
+                "{shown}:{line}: face without a material (no usemtl before it), and the scene gives \
+                 the mesh no `material`"
+            );
+        }
+    }
+
+    let dir = path.parent().unwrap_or(Path::new(""));
+    // tobj's loader callback can only return tobj's error codes: ours wait here.
+    let mtl_error: RefCell<Option<anyhow::Error>> = RefCell::new(None);
+    let mtl_of: RefCell<HashMap<String, String>> = RefCell::new(HashMap::new());
+    let loader = |name: &Path| {
+        if import.material.is_some() {
+            // Overridden: the MTL is not needed, so not read (an empty library).
+            return tobj::load_mtl_buf(&mut &b""[..]);
+        }
+        let line = stats
+            .mtllibs
+            .iter()
+            .find(|(_, n)| Path::new(n) == name)
+            .map_or(0, |(l, _)| *l);
+        let full = dir.join(name);
+        match read_mtl(&full, &format!("{shown}:{line}")) {
+            Ok(Ok(lib)) => {
+                let mut of = mtl_of.borrow_mut();
+                for m in &lib.0 {
+                    of.insert(m.name.clone(), full.display().to_string());
+                }
+                Ok(lib)
+            }
+            Ok(Err(e)) => {
+                mtl_error
+                    .borrow_mut()
+                    .get_or_insert(anyhow!("{}: {e}", full.display()));
+                Err(e)
+            }
+            Err(e) => {
+                mtl_error.borrow_mut().get_or_insert(e);
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+        }
+    };
+    // The update fills the fields tobj has only with its `merging`/`reordering` features.
+    #[allow(clippy::needless_update)]
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    // The scan above leaves tobj nothing known to panic on; should it still, that is an error here.
+    let result = std::panic::catch_unwind(AssertUnwindSafe(|| {
+        tobj::load_obj_buf(&mut text.as_bytes(), &options, loader)
+    }));
+    if let Some(e) = mtl_error.take() {
+        return Err(e);
+    }
+    let (models, mtl_materials) = match result {
+        Err(_) => bail!("{shown}: the OBJ reader (tobj) failed on this file"),
+        Ok(Err(e)) => bail!("{shown}: {e}"),
+        Ok(Ok(r)) => r,
+    };
+    let mtl_materials = match (import.material, mtl_materials) {
+        (Some(_), _) => Vec::new(),
+        (None, Ok(m)) => m,
+        (None, Err(e)) => bail!("{shown}: MTL: {e}"),
+    };
+    if import.material.is_none() {
+        for (line, name) in &stats.usemtls {
+            if !mtl_materials.iter().any(|m| m.name == *name) {
+                let libs: Vec<&str> = stats.mtllibs.iter().map(|(_, n)| n.as_str()).collect();
+                bail!(
+                    "{shown}:{line}: usemtl {name}: no such material in {}",
+                    libs.join(", ")
+                );
+            }
+        }
+    }
+
+    // tobj material index -> scene material index, made on first use.
+    let mut index_of: HashMap<usize, u32> = HashMap::new();
+    let mut warnings = Vec::new();
+    let mtl_of = mtl_of.into_inner();
+    let mut material_of = |id: Option<usize>, object: &str| -> Result<u32> {
+        if let Some(k) = import.material {
+            return Ok(k);
+        }
+        let Some(id) = id else {
+            bail!("{shown}: object {object} has faces without a material");
+        };
+        if let Some(&k) = index_of.get(&id) {
+            return Ok(k);
+        }
+        let m = mtl_materials
+            .get(id)
+            .ok_or_else(|| anyhow!("{shown}: object {object}: material {id} out of range"))?;
+        let mtl = mtl_of.get(&m.name).map_or("MTL", String::as_str);
+        let (mat, notes) = convert(m, format!("{shown}:{}", m.name), mtl)?;
+        let k = match scene.materials.iter().position(|x| x.name == mat.name) {
+            // The same OBJ imported again: one material (and its warning) serves both.
+            Some(i) if scene.materials[i] == mat => i,
+            Some(_) => bail!(
+                "{shown}: material name \"{}\" is already taken by a different material",
+                mat.name
+            ),
+            None => {
+                if !notes.is_empty() {
+                    warnings.push(format!(
+                        "{shown}: material \"{}\" ({mtl}): {}",
+                        m.name,
+                        notes.join("; ")
+                    ));
+                }
+                scene.materials.push(mat);
+                scene.materials.len() - 1
+            }
+        };
+        let k = u32::try_from(k).map_err(|_| anyhow!("{shown}: too many materials"))?;
+        index_of.insert(id, k);
+        Ok(k)
+    };
+
+    let lin = import.transform.matrix3;
+    let flip = lin.determinant() < 0.0;
+    let normal_matrix = lin.inverse().transpose();
+    let mut positions: Vec<Vec3> = Vec::new();
+    let mut normals: Vec<Vec3> = Vec::new();
+    // Whether every vertex came with a normal, and whether any did.
+    let (mut all_normals, mut any_normals) = (true, false);
+    let mut triangles: Vec<([u32; 3], u32)> = Vec::new();
+    for model in &models {
+        let m = &model.mesh;
+        // tobj ends the file with a model even when no face follows the last `o` or `usemtl`.
+        if m.indices.is_empty() {
+            continue;
+        }
+        let material = material_of(m.material_id, &model.name)?;
+        let base =
+            u32::try_from(positions.len()).map_err(|_| anyhow!("{shown}: too many vertices"))?;
+        for p in m.positions.chunks_exact(3) {
+            let p = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+            positions.push(import.transform.transform_point3(p).as_vec3());
+        }
+        if !m.normals.is_empty() && m.normals.len() == m.positions.len() {
+            any_normals = true;
+            for n in m.normals.chunks_exact(3) {
+                let n = DVec3::new(f64::from(n[0]), f64::from(n[1]), f64::from(n[2]));
+                normals.push((normal_matrix * n).normalize_or_zero().as_vec3());
+            }
+        } else {
+            any_normals |= !m.normals.is_empty();
+            all_normals = false;
+        }
+        for t in m.indices.chunks_exact(3) {
+            let [a, b, c] = [t[0] + base, t[1] + base, t[2] + base];
+            triangles.push((if flip { [a, c, b] } else { [a, b, c] }, material));
+        }
+    }
+    if let Some(k) = positions.iter().position(|p| !p.is_finite()) {
+        bail!(
+            "{shown}: vertex {k} is {} after the transform: the transform overflows f32",
+            fmt_vec(positions[k].to_array())
+        );
+    }
+
+    // Drop degenerate triangles, then the vertices no triangle uses any more.
+    let total = triangles.len();
+    triangles.retain(|&([a, b, c], material)| {
+        a != b
+            && b != c
+            && a != c
+            && !Triangle {
+                p: [a, b, c].map(|i| positions[i as usize]),
+                material,
+            }
+            .is_degenerate()
+    });
+    let dropped = total - triangles.len();
+    if triangles.is_empty() {
+        bail!(
+            "{shown}: every one of its {total} triangles is degenerate (zero area or a repeated \
+             vertex): the mesh is empty"
+        );
+    }
+    if dropped > 0 {
+        warnings.push(format!(
+            "{shown}: {dropped} degenerate triangles dropped (zero area or a repeated vertex)"
+        ));
+    }
+    if stats.skipped > 0 {
+        warnings.push(format!(
+            "{shown}: {} point and line elements ignored (only faces are surfaces)",
+            stats.skipped
+        ));
+    }
+    let mut remap = vec![u32::MAX; positions.len()];
+    let mut kept: Vec<u32> = Vec::new();
+    let mut indices = Vec::with_capacity(triangles.len());
+    let mut materials = Vec::with_capacity(triangles.len());
+    for (tri, material) in &triangles {
+        indices.push(tri.map(|i| {
+            let r = &mut remap[i as usize];
+            if *r == u32::MAX {
+                *r = kept.len() as u32;
+                kept.push(i);
+            }
+            *r
+        }));
+        materials.push(*material);
+    }
+    let normals = if all_normals && any_normals {
+        let n: Vec<Vec3> = kept.iter().map(|&i| normals[i as usize]).collect();
+        match n.iter().position(|v| *v == Vec3::ZERO) {
+            None => Some(n),
+            Some(k) => {
+                warnings.push(format!(
+                    "{shown}: vertex normals dropped (flat shading): normal {k} is zero or not \
+                     finite"
+                ));
+                None
+            }
+        }
+    } else {
+        if any_normals {
+            warnings.push(format!(
+                "{shown}: vertex normals dropped (flat shading): only some vertices have one"
+            ));
+        }
+        None
+    };
+    scene.meshes.push(Mesh {
+        name: shown,
+        positions: kept.iter().map(|&i| positions[i as usize]).collect(),
+        normals,
+        indices,
+        materials,
+    });
+    scene.warnings.extend(warnings);
+    Ok(scene.meshes.len() - 1)
+}
+
+/// What the scan of an OBJ found.
+#[derive(Debug, Default)]
+struct ObjStats {
+    /// After fan triangulation.
+    triangles: usize,
+    /// Point and two-vertex line elements (skipped).
+    skipped: usize,
+    /// `(line, name)` of every `mtllib` and `usemtl`, names as tobj reads them.
+    mtllibs: Vec<(usize, String)>,
+    usemtls: Vec<(usize, String)>,
+    /// Line of the first face before any `usemtl`.
+    first_bare_face: Option<usize>,
+}
+
+/// The name after a keyword, read as tobj does (the rest of the line after its first space).
+fn tobj_name(line: &str) -> String {
+    line.split_once(' ')
+        .map_or("", |(_, r)| r.trim())
+        .to_string()
+}
+
+fn numbers<const N: usize>(words: &[&str]) -> Option<[f32; N]> {
+    let mut out = [0.0; N];
+    for (o, w) in out.iter_mut().zip(words) {
+        *o = w.parse().ok()?;
+    }
+    (words.len() >= N).then_some(out)
+}
+
+/// Checks every line tobj reads (so that its errors, which carry no line, cannot happen) and counts.
+fn prescan(text: &str, shown: &str, max_triangles: usize) -> Result<ObjStats> {
+    // Totals first: a positive index may point at a vertex defined further down (tobj resolves
+    // them at the end), a negative one counts back from the line it is on.
+    let mut total = [0usize; 3];
+    for line in text.lines() {
+        match line.split_whitespace().next() {
+            Some("v") => total[0] += 1,
+            Some("vt") => total[1] += 1,
+            Some("vn") => total[2] += 1,
+            _ => {}
+        }
+    }
+    let mut st = ObjStats::default();
+    let mut so_far = [0usize; 3];
+    let mut have_material = false;
+    for (i, line) in text.lines().enumerate() {
+        let ln = i + 1;
+        let fail = |msg: String| anyhow!("{shown}:{ln}: {msg}");
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let Some((&kw, args)) = words.split_first() else {
+            continue;
+        };
+        match kw {
+            "v" => {
+                so_far[0] += 1;
+                let k = so_far[0];
+                let Some(mut p) = numbers::<3>(args) else {
+                    return Err(fail(format!(
+                        "vertex {k} needs three numbers x y z: {:?}",
+                        line.trim()
+                    )));
+                };
+                match args.len() {
+                    // x y z, or with colours r g b (which tobj reads leniently).
+                    3 | 6 => {}
+                    4 => match args[3].parse::<f32>() {
+                        Ok(w) if w != 0.0 => p = p.map(|c| c / w),
+                        _ => {
+                            return Err(fail(format!(
+                                "vertex {k}: w must be a non-zero number, got {:?}",
+                                args[3]
+                            )))
+                        }
+                    },
+                    n => {
+                        return Err(fail(format!(
+                        "vertex {k}: expected x y z with an optional w or r g b, got {n} numbers"
+                    )))
+                    }
+                }
+                if !p.iter().all(|c| c.is_finite()) {
+                    return Err(fail(format!("vertex {k} is not finite: {:?}", line.trim())));
+                }
+            }
+            "vt" => {
+                so_far[1] += 1;
+                if numbers::<2>(args).is_none() {
+                    return Err(fail(format!(
+                        "texture coordinate needs two numbers u v: {:?}",
+                        line.trim()
+                    )));
+                }
+            }
+            "vn" => {
+                so_far[2] += 1;
+                if numbers::<3>(args).is_none() {
+                    return Err(fail(format!(
+                        "normal needs three numbers x y z: {:?}",
+                        line.trim()
+                    )));
+                }
+            }
+            "f" | "l" => {
+                for r in args {
+                    check_ref(r, so_far, total).map_err(fail)?;
+                }
+                let n = args.len();
+                if n == 0 {
+                    return Err(fail(format!("`{kw}` without vertices")));
+                }
+                if kw == "l" && n >= 3 {
+                    return Err(fail(
+                        "polylines (l) of 3 or more points are not supported (tobj would read \
+                         them as faces)"
+                            .into(),
+                    ));
+                }
+                if n < 3 {
+                    st.skipped += 1;
+                    continue;
+                }
+                st.triangles += n - 2;
+                if st.triangles > max_triangles {
+                    return Err(fail(format!(
+                        "more than {max_triangles} triangles: the limit (MAX_TRIANGLES) is \
+                         reached here"
+                    )));
+                }
+                if !have_material {
+                    st.first_bare_face.get_or_insert(ln);
+                }
+            }
+            "usemtl" | "mtllib" => {
+                let name = tobj_name(line);
+                if name.is_empty() {
+                    return Err(fail(format!("`{kw}` needs a name")));
+                }
+                if kw == "usemtl" {
+                    have_material = true;
+                    st.usemtls.push((ln, name));
+                } else {
+                    st.mtllibs.push((ln, name));
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(st)
+}
+
+/// One `v`, `v/vt`, `v//vn` or `v/vt/vn` of a face: every index in range.
+fn check_ref(token: &str, so_far: [usize; 3], total: [usize; 3]) -> Result<(), String> {
+    const KIND: [&str; 3] = ["vertex", "texture coordinate", "normal"];
+    let parts: Vec<&str> = token.split('/').collect();
+    if parts.len() > 3 {
+        return Err(format!("bad face vertex {token:?}"));
+    }
+    for (k, part) in parts.iter().enumerate() {
+        if part.is_empty() {
+            if k == 0 {
+                return Err(format!("face vertex {token:?} has no position index"));
+            }
+            continue;
+        }
+        let x: isize = part
+            .parse()
+            .map_err(|_| format!("bad face vertex {token:?}"))?;
+        // tobj ignores texture and normal indices when the file has none of that kind.
+        if k > 0 && total[k] == 0 {
+            continue;
+        }
+        let kind = KIND[k];
+        if x == 0 {
+            return Err(format!(
+                "{kind} index 0 in {token:?}: OBJ indices start at 1"
+            ));
+        }
+        if x > 0 && x as usize > total[k] {
+            return Err(format!(
+                "{kind} index {x} out of range ({} in the file)",
+                total[k]
+            ));
+        }
+        if x < 0 && x.unsigned_abs() > so_far[k] {
+            return Err(format!(
+                "{kind} index {x} out of range ({} before this line)",
+                so_far[k]
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Reads one MTL file through tobj, after checking the lines tobj would panic on or refuse (the
+/// outer error: ours, with a line; the inner one: tobj's).
+fn read_mtl(path: &Path, mtllib_at: &str) -> Result<tobj::MTLLoadResult> {
+    let shown = path.display();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| anyhow!("{shown}: cannot read MTL file (mtllib at {mtllib_at}): {e}"))?;
+    for (i, line) in text.lines().enumerate() {
+        let fail = |msg: String| anyhow!("{shown}:{}: {msg}", i + 1);
+        let t = line.trim();
+        let words: Vec<&str> = t.split_whitespace().collect();
+        let Some((&kw, args)) = words.split_first() else {
+            continue;
+        };
+        // The part of the line after the keyword, where tobj takes file names from.
+        let rest = |n: usize| t.get(n..).map_or("", str::trim);
+        match kw {
+            "Ka" | "Kd" | "Ks" | "Ke" if numbers::<3>(args).is_none() => {
+                return Err(fail(format!("{kw} needs three numbers r g b: {t:?}")))
+            }
+            "Ns" | "Ni" | "d" if numbers::<1>(args).is_none() => {
+                return Err(fail(format!("{kw} needs a number: {t:?}")))
+            }
+            "illum" if args.first().and_then(|a| a.parse::<u8>().ok()).is_none() => {
+                return Err(fail(format!("illum needs a model number (0-10): {t:?}")))
+            }
+            "newmtl" if rest(6).is_empty() => return Err(fail("newmtl needs a name".into())),
+            "map_Ka" | "map_Kd" | "map_Ks" | "map_Ns" | "map_ns" | "map_NS"
+                if rest(6).is_empty() =>
+            {
+                return Err(fail(format!("{kw} needs a file name")))
+            }
+            "map_Bump" | "map_bump" if rest(8).is_empty() => {
+                return Err(fail(format!("{kw} needs a file name")))
+            }
+            "bump" if rest(4).is_empty() => return Err(fail(format!("{kw} needs a file name"))),
+            "map_d" if rest(5).is_empty() => return Err(fail(format!("{kw} needs a file name"))),
+            _ => {}
+        }
+    }
+    Ok(tobj::load_mtl_buf(&mut text.as_bytes()))
+}
+
+// tobj's numbers are f32, or f64 where a crate turns on its `use_f64`: taken either way.
+fn f32x1<T: Into<f64>>(x: T) -> f32 {
+    x.into() as f32
+}
+
+fn f32x3<T: Into<f64>>(v: Option<[T; 3]>) -> Option<[f32; 3]> {
+    v.map(|a| a.map(f32x1))
+}
+
+/// An MTL material as an engine material, with notes on what it approximates (the table in
+/// docs/scene-format.md). `mtl` names the file in errors.
+fn convert(m: &tobj::Material, name: String, mtl: &str) -> Result<(Material, Vec<String>)> {
+    let fail = |msg: String| anyhow!("{mtl}: material \"{}\": {msg}", m.name);
+    let color = |v: Option<[f32; 3]>, key: &str, unit: bool| -> Result<Option<Vec3>> {
+        let Some(a) = v else { return Ok(None) };
+        let v = Vec3::from_array(a);
+        if v.is_finite() && v.cmpge(Vec3::ZERO).all() && (!unit || v.cmple(Vec3::ONE).all()) {
+            Ok(Some(v))
+        } else {
+            let range = if unit { "in [0, 1]" } else { "finite and >= 0" };
+            Err(fail(format!("{key} must be {range}, got {}", fmt_vec(a))))
+        }
+    };
+    let kd = color(f32x3(m.diffuse), "Kd", true)?;
+    let ks = color(f32x3(m.specular), "Ks", true)?;
+    let ke = color(f32x3(m.emissive), "Ke", false)?;
+    let number = |v: Option<f32>, key: &str| -> Result<Option<f32>> {
+        match v {
+            Some(x) if !x.is_finite() => Err(fail(format!("{key} must be finite, got {x}"))),
+            _ => Ok(v),
+        }
+    };
+    let d = number(m.dissolve.map(f32x1), "d")?;
+    let ni = number(m.optical_density.map(f32x1), "Ni")?;
+    let tr = match m.unknown_param.get("Tr") {
+        None => None,
+        Some(s) => Some(
+            s.split_whitespace()
+                .next()
+                .and_then(|x| x.parse::<f32>().ok())
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| fail(format!("Tr needs a number, got {s:?}")))?,
+        ),
+    };
+    let illum = m.illumination_model;
+    let nonzero = |v: Option<Vec3>| v.is_some_and(|v| v.max_element() > 0.0);
+    let mut notes = Vec::new();
+
+    let transparent = d.is_some_and(|d| d < 1.0) || tr.is_some_and(|t| t > 0.0);
+    let glass = matches!(illum, Some(4 | 6 | 7 | 9)) || transparent;
+    let mirror = !glass && (matches!(illum, Some(3 | 5 | 8)) || (nonzero(ks) && !nonzero(kd)));
+    let surface = if glass {
+        let ior = ni.unwrap_or(DEFAULT_IOR);
+        if ior < 1.0 {
+            return Err(fail(format!(
+                "Ni (index of refraction) must be >= 1 for glass, got {ior}"
+            )));
+        }
+        if d.is_some_and(|d| d > 0.0 && d < 1.0) || tr.is_some_and(|t| t > 0.0 && t < 1.0) {
+            notes.push("partial transparency (d or Tr) rendered as clear glass".to_string());
+        }
+        if nonzero(kd) {
+            notes.push("Kd ignored: glass is clear".into());
+        }
+        if let Some(tf) = m.unknown_param.get("Tf") {
+            if numbers::<3>(&tf.split_whitespace().collect::<Vec<_>>()) != Some([1.0; 3]) {
+                notes.push("Tf ignored: glass is clear".into());
+            }
+        }
+        Surface::Glass { ior }
+    } else if mirror {
+        if nonzero(kd) {
+            notes.push("Kd ignored: a mirror reflects Ks only".into());
+        }
+        Surface::Mirror {
+            reflectance: ks.unwrap_or_else(|| {
+                notes.push("no Ks: mirror reflectance 1 assumed".into());
+                Vec3::ONE
+            }),
+        }
+    } else {
+        if nonzero(ks) && !matches!(illum, Some(0 | 1)) {
+            notes.push("Ks/Ns glossy lobe ignored (diffuse Kd only)".into());
+        }
+        Surface::Diffuse {
+            albedo: match kd {
+                Some(k) => k,
+                // An emitter without Kd is a black emitter, as in the TOML.
+                None if nonzero(ke) => Vec3::ZERO,
+                None => {
+                    notes.push(format!("no Kd: diffuse albedo {DEFAULT_KD} assumed"));
+                    Vec3::splat(DEFAULT_KD)
+                }
+            },
+        }
+    };
+    let diffuse = matches!(surface, Surface::Diffuse { .. });
+    if nonzero(ke) && !diffuse {
+        notes.push("Ke ignored: only diffuse surfaces emit".into());
+    }
+    for (key, tex) in [
+        ("map_Ka", &m.ambient_texture),
+        ("map_Kd", &m.diffuse_texture),
+        ("map_Ks", &m.specular_texture),
+        ("map_Ns", &m.shininess_texture),
+        ("map_d", &m.dissolve_texture),
+        ("bump map", &m.normal_texture),
+    ] {
+        if let Some(t) = tex {
+            notes.push(format!("{key} {t} ignored (no textures)"));
+        }
+    }
+    // Other statements (PBR extensions, map_Ke, disp, refl, ...), in a stable order.
+    let mut other: Vec<&String> = m
+        .unknown_param
+        .keys()
+        .filter(|k| !matches!(k.as_str(), "Tr" | "Tf"))
+        .collect();
+    other.sort();
+    for k in other {
+        notes.push(format!("{k} ignored"));
+    }
+    let emission = match (diffuse, ke) {
+        (true, Some(e)) => e,
+        _ => Vec3::ZERO,
+    };
+    Ok((
+        Material {
+            name,
+            surface,
+            emission,
+        },
+        notes,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Camera, TempDir};
+    use glam::{DMat3, DVec3};
+
+    /// A scene with a camera and one material ("white"), nothing else.
+    fn scene() -> Scene {
+        Scene {
+            name: "t".into(),
+            camera: Camera {
+                eye: Vec3::new(0.0, 0.0, 5.0),
+                look_at: Vec3::ZERO,
+                up: Vec3::Y,
+                vfov_deg: 40.0,
+                width: 8,
+                height: 8,
+            },
+            materials: vec![Material {
+                name: "white".into(),
+                surface: Surface::Diffuse {
+                    albedo: Vec3::splat(0.5),
+                },
+                emission: Vec3::ZERO,
+            }],
+            spheres: vec![],
+            quads: vec![],
+            meshes: vec![],
+            warnings: vec![],
+        }
+    }
+
+    /// Writes `a.obj` (and `a.mtl`) into `dir` and imports it into [`scene`].
+    fn import_into(dir: &TempDir, obj: &str, mtl: Option<&str>, opts: &ObjImport) -> Result<Scene> {
+        if let Some(m) = mtl {
+            dir.write("a.mtl", m);
+        }
+        let path = dir.write("a.obj", obj);
+        let mut s = scene();
+        s.import_obj(&path, opts)?;
+        Ok(s)
+    }
+
+    /// The error of importing, with the temp dir's path cut out of it.
+    fn err(obj: &str, mtl: Option<&str>) -> String {
+        let dir = TempDir::new("obj-err");
+        match import_into(&dir, obj, mtl, &ObjImport::default()) {
+            Ok(s) => panic!("expected an error for\n{obj}\ngot {:?}", s.meshes),
+            Err(e) => format!("{e:#}").replace(&format!("{}/", dir.0.display()), ""),
+        }
+    }
+
+    const TRI: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    const MTL: &str = "newmtl m\nKd 0.5 0.5 0.5\n";
+
+    #[test]
+    fn mtl_materials_follow_the_mapping_table() {
+        let mtl = "\
+newmtl matte\nKd 0.5 0.6 0.7\n\
+newmtl lamp\nKd 0.2 0.2 0.2\nKe 5 4 3\n\
+newmtl blacklamp\nKe 1 1 1\n\
+newmtl mirror3\nKd 0.3 0.3 0.3\nKs 0.9 0.8 0.7\nillum 3\n\
+newmtl chrome\nKs 0.6 0.6 0.6\n\
+newmtl water\nNi 1.33\nillum 7\n\
+newmtl clear\nd 0.5\n\
+newmtl tr\nTr 1\nNi 1.6\n\
+newmtl glossy\nKd 0.4 0.4 0.4\nKs 0.5 0.5 0.5\nNs 100\nillum 2\nmap_Kd wood.png\n\
+newmtl plain\nNs 10\n";
+        let names = [
+            "matte",
+            "lamp",
+            "blacklamp",
+            "mirror3",
+            "chrome",
+            "water",
+            "clear",
+            "tr",
+            "glossy",
+            "plain",
+        ];
+        let mut obj = format!("mtllib a.mtl\n{TRI}");
+        for n in names {
+            obj += &format!("usemtl {n}\nf 1 2 3\n");
+        }
+        let dir = TempDir::new("obj-mtl");
+        let s = import_into(&dir, &obj, Some(mtl), &ObjImport::default()).expect("loads");
+        let m = &s.meshes[0];
+        assert_eq!(m.indices.len(), names.len());
+        let got = |i: usize| {
+            let k = &s.materials[m.materials[i] as usize];
+            assert_eq!(
+                k.name,
+                format!("{}:{}", dir.0.join("a.obj").display(), names[i])
+            );
+            (k.surface, k.emission)
+        };
+        let d = |r: f32, g: f32, b: f32| Surface::Diffuse {
+            albedo: Vec3::new(r, g, b),
+        };
+        let z = Vec3::ZERO;
+        assert_eq!(got(0), (d(0.5, 0.6, 0.7), z));
+        assert_eq!(got(1), (d(0.2, 0.2, 0.2), Vec3::new(5.0, 4.0, 3.0)));
+        assert_eq!(got(2), (d(0.0, 0.0, 0.0), Vec3::ONE), "a black emitter");
+        assert_eq!(
+            got(3),
+            (
+                Surface::Mirror {
+                    reflectance: Vec3::new(0.9, 0.8, 0.7)
+                },
+                z
+            )
+        );
+        assert_eq!(
+            got(4),
+            (
+                Surface::Mirror {
+                    reflectance: Vec3::splat(0.6)
+                },
+                z
+            )
+        );
+        assert_eq!(got(5), (Surface::Glass { ior: 1.33 }, z));
+        assert_eq!(got(6), (Surface::Glass { ior: 1.5 }, z), "d < 1 without Ni");
+        assert_eq!(got(7), (Surface::Glass { ior: 1.6 }, z), "Tr > 0");
+        assert_eq!(got(8), (d(0.4, 0.4, 0.4), z));
+        assert_eq!(got(9), (d(0.8, 0.8, 0.8), z));
+        // One warning per approximated material, naming it and the MTL.
+        let w = &s.warnings;
+        assert_eq!(w.len(), 4, "{w:#?}");
+        let about = |name: &str| -> &String {
+            let tag = format!("material \"{name}\" (");
+            let found: Vec<&String> = w.iter().filter(|x| x.contains(&tag)).collect();
+            assert_eq!(found.len(), 1, "{name}: {w:#?}");
+            assert!(found[0].contains("a.mtl"), "{}", found[0]);
+            found[0]
+        };
+        assert!(about("mirror3").contains("Kd ignored"));
+        assert!(about("clear").contains("partial transparency"));
+        let glossy = about("glossy");
+        assert!(
+            glossy.contains("Ks/Ns glossy lobe ignored")
+                && glossy.contains("map_Kd wood.png ignored"),
+            "{glossy}"
+        );
+        assert!(about("plain").contains("no Kd: diffuse albedo 0.8"));
+
+        // The same file again: its materials (and their warnings) are not repeated.
+        let mut again = s.clone();
+        again
+            .import_obj(&dir.0.join("a.obj"), &ObjImport::default())
+            .expect("again");
+        assert_eq!(again.materials.len(), s.materials.len());
+        assert_eq!(again.warnings, s.warnings);
+        assert_eq!(again.meshes[1].materials, s.meshes[0].materials);
+    }
+
+    #[test]
+    fn polygons_are_fanned_counter_clockwise() {
+        let obj = "mtllib a.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv -1 0.5 0\n\
+                   f 1 2 3 4\nf 1 2 3 4 5\n";
+        let dir = TempDir::new("obj-fan");
+        let s = import_into(&dir, obj, Some(MTL), &ObjImport::default()).expect("loads");
+        let m = &s.meshes[0];
+        assert_eq!(m.indices.len(), 2 + 3);
+        for t in m.triangles() {
+            assert_eq!(t.normal(), Vec3::Z, "counter-clockwise seen from +z");
+        }
+        let area: f32 = m.triangles().take(2).map(|t| t.area()).sum();
+        assert!((area - 1.0).abs() < 1e-6);
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    }
+
+    #[test]
+    fn transform_places_the_mesh_and_mirroring_keeps_the_front() {
+        let obj = format!("mtllib a.mtl\nusemtl m\n{TRI}vn 0 0 1\nf 1//1 2//1 3//1\n");
+        let dir = TempDir::new("obj-xf");
+        let moved = ObjImport {
+            transform: DAffine3::from_mat3_translation(
+                DMat3::from_diagonal(DVec3::new(2.0, 3.0, 4.0)),
+                DVec3::new(1.0, 0.0, -1.0),
+            ),
+            material: None,
+        };
+        let s = import_into(&dir, &obj, Some(MTL), &moved).expect("loads");
+        let t = s.meshes[0].triangle(0);
+        assert_eq!(
+            t.p,
+            [
+                Vec3::new(1.0, 0.0, -1.0),
+                Vec3::new(3.0, 0.0, -1.0),
+                Vec3::new(1.0, 3.0, -1.0)
+            ]
+        );
+        assert_eq!(t.normal(), Vec3::Z);
+        // A mirror in x: positions reflected, winding reversed so that the front stays +z, and the
+        // shading normal (inverse transpose) agrees with it.
+        let mirror = ObjImport {
+            transform: DAffine3::from_mat3(DMat3::from_diagonal(DVec3::new(-1.0, 1.0, 1.0))),
+            material: None,
+        };
+        let s = import_into(&dir, &obj, Some(MTL), &mirror).expect("loads");
+        let m = &s.meshes[0];
+        assert!(m.positions.contains(&Vec3::new(-1.0, 0.0, 0.0)));
+        assert_eq!(m.triangle(0).normal(), Vec3::Z);
+        assert_eq!(m.normals.as_deref(), Some(&[Vec3::Z; 3][..]));
+    }
+
+    #[test]
+    fn material_override_needs_no_mtl() {
+        let obj = format!("mtllib nowhere.mtl\nusemtl x\n{TRI}f 1 2 3\n");
+        let dir = TempDir::new("obj-override");
+        let opts = ObjImport {
+            material: Some(0),
+            ..ObjImport::default()
+        };
+        let s = import_into(&dir, &obj, None, &opts).expect("the MTL is not read");
+        assert_eq!(s.meshes[0].materials, [0]);
+        assert_eq!(s.materials.len(), 1, "no MTL material added");
+        // Without an MTL nor an override: refused.
+        let e = err(&format!("{TRI}f 1 2 3\n"), None);
+        assert!(
+            e.starts_with("a.obj: no materials: the OBJ names no MTL file"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn degenerate_triangles_are_dropped_and_counted() {
+        let obj = "mtllib a.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nv 5 5 5\n\
+                   f 1 2 3\nf 1 1 2\nf 1 2 4\n";
+        let dir = TempDir::new("obj-degen");
+        let s = import_into(&dir, obj, Some(MTL), &ObjImport::default()).expect("loads");
+        let m = &s.meshes[0];
+        assert_eq!(m.indices, [[0, 1, 2]]);
+        assert_eq!(m.positions.len(), 3, "unused vertices dropped");
+        assert_eq!(s.warnings.len(), 1);
+        assert!(
+            s.warnings[0].ends_with(
+                "a.obj: 2 degenerate triangles dropped (zero area or a repeated vertex)"
+            ),
+            "{:?}",
+            s.warnings
+        );
+        // All degenerate: an empty mesh, refused.
+        let e = err(
+            "mtllib a.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 3 3 1\n",
+            Some(MTL),
+        );
+        assert!(
+            e.contains("a.obj: every one of its 2 triangles is degenerate"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn normals_are_kept_only_when_every_vertex_has_one() {
+        let dir = TempDir::new("obj-normals");
+        let obj = format!("mtllib a.mtl\nusemtl m\n{TRI}vn 0 0 2\nf 1//1 2//1 3//1\n");
+        let s = import_into(&dir, &obj, Some(MTL), &ObjImport::default()).expect("loads");
+        assert_eq!(
+            s.meshes[0].normals.as_deref(),
+            Some(&[Vec3::Z; 3][..]),
+            "unit length"
+        );
+        let obj =
+            format!("mtllib a.mtl\nusemtl m\n{TRI}v 1 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\nf 2 4 3\n");
+        let s = import_into(&dir, &obj, Some(MTL), &ObjImport::default()).expect("loads");
+        assert_eq!(s.meshes[0].normals, None);
+        assert!(
+            s.warnings[0].contains("vertex normals dropped (flat shading): only some"),
+            "{:?}",
+            s.warnings
+        );
+        let obj = format!("mtllib a.mtl\nusemtl m\n{TRI}vn 0 0 0\nf 1//1 2//1 3//1\n");
+        let s = import_into(&dir, &obj, Some(MTL), &ObjImport::default()).expect("loads");
+        assert_eq!(s.meshes[0].normals, None);
+        assert!(
+            s.warnings[0].contains("normal 0 is zero"),
+            "{:?}",
+            s.warnings
+        );
+    }
+
+    #[test]
+    fn objects_without_faces_are_ignored() {
+        // A trailing `o` and `usemtl` with no face after them: tobj still makes a (faceless) model.
+        let mtl = "newmtl m\nKd 0.5 0.5 0.5\nnewmtl unused\nKd 0.1 0.1 0.1\n";
+        let obj = format!("mtllib a.mtl\nusemtl m\n{TRI}f 1 2 3\no empty\nusemtl unused\n");
+        let dir = TempDir::new("obj-empty-object");
+        let s = import_into(&dir, &obj, Some(mtl), &ObjImport::default()).expect("loads");
+        assert_eq!(s.meshes[0].indices.len(), 1);
+        assert_eq!(s.materials.len(), 2, "white and m only: {:?}", s.materials);
+        let s = import_into(
+            &dir,
+            &format!("mtllib a.mtl\nusemtl m\n{TRI}f 1 2 3\no tail\n"),
+            Some(mtl),
+            &ObjImport::default(),
+        )
+        .expect("loads");
+        assert_eq!(s.meshes[0].indices.len(), 1);
+    }
+
+    #[test]
+    fn points_and_lines_are_skipped_with_a_warning() {
+        let obj = format!("mtllib a.mtl\nusemtl m\n{TRI}f 1 2 3\nf 1\nl 1 2\n");
+        let dir = TempDir::new("obj-lines");
+        let s = import_into(&dir, &obj, Some(MTL), &ObjImport::default()).expect("loads");
+        assert_eq!(s.meshes[0].indices.len(), 1);
+        assert!(s.warnings.iter().any(|w| w.ends_with("2 point and line elements ignored (only faces are surfaces)")), "{:?}", s.warnings);
+    }
+
+    #[test]
+    fn bad_obj_lines_are_named_by_line() {
+        let head = "mtllib a.mtl\nusemtl m\n";
+        let cases: &[(&str, &str)] = &[
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n",
+                "a.obj:6: vertex index 4 out of range (3 in the file)",
+            ),
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n",
+                "a.obj:6: vertex index 0 in \"0\": OBJ indices start at 1",
+            ),
+            (
+                "v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n",
+                "a.obj:5: vertex index -3 out of range (2 before this line)",
+            ),
+            (
+                "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n",
+                "a.obj:4: vertex 2 is not finite: \"v nan 0 0\"",
+            ),
+            (
+                "v 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n",
+                "a.obj:4: vertex 2 is not finite",
+            ),
+            (
+                "v 0 0 0\nv 1 1e39 0\nv 0 1 0\nf 1 2 3\n",
+                "a.obj:4: vertex 2 is not finite",
+            ),
+            (
+                "v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n",
+                "a.obj:4: vertex 2 needs three numbers x y z",
+            ),
+            (
+                "v 0 0 0 0\n",
+                "a.obj:3: vertex 1: w must be a non-zero number",
+            ),
+            (
+                "v 0 0 0 1 2\n",
+                "a.obj:3: vertex 1: expected x y z with an optional w or r g b, got 5",
+            ),
+            ("vn 0 0\n", "a.obj:3: normal needs three numbers"),
+            ("vt x 0\n", "a.obj:3: texture coordinate needs two numbers"),
+            (
+                &format!("{TRI}vn 0 0 1\nf 1//1 2//1 3//2\n"),
+                "a.obj:7: normal index 2 out of range (1 in the file)",
+            ),
+            (&format!("{TRI}f 1 2 x\n"), "a.obj:6: bad face vertex \"x\""),
+            (&format!("{TRI}f 1 2 3/1/1/1\n"), "a.obj:6: bad face vertex"),
+            (
+                &format!("{TRI}f 1 2 /1\n"),
+                "a.obj:6: face vertex \"/1\" has no position index",
+            ),
+            (
+                &format!("{TRI}l 1 2 3\n"),
+                "a.obj:6: polylines (l) of 3 or more points are not supported",
+            ),
+            (&format!("{TRI}f\n"), "a.obj:6: `f` without vertices"),
+            (TRI, "a.obj: no faces: the mesh is empty"),
+            (
+                &format!("{TRI}usemtl nope\nf 1 2 3\n"),
+                "a.obj:6: usemtl nope: no such material in a.mtl",
+            ),
+        ];
+        for (body, needle) in cases {
+            let e = err(&format!("{head}{body}"), Some(MTL));
+            assert!(e.starts_with(needle), "{e:?} should start with {needle:?}");
+        }
+        let e = err(
+            &format!("mtllib a.mtl\n{TRI}f 1 2 3\nusemtl m\nf 1 2 3\n"),
+            Some(MTL),
+        );
+        assert!(
+            e.starts_with("a.obj:5: face without a material (no usemtl before it)"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn bad_mtl_files_are_named() {
+        let obj = format!("\nmtllib a.mtl\nusemtl m\n{TRI}f 1 2 3\n");
+        let cases: &[(&str, &str)] = &[
+            (
+                "newmtl m\nKd 0.5\n",
+                "a.mtl:2: Kd needs three numbers r g b: \"Kd 0.5\"",
+            ),
+            ("newmtl m\nKe 1 x 1\n", "a.mtl:2: Ke needs three numbers"),
+            ("newmtl m\nNi\n", "a.mtl:2: Ni needs a number"),
+            (
+                "newmtl m\nillum 300\n",
+                "a.mtl:2: illum needs a model number",
+            ),
+            ("newmtl\n", "a.mtl:1: newmtl needs a name"),
+            ("newmtl m\nmap_Kd\n", "a.mtl:2: map_Kd needs a file name"),
+            (
+                "newmtl m\nKd 0.5 1.5 0.5\n",
+                "a.mtl: material \"m\": Kd must be in [0, 1], got [0.5, 1.5, 0.5]",
+            ),
+            (
+                "newmtl m\nKs 0.5 -1 0.5\n",
+                "a.mtl: material \"m\": Ks must be in [0, 1]",
+            ),
+            (
+                "newmtl m\nKe nan 1 1\n",
+                "a.mtl: material \"m\": Ke must be finite and >= 0, got [NaN, 1, 1]",
+            ),
+            (
+                "newmtl m\nillum 7\nNi 0.5\n",
+                "a.mtl: material \"m\": Ni (index of refraction) must be >= 1 for glass, got 0.5",
+            ),
+            (
+                "newmtl m\nTr lots\n",
+                "a.mtl: material \"m\": Tr needs a number",
+            ),
+        ];
+        for (mtl, needle) in cases {
+            let e = err(&obj, Some(mtl));
+            assert!(e.starts_with(needle), "{e:?} should start with {needle:?}");
+        }
+        let e = err(&obj.replace("a.mtl", "gone.mtl"), Some(MTL));
+        assert!(
+            e.starts_with("gone.mtl: cannot read MTL file (mtllib at a.obj:2): "),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn missing_obj_and_too_many_triangles() {
+        let dir = TempDir::new("obj-missing");
+        let mut s = scene();
+        let e = format!(
+            "{:#}",
+            s.import_obj(&dir.0.join("none.obj"), &ObjImport::default())
+                .unwrap_err()
+        );
+        assert!(
+            e.contains("none.obj: cannot read OBJ file: ") && !e.contains("gen_scenes"),
+            "{e}"
+        );
+        let e = format!(
+            "{:#}",
+            s.import_obj(&dir.0.join("water.obj"), &ObjImport::default())
+                .unwrap_err()
+        );
+        assert!(e.contains(demo::COMMAND), "a generated file's hint: {e}");
+        // The limit, scaled down: three triangles against a limit of two.
+        let path = dir.write(
+            "a.obj",
+            &format!("{TRI}v 1 1 0\nf 1 2 3\nf 2 4 3\nf 1 2 4\n"),
+        );
+        let opts = ObjImport {
+            material: Some(0),
+            ..ObjImport::default()
+        };
+        let e = format!("{:#}", import(&mut s, &path, &opts, 2).unwrap_err());
+        assert!(
+            e.ends_with(
+                "a.obj:7: more than 2 triangles: the limit (MAX_TRIANGLES) is reached here"
+            ),
+            "{e}"
+        );
+        import(&mut s, &path, &opts, 3).expect("three is within a limit of three");
+        assert!(s.meshes.len() == 1 && s.warnings.is_empty());
+    }
+
+    #[test]
+    fn a_name_taken_by_another_material_is_refused() {
+        let dir = TempDir::new("obj-clash");
+        let obj = format!("mtllib a.mtl\nusemtl m\n{TRI}f 1 2 3\n");
+        dir.write("a.mtl", MTL);
+        let path = dir.write("a.obj", &obj);
+        let mut s = scene();
+        s.materials[0].name = format!("{}:m", path.display());
+        s.materials[0].surface = Surface::Glass { ior: 1.5 };
+        let e = format!(
+            "{:#}",
+            s.import_obj(&path, &ObjImport::default()).unwrap_err()
+        );
+        assert!(
+            e.contains("is already taken by a different material"),
+            "{e}"
+        );
+    }
+}
