@@ -175,6 +175,15 @@ struct Bin {
     count: u32,
 }
 
+/// A chosen split: the first `mid` triangles go left; its cost relative to a leaf's triangle tests; each
+/// side's bounds and centroid (times 2) bounds.
+struct Split {
+    axis: usize,
+    mid: usize,
+    cost: f64,
+    sides: [(Aabb, Aabb); 2],
+}
+
 /// Per-axis bins, reused down a thread's recursion.
 type Bins = [[Bin; 64]; 3];
 
@@ -216,19 +225,18 @@ impl Builder {
         // plane separates them. Either way: a leaf if it may be one, else the median.
         let median = depth + levels_needed(n, self.max_leaf) >= self.max_depth || extent.max_element() <= 0.0;
         let sah = if median { None } else { self.sah_split(refs, b, cb, scratch) };
-        let (axis, mid) = match sah {
-            Some((axis, mid, cost)) if n > self.max_leaf || cost < n as f64 * TRIANGLE_COST => (axis, mid),
+        let (axis, mid, [(lb, lcb), (rb, rcb)]) = match sah {
+            Some(s) if n > self.max_leaf || s.cost < n as f64 * TRIANGLE_COST => (s.axis, s.mid, s.sides),
             _ if n <= self.max_leaf => return self.leaf(out, b, first, n),
             _ => {
                 counters.median_splits += 1;
                 let axis = extent.max_position();
-                refs.select_nth_unstable_by(n / 2, |p, q| p.c2()[axis].total_cmp(&q.c2()[axis]));
-                (axis, n / 2)
+                let mid = n / 2;
+                refs.select_nth_unstable_by(mid, |p, q| p.c2()[axis].total_cmp(&q.c2()[axis]));
+                (axis, mid, [bounds_of(&refs[..mid]), bounds_of(&refs[mid..])])
             }
         };
         let (left, right) = refs.split_at_mut(mid);
-        let (lb, lcb) = bounds_of(left);
-        let (rb, rcb) = bounds_of(right);
         let me = out.len();
         out.push(BvhNode { lo: b.lo.to_array(), offset: 0, hi: b.hi.to_array(), count_axis: axis as u32 });
         if spawn > 0 && n >= PARALLEL_MIN {
@@ -259,9 +267,9 @@ impl Builder {
         }
     }
 
-    /// The cheapest binned SAH split: (axis, triangles on the left after partitioning `refs`, cost relative
-    /// to a leaf's triangle tests), or None if no bin boundary separates the centroids.
-    fn sah_split(&self, refs: &mut [PrimRef], b: Aabb, cb: Aabb, bins: &mut Bins) -> Option<(usize, usize, f64)> {
+    /// The cheapest binned SAH split, `refs` partitioned by it, or None if no bin boundary separates the
+    /// centroids.
+    fn sah_split(&self, refs: &mut [PrimRef], b: Aabb, cb: Aabb, bins: &mut Bins) -> Option<Split> {
         // No more bins than triangles: a small node's sweep would mostly cross empty bins.
         let nb = self.bins.min(refs.len().max(2));
         let extent = cb.hi - cb.lo;
@@ -306,19 +314,40 @@ impl Builder {
         let (axis, split, cost) = best?;
         let area = b.half_area().max(f64::MIN_POSITIVE);
         let cost = TRAVERSAL_COST + TRIANGLE_COST * cost / area;
-        // Partition: bins 0..=split to the left.
+        // Partition (bins 0..=split to the left), taking each side's bounds and centroid bounds as each
+        // triangle finds its side: no second pass over them.
+        let mut sides = [(Aabb::EMPTY, Aabb::EMPTY); 2];
         let mut i = 0;
         let mut j = refs.len();
         while i < j {
-            if bin_of(&refs[i])[axis] as usize <= split {
+            let r = refs[i];
+            let c2 = r.c2();
+            if bin_of(&r)[axis] as usize <= split {
+                sides[0].0.grow(r.lo, r.hi);
+                sides[0].1.grow(c2, c2);
                 i += 1;
             } else {
+                sides[1].0.grow(r.lo, r.hi);
+                sides[1].1.grow(c2, c2);
                 j -= 1;
                 refs.swap(i, j);
             }
         }
-        Some((axis, i, cost))
+        Some(Split { axis, mid: i, cost, sides })
     }
+}
+
+/// `f` over `0..n` cut into one contiguous range per thread, the results in order.
+fn parallel_chunks<T: Send>(n: usize, threads: usize, f: impl Fn(std::ops::Range<usize>) -> T + Sync) -> Vec<T> {
+    let per = n.div_ceil(threads.max(1)).max(PARALLEL_MIN);
+    let ranges: Vec<_> = (0..n.div_ceil(per).max(1)).map(|k| k * per..((k + 1) * per).min(n)).collect();
+    if ranges.len() == 1 {
+        return vec![f(ranges[0].clone())];
+    }
+    std::thread::scope(|s| {
+        let handles: Vec<_> = ranges.iter().map(|r| s.spawn(|| f(r.clone()))).collect();
+        handles.into_iter().map(|h| h.join().expect("a BVH build thread panicked")).collect()
+    })
 }
 
 /// Appends a subtree built into its own vector, moving its second-child offsets along.
@@ -355,16 +384,27 @@ pub fn build(input: &[TriangleInput], options: &BvhOptions) -> Result<Bvh> {
         t => t,
     };
 
+    // Bounds of each triangle, in chunks on all threads (concatenated in input order).
+    let chunks = parallel_chunks(input.len(), threads, |range| {
+        let mut refs = Vec::with_capacity(range.len());
+        let mut dropped = Vec::new();
+        for i in range {
+            let t = &input[i];
+            if is_degenerate(&t.v) {
+                dropped.push(i as u32);
+                continue;
+            }
+            let lo = Vec3A::from(t.v[0].min(t.v[1]).min(t.v[2]));
+            let hi = Vec3A::from(t.v[0].max(t.v[1]).max(t.v[2]));
+            refs.push(PrimRef { lo, hi, index: i as u32 });
+        }
+        (refs, dropped)
+    });
     let mut refs = Vec::with_capacity(input.len());
     let mut dropped = Vec::new();
-    for (i, t) in input.iter().enumerate() {
-        if is_degenerate(&t.v) {
-            dropped.push(i as u32);
-            continue;
-        }
-        let lo = Vec3A::from(t.v[0].min(t.v[1]).min(t.v[2]));
-        let hi = Vec3A::from(t.v[0].max(t.v[1]).max(t.v[2]));
-        refs.push(PrimRef { lo, hi, index: i as u32 });
+    for (r, d) in chunks {
+        refs.extend_from_slice(&r);
+        dropped.extend_from_slice(&d);
     }
     let n = refs.len();
     let max_leaf = options.max_leaf as usize;
@@ -387,20 +427,23 @@ pub fn build(input: &[TriangleInput], options: &BvhOptions) -> Result<Bvh> {
         let spawn = if threads > 1 { usize::BITS - (threads - 1).leading_zeros() + 2 } else { 0 };
         builder.build(&mut refs, 0, 0, b, cb, spawn, &mut nodes, &mut counters, &mut new_bins());
     }
-    let triangles: Vec<Triangle> = refs
-        .iter()
-        .map(|r| {
-            let t = &input[r.index as usize];
-            Triangle {
-                v0: t.v[0].to_array(),
-                material: t.material,
-                v1: t.v[1].to_array(),
-                source: r.index,
-                v2: t.v[2].to_array(),
-                pad0: 0,
-            }
-        })
-        .collect();
+    let triangles: Vec<Triangle> = parallel_chunks(refs.len(), threads, |range| {
+        refs[range]
+            .iter()
+            .map(|r| {
+                let t = &input[r.index as usize];
+                Triangle {
+                    v0: t.v[0].to_array(),
+                    material: t.material,
+                    v1: t.v[1].to_array(),
+                    source: r.index,
+                    v2: t.v[2].to_array(),
+                    pad0: 0,
+                }
+            })
+            .collect::<Vec<_>>()
+    })
+    .concat();
     let mut bvh = Bvh { nodes, triangles, dropped, stats: BvhStats::default() };
     let (depth, leaves, sah_cost) = bvh.shape();
     if depth > options.max_depth {
