@@ -551,15 +551,9 @@ pub struct DeviceBvh {
 
 impl DeviceBvh {
     pub fn new(ctx: &Context, bvh: &Bvh) -> Result<DeviceBvh> {
-        // The GPU's traversal stack holds MAX_DEPTH entries; build() never makes a deeper tree, but a Bvh
-        // may have been put together by hand.
-        ensure!(
-            bvh.stats.depth <= MAX_DEPTH && bvh.stats.nodes == bvh.nodes.len(),
-            "BVH of depth {} (stats of {} nodes for {}): the GPU traversal's stack holds {MAX_DEPTH} levels",
-            bvh.stats.depth,
-            bvh.stats.nodes,
-            bvh.nodes.len()
-        );
+        // build() never makes a tree the GPU cannot walk (its stack holds MAX_DEPTH levels), but a Bvh may
+        // have been put together or changed by hand, and a bad index would read out of bounds there.
+        bvh.validate(MAX_LEAF, MAX_DEPTH).context("uploading a BVH the GPU traversal cannot take")?;
         Ok(DeviceBvh {
             nodes: ctx.buffer_from("bvh nodes", &bvh.nodes).context("uploading the BVH's nodes")?,
             triangles: ctx.buffer_from("bvh triangles", &bvh.triangles).context("uploading the BVH's triangles")?,

@@ -73,3 +73,22 @@ pub fn record(
     }
     k.dispatch(cmd, &[nodes, triangles, rays, hits], bytemuck::bytes_of(push), push.count as u64)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The limits stated here are the ones bvh.glsl uses.
+    #[test]
+    fn constants_match_the_glsl() {
+        let glsl = crate::reflected::SOURCES.iter().find(|(p, _)| *p == "common/bvh.glsl").unwrap().1;
+        for line in [
+            format!("const uint BVH_MAX_DEPTH = {MAX_DEPTH}u;"),
+            format!("const uint BVH_LOOP_LIMIT = {LOOP_LIMIT}u;"),
+            format!("const uint BVH_NONE = 0x{NO_HIT:x}u;"),
+            format!("const uint BVH_LEAF = {}u;", crate::layout::BVH_LEAF),
+        ] {
+            assert!(glsl.lines().any(|l| l.starts_with(&line)), "bvh.glsl lacks `{line}`");
+        }
+    }
+}

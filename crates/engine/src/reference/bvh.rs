@@ -134,6 +134,8 @@ pub struct Traversal {
     pub steps: u32,
     /// Stopped after `budget` steps with work left: `hit` is not final.
     pub cut: bool,
+    /// Most entries the stack held (not reported by the GPU).
+    pub stack_peak: u32,
 }
 
 /// `bvh_intersect`: the nearest hit of o + t d, t in (tmin, tmax), through the flattened BVH, taking at
@@ -147,6 +149,7 @@ pub fn intersect(nodes: &[BvhNode], tris: &[Triangle], o: Vec3, d: Vec3, tmin: f
     let mut cut = false;
     let mut stack = [0u32; crate::bvh::MAX_DEPTH as usize];
     let mut sp = 0usize;
+    let mut stack_peak = 0;
     let mut node = 0u32;
     let (mut tri, mut tri_end) = (0u32, 0u32);
     loop {
@@ -189,8 +192,9 @@ pub fn intersect(nodes: &[BvhNode], tris: &[Triangle], o: Vec3, d: Vec3, tmin: f
             sp += 1;
             node = here + 1;
         }
+        stack_peak = stack_peak.max(sp as u32);
     }
-    Traversal { hit, steps, cut }
+    Traversal { hit, steps, cut, stack_peak }
 }
 
 /// The nearest hit by testing every triangle in order (the first of equal t wins): the check of
@@ -241,6 +245,19 @@ mod tests {
         assert!(triangle_test(&r, v3(t.v0), v3(t.v1), v3(t.v2), 0.0, 0.5).is_none());
         let r = BvhRay::new(Vec3::new(-1.0, 0.25, 0.0), Vec3::X);
         assert!(triangle_test(&r, v3(t.v0), v3(t.v1), v3(t.v2), 0.0, 10.0).is_none());
+    }
+
+    /// The constants this file shares with bvh.glsl have the same values there.
+    #[test]
+    fn constants_match_the_glsl() {
+        let glsl = ppm_vk_kernels::reflected::SOURCES.iter().find(|(p, _)| *p == "common/bvh.glsl").unwrap().1;
+        let value = |name: &str| -> f32 {
+            let line = glsl.lines().find(|l| l.starts_with(&format!("const float {name} = "))).unwrap();
+            line.split('=').nth(1).unwrap().trim().trim_end_matches(';').parse().unwrap()
+        };
+        assert_eq!(value("BVH_ROBUST"), ROBUST);
+        assert_eq!(value("BVH_TINY"), TINY);
+        assert_eq!(value("BVH_HUGE"), HUGE);
     }
 
     #[test]
