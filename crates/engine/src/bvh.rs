@@ -306,7 +306,7 @@ impl Builder {
                     continue;
                 }
                 let cost = acc.half_area() * count as f64 + right_cost[k + 1];
-                if best.map_or(true, |(_, _, c)| cost < c) {
+                if !matches!(best, Some((_, _, c)) if c <= cost) {
                     best = Some((axis, k, cost));
                 }
             }
