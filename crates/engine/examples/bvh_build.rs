@@ -1,22 +1,28 @@
 //! BVH build speed and memory on a generated 1M-triangle mesh (a closed UV sphere, 1000 x 501) and a
-//! 1M-triangle random soup: best of `--runs` builds per thread count.
+//! 1M-triangle random soup: best of `--runs` builds per thread count. `--trace N` also traces N rays from
+//! inside the sphere through its BVH on the Vulkan device (the test kernel bvh_trace.comp).
 //!
-//! cargo run --release -p ppm-vk-engine --example bvh_build [-- --triangles 1000000 --runs 5]
+//! cargo run --release -p ppm-vk-engine --example bvh_build [-- --triangles 1000000 --runs 5 --trace 1000000]
 
 use anyhow::{bail, Context as _, Result};
 use glam::Vec3;
-use ppm_vk_engine::bvh::{self, meshes, BvhOptions, TriangleInput};
+use ppm_vk_engine::bvh::{self, meshes, Bvh, BvhOptions, DeviceBvh, TriangleInput};
+use ppm_vk_engine::reference::rng::Rng;
+use ppm_vk_engine::{Context, ContextOptions};
+use ppm_vk_kernels::bvh_trace::{self, TraceHit, TracePush, TraceRay};
 
 fn main() -> Result<()> {
     let mut triangles = 1_000_000usize;
     let mut runs = 5usize;
+    let mut trace = 0usize;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         let value = args.next().with_context(|| format!("{a} needs a value"))?;
         match a.as_str() {
             "--triangles" => triangles = value.parse().with_context(|| format!("--triangles {value}"))?,
             "--runs" => runs = value.parse().with_context(|| format!("--runs {value}"))?,
-            _ => bail!("unknown argument {a} (--triangles N, --runs N)"),
+            "--trace" => trace = value.parse().with_context(|| format!("--trace {value}"))?,
+            _ => bail!("unknown argument {a} (--triangles N, --runs N, --trace N)"),
         }
     }
     // 2 segments (rings - 1) triangles with segments = 2 (rings - 1).
@@ -25,15 +31,64 @@ fn main() -> Result<()> {
     let soup = meshes::random_soup(1, sphere.len(), 100.0, 0.5);
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
     println!("{} logical cores", cores);
+    let mut sphere_bvh = None;
     for (name, mesh) in [("sphere", &sphere), ("soup", &soup)] {
         for threads in [1, cores] {
-            measure(name, mesh, threads, runs)?;
+            let b = measure(name, mesh, threads, runs)?;
+            if name == "sphere" {
+                sphere_bvh = Some(b);
+            }
         }
+    }
+    if trace > 0 {
+        trace_rays(&sphere_bvh.expect("built above"), trace)?;
     }
     Ok(())
 }
 
-fn measure(name: &str, mesh: &[TriangleInput], threads: usize, runs: usize) -> Result<()> {
+/// Rays from random points inside the unit sphere in random directions, traced on the device; every one
+/// must hit (the mesh is closed).
+fn trace_rays(b: &Bvh, n: usize) -> Result<()> {
+    let ctx = Context::new(&ContextOptions::default()).context("opening the Vulkan device")?;
+    let dev = DeviceBvh::new(&ctx, b)?;
+    let mut rng = Rng::new(3, 4);
+    let mut point = || loop {
+        let v = Vec3::new(rng.float(), rng.float(), rng.float()) * 2.0 - 1.0;
+        if v.length_squared() < 0.8 && v.length_squared() > 1e-4 {
+            return v;
+        }
+    };
+    let rays: Vec<TraceRay> = (0..n)
+        .map(|_| TraceRay { origin: (0.5 * point()).to_array(), tmin: 0.0, dir: point().normalize().to_array(), tmax: f32::INFINITY })
+        .collect();
+    let ray_buf = ctx.buffer_from("rays", &rays)?;
+    let hit_buf = ctx.buffer_from("hits", &vec![TraceHit::default(); n])?;
+    let kernel = ppm_vk_kernels::pipeline(&ctx, &ppm_vk_kernels::reflected::BVH_TRACE)?;
+    let push = TracePush { count: n as u32, budget: bvh_trace::MAX_BUDGET };
+    let mut best = f64::INFINITY;
+    for _ in 0..3 {
+        // The first dispatch also compiles the kernel (lavapipe compiles at first use): best of three.
+        let start = std::time::Instant::now();
+        ctx.run(|cmd| bvh_trace::record(&kernel, cmd, &dev.nodes, &dev.triangles, &ray_buf, &hit_buf, &push))?;
+        best = best.min(start.elapsed().as_secs_f64());
+    }
+    let hits: Vec<TraceHit> = ctx.download(&hit_buf)?;
+    let missed = hits.iter().filter(|h| h.triangle == bvh_trace::NO_HIT).count();
+    let cut = hits.iter().filter(|h| h.cut != 0).count();
+    let steps: f64 = hits.iter().map(|h| h.steps as f64).sum::<f64>() / n as f64;
+    println!(
+        "trace on {}: {n} rays from inside the sphere in {:.1} ms = {:.2} M rays/s, {steps:.1} steps per ray, {missed} missed, {cut} cut",
+        ctx.info().name,
+        best * 1e3,
+        n as f64 / best / 1e6
+    );
+    if missed + cut > 0 {
+        bail!("{missed} rays missed and {cut} were cut inside a closed mesh");
+    }
+    Ok(())
+}
+
+fn measure(name: &str, mesh: &[TriangleInput], threads: usize, runs: usize) -> Result<Bvh> {
     let opts = BvhOptions { threads, ..BvhOptions::default() };
     let mut best = f64::INFINITY;
     let mut last = None;
@@ -61,5 +116,5 @@ fn measure(name: &str, mesh: &[TriangleInput], threads: usize, runs: usize) -> R
         b.triangle_bytes() as f64 / 1e6,
         bytes as f64 / s.triangles as f64
     );
-    Ok(())
+    Ok(b)
 }
