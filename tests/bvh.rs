@@ -51,6 +51,17 @@ fn assert_gpu_matches_cpu(b: &Bvh, rays: &[TraceRay], gpu: &[TraceHit], budget: 
     (hits, identical)
 }
 
+/// bvh_subgroup_cost is what lavapipe's loop counter takes for the call: the most steps of any lane of the
+/// subgroup (consecutive invocations) plus the loop's exit.
+fn assert_subgroup_cost(gpu: &[TraceHit], what: &str) {
+    let size = gpu[0].subgroup_size as usize;
+    assert!(size > 0 && gpu.iter().all(|h| h.subgroup_size as usize == size));
+    for (k, group) in gpu.chunks(size).enumerate() {
+        let most = group.iter().map(|h| h.steps).max().unwrap();
+        assert!(group.iter().all(|h| h.subgroup_cost == most + 1), "{what}: subgroup {k}: {group:?}");
+    }
+}
+
 fn random_unit(rng: &mut Rng) -> Vec3 {
     loop {
         let v = Vec3::new(rng.float(), rng.float(), rng.float()) * 2.0 - 1.0;
@@ -107,6 +118,7 @@ fn bvh_gpu_traversal_matches_cpu_reference() {
         let (hits, identical) = assert_gpu_matches_cpu(&b, &rays, &gpu, MAX_BUDGET, name);
         println!("{name}: {} triangles, {} rays, {hits} hits, {identical} with a bit-identical t", mesh.len(), rays.len());
         assert!(hits * 4 >= rays.len(), "{name}: only {hits} of {} rays hit", rays.len());
+        assert_subgroup_cost(&gpu, name);
         if closed {
             // Every origin is inside: watertight on the GPU too.
             let missed: Vec<_> = rays.iter().zip(&gpu).filter(|(_, h)| h.triangle == NO_HIT).map(|(r, _)| *r).collect();

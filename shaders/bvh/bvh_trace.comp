@@ -20,9 +20,9 @@ struct TraceHit {
     uint triangle;   // index into the leaf-ordered triangles; 0xffffffff: no hit
     uint steps;      // loop steps the traversal took (node visits + triangle tests)
     uint cut;        // 1: stopped at the step budget, the hit is not final
+    uint subgroup_cost; // bvh_subgroup_cost: the loop iterations this lane's subgroup spent
+    uint subgroup_size;
     uint pad0;
-    uint pad1;
-    uint pad2;
 };
 
 layout(std430, binding = 0) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
@@ -48,8 +48,8 @@ void main() {
     out_hit.triangle = h.triangle;
     out_hit.steps = h.steps;
     out_hit.cut = h.cut ? 1u : 0u;
+    out_hit.subgroup_cost = bvh_subgroup_cost(h);
+    out_hit.subgroup_size = gl_SubgroupSize;
     out_hit.pad0 = 0u;
-    out_hit.pad1 = 0u;
-    out_hit.pad2 = 0u;
     hits[i] = out_hit;
 }

@@ -43,11 +43,12 @@ pub struct TraceHit {
     pub steps: u32,
     /// 1: stopped at the step budget; the hit is not final.
     pub cut: u32,
+    /// `bvh_subgroup_cost`: the loop iterations the traversal cost this lane's subgroup.
+    pub subgroup_cost: u32,
+    pub subgroup_size: u32,
     pub pad0: u32,
-    pub pad1: u32,
-    pub pad2: u32,
 }
-gpu_struct!(TraceHit { normal, t, bary, triangle, steps, cut, pad0, pad1, pad2 });
+gpu_struct!(TraceHit { normal, t, bary, triangle, steps, cut, subgroup_cost, subgroup_size, pad0 });
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
