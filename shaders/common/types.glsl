@@ -133,5 +133,26 @@ struct PathCounters {
     uint eye_paths;
 };
 
+// A node of the flattened BVH (crates/engine/src/bvh.rs), in depth-first order: an interior node's first
+// child is the node after it, its second child is at `offset`; a leaf holds triangles offset .. offset +
+// count - 1 of the leaf-ordered triangle buffer.
+struct BvhNode {
+    vec3 lo;
+    uint offset;     // interior: index of the second child; leaf: first triangle
+    vec3 hi;
+    uint count_axis; // count << 2 | axis: axis 0-2 is an interior node's split axis, 3 marks a leaf
+};
+
+// A triangle of the BVH, in leaf order. Its vertices as given, not a vertex and two edges: the watertight
+// test needs the two triangles sharing an edge to see bit-identical vertices (v0 + e1 rounds).
+struct Triangle {
+    vec3 v0;
+    uint material;
+    vec3 v1;
+    uint source;     // index of the triangle in the builder's input
+    vec3 v2;
+    uint pad0;
+};
+
 const float PROBE_FIXED = 1073741824.0; // 2^30: the probe's fixed-point scale for d^2 / r^2 in [0, 1]
 #endif

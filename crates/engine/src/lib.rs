@@ -18,6 +18,7 @@
 //! ```
 //! Every kernel has a CPU twin in [`reference`] that the tests compare against on identical inputs.
 
+pub mod bvh;
 pub mod gpu_scene;
 pub mod image_io;
 pub mod metrics;

@@ -159,3 +159,54 @@ pub struct PathCounters {
     pub eye_paths: u32,
 }
 gpu_struct!(PathCounters { photon_paths, eye_paths });
+
+/// `BvhNode::count_axis & 3` of a leaf (`BVH_LEAF` in bvh.glsl); 0-2 is an interior node's split axis.
+pub const BVH_LEAF: u32 = 3;
+
+/// A node of the flattened BVH, depth first: an interior node's first child is the next node, its second
+/// is at `offset`; a leaf holds the triangles `offset .. offset + count`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BvhNode {
+    pub lo: [f32; 3],
+    /// Interior: index of the second child; leaf: first triangle.
+    pub offset: u32,
+    pub hi: [f32; 3],
+    /// `count << 2 | axis`, axis [`BVH_LEAF`] for a leaf.
+    pub count_axis: u32,
+}
+gpu_struct!(BvhNode { lo, offset, hi, count_axis });
+
+impl BvhNode {
+    pub fn is_leaf(&self) -> bool {
+        self.count_axis & 3 == BVH_LEAF
+    }
+
+    /// Triangles of a leaf (0 for an interior node).
+    pub fn count(&self) -> u32 {
+        if self.is_leaf() {
+            self.count_axis >> 2
+        } else {
+            0
+        }
+    }
+
+    /// Split axis of an interior node.
+    pub fn axis(&self) -> usize {
+        (self.count_axis & 3) as usize
+    }
+}
+
+/// A triangle of the BVH in leaf order: its vertices as given (the watertight test needs shared vertices
+/// bit-identical), its material and its index in the builder's input.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Triangle {
+    pub v0: [f32; 3],
+    pub material: u32,
+    pub v1: [f32; 3],
+    pub source: u32,
+    pub v2: [f32; 3],
+    pub pad0: u32,
+}
+gpu_struct!(Triangle { v0, material, v1, source, v2, pad0 });

@@ -4,7 +4,8 @@
 //! One module per pipeline stage, in pipeline order: [`ray`] -> [`probe`] (once) -> [`photon`] -> [`lookup`]
 //! -> [`gather`] -> [`resolve`]. Each kernel's storage-buffer count, push-constant size and workgroup size come from
 //! SPIR-V reflection ([`reflected`]); the records they share are in [`layout`], each checked at compile
-//! time against glslang's std430 offsets.
+//! time against glslang's std430 offsets. [`bvh_trace`] is a test kernel of the BVH traversal
+//! (`shaders/common/bvh.glsl`), not a stage.
 
 pub mod layout;
 
@@ -27,11 +28,12 @@ pub mod reflected {
     }
     include!(concat!(env!("OUT_DIR"), "/reflected.rs"));
 
-    /// Every kernel, in pipeline order.
+    /// Every kernel, in pipeline order, then the test kernel of the BVH traversal.
     pub const ALL: &[KernelInfo] =
-        &[RAY, PROBE, PHOTON, GRID_COUNT, GRID_SCAN, GRID_SCATTER, GATHER, UPDATE, RESOLVE];
+        &[RAY, PROBE, PHOTON, GRID_COUNT, GRID_SCAN, GRID_SCATTER, GATHER, UPDATE, RESOLVE, BVH_TRACE];
 }
 
+pub mod bvh_trace;
 pub mod gather;
 pub mod lookup;
 pub mod photon;

@@ -2,6 +2,7 @@
 //! f32 and draws the same random numbers, so both produce the same paths (up to the last bit of a fused
 //! multiply-add); sums and the progressive update are in f64. The tests run both on identical inputs.
 
+pub mod bvh;
 pub mod rng;
 pub mod trace;
 

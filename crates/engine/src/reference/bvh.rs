@@ -1,0 +1,280 @@
+//! `shaders/common/bvh.glsl` in Rust, operation for operation, over the same flattened nodes: the BVH
+//! traversal and the watertight ray/triangle test (Woop, Benthin and Wald 2013). Rust never fuses a
+//! multiply-add, and the GLSL marks those operations `precise`, so both compute the same bits. Also a
+//! brute-force intersector over all triangles, the independent check of the traversal.
+
+use glam::{Vec2, Vec3};
+use ppm_vk_kernels::layout::{BvhNode, Triangle};
+
+use super::trace::v3;
+
+/// `BVH_ROBUST`: 1 + 2 gamma(3), the slab test's far distance widened by its rounding error bound (the
+/// same literal as bvh.glsl).
+#[allow(clippy::excessive_precision)]
+pub const ROBUST: f32 = 1.0000003576;
+/// `BVH_TINY`: a direction component below this makes the ray parallel to that axis's slab.
+const TINY: f32 = 1e-30;
+/// `BVH_HUGE`: an infinite distance in the slab test.
+const HUGE: f32 = 3e38;
+
+/// A ray prepared for the box and triangle tests (`BvhRay` of bvh.glsl).
+#[derive(Clone, Copy, Debug)]
+pub struct BvhRay {
+    pub o: Vec3,
+    pub d: Vec3,
+    /// 1 / d, 0 on the parallel axes.
+    pub inv_d: Vec3,
+    /// |d| < TINY per axis.
+    pub parallel: [bool; 3],
+    /// kx, ky, kz: kz the axis of the largest |d|; kx, ky swapped when d[kz] < 0.
+    pub k: [usize; 3],
+    /// d[kx] / d[kz], d[ky] / d[kz], 1 / d[kz].
+    pub s: Vec3,
+}
+
+impl BvhRay {
+    pub fn new(o: Vec3, d: Vec3) -> BvhRay {
+        let ad = d.abs();
+        let parallel = [ad.x < TINY, ad.y < TINY, ad.z < TINY];
+        let inv = |x: f32, p: bool| if p { 0.0 } else { 1.0 / x };
+        let inv_d = Vec3::new(inv(d.x, parallel[0]), inv(d.y, parallel[1]), inv(d.z, parallel[2]));
+        let mut kz = 0;
+        if ad.y > ad[kz] {
+            kz = 1;
+        }
+        if ad.z > ad[kz] {
+            kz = 2;
+        }
+        let mut kx = if kz == 2 { 0 } else { kz + 1 };
+        let mut ky = if kx == 2 { 0 } else { kx + 1 };
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let sz = 1.0 / d[kz];
+        BvhRay { o, d, inv_d, parallel, k: [kx, ky, kz], s: Vec3::new(d[kx] * sz, d[ky] * sz, sz) }
+    }
+}
+
+/// Whether the ray meets the box [lo, hi] within (tmin, tmax], conservatively (`bvh_box_test`).
+pub fn box_test(r: &BvhRay, lo: Vec3, hi: Vec3, tmin: f32, tmax: f32) -> bool {
+    let t0 = (lo - r.o) * r.inv_d;
+    let t1 = (hi - r.o) * r.inv_d;
+    let mut tn = t0.min(t1);
+    let mut tf = t0.max(t1);
+    for k in 0..3 {
+        if r.parallel[k] {
+            // Inside the slab (faces included) for every t, or for none.
+            let entry = if lo[k] <= r.o[k] && r.o[k] <= hi[k] { -HUGE } else { HUGE };
+            tn[k] = entry;
+            tf[k] = -entry;
+        }
+    }
+    let near = tn.x.max(tn.y).max(tn.z.max(tmin));
+    let far = tf.x.min(tf.y).min(tf.z) * ROBUST;
+    near <= far.min(tmax)
+}
+
+/// The watertight test (`bvh_triangle_test`): (t, barycentric weights of v1 and v2) for a hit with t in
+/// (tmin, tmax). Two-sided; an edge function of exactly 0 is recomputed in f64.
+pub fn triangle_test(r: &BvhRay, v0: Vec3, v1: Vec3, v2: Vec3, tmin: f32, tmax: f32) -> Option<(f32, Vec2)> {
+    let [kx, ky, kz] = r.k;
+    let (a0, b0, c0) = (v0 - r.o, v1 - r.o, v2 - r.o);
+    let a = Vec3::new(a0[kx], a0[ky], a0[kz]);
+    let b = Vec3::new(b0[kx], b0[ky], b0[kz]);
+    let c = Vec3::new(c0[kx], c0[ky], c0[kz]);
+    let ax = a.x - r.s.x * a.z;
+    let ay = a.y - r.s.y * a.z;
+    let bx = b.x - r.s.x * b.z;
+    let by = b.y - r.s.y * b.z;
+    let cx = c.x - r.s.x * c.z;
+    let cy = c.y - r.s.y * c.z;
+    let mut u = cx * by - cy * bx;
+    let mut v = ax * cy - ay * cx;
+    let mut w = bx * ay - by * ax;
+    if u == 0.0 || v == 0.0 || w == 0.0 {
+        let f = |p: f32, q: f32, s: f32, t: f32| (p as f64 * q as f64 - s as f64 * t as f64) as f32;
+        u = f(cx, by, cy, bx);
+        v = f(ax, cy, ay, cx);
+        w = f(bx, ay, by, ax);
+    }
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return None;
+    }
+    let az = r.s.z * a.z;
+    let bz = r.s.z * b.z;
+    let cz = r.s.z * c.z;
+    let tt = u * az + v * bz + w * cz;
+    let rcp = 1.0 / det;
+    let t = tt * rcp;
+    if !(t > tmin && t < tmax) {
+        return None;
+    }
+    Some((t, Vec2::new(v, w) * rcp))
+}
+
+/// A hit of [`intersect`] or [`brute_force`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BvhHit {
+    pub t: f32,
+    /// Index into the leaf-ordered triangles.
+    pub triangle: u32,
+    /// Barycentric weights of v1 and v2.
+    pub bary: Vec2,
+}
+
+/// What one traversal did (`BvhHit` of bvh.glsl).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Traversal {
+    pub hit: Option<BvhHit>,
+    /// Node visits plus triangle tests.
+    pub steps: u32,
+    /// Stopped after `budget` steps with work left: `hit` is not final.
+    pub cut: bool,
+    /// Most entries the stack held (not reported by the GPU).
+    pub stack_peak: u32,
+}
+
+/// `bvh_intersect`: the nearest hit of o + t d, t in (tmin, tmax), through the flattened BVH, taking at
+/// most `budget` steps. Panics if the tree is deeper than its stack (the builder never makes one).
+pub fn intersect(nodes: &[BvhNode], tris: &[Triangle], o: Vec3, d: Vec3, tmin: f32, tmax: f32, budget: u32) -> Traversal {
+    const NONE: u32 = u32::MAX;
+    let r = BvhRay::new(o, d);
+    let mut best = tmax;
+    let mut hit = None;
+    let mut steps = 0u32;
+    let mut cut = false;
+    let mut stack = [0u32; crate::bvh::MAX_DEPTH as usize];
+    let mut sp = 0usize;
+    let mut stack_peak = 0;
+    let mut node = 0u32;
+    let (mut tri, mut tri_end) = (0u32, 0u32);
+    loop {
+        if tri == tri_end && node == NONE {
+            if sp == 0 {
+                break;
+            }
+            sp -= 1;
+            node = stack[sp];
+        }
+        if steps == budget {
+            cut = true;
+            break;
+        }
+        steps += 1;
+        if tri != tri_end {
+            let tr = &tris[tri as usize];
+            if let Some((t, bary)) = triangle_test(&r, v3(tr.v0), v3(tr.v1), v3(tr.v2), tmin, best) {
+                best = t;
+                hit = Some(BvhHit { t, triangle: tri, bary });
+            }
+            tri += 1;
+            continue;
+        }
+        let n = &nodes[node as usize];
+        let here = node;
+        node = NONE;
+        if !box_test(&r, v3(n.lo), v3(n.hi), tmin, best) {
+            continue;
+        }
+        if n.is_leaf() {
+            tri = n.offset;
+            tri_end = n.offset + n.count();
+        } else if r.d[n.axis()] < 0.0 {
+            stack[sp] = here + 1;
+            sp += 1;
+            node = n.offset;
+        } else {
+            stack[sp] = n.offset;
+            sp += 1;
+            node = here + 1;
+        }
+        stack_peak = stack_peak.max(sp as u32);
+    }
+    Traversal { hit, steps, cut, stack_peak }
+}
+
+/// The nearest hit by testing every triangle in order (the first of equal t wins): the check of
+/// [`intersect`].
+pub fn brute_force(tris: &[Triangle], o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<BvhHit> {
+    let r = BvhRay::new(o, d);
+    let mut best = tmax;
+    let mut hit = None;
+    for (i, tr) in tris.iter().enumerate() {
+        if let Some((t, bary)) = triangle_test(&r, v3(tr.v0), v3(tr.v1), v3(tr.v2), tmin, best) {
+            best = t;
+            hit = Some(BvhHit { t, triangle: i as u32, bary });
+        }
+    }
+    hit
+}
+
+/// `bvh_normal`: the geometric normal, on the side the vertices wind counter-clockwise.
+pub fn normal(tr: &Triangle) -> Vec3 {
+    (v3(tr.v1) - v3(tr.v0)).cross(v3(tr.v2) - v3(tr.v0)).normalize()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri(v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> Triangle {
+        Triangle { v0, v1, v2, ..Default::default() }
+    }
+
+    #[test]
+    fn hits_the_inside_and_reports_barycentrics() {
+        let t = tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        for d in [Vec3::Z, -Vec3::Z] {
+            let o = Vec3::new(0.25, 0.5, 0.0) - 2.0 * d;
+            let r = BvhRay::new(o, d);
+            let (th, b) = triangle_test(&r, v3(t.v0), v3(t.v1), v3(t.v2), 0.0, 10.0).expect("two-sided hit");
+            assert_eq!(th, 2.0);
+            assert!((b - Vec2::new(0.25, 0.5)).abs().max_element() < 1e-7, "{b}");
+        }
+        assert_eq!(normal(&t), Vec3::Z);
+        // Outside, behind the origin, beyond tmax, in the plane: no hit.
+        let r = BvhRay::new(Vec3::new(0.75, 0.75, -1.0), Vec3::Z);
+        assert!(triangle_test(&r, v3(t.v0), v3(t.v1), v3(t.v2), 0.0, 10.0).is_none());
+        let r = BvhRay::new(Vec3::new(0.25, 0.25, 1.0), Vec3::Z);
+        assert!(triangle_test(&r, v3(t.v0), v3(t.v1), v3(t.v2), 0.0, 10.0).is_none());
+        let r = BvhRay::new(Vec3::new(0.25, 0.25, -1.0), Vec3::Z);
+        assert!(triangle_test(&r, v3(t.v0), v3(t.v1), v3(t.v2), 0.0, 0.5).is_none());
+        let r = BvhRay::new(Vec3::new(-1.0, 0.25, 0.0), Vec3::X);
+        assert!(triangle_test(&r, v3(t.v0), v3(t.v1), v3(t.v2), 0.0, 10.0).is_none());
+    }
+
+    /// The constants this file shares with bvh.glsl have the same values there.
+    #[test]
+    fn constants_match_the_glsl() {
+        let glsl = ppm_vk_kernels::reflected::SOURCES.iter().find(|(p, _)| *p == "common/bvh.glsl").unwrap().1;
+        let value = |name: &str| -> f32 {
+            let line = glsl.lines().find(|l| l.starts_with(&format!("const float {name} = "))).unwrap();
+            line.split('=').nth(1).unwrap().trim().trim_end_matches(';').parse().unwrap()
+        };
+        assert_eq!(value("BVH_ROBUST"), ROBUST);
+        assert_eq!(value("BVH_TINY"), TINY);
+        assert_eq!(value("BVH_HUGE"), HUGE);
+    }
+
+    #[test]
+    fn a_shared_edge_is_hit_by_exactly_one_side_or_both() {
+        // Two triangles sharing the diagonal (0,0)-(1,1); rays exactly through points of it.
+        let a = tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]);
+        let b = tri([0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]);
+        // The square's corners (0,0) and (1,1) are on its outline, where a ray may pass outside.
+        for k in 1..64 {
+            let s = k as f32 / 64.0;
+            for o in [Vec3::new(0.3, -0.2, -1.0), Vec3::new(-5.0, 7.0, 3.0), Vec3::new(0.1, 0.9, 0.001)] {
+                let target = Vec3::new(s, s, 0.0);
+                let r = BvhRay::new(o, target - o);
+                let ha = triangle_test(&r, v3(a.v0), v3(a.v1), v3(a.v2), 0.0, 10.0);
+                let hb = triangle_test(&r, v3(b.v0), v3(b.v1), v3(b.v2), 0.0, 10.0);
+                assert!(ha.is_some() || hb.is_some(), "ray from {o} through {target} passes between the triangles");
+            }
+        }
+    }
+}
