@@ -29,7 +29,8 @@ pub struct CompareArgs {
     /// Wall-clock seconds per variant, setup included.
     #[arg(long, default_value_t = 10.0)]
     time: f64,
-    /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone".
+    /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone". Words joined by
+    /// `+`: ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass).
     #[arg(long, default_value = "ppm; ppm+probe; ppm+probe-sf; ppm+cone; ppm+probe+cone; ppm+probe-sf+cone")]
     variants: String,
     /// Photons per pass.
@@ -74,7 +75,16 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
             "cone" => s.cone_k = Some(if value.is_some() { number("cone")? } else { 1.1 }),
             "beta" => s.probe_beta = number("beta")?,
             "alpha" => s.alpha = number("alpha")?,
-            other => bail!("variant {name:?}: unknown word {other:?} (ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A)"),
+            "es" => {
+                let e = number("es")?;
+                if !(e >= 0.0 && e.fract() == 0.0) {
+                    bail!("variant {name:?}: es (emission samples) must be a whole number, got {e}");
+                }
+                s.emission_samples = e as u32;
+            }
+            other => bail!(
+                "variant {name:?}: unknown word {other:?} (ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A, es=N)"
+            ),
         }
     }
     s.validate().with_context(|| format!("variant {name:?}"))?;
