@@ -1,10 +1,9 @@
-//! The `ppm-vk` binary on a scene with a mesh: loading warnings reach stderr, and the renderer refuses
-//! the mesh with a clear error (the kernels do not trace triangles yet) instead of ignoring it.
+//! The `ppm-vk` binary on a scene with a mesh: loading warnings reach stderr, and the mesh renders.
 
 use std::process::Command;
 
 #[test]
-fn render_prints_mesh_warnings_and_refuses_meshes() {
+fn render_prints_mesh_warnings_and_renders_the_mesh() {
     let dir = std::env::temp_dir().join(format!("ppm-vk-mesh-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     // One good triangle, one degenerate; a glossy, textured material the engine approximates.
@@ -35,8 +34,10 @@ fn render_prints_mesh_warnings_and_refuses_meshes() {
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&run.stderr);
+    let written = dir.join("out.png").exists();
     let _ = std::fs::remove_dir_all(&dir);
-    assert!(!run.status.success(), "a mesh scene rendered:\n{stderr}");
+    assert!(run.status.success(), "the mesh scene did not render:\n{stderr}");
+    assert!(written, "no image written");
     let obj = dir.join("cup.obj").display().to_string();
     let warnings: Vec<&str> = stderr.lines().filter(|l| l.starts_with("warning: ")).collect();
     assert_eq!(warnings.len(), 2, "{stderr}");
@@ -47,9 +48,5 @@ fn render_prints_mesh_warnings_and_refuses_meshes() {
         "{stderr}"
     );
     assert_eq!(warnings[1], format!("warning: {obj}: 1 degenerate triangles dropped (zero area or a repeated vertex)"));
-    assert!(
-        stderr.contains("error: scene cup: triangle meshes are not rendered yet (1 triangles in 1 meshes)"),
-        "{stderr}"
-    );
-    assert!(!dir.join("out.png").exists(), "no image written");
+
 }

@@ -1,4 +1,5 @@
-// Scene bindings shared by the kernels that trace rays (ray, photon): always bindings 0-3, in this order.
+// Scene bindings shared by the kernels that trace rays (ray, photon): always bindings 0-5, in this order
+// (4 and 5: the triangle BVH, crates/engine/src/bvh.rs; one empty leaf in scenes without meshes).
 // The intersection loops read the scene through SPHERE(i), QUAD(i), NUM_SPHERES and NUM_QUADS. Built as
 // shipped, they read the buffers; the renderer recompiles the tracing kernels with SCENE_CONSTANTS defined
 // and the primitives written out as constants (crates/kernels/src/specialize.rs), so the unrolled loops
@@ -11,11 +12,15 @@
 layout(std430, binding = 1) readonly buffer Spheres { Sphere spheres[]; };
 layout(std430, binding = 2) readonly buffer Quads { Quad quads[]; };
 layout(std430, binding = 3) readonly buffer Materials { Material materials[]; };
+layout(std430, binding = 4) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
+layout(std430, binding = 5) readonly buffer BvhTriangles { Triangle bvh_triangles[]; };
 #ifdef SCENE_CONSTANTS
 #include "scene_constants.glsl"
 #define SPHERE(i) SCENE_SPHERES[i]
 #define QUAD(i) SCENE_QUADS[i]
+#define NUM_TRIANGLES 0u
 #else
+#define NUM_TRIANGLES params.num_triangles
 #define NUM_SPHERES params.num_spheres
 #define NUM_QUADS params.num_quads
 #define SPHERE(i) spheres[i]

@@ -1,7 +1,24 @@
-// Ray intersection with the scene (analytic spheres and parallelograms), through the accessors of
-// bindings.glsl.
+// Ray intersection with the scene (analytic spheres and parallelograms, and triangles through the BVH),
+// through the accessors of bindings.glsl.
 #ifndef GEOMETRY_GLSL
 #define GEOMETRY_GLSL
+#include "bvh.glsl"
+
+// BVH traversal steps this thread's subgroup may still take (lavapipe's loop budget, less what the
+// kernel's other loops may take: PathLimits). Kernels set bvh_left at the start and call bvh_sync() at the
+// top of every loop iteration that may intersect, so all active lanes agree on what the subgroup has used.
+// A traversal that runs out of steps ends its path, in one of two ways:
+//   bvh_cut:   it had at least BVH_TRAVERSAL_MIN steps and needed more: the BVH is degenerate, an error;
+//   bvh_spent: long paths (glass that traps light by internal reflection) had used up the budget: the
+//              path ends there, counted as a path cut at a backstop, like the depth limits.
+uint bvh_left = 0xffffffffu;
+bool bvh_cut = false;
+bool bvh_spent = false;
+const uint BVH_TRAVERSAL_MIN = 8192u;
+
+void bvh_sync() {
+    if (NUM_TRIANGLES > 0u) bvh_left = subgroupMin(bvh_left);
+}
 
 // A point moved off a surface along n, far enough that the next ray does not hit the surface it left: a
 // multiple of the f32 spacing at the point's coordinates (which grows with its distance from the origin)
@@ -53,6 +70,21 @@ bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {
         if (a < 0.0 || a > 1.0 || b < 0.0 || b > 1.0) continue;
         hit.t = t; found = true; on_sphere = false;
         hit.normal = q.normal; hit.material = q.material;
+    }
+    if (NUM_TRIANGLES > 0u) {
+        BvhHit bh;
+        uint had = bvh_left;
+        if (bvh_intersect(o, d, tmin, hit.t, bvh_left, bh)) {
+            Triangle tr = bvh_triangles[bh.triangle];
+            hit.t = bh.t; found = true; on_sphere = false;
+            hit.normal = bvh_normal(tr); hit.material = tr.material;
+        }
+        // bvh_left is a budget, not a count of loop iterations: unlimited devices pass 0xffffffff.
+        if (bvh_left != 0xffffffffu) bvh_left -= min(bvh_left, bvh_subgroup_cost(bh));
+        if (bh.cut) {
+            if (had >= BVH_TRAVERSAL_MIN) bvh_cut = true; else bvh_spent = true;
+            return false;
+        }
     }
     if (found) {
         hit.pos = o + hit.t * d;

@@ -47,14 +47,18 @@ struct Emitter {
     vec3 normal;
     vec3 flux;
     float cdf;
+    bool triangle;   // origin + a edge_u + b edge_v with a + b <= 1 (a quad: a, b in [0, 1])
 };
+
+const uint LIGHT_QUAD = 0u;
+const uint LIGHT_TRIANGLE = 1u;
 
 // A light to emit photons from, chosen with probability `prob` (proportional to power).
 struct Light {
-    uint quad;
+    uint index;      // into the quads (LIGHT_QUAD) or the BVH's leaf-ordered triangles (LIGHT_TRIANGLE)
     float cdf;       // inclusive running sum of prob
-    float prob;
-    float pad0;
+    float prob;      // the probability the f32 cdf gives it: cdf - the previous cdf
+    uint kind;       // LIGHT_*
     vec3 power;      // emission * area * pi: the flux a photon carries is power / prob
     float pad1;
 };
@@ -84,6 +88,10 @@ struct RenderParams {
     float flux_fixed; // fixed-point units per unit of flux in PassAccum: a power of two, 2^30 / (largest
                       // flux a photon can carry) rounded down, so one photon's contribution fits an int32
     float eps_rel;   // ray offset per unit of the point's largest coordinate (see offset_ray)
+    uint num_triangles; // triangles in the BVH (0: no meshes, the BVH is not traversed)
+    uint photon_bvh_budget; // BVH traversal steps one photon thread may take in all (PathLimits)
+    uint eye_bvh_budget;    // the same for one eye thread
+    uint pad0;
 };
 
 // A diffuse point seen from a pixel (PPM pass 1). Fixed for the whole render.
@@ -131,6 +139,8 @@ struct Photon {
 struct PathCounters {
     uint photon_paths;
     uint eye_paths;
+    uint traversal_cut; // paths whose BVH traversal ran out of the loop budget (an error: the renderer stops)
+    uint pad0;
 };
 
 // A node of the flattened BVH (crates/engine/src/bvh.rs), in depth-first order: an interior node's first

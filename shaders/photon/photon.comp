@@ -11,10 +11,10 @@ layout(local_size_x = 64) in;
 
 #include "types.glsl"
 #include "bindings.glsl"
-layout(std430, binding = 4) readonly buffer Lights { Light lights[]; };
-layout(std430, binding = 5) writeonly buffer Photons { Photon photons[]; };
-layout(std430, binding = 6) buffer Counter { uint photon_count; };
-layout(std430, binding = 7) buffer Cut { PathCounters cut; };
+layout(std430, binding = 6) readonly buffer Lights { Light lights[]; };
+layout(std430, binding = 7) writeonly buffer Photons { Photon photons[]; };
+layout(std430, binding = 8) buffer Counter { uint photon_count; };
+layout(std430, binding = 9) buffer Cut { PathCounters cut; };
 layout(push_constant) uniform PhotonPush {
     uint64_t first;  // global index of this batch's first photon: its random stream
     uint count;      // photons in this batch
@@ -52,12 +52,23 @@ Emitter choose_emitter(float u) {
     return e;
 }
 #else
+// Binary search for the first light whose cdf exceeds u (the same light as a linear scan: cdfs never
+// decrease), in ceil(log2 n) steps: scenes may have 100k emitting triangles.
 Emitter choose_emitter(float u) {
-    uint li = 0u;
-    while (li + 1u < params.num_lights && u >= lights[li].cdf) li++;
-    Light light = lights[li];
-    Quad q = quads[light.quad];
-    return Emitter(q.origin, q.edge_u, q.edge_v, q.normal, light.power / light.prob, light.cdf);
+    uint lo = 0u;
+    uint hi = params.num_lights - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (u >= lights[mid].cdf) lo = mid + 1u; else hi = mid;
+    }
+    Light light = lights[lo];
+    vec3 flux = light.power / light.prob;
+    if (light.kind == LIGHT_TRIANGLE) {
+        Triangle tr = bvh_triangles[light.index];
+        return Emitter(tr.v0, tr.v1 - tr.v0, tr.v2 - tr.v0, bvh_normal(tr), flux, light.cdf, true);
+    }
+    Quad q = quads[light.index];
+    return Emitter(q.origin, q.edge_u, q.edge_v, q.normal, flux, light.cdf, false);
 }
 #endif
 
@@ -75,6 +86,7 @@ void main() {
     uint t = invocation_index();
     uint threads = (pc.count + pc.per_thread - 1u) / pc.per_thread;
     if (t >= threads) return;
+    bvh_left = params.photon_bvh_budget;
     uint next = 0u;          // photons of this thread started so far
     bool alive = false;
     Rng rng;
@@ -92,6 +104,8 @@ void main() {
             Emitter e = choose_emitter(rng_float(rng));
             float a = rng_float(rng);
             float b = rng_float(rng);
+            // A triangle: the unit square folded onto the half below its diagonal, uniform in area.
+            if (e.triangle && a + b > 1.0) { a = 1.0 - a; b = 1.0 - b; }
             o = offset_ray(e.origin + a * e.edge_u + b * e.edge_v, e.normal);
             lobe = e.normal;
             pending = true;
@@ -105,6 +119,7 @@ void main() {
             d = cosine_direction(lobe, u1, u2);
             pending = false;
         }
+        bvh_sync();
         if (depth >= params.max_photon_depth) {
             atomicAdd(cut.photon_paths, 1u);
             alive = false;
@@ -112,6 +127,10 @@ void main() {
         }
         Hit h;
         if (!intersect_scene(o, d, 0.0, 1e30, h)) {
+            // Out of traversal steps: an error (bvh_cut) or a long path's end (bvh_spent); either way this
+            // thread's budget is gone, so it stops (BVH scenes trace one photon per thread).
+            if (bvh_cut) { atomicAdd(cut.traversal_cut, 1u); break; }
+            if (bvh_spent) { atomicAdd(cut.photon_paths, 1u); break; }
             alive = false;
             continue;
         }

@@ -19,9 +19,9 @@ layout(local_size_x = 64) in;
 
 #include "types.glsl"
 #include "bindings.glsl"
-layout(std430, binding = 4) writeonly buffer HitPoints { HitPoint hit_points[]; };
-layout(std430, binding = 5) buffer Direct { dvec4 direct[]; };
-layout(std430, binding = 6) buffer Cut { PathCounters cut; };
+layout(std430, binding = 6) writeonly buffer HitPoints { HitPoint hit_points[]; };
+layout(std430, binding = 7) buffer Direct { dvec4 direct[]; };
+layout(std430, binding = 8) buffer Cut { PathCounters cut; };
 layout(push_constant) uniform RayPush {
     vec2 jitter;     // sample position inside the pixel, in [0,1)^2 (0.5, 0.5: the centre); negative:
                      // a random position per pixel (box filter)
@@ -29,6 +29,8 @@ layout(push_constant) uniform RayPush {
     uint pass;       // eye pass index: pixel p of pass k draws from stream k * pixels + p
     uint emission_samples; // extra paths per pixel that only collect emission (term (a) above)
     uint trace_hits; // 0: only the emission samples (PPM's passes after the first keep their hit points)
+    uint chunk;      // dispatch of this eye pass: the emission samples' streams are chunk << 48 | stream
+    uint pad0;
 } pc;
 
 #include "rng.glsl"
@@ -54,9 +56,14 @@ vec3 emission_sample(uint px, uint py, inout Rng rng) {
     vec3 d = camera_ray(px, py, jitter);
     vec3 thr = vec3(1.0);
     for (uint depth = 0u;; depth++) {
+        bvh_sync();
         if (depth >= params.max_eye_depth) { atomicAdd(cut.eye_paths, 1u); break; }
         Hit h;
-        if (!intersect_scene(o, d, 0.0, 1e30, h)) break;
+        if (!intersect_scene(o, d, 0.0, 1e30, h)) {
+            if (bvh_cut) atomicAdd(cut.traversal_cut, 1u);
+            if (bvh_spent) atomicAdd(cut.eye_paths, 1u);
+            break;
+        }
         Material m = materials[h.material];
         bool front = dot(d, h.normal) < 0.0;
         vec3 nf = front ? h.normal : -h.normal;
@@ -94,6 +101,7 @@ void main() {
     uint64_t stream = uint64_t(pc.pass) * pixels + uint64_t(pixel);
     dvec3 emitted = dvec3(0.0);
     uint samples = 0u;
+    bvh_left = params.eye_bvh_budget;
 
     if (pc.trace_hits != 0u) {
         Rng rng = rng_new(uint64_t(params.seed) | (uint64_t(pc.salt) << 32), stream);
@@ -112,9 +120,14 @@ void main() {
         while (sp > 0u) {
             Pending r = stack[--sp];
             for (;;) {
+                bvh_sync();
                 if (r.depth >= params.max_eye_depth) { atomicAdd(cut.eye_paths, 1u); break; }
                 Hit h;
-                if (!intersect_scene(r.o, r.d, 0.0, 1e30, h)) break;
+                if (!intersect_scene(r.o, r.d, 0.0, 1e30, h)) {
+                    if (bvh_cut) atomicAdd(cut.traversal_cut, 1u);
+                    if (bvh_spent) { atomicAdd(cut.eye_paths, 1u); sp = 0u; } // no budget for the rest
+                    break;
+                }
                 Material m = materials[h.material];
                 bool front = dot(r.d, h.normal) < 0.0;
                 vec3 nf = front ? h.normal : -h.normal;
@@ -162,16 +175,21 @@ void main() {
         }
         // A sample at a fixed point of the pixel (PPM's centre) would bias the box-filtered term (a):
         // it counts only when no random sample does.
-        if (pc.jitter.x < 0.0 || pc.emission_samples == 0u) {
+        if ((pc.jitter.x < 0.0 || pc.emission_samples == 0u) && !bvh_spent && !bvh_cut) {
             emitted += dvec3(hit_emitted);
             samples++;
         }
     }
 
-    Rng erng = rng_new(uint64_t(params.seed) | (uint64_t(SALT_EMISSION) << 32), stream);
+    Rng erng = rng_new(uint64_t(params.seed) | (uint64_t(SALT_EMISSION) << 32), (uint64_t(pc.chunk) << 48) | stream);
+    // Only whole samples count: once long paths have spent the thread's BVH budget (bvh_spent, counted),
+    // the remaining samples are not taken rather than taken as black.
     for (uint s = 0u; s < pc.emission_samples; s++) {
-        emitted += dvec3(emission_sample(px, py, erng));
+        if (bvh_spent || bvh_cut) break;
+        vec3 e = emission_sample(px, py, erng);
+        if (bvh_spent || bvh_cut) break;
+        emitted += dvec3(e);
+        samples++;
     }
-    samples += pc.emission_samples;
     if (samples > 0u) direct[pixel] += dvec4(emitted, double(samples));
 }

@@ -3,9 +3,10 @@
 
 use anyhow::{bail, Result};
 use glam::Vec3;
-use ppm_vk_kernels::layout::{self, Light, Material, Quad, RenderParams, Sphere};
+use ppm_vk_kernels::layout::{self, BvhNode, Light, Material, Quad, RenderParams, Sphere, Triangle, LIGHT_QUAD, LIGHT_TRIANGLE};
 use ppm_vk_kernels::lookup::SCAN_BLOCK;
 
+use crate::bvh::{self, BvhOptions, BvhStats, TriangleInput};
 use crate::scene::{Scene, Surface};
 use crate::settings::Settings;
 
@@ -17,6 +18,10 @@ pub struct GpuScene {
     pub spheres: Vec<Sphere>,
     pub quads: Vec<Quad>,
     pub lights: Vec<Light>,
+    /// The triangles of all meshes in a BVH: one empty leaf and no triangles without meshes.
+    pub bvh_nodes: Vec<BvhNode>,
+    pub bvh_triangles: Vec<Triangle>,
+    pub bvh_stats: BvhStats,
     /// The starting search radius of every hit point (eq. 8, or the setting).
     pub initial_radius: f32,
     /// Total emitted power of all lights, per channel (W, un-normalised photon flux sums to this).
@@ -46,16 +51,6 @@ pub fn default_radius(scene: &Scene) -> f32 {
 impl GpuScene {
     /// `photon_capacity` sizes the photon batch buffers (see `Renderer`).
     pub fn new(scene: &Scene, settings: &Settings, photon_capacity: u32) -> Result<GpuScene> {
-        // Refused rather than drawn without them: the kernels read spheres and quads only, so far.
-        if !scene.meshes.is_empty() {
-            bail!(
-                "scene {}: triangle meshes are not rendered yet ({} triangles in {} meshes): the \
-                 kernels trace spheres and quads only",
-                scene.name,
-                scene.triangle_count(),
-                scene.meshes.len()
-            );
-        }
         let materials: Vec<Material> = scene
             .materials
             .iter()
@@ -93,18 +88,39 @@ impl GpuScene {
             })
             .collect();
 
-        // Lights: emitting quads, chosen in proportion to their power (summed over RGB).
+        // Triangles: every mesh's, in one BVH (the meshes are already in world space).
+        let input: Vec<TriangleInput> = scene
+            .meshes
+            .iter()
+            .flat_map(|m| m.triangles().map(|t| TriangleInput { v: t.p, material: t.material }))
+            .collect();
+        let built = bvh::build(&input, &BvhOptions::default())?;
+        if !built.dropped.is_empty() {
+            // Scene validation drops degenerate triangles first, so this is a NaN or an area that rounds to 0.
+            bail!("scene {}: {} triangles are degenerate (zero area or not finite), e.g. input triangle {}", scene.name, built.dropped.len(), built.dropped[0]);
+        }
+
+        // Lights: emitting quads and triangles, chosen in proportion to their power (summed over RGB).
+        // A Lambertian emitter of radiance L and area A emits L A pi.
         let mut lights = Vec::new();
         let mut total_power = [0f64; 3];
-        for qi in scene.lights() {
-            let q = &scene.quads[qi as usize];
-            let e = scene.materials[q.material as usize].emission;
-            // A Lambertian emitter of radiance L and area A emits L A pi.
-            let power = e * q.area() * std::f32::consts::PI;
+        let mut add = |index: u32, kind: u32, emission: Vec3, area: f32| {
+            let power = emission * area * std::f32::consts::PI;
             for c in 0..3 {
                 total_power[c] += power[c] as f64;
             }
-            lights.push(Light { quad: qi, power: arr(power), ..Default::default() });
+            lights.push(Light { index, kind, power: arr(power), ..Default::default() });
+        };
+        for qi in scene.lights() {
+            let q = &scene.quads[qi as usize];
+            add(qi, LIGHT_QUAD, scene.materials[q.material as usize].emission, q.area());
+        }
+        for (ti, t) in built.triangles.iter().enumerate() {
+            let e = scene.materials[t.material as usize].emission;
+            if e.max_element() > 0.0 {
+                let (v0, v1, v2) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
+                add(ti as u32, LIGHT_TRIANGLE, e, 0.5 * (v1 - v0).cross(v2 - v0).length());
+            }
         }
         let sum: f64 = lights.iter().map(|l| l.power.iter().map(|&p| p as f64).sum::<f64>()).sum();
         if lights.is_empty() || sum <= 0.0 {
@@ -112,13 +128,26 @@ impl GpuScene {
         }
         let mut run = 0f64;
         for l in &mut lights {
-            let p = l.power.iter().map(|&p| p as f64).sum::<f64>() / sum;
-            run += p;
-            l.prob = p as f32;
+            run += l.power.iter().map(|&p| p as f64).sum::<f64>() / sum;
             l.cdf = run as f32;
         }
         if let Some(last) = lights.last_mut() {
             last.cdf = 1.0; // no photon may fall past the last light through rounding
+        }
+        // Each light's probability is the share of [0, 1) its f32 cdf gives it, so that power / prob stays
+        // unbiased where 100k lights make the rounding of the running sum matter.
+        let mut previous = 0f64;
+        for l in &mut lights {
+            l.prob = (l.cdf as f64 - previous) as f32;
+            previous = l.cdf as f64;
+        }
+        if let Some(i) = lights.iter().position(|l| !(l.prob > 0.0)) {
+            bail!(
+                "scene {}: light {i} of {} has too small a share of the total power to be chosen in an f32 \
+                 light table (split the scene's lights more evenly)",
+                scene.name,
+                lights.len()
+            );
         }
 
         // No photon carries more flux than it leaves its light with (roulette divides by the largest
@@ -163,6 +192,9 @@ impl GpuScene {
             num_spheres: spheres.len() as u32,
             num_quads: quads.len() as u32,
             num_lights: lights.len() as u32,
+            num_triangles: built.triangles.len() as u32,
+            photon_bvh_budget: u32::MAX,
+            eye_bvh_budget: u32::MAX,
             // Ray offsets (offset_ray in geometry.glsl): 2^-14 of the point's largest coordinate, ~512 f32
             // ulps, plus 1e-7 of the scene's size for points near the origin. Both scale with the scene.
             // Measured: smaller offsets let eye paths split at glass re-hit the surface they left (2^-16:
@@ -185,6 +217,9 @@ impl GpuScene {
             spheres,
             quads,
             lights,
+            bvh_nodes: built.nodes,
+            bvh_triangles: built.triangles,
+            bvh_stats: built.stats,
             initial_radius,
             total_power,
             lo: arr(lo),
@@ -220,6 +255,7 @@ impl GpuScene {
 fn scene_surface_area(scene: &Scene) -> f64 {
     scene.quads.iter().map(|q| q.area() as f64).sum::<f64>()
         + scene.spheres.iter().map(|s| 4.0 * std::f64::consts::PI * (s.radius as f64).powi(2)).sum::<f64>()
+        + scene.meshes.iter().flat_map(|m| m.triangles()).map(|t| t.area() as f64).sum::<f64>()
 }
 
 /// Buckets of the photon grid's hash table. Photons lie on surfaces, so the cells that ever hold one

@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::{bail, Context as _, Result};
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
 use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers, UpdatePush};
-use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon};
+use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, Triangle};
 use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PathLimits, PhotonPush, SALT_EYE, SALT_PHOTON, SALT_PROBE};
 use ppm_vk_kernels::probe::{self, ProbePush, MODE_PAPER, MODE_SCALE_FREE};
@@ -89,6 +89,8 @@ pub struct Renderer {
     quads: Buffer,
     materials: Buffer,
     lights: Buffer,
+    bvh_nodes: Buffer,
+    bvh_triangles: Buffer,
     /// `PathCounters`: paths cut at the depth backstops, over the whole render.
     cut: Buffer,
     limits: PathLimits,
@@ -173,16 +175,21 @@ impl Renderer {
         let mut gpu = GpuScene::new(scene, &settings, capacity)?;
         // Depth backstops and photons per thread that keep every loop inside the device's budget. The
         // intersection loops are counted as loops even where the specialised kernels unroll them.
-        let limits = PathLimits::new(
+        let limits = if gpu.params.num_triangles > 0 { PathLimits::with_bvh } else { PathLimits::new };
+        let limits = limits(
             ctx.info().loop_budget,
             gpu.params.num_spheres + gpu.params.num_quads,
-            gpu.params.num_lights,
-            settings.slots() + settings.emission_samples,
+            // choose_emitter's binary search
+            u32::BITS - gpu.params.num_lights.leading_zeros() + 1,
+            settings.slots(),
+            settings.emission_samples,
             settings.max_photon_depth,
             settings.max_eye_depth,
         )?;
         gpu.params.max_photon_depth = limits.photon_depth;
         gpu.params.max_eye_depth = limits.eye_depth;
+        gpu.params.photon_bvh_budget = limits.photon_bvh_budget;
+        gpu.params.eye_bvh_budget = limits.eye_bvh_budget;
         let cells = gpu.grid_allocated;
         let slots = gpu.slots() as u64;
         let pixels = gpu.pixels() as u64;
@@ -201,11 +208,22 @@ impl Renderer {
             Ok(())
         };
         need("the hit points", slots * std::mem::size_of::<HitPoint>() as u64)?;
+        let triangles = gpu.bvh_triangles.len() as u64;
+        if triangles * std::mem::size_of::<Triangle>() as u64 > max_range || gpu.bvh_nodes.len() as u64 * 32 > max_range {
+            bail!(
+                "the scene's {triangles} triangles need {} MiB for their BVH, more than this device's largest \
+                 buffer ({} MiB): use meshes of at most {} triangles in all",
+                (triangles * std::mem::size_of::<Triangle>() as u64 + gpu.bvh_nodes.len() as u64 * 32) >> 20,
+                max_range >> 20,
+                max_range / std::mem::size_of::<Triangle>() as u64
+            );
+        }
         need("the hit-point statistics", slots * std::mem::size_of::<HitStats>() as u64)?;
 
         // The tracing kernels with this scene compiled in, where it is small enough (see specialize.rs).
         let traced = |k: &reflected::KernelInfo| -> Result<ComputePipeline> {
-            if gpu.spheres.len() + gpu.quads.len() > MAX_INLINE_PRIMITIVES || !settings.specialize {
+            let inline = gpu.spheres.len() + gpu.quads.len() <= MAX_INLINE_PRIMITIVES && gpu.params.num_triangles == 0;
+            if !inline || !settings.specialize {
                 return pipeline(ctx, k);
             }
             let constants = specialize::scene_constants(&gpu.spheres, &gpu.quads, &gpu.lights);
@@ -236,6 +254,12 @@ impl Renderer {
             quads: ctx.buffer_from("quads", &gpu.quads)?,
             materials: ctx.buffer_from("materials", &gpu.materials)?,
             lights: ctx.buffer_from("lights", &gpu.lights)?,
+            bvh_nodes: ctx.buffer_from("BVH nodes", &gpu.bvh_nodes)?,
+            // One zeroed triangle where there are none (a buffer may not be empty); never read then.
+            bvh_triangles: match gpu.bvh_triangles.is_empty() {
+                true => ctx.buffer_from("BVH triangles", &[Triangle::default()])?,
+                false => ctx.buffer_from("BVH triangles", &gpu.bvh_triangles)?,
+            },
             cut: ctx.buffer_from("path counters", &[PathCounters::default()])?,
             limits,
             hit_points: storage("hit points", slots * std::mem::size_of::<HitPoint>() as u64)?,
@@ -267,6 +291,7 @@ impl Renderer {
             Ok(())
         })?;
         r.ray_ms = r.ray_pass(0, true)?.iter().map(|s| s.duration_ms).sum();
+        r.path_counters()?;
         // The gather walks the hit points in Morton order, so neighbouring threads read the same buckets.
         // PPM's hit points never move: order them by position once, on the host. SPPM's move every pass:
         // order the pixels by their screen position, which is nearly as coherent and never changes.
@@ -282,23 +307,44 @@ impl Renderer {
         Ok(r)
     }
 
-    /// The ray kernel's push constants for eye pass `eye_pass` (the CPU reference takes the same).
-    pub fn ray_push(&self, eye_pass: u32, trace_hits: bool) -> RayPush {
+    /// The ray kernel's dispatches for eye pass `eye_pass` (the CPU reference, `reference::eye_pass`,
+    /// takes the same): the first traces the hit points (with `trace_hits`) and as many emission samples as
+    /// the loop budget lets one thread take (`PathLimits::emission_per_dispatch`), the others the rest.
+    pub fn ray_pushes(&self, eye_pass: u32, trace_hits: bool) -> Vec<RayPush> {
         let jitter = match self.settings.mode {
             Mode::Ppm => [0.5, 0.5],
             Mode::Sppm => JITTER_RANDOM,
         };
-        RayPush {
+        let total = self.settings.emission_samples;
+        let per = self.limits.emission_per_dispatch.max(1);
+        let push = |chunk: u32, samples: u32, hits: bool| RayPush {
             jitter,
             salt: SALT_EYE,
             pass: eye_pass,
-            emission_samples: self.settings.emission_samples,
-            trace_hits: trace_hits as u32,
+            emission_samples: samples,
+            trace_hits: hits as u32,
+            chunk,
+            pad0: 0,
+        };
+        let mut pushes = vec![push(0, total.min(per), trace_hits)];
+        let mut done = total.min(per);
+        while done < total {
+            let n = (total - done).min(per);
+            pushes.push(push(pushes.len() as u32, n, false));
+            done += n;
         }
+        pushes
     }
 
     fn scene_buffers(&self) -> SceneBuffers<'_> {
-        SceneBuffers { params: &self.params, spheres: &self.spheres, quads: &self.quads, materials: &self.materials }
+        SceneBuffers {
+            params: &self.params,
+            spheres: &self.spheres,
+            quads: &self.quads,
+            materials: &self.materials,
+            bvh_nodes: &self.bvh_nodes,
+            bvh_triangles: &self.bvh_triangles,
+        }
     }
 
     fn hit_buffers(&self) -> HitBuffers<'_> {
@@ -309,13 +355,19 @@ impl Renderer {
     /// a random point of each pixel; with `trace_hits` false only the emission samples (PPM's later passes).
     fn ray_pass(&mut self, eye_pass: u32, trace_hits: bool) -> Result<Vec<ScopeTiming>> {
         self.profiler.reset();
-        let push = self.ray_push(eye_pass, trace_hits);
+        let pushes = self.ray_pushes(eye_pass, trace_hits);
         let pixels = self.gpu.pixels();
         let scene = self.scene_buffers();
         let (profiler, k) = (&self.profiler, &self.kernels);
         let (hit_points, direct, cut) = (&self.hit_points, &self.direct, &self.cut);
         self.ctx.run(|cmd| {
-            profiler.scope(cmd, "ray", || ray::record(&k.ray, cmd, &scene, hit_points, direct, cut, pixels, &push))?;
+            profiler.scope(cmd, "ray", || {
+                for push in &pushes {
+                    ray::record(&k.ray, cmd, &scene, hit_points, direct, cut, pixels, push)?;
+                    barrier(&self.ctx, cmd); // the next dispatch adds to the same `direct`
+                }
+                Ok(())
+            })?;
             barrier(&self.ctx, cmd);
             Ok(())
         })?;
@@ -556,8 +608,21 @@ impl Renderer {
     }
 
     /// Paths cut at the depth backstops so far (photon passes including the probe's, and eye passes).
+    /// Fails if a BVH traversal ran out of the device's loop budget: its hit, and so the image, would be
+    /// wrong.
     pub fn path_counters(&self) -> Result<PathCounters> {
         let c: Vec<PathCounters> = self.ctx.download_prefix(&self.cut, 1)?;
+        if c[0].traversal_cut > 0 {
+            bail!(
+                "{} ray(s) through the triangle BVH reached the device's limit on loop iterations (lavapipe: \
+                 65535 per SIMD group; this render leaves photon threads {} and eye threads {} traversal \
+                 steps) and were stopped: the scene's triangles overlap so much that a ray visits most of \
+                 them (degenerate or duplicated geometry?)",
+                c[0].traversal_cut,
+                self.limits.photon_bvh_budget,
+                self.limits.eye_bvh_budget
+            );
+        }
         Ok(c[0])
     }
 
@@ -627,6 +692,7 @@ impl Renderer {
         self.ctx.run(|cmd| self.record_batch(cmd, first, count, 0, use_))?;
         let n: Vec<u32> = self.ctx.download_prefix(&self.counter, 1)?;
         self.check_lookups()?;
+        self.path_counters()?;
         if n[0] > self.gpu.params.photon_capacity {
             bail!("a test batch of {count} photons left {} records, over the capacity {}", n[0], self.gpu.params.photon_capacity);
         }

@@ -95,7 +95,7 @@ impl Default for Settings {
             hit_slots: 4,
             max_eye_depth: 1024,
             max_photon_depth: 4096,
-            emission_samples: 4,
+            emission_samples: 16,
             specialize: true,
             grid_buckets: None,
             grid_cell: None,

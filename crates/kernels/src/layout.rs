@@ -54,14 +54,17 @@ gpu_struct!(Quad { origin, material, edge_u, area, edge_v, plane_d, normal, pad0
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Light {
-    pub quad: u32,
+    /// Into the quads ([`LIGHT_QUAD`]) or the BVH's leaf-ordered triangles ([`LIGHT_TRIANGLE`]).
+    pub index: u32,
     pub cdf: f32,
     pub prob: f32,
-    pub pad0: f32,
+    pub kind: u32,
     pub power: [f32; 3],
     pub pad1: f32,
 }
-gpu_struct!(Light { quad, cdf, prob, pad0, power, pad1 });
+gpu_struct!(Light { index, cdf, prob, kind, power, pad1 });
+pub const LIGHT_QUAD: u32 = 0;
+pub const LIGHT_TRIANGLE: u32 = 1;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -90,11 +93,17 @@ pub struct RenderParams {
     pub flux_fixed: f32,
     /// Ray offset per unit of the point's largest coordinate.
     pub eps_rel: f32,
+    /// Triangles in the BVH (0: the kernels do not traverse it).
+    pub num_triangles: u32,
+    /// BVH traversal steps one photon thread / one eye thread may take in all (`PathLimits`).
+    pub photon_bvh_budget: u32,
+    pub eye_bvh_budget: u32,
+    pub pad0: u32,
 }
 gpu_struct!(RenderParams {
     eye, tan_half_fov, right, aspect, up, width, forward, height, grid_min, cell_size, grid_mask,
     num_spheres, num_quads, num_lights, eps, max_photon_depth, max_eye_depth, hit_slots, photon_capacity,
-    seed, flux_fixed, eps_rel
+    seed, flux_fixed, eps_rel, num_triangles, photon_bvh_budget, eye_bvh_budget, pad0
 });
 
 #[repr(C)]
@@ -157,8 +166,11 @@ const _: () = assert!(std::mem::offset_of!(Photon, cell) == 12 && std::mem::size
 pub struct PathCounters {
     pub photon_paths: u32,
     pub eye_paths: u32,
+    /// Paths whose BVH traversal ran out of the loop budget: the renderer stops with an error.
+    pub traversal_cut: u32,
+    pub pad0: u32,
 }
-gpu_struct!(PathCounters { photon_paths, eye_paths });
+gpu_struct!(PathCounters { photon_paths, eye_paths, traversal_cut, pad0 });
 
 /// `BvhNode::count_axis & 3` of a leaf (`BVH_LEAF` in bvh.glsl); 0-2 is an interior node's split axis.
 pub const BVH_LEAF: u32 = 3;

@@ -48,6 +48,11 @@ pub const MIN_EYE_DEPTH: u32 = 64;
 /// thread's loop runs at most `per_thread * ((photon_depth + 1) * (1 + P) + L) + 1` iterations (P the
 /// iterations of one intersection, L of choosing a light), and an eye thread's at most
 /// `paths * ((eye_depth + 1) * (1 + P) + 2)`. Paths that reach a backstop are counted (`PathCounters`).
+///
+/// With triangles, a BVH traversal takes a number of steps no bound fits well, so each thread gets the
+/// budget its other loops leave (`photon_bvh_budget`, `eye_bvh_budget`) and counts what its traversals
+/// take; one that would overrun stops and is counted (`PathCounters::traversal_cut`), and the renderer
+/// fails: never a silent miss. Such scenes trace one photon per thread, to leave each path the most.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PathLimits {
     pub per_thread: u32,
@@ -55,16 +60,44 @@ pub struct PathLimits {
     pub photon_depth: u32,
     /// Specular bounces of an eye path (`RenderParams::max_eye_depth`).
     pub eye_depth: u32,
+    /// BVH steps a photon thread / an eye thread may take in all (`u32::MAX`: unlimited).
+    pub photon_bvh_budget: u32,
+    pub eye_bvh_budget: u32,
+    /// Emission samples one eye thread takes per dispatch; an eye pass that wants more runs the ray kernel
+    /// again for the rest (`RayPush::chunk`).
+    pub emission_per_dispatch: u32,
 }
+
+/// Specular bounces aimed at for an eye path without a BVH (a mirror of reflectance 0.95 keeps 2e-6 of a
+/// path's weight after 256).
+const EYE_DEPTH: u32 = 256;
+/// Emission samples per eye thread and dispatch with a BVH, so each path keeps a share of the budget.
+const BVH_EMISSION_PER_DISPATCH: u32 = 4;
+
+/// Depths aimed at with a BVH: deep enough for roulette to end paths (0.95^512 < 4e-12), shallow enough to
+/// leave most of the loop budget to traversal.
+const BVH_PHOTON_DEPTH: u32 = 512;
+const BVH_EYE_DEPTH: u32 = 128;
+/// The least BVH budget a thread is left: about 100 traversals of a million-triangle BVH (58 steps per
+/// ray measured, docs/measurements/bvh-build.txt) with room for incoherent ones.
+pub const MIN_BVH_BUDGET: u32 = 16384;
 
 impl PathLimits {
     /// `budget`: the device's loop budget (`None`: unlimited); `intersect_steps`: loop iterations of one
     /// scene intersection (primitives looped over, or 0 when unrolled); `lights`: iterations of choosing a
-    /// light; `eye_paths`: paths one eye thread traces (hit-point slots + emission samples); `photon_cap`
-    /// and `eye_cap`: the depths asked for (Settings).
-    pub fn new(budget: Option<u32>, intersect_steps: u32, lights: u32, eye_paths: u32, photon_cap: u32, eye_cap: u32) -> Result<PathLimits> {
+    /// light; `slots`: hit-point paths one eye thread traces; `emission`: emission samples per pixel and
+    /// eye pass; `photon_cap` and `eye_cap`: the depths asked for (Settings).
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(budget: Option<u32>, intersect_steps: u32, lights: u32, slots: u32, emission: u32, photon_cap: u32, eye_cap: u32) -> Result<PathLimits> {
         let Some(budget) = budget else {
-            return Ok(PathLimits { per_thread: MAX_PER_THREAD, photon_depth: photon_cap, eye_depth: eye_cap });
+            return Ok(PathLimits {
+                per_thread: MAX_PER_THREAD,
+                photon_depth: photon_cap,
+                eye_depth: eye_cap,
+                photon_bvh_budget: u32::MAX,
+                eye_bvh_budget: u32::MAX,
+                emission_per_dispatch: emission,
+            });
         };
         let step = 1 + intersect_steps as u64;
         let budget = budget as u64 - 1;
@@ -73,8 +106,17 @@ impl PathLimits {
         let per_thread = (budget / ((want + 1) * step + lights as u64)).clamp(1, MAX_PER_THREAD as u64);
         let photon_fit = (budget / per_thread).saturating_sub(lights as u64) / step;
         let photon_depth = photon_fit.saturating_sub(1).min(photon_cap as u64) as u32;
-        let eye_fit = (budget / eye_paths.max(1) as u64).saturating_sub(2) / step;
-        let eye_depth = eye_fit.saturating_sub(1).min(eye_cap as u64) as u32;
+        // Eye threads: the hit-point paths and as many emission samples as fit at EYE_DEPTH; the rest of the
+        // samples go to further dispatches. Where not even one sample fits, as deep as the paths allow.
+        let eye_target = EYE_DEPTH.min(eye_cap);
+        let fit = budget / ((eye_target as u64 + 1) * step + 2);
+        let least = slots as u64 + emission.min(1) as u64;
+        let (eye_depth, emission_per_dispatch) = if fit >= least {
+            (eye_target, (fit - slots as u64).min(emission as u64) as u32)
+        } else {
+            let depth = ((budget / least.max(1)).saturating_sub(2) / step).saturating_sub(1);
+            (depth.min(eye_cap as u64) as u32, emission.min(1))
+        };
         if photon_depth < MIN_DEPTH.min(photon_cap) || eye_depth < MIN_EYE_DEPTH.min(eye_cap) {
             bail!(
                 "the scene is too large for this device's loop budget ({} iterations per SIMD group): one ray \
@@ -84,7 +126,57 @@ impl PathLimits {
                 budget + 1
             );
         }
-        Ok(PathLimits { per_thread: per_thread as u32, photon_depth, eye_depth })
+        Ok(PathLimits {
+            per_thread: per_thread as u32,
+            photon_depth,
+            eye_depth,
+            photon_bvh_budget: u32::MAX,
+            eye_bvh_budget: u32::MAX,
+            emission_per_dispatch,
+        })
+    }
+
+    /// Paths one eye thread traces in a dispatch: the hit-point slots and its emission samples.
+    pub fn eye_paths(&self, slots: u32) -> u32 {
+        slots + self.emission_per_dispatch
+    }
+
+    /// The limits of a scene with a triangle BVH: one photon per thread, and what the depths leave of the
+    /// budget goes to traversal (see the struct). Arguments as [`PathLimits::new`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_bvh(budget: Option<u32>, intersect_steps: u32, lights: u32, slots: u32, emission: u32, photon_cap: u32, eye_cap: u32) -> Result<PathLimits> {
+        let Some(budget) = budget else {
+            return PathLimits::new(None, intersect_steps, lights, slots, emission, photon_cap, eye_cap);
+        };
+        let emission_per_dispatch = emission.min(BVH_EMISSION_PER_DISPATCH);
+        let eye_paths = slots + emission_per_dispatch;
+        let step = 1 + intersect_steps as u64;
+        let total = budget as u64 - 1;
+        let photon_loops = |depth: u32| (depth as u64 + 1) * step + lights as u64 + 1;
+        let eye_loops = |depth: u32| eye_paths.max(1) as u64 * ((depth as u64 + 1) * step + 2);
+        let fit = |mut depth: u32, floor: u32, loops: &dyn Fn(u32) -> u64| -> Option<(u32, u32)> {
+            loop {
+                let left = total.saturating_sub(loops(depth));
+                if left >= MIN_BVH_BUDGET as u64 {
+                    return Some((depth, left as u32));
+                }
+                if depth <= floor {
+                    return None;
+                }
+                depth = (depth / 2).max(floor);
+            }
+        };
+        let photon = fit(BVH_PHOTON_DEPTH.min(photon_cap), MIN_DEPTH.min(photon_cap), &photon_loops);
+        let eye = fit(BVH_EYE_DEPTH.min(eye_cap), MIN_EYE_DEPTH.min(eye_cap), &eye_loops);
+        let (Some((photon_depth, photon_bvh_budget)), Some((eye_depth, eye_bvh_budget))) = (photon, eye) else {
+            bail!(
+                "the scene is too large for this device's loop budget ({budget} iterations per SIMD group): \
+                 one ray intersection loops over {intersect_steps} primitives besides the triangle BVH, which \
+                 leaves too little for traversal (put the spheres and quads in meshes, or use fewer hit slots \
+                 and emission samples)"
+            );
+        };
+        Ok(PathLimits { per_thread: 1, photon_depth, eye_depth, photon_bvh_budget, eye_bvh_budget, emission_per_dispatch })
     }
 }
 
@@ -104,7 +196,7 @@ pub fn record(
 ) -> Result<()> {
     k.dispatch(
         cmd,
-        &[scene.params, scene.spheres, scene.quads, scene.materials, lights, photons, counter, cut],
+        &[&scene.bindings()[..], &[lights, photons, counter, cut]].concat(),
         bytemuck::bytes_of(push),
         push.count.div_ceil(push.per_thread.max(1)) as u64,
     )
@@ -115,41 +207,58 @@ mod tests {
     use super::*;
 
     /// Worst-case loop iterations of one photon thread and one eye thread, as the struct's doc counts them.
-    fn worst(l: &PathLimits, steps: u32, lights: u32, eye_paths: u32) -> (u64, u64) {
+    fn worst(l: &PathLimits, steps: u32, lights: u32, slots: u32) -> (u64, u64) {
         let step = 1 + steps as u64;
         (
             l.per_thread as u64 * ((l.photon_depth as u64 + 1) * step + lights as u64) + 1,
-            eye_paths as u64 * ((l.eye_depth as u64 + 1) * step + 2),
+            l.eye_paths(slots) as u64 * ((l.eye_depth as u64 + 1) * step + 2),
         )
     }
 
     #[test]
     fn limits_fit_the_budget_and_reach_the_target_depth() {
-        for (steps, lights, eye_paths) in [(0, 0, 1), (10, 1, 5), (11, 2, 12), (64, 1, 8), (100, 3, 1)] {
-            let l = PathLimits::new(Some(65535), steps, lights, eye_paths, 4096, 4096).unwrap();
-            let (photon, eye) = worst(&l, steps, lights, eye_paths);
+        for (steps, lights, slots, emission) in [(0, 0, 1, 0), (10, 1, 1, 16), (11, 2, 4, 16), (64, 1, 8, 16), (100, 3, 1, 4), (70, 2, 4, 16)] {
+            let l = PathLimits::new(Some(65535), steps, lights, slots, emission, 4096, 1024).unwrap();
+            let (photon, eye) = worst(&l, steps, lights, slots);
             assert!(photon <= 65535 && eye <= 65535, "{steps} steps: {l:?} needs {photon} / {eye}");
             assert!(l.photon_depth >= MIN_DEPTH && l.eye_depth >= MIN_EYE_DEPTH, "{l:?}");
+            assert!(l.emission_per_dispatch >= emission.min(1) && l.emission_per_dispatch <= emission, "{l:?}");
             // The budget is used, not wasted: one more bounce would not fit.
             let deeper = PathLimits { photon_depth: l.photon_depth + 1, ..l };
-            assert!(l.photon_depth == 4096 || worst(&deeper, steps, lights, eye_paths).0 > 65535, "{l:?}");
+            assert!(l.photon_depth == 4096 || worst(&deeper, steps, lights, slots).0 > 65535, "{l:?}");
         }
-        // Small scenes keep 8 photons per thread at the target depth.
-        let l = PathLimits::new(Some(65535), 11, 1, 5, 4096, 4096).unwrap();
-        assert!(l.per_thread == 8 && l.photon_depth >= TARGET_DEPTH, "{l:?}");
+        // Small scenes keep 8 photons per thread at the target depth and every emission sample in one go.
+        let l = PathLimits::new(Some(65535), 11, 1, 1, 16, 4096, 1024).unwrap();
+        assert!(l.per_thread == 8 && l.photon_depth >= TARGET_DEPTH && l.emission_per_dispatch == 16, "{l:?}");
     }
 
     #[test]
     fn caps_are_kept_and_an_unlimited_device_takes_them() {
-        let l = PathLimits::new(Some(65535), 11, 1, 5, 40, 3).unwrap();
+        let l = PathLimits::new(Some(65535), 11, 1, 4, 1, 40, 3).unwrap();
         assert_eq!((l.photon_depth, l.eye_depth), (40, 3));
-        let l = PathLimits::new(None, 1000, 1, 5, 4096, 1024).unwrap();
-        assert_eq!(l, PathLimits { per_thread: MAX_PER_THREAD, photon_depth: 4096, eye_depth: 1024 });
+        let l = PathLimits::new(None, 1000, 1, 4, 16, 4096, 1024).unwrap();
+        assert_eq!(l.per_thread, MAX_PER_THREAD);
+        assert_eq!((l.photon_depth, l.eye_depth, l.photon_bvh_budget, l.eye_bvh_budget), (4096, 1024, u32::MAX, u32::MAX));
+        assert_eq!(l.emission_per_dispatch, 16);
     }
 
     #[test]
     fn a_scene_too_large_for_the_budget_is_an_error() {
-        let e = PathLimits::new(Some(65535), 1000, 1, 5, 4096, 4096).unwrap_err().to_string();
+        let e = PathLimits::new(Some(65535), 1000, 1, 4, 1, 4096, 4096).unwrap_err().to_string();
         assert!(e.contains("loop budget") && e.contains("1000 primitives"), "{e}");
+    }
+
+    #[test]
+    fn bvh_limits_leave_the_traversal_its_budget() {
+        for (steps, lights, slots, emission) in [(0, 1, 1, 16), (10, 18, 4, 16), (60, 3, 8, 4)] {
+            let l = PathLimits::with_bvh(Some(65535), steps, lights, slots, emission, 4096, 1024).unwrap();
+            let step = 1 + steps as u64;
+            let photon = (l.photon_depth as u64 + 1) * step + lights as u64 + 1 + l.photon_bvh_budget as u64;
+            let eye = l.eye_paths(slots) as u64 * ((l.eye_depth as u64 + 1) * step + 2) + l.eye_bvh_budget as u64;
+            assert!(photon <= 65534 && eye <= 65534, "{l:?}");
+            assert!(l.per_thread == 1 && l.photon_bvh_budget >= MIN_BVH_BUDGET && l.eye_bvh_budget >= MIN_BVH_BUDGET, "{l:?}");
+            assert!(l.photon_depth >= MIN_DEPTH && l.eye_depth >= MIN_EYE_DEPTH, "{l:?}");
+        }
+        assert!(PathLimits::with_bvh(Some(65535), 500, 1, 8, 4, 4096, 1024).is_err());
     }
 }

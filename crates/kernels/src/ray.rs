@@ -19,18 +19,32 @@ pub struct RayPush {
     pub emission_samples: u32,
     /// 1: trace the hit-point path; 0: only the emission samples.
     pub trace_hits: u32,
+    /// Which dispatch of the eye pass this is: an eye pass whose emission samples do not fit one thread's
+    /// loop budget runs in several (`PathLimits::emission_per_dispatch`), each with its own streams.
+    pub chunk: u32,
+    pub pad0: u32,
 }
 
 /// `RayPush::jitter` for a random position in every pixel (SPPM's box filter).
 pub const JITTER_RANDOM: [f32; 2] = [-1.0, -1.0];
 push_struct!(RayPush, RAY);
 
-/// The scene as the tracing kernels see it (bindings 0-3 of `ray` and `photon`).
+/// The scene as the tracing kernels see it (bindings 0-5 of `ray` and `photon`).
 pub struct SceneBuffers<'a> {
     pub params: &'a Buffer,
     pub spheres: &'a Buffer,
     pub quads: &'a Buffer,
     pub materials: &'a Buffer,
+    /// The triangle BVH (`BvhNode`, `Triangle`); one empty leaf without meshes.
+    pub bvh_nodes: &'a Buffer,
+    pub bvh_triangles: &'a Buffer,
+}
+
+impl SceneBuffers<'_> {
+    /// Bindings 0-5 in order.
+    pub fn bindings(&self) -> [&Buffer; 6] {
+        [self.params, self.spheres, self.quads, self.materials, self.bvh_nodes, self.bvh_triangles]
+    }
 }
 
 /// Writes `hit_slots` hit points per pixel into `hit_points` (with `push.trace_hits`), adds the emission
@@ -49,7 +63,7 @@ pub fn record(
 ) -> Result<()> {
     k.dispatch(
         cmd,
-        &[scene.params, scene.spheres, scene.quads, scene.materials, hit_points, direct, cut],
+        &[&scene.bindings()[..], &[hit_points, direct, cut]].concat(),
         bytemuck::bytes_of(push),
         pixels as u64,
     )

@@ -7,7 +7,7 @@ pub mod rng;
 pub mod trace;
 
 use glam::{DVec3, Vec3};
-use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon, EMPTY_SLOT, SURFACE_DIFFUSE, SURFACE_MIRROR};
+use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon, EMPTY_SLOT, LIGHT_TRIANGLE, SURFACE_DIFFUSE, SURFACE_MIRROR};
 use ppm_vk_kernels::photon::SALT_EMISSION;
 use ppm_vk_kernels::ray::RayPush;
 
@@ -71,7 +71,26 @@ pub struct EyePass {
     pub cut: u32,
 }
 
-/// Eye pass `push.pass` as `ray.comp` runs it: hit points (with `push.trace_hits`; a negative `jitter`
+/// A whole eye pass: the ray kernel's dispatches `pushes` (`Renderer::ray_pushes`), hit points from the
+/// one that traces them, emission samples summed over all.
+pub fn eye_pass(g: &GpuScene, pushes: &[RayPush]) -> EyePass {
+    let mut out = EyePass { hits: Vec::new(), direct: vec![[0f64; 4]; g.pixels() as usize], cut: 0 };
+    for push in pushes {
+        let one = ray_pass(g, push);
+        if push.trace_hits != 0 {
+            out.hits = one.hits;
+        }
+        for (d, e) in out.direct.iter_mut().zip(&one.direct) {
+            for c in 0..4 {
+                d[c] += e[c];
+            }
+        }
+        out.cut += one.cut;
+    }
+    out
+}
+
+/// One dispatch of eye pass `push.pass` as `ray.comp` runs it: hit points (with `push.trace_hits`; a negative `jitter`
 /// draws a random position in each pixel) and the emission samples.
 pub fn ray_pass(g: &GpuScene, push: &RayPush) -> EyePass {
     let p = &g.params;
@@ -165,7 +184,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush) -> EyePass {
                 samples += 1;
             }
         }
-        let mut rng = Rng::new(p.seed as u64 | ((SALT_EMISSION as u64) << 32), stream);
+        let mut rng = Rng::new(p.seed as u64 | ((SALT_EMISSION as u64) << 32), ((push.chunk as u64) << 48) | stream);
         for _ in 0..push.emission_samples {
             emitted += emission_sample(g, px, py, &mut rng, &mut out.cut).as_dvec3();
         }
@@ -188,13 +207,23 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
         li += 1;
     }
     let light = &g.lights[li];
-    let q = &g.quads[light.quad as usize];
-    let a = rng.float();
-    let b = rng.float();
-    let mut o = offset_ray(g, v3(q.origin) + a * v3(q.edge_u) + b * v3(q.edge_v), v3(q.normal));
+    // The light's parallelogram or triangle: origin, edges, front normal (photon.comp's Emitter).
+    let (origin, eu, ev, normal, triangle) = if light.kind == LIGHT_TRIANGLE {
+        let t = &g.bvh_triangles[light.index as usize];
+        (v3(t.v0), v3(t.v1) - v3(t.v0), v3(t.v2) - v3(t.v0), bvh::normal(t), true)
+    } else {
+        let q = &g.quads[light.index as usize];
+        (v3(q.origin), v3(q.edge_u), v3(q.edge_v), v3(q.normal), false)
+    };
+    let mut a = rng.float();
+    let mut b = rng.float();
+    if triangle && a + b > 1.0 {
+        (a, b) = (1.0 - a, 1.0 - b);
+    }
+    let mut o = offset_ray(g, origin + a * eu + b * ev, normal);
     let u1 = rng.float();
     let u2 = rng.float();
-    let mut d = cosine_direction(v3(q.normal), u1, u2);
+    let mut d = cosine_direction(normal, u1, u2);
     let mut flux = v3(light.power) / light.prob;
     for _ in 0..p.max_photon_depth {
         let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else { return true };

@@ -56,13 +56,26 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
         best = t;
         found = Some((1, i));
     }
+    if !g.bvh_triangles.is_empty() {
+        // Unlimited budget: where the GPU's traversal is cut, the renderer fails instead.
+        let tr = super::bvh::intersect(&g.bvh_nodes, &g.bvh_triangles, o, d, tmin, best, u32::MAX);
+        if let Some(h) = tr.hit {
+            best = h.t;
+            found = Some((2, h.triangle as usize));
+        }
+    }
     let (kind, i) = found?;
     let pos = o + best * d;
-    Some(if kind == 0 {
-        let s = &g.spheres[i];
-        Hit { pos, normal: (pos - v3(s.center)) * (1.0 / s.radius), material: s.material }
-    } else {
-        Hit { pos, normal: v3(g.quads[i].normal), material: g.quads[i].material }
+    Some(match kind {
+        0 => {
+            let s = &g.spheres[i];
+            Hit { pos, normal: (pos - v3(s.center)) * (1.0 / s.radius), material: s.material }
+        }
+        1 => Hit { pos, normal: v3(g.quads[i].normal), material: g.quads[i].material },
+        _ => {
+            let t = &g.bvh_triangles[i];
+            Hit { pos, normal: super::bvh::normal(t), material: t.material }
+        }
     })
 }
 

@@ -827,15 +827,16 @@ mod tests {
     }
 
     #[test]
-    fn mesh_scenes_are_refused_by_the_renderer_for_now() {
+    fn mesh_scenes_become_gpu_scenes_with_a_bvh() {
         for name in ["cornell-mesh", "furnace-mesh", "cornell-glass-mesh"] {
             let s = demo_scene(name);
-            let e = crate::gpu_scene::GpuScene::new(&s, &crate::Settings::default(), 1 << 16)
-                .expect_err("meshes are not rendered yet");
-            assert!(
-                format!("{e:#}").contains("triangle meshes are not rendered yet"),
-                "{e:#}"
-            );
+            let g = crate::gpu_scene::GpuScene::new(&s, &crate::Settings::default(), 1 << 16).unwrap();
+            assert_eq!(g.params.num_triangles as usize, s.triangle_count(), "{name}");
+            assert_eq!(g.bvh_triangles.len(), s.triangle_count(), "{name}");
+            let tri_lights = g.lights.iter().filter(|l| l.kind == ppm_vk_kernels::layout::LIGHT_TRIANGLE).count();
+            assert_eq!(tri_lights, s.emitting_triangles().len(), "{name}");
+            let p: f64 = g.lights.iter().map(|l| l.prob as f64).sum();
+            assert!((p - 1.0).abs() < 1e-6, "{name}: light probabilities sum to {p}");
         }
     }
 
