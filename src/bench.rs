@@ -123,7 +123,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
         "sppm" => Mode::Sppm,
         other => bail!("--mode {other:?}: expected ppm or sppm"),
     };
+    let loading = std::time::Instant::now();
     let base = crate::load_scene(&args.scene)?;
+    let load_s = loading.elapsed().as_secs_f64();
     let ctx = args.device.open()?;
     let info = ctx.info().clone();
     println!("device: {} ({}, {})", info.name, info.kind, info.driver);
@@ -164,6 +166,19 @@ pub fn run(args: BenchArgs) -> Result<()> {
         ctx.reset_memory_peak();
         reset_peak_rss();
         let mut renderer = Renderer::new(&ctx, &scene, settings)?;
+        let bvh = renderer.gpu_scene().bvh_stats.clone();
+        if bvh.triangles > 0 && results.is_empty() {
+            println!(
+                "scene: {} triangles loaded in {:.2} s; BVH built in {:.2} s ({:.2} M triangles/s), {} nodes, depth {}, {:.1} MiB",
+                bvh.triangles,
+                load_s,
+                bvh.build_seconds,
+                bvh.triangles as f64 / bvh.build_seconds.max(1e-9) / 1e6,
+                bvh.nodes,
+                bvh.depth,
+                mib((bvh.nodes * 32 + bvh.triangles * 48) as u64)
+            );
+        }
         for _ in 0..args.warmup {
             renderer.pass()?;
         }
@@ -207,6 +222,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
             "pass_wall_ms_all": measured.iter().map(|p| p.wall_ms).collect::<Vec<_>>(),
             "resolve_ms_median": resolve_ms,
             "photons_per_second": rate * 1e6,
+            "photon_stage_ns_per_photon": stage[1] * 1e6 / case.photons as f64,
+            "bvh": {
+                "triangles": bvh.triangles,
+                "nodes": bvh.nodes,
+                "depth": bvh.depth,
+                "build_seconds": bvh.build_seconds,
+                "bytes": bvh.nodes * 32 + bvh.triangles * 48,
+            },
             "device_memory": {
                 "peak_reserved_bytes": dev_after.peak_reserved_bytes,
                 "in_use_bytes_after_warmup": dev_before.in_use_bytes,

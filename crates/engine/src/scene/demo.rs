@@ -68,6 +68,11 @@ pub const FILES: &[DemoFile] = &[
         make: water_obj,
     },
     DemoFile {
+        name: "dense-sphere.obj",
+        committed: false,
+        make: dense_sphere_obj,
+    },
+    DemoFile {
         name: "water.mtl",
         committed: false,
         make: water_mtl,
@@ -452,6 +457,19 @@ fn furnace_sphere_mtl() -> String {
 /// Level 5: 20480 triangles, unit radius at the origin, no MTL (the scene gives the material).
 fn glass_sphere_obj() -> String {
     sphere_model(5, false, None, "sphere").write(None)
+}
+
+/// Level 8: 1310720 triangles, unit radius at the origin, flat (no normals), no MTL: the million-triangle
+/// benchmark scene (`scenes/cornell-dense.toml`).
+fn dense_sphere_obj() -> String {
+    let (v, f) = icosphere(8);
+    let mut m = Model { v, ..Model::default() };
+    m.group("sphere", None);
+    for t in f {
+        let centre = t.iter().map(|&i| m.v[i as usize]).sum::<DVec3>();
+        m.face(t, [NO_NORMAL; 3], centre);
+    }
+    m.write(None)
 }
 
 /// Waves of the water surface: (amplitude, wavelength, direction in radians, phase), all metres.
