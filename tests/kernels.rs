@@ -51,12 +51,12 @@ fn hit_points_agree(a: &HitPoint, b: &HitPoint, pos_tol: f32, weight_tol: f32) -
 fn ray_pass_matches_reference_case(specialize: bool) {
     let ctx = ctx();
     let scene = cornell(RES, RES);
-    let r = Renderer::new(&ctx, &scene, Settings { specialize, ..settings() }).unwrap();
-    let g = r.gpu_scene();
-    let g_samples = r.settings().emission_samples;
+    let mut r = Renderer::new(&ctx, &scene, Settings { specialize, ..settings() }).unwrap();
+    let g = r.gpu_scene().clone();
+    let g = &g;
     let gpu_hits = r.read_hit_points().unwrap();
     let gpu_direct = r.read_direct().unwrap();
-    let eye = reference::eye_pass(g, &r.ray_pushes(0, true));
+    let eye = reference::eye_pass(g, &r.ray_pushes(0, true), &mut vec![0; g.pixels() as usize]);
     let (cpu_hits, cpu_direct) = (eye.hits, eye.direct);
     assert_eq!(gpu_hits.len(), cpu_hits.len());
     assert_eq!(gpu_hits.len(), (RES * RES * g.params.hit_slots) as usize);
@@ -93,20 +93,43 @@ fn ray_pass_matches_reference_case(specialize: bool) {
     // ulp) and still found a diffuse surface: measured 0-1 of 4096; at most 0.1% allowed.
     assert!(agree_loose * 1000 >= slots * 999, "{} of {slots} hit points differ by more than 10x the tolerances", slots - agree_loose);
 
-    // Direct emission: the same throughput products in f32, so 1e-4 relative (of at least 1) is ~1000
-    // ulps of slack; a pixel may differ only where its path diverged, as above. The sample counts agree
-    // exactly (the emission samples and no centre sample: PPM's centre would bias the box filter).
-    assert!(gpu_direct.iter().zip(&cpu_direct).all(|(a, b)| a[3] == b[3] && a[3] == g_samples as f64));
-    let direct_ok = gpu_direct
-        .iter()
-        .zip(&cpu_direct)
-        .filter(|(a, b)| (0..3).all(|c| close(a[c], b[c], 1e-4, 1e-4)))
-        .count();
-    let lit = gpu_direct.iter().filter(|d| d[0] > 0.0).count();
-    println!("direct: {direct_ok} of {} pixels agree, {lit} see the light", gpu_direct.len());
-    assert!(lit > 0, "no pixel sees the light directly");
-    assert!(direct_ok >= gpu_direct.len() * 995 / 1000, "direct emission agrees on {direct_ok} of {} pixels", gpu_direct.len());
+    // PPM's pass 0 adds no emission: its samples are the pilot's, and its centre sample would bias the
+    // box filter.
+    assert!(gpu_direct.iter().chain(&cpu_direct).all(|d| d[3] == 0.0));
+    emission_passes_match_reference(&mut r);
     assert_clean(&ctx);
+}
+
+/// The pilot eye pass (0) and eye pass 1 on the GPU against the CPU reference: the pixels the pilot marks,
+/// then pass 1's emission samples, their sum and count (all of them in marked pixels, one elsewhere).
+/// Sums are the same throughput products in f32: 1e-4 relative (of at least 1) is ~1000 ulps of slack; a
+/// pixel may differ only where a path diverged at a threshold.
+fn emission_passes_match_reference(r: &mut Renderer) {
+    let g = r.gpu_scene().clone();
+    let pixels = g.pixels() as usize;
+    let mut busy = vec![0u32; pixels];
+    reference::eye_pass(&g, &r.ray_pushes(0, true), &mut busy);
+    let gpu_busy = r.read_busy().unwrap();
+    let same = busy.iter().zip(&gpu_busy).filter(|(a, b)| a == b).count();
+    let marked = busy.iter().filter(|&&b| b != 0).count();
+    println!("pilot: {marked} of {pixels} pixels marked, GPU and CPU agree on {same}");
+    assert!(marked > 0 && marked < pixels, "{marked} of {pixels} pixels marked");
+    assert!(same * 1000 >= pixels * 995, "marks agree on {same} of {pixels} pixels");
+    let before = r.read_direct().unwrap();
+    r.pass().unwrap(); // eye pass 1, then photons
+    let after = r.read_direct().unwrap();
+    let cpu = reference::eye_pass(&g, &r.ray_pushes(1, r.settings().mode == Mode::Sppm), &mut busy.clone()).direct;
+    let gpu: Vec<[f64; 4]> = after.iter().zip(&before).map(|(a, b)| [0, 1, 2, 3].map(|c| a[c] - b[c])).collect();
+    let e = r.settings().emission_samples as f64;
+    let hit = (r.settings().mode == Mode::Sppm) as u32 as f64; // SPPM's jittered hit path is a sample too
+    for (i, d) in cpu.iter().enumerate() {
+        assert_eq!(d[3], if busy[i] != 0 { e } else { 1.0 } + hit, "pixel {i}: CPU sample count");
+    }
+    let ok = gpu.iter().zip(&cpu).filter(|(a, b)| (0..4).all(|c| close(a[c], b[c], 1e-4, 1e-4))).count();
+    let lit = gpu.iter().filter(|d| d[0] > 0.0).count();
+    println!("direct: {ok} of {pixels} pixels agree, {lit} see the light");
+    assert!(lit > 0, "no pixel sees the light directly");
+    assert!(ok * 1000 >= pixels * 995, "direct emission agrees on {ok} of {pixels} pixels");
 }
 
 /// With the scene compiled into the tracing kernels (the default).
@@ -663,11 +686,7 @@ fn photon_records_match_reference_with_one_photon_per_thread() {
     if ctx.info().loop_budget.is_some() {
         assert!(pushes.len() > 1, "the eye pass was expected to need several dispatches");
     }
-    let gpu_direct = r.read_direct().unwrap();
-    let cpu_direct = reference::eye_pass(r.gpu_scene(), &pushes).direct;
-    assert!(gpu_direct.iter().zip(&cpu_direct).all(|(a, b)| a[3] == b[3] && a[3] == r.settings().emission_samples as f64));
-    let agree = gpu_direct.iter().zip(&cpu_direct).filter(|(a, b)| (0..3).all(|c| close(a[c], b[c], 1e-4, 1e-4))).count();
-    assert!(agree * 1000 >= gpu_direct.len() * 995, "direct emission agrees on {agree} of {} pixels", gpu_direct.len());
+    emission_passes_match_reference(&mut r);
     let gpu = r.trace_and_gather(0, PHOTONS).unwrap();
     let cpu = reference::photon_pass(r.gpu_scene(), 0, PHOTONS, SALT_PHOTON);
     let matched = match_records(&gpu, &cpu, 1e-4 * scene_extent(&scene));

@@ -21,7 +21,7 @@ fn sppm(photons: u32) -> Settings {
 fn check_eye_pass(r: &Renderer, pass: u32) {
     let g = r.gpu_scene();
     let gpu = r.read_hit_points().unwrap();
-    let cpu = reference::eye_pass(g, &r.ray_pushes(pass, true)).hits;
+    let cpu = reference::eye_pass(g, &r.ray_pushes(pass, true), &mut vec![0; g.pixels() as usize]).hits;
     assert_eq!(gpu.len(), (RES * RES) as usize, "SPPM keeps one hit point per pixel");
     let tol = 1e-4 * 4.0;
     let agree = gpu

@@ -458,7 +458,7 @@ fn rays_grazing_a_sphere_give_finite_hits_that_match_the_reference() {
     let ctx = ctx();
     let r = Renderer::new(&ctx, &scene, small(20_000)).unwrap();
     let gpu = r.read_hit_points().unwrap();
-    let cpu = reference::eye_pass(r.gpu_scene(), &r.ray_pushes(0, true)).hits;
+    let cpu = reference::eye_pass(r.gpu_scene(), &r.ray_pushes(0, true), &mut vec![0; r.gpu_scene().pixels() as usize]).hits;
     let mut on_sphere = 0;
     for (i, (a, b)) in gpu.iter().zip(&cpu).enumerate() {
         if a.is_empty() {

@@ -13,6 +13,13 @@
 // = 1): each is an unbiased sample of (a), independent of (b). `direct` sums them in double over all
 // eye passes (rgb) with their count (w); the resolve divides. The hit-point path's own emission is one
 // more such sample when its position is random (SPPM), or the only one when there are no others.
+//
+// Most pixels see only diffuse, non-emitting surfaces, where (a) is 0 and samples are wasted. Eye pass 0
+// is a pilot: its emission samples only mark (in `busy`) the pixels where one met a mirror, glass or an
+// emitter, and are not added. Later passes take all their samples in marked pixels and one in the others.
+// The pooled mean stays unbiased because every count is fixed before the samples it counts are drawn:
+// the marks depend on the pilot's samples only, which are not in the sum (pooling samples that had
+// chosen their own count would bias it).
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 64) in;
@@ -22,6 +29,7 @@ layout(local_size_x = 64) in;
 layout(std430, binding = 6) writeonly buffer HitPoints { HitPoint hit_points[]; };
 layout(std430, binding = 7) buffer Direct { dvec4 direct[]; };
 layout(std430, binding = 8) buffer Cut { PathCounters cut; };
+layout(std430, binding = 9) buffer Busy { uint busy[]; }; // 1: the pilot saw mirror, glass or emission here
 layout(push_constant) uniform RayPush {
     vec2 jitter;     // sample position inside the pixel, in [0,1)^2 (0.5, 0.5: the centre); negative:
                      // a random position per pixel (box filter)
@@ -30,7 +38,7 @@ layout(push_constant) uniform RayPush {
     uint emission_samples; // extra paths per pixel that only collect emission (term (a) above)
     uint trace_hits; // 0: only the emission samples (PPM's passes after the first keep their hit points)
     uint chunk;      // dispatch of this eye pass: the emission samples' streams are chunk << 48 | stream
-    uint pad0;
+    uint pilot;      // 1: eye pass 0, whose emission samples only set `busy`
 } pc;
 
 #include "rng.glsl"
@@ -50,7 +58,8 @@ vec3 camera_ray(uint px, uint py, vec2 jitter) {
 }
 
 // One emission sample: the emission met along the specular chain from the eye through `jitter`.
-vec3 emission_sample(uint px, uint py, inout Rng rng) {
+// `seen`: set if the path met a mirror, glass or the front of an emitter.
+vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen) {
     vec2 jitter = vec2(rng_float(rng), rng_float(rng));
     vec3 o = params.eye;
     vec3 d = camera_ray(px, py, jitter);
@@ -68,8 +77,11 @@ vec3 emission_sample(uint px, uint py, inout Rng rng) {
         bool front = dot(d, h.normal) < 0.0;
         vec3 nf = front ? h.normal : -h.normal;
         if (m.surface == SURFACE_DIFFUSE) {
-            return front ? thr * m.emission : vec3(0.0); // emitters are one-sided
+            vec3 e = front ? thr * m.emission : vec3(0.0); // emitters are one-sided
+            if (max(e.r, max(e.g, e.b)) > 0.0) seen = true;
+            return e;
         }
+        seen = true;
         if (m.surface == SURFACE_MIRROR) {
             thr *= m.color;
             d = reflect(d, nf);
@@ -184,12 +196,17 @@ void main() {
     Rng erng = rng_new(uint64_t(params.seed) | (uint64_t(SALT_EMISSION) << 32), (uint64_t(pc.chunk) << 48) | stream);
     // Only whole samples count: once long paths have spent the thread's BVH budget (bvh_spent, counted),
     // the remaining samples are not taken rather than taken as black.
-    for (uint s = 0u; s < pc.emission_samples; s++) {
+    uint want = pc.emission_samples;
+    if (pc.pilot == 0u && busy[pixel] == 0u) want = pc.chunk == 0u ? min(want, 1u) : 0u;
+    bool seen = false;
+    for (uint s = 0u; s < want; s++) {
         if (bvh_spent || bvh_cut) break;
-        vec3 e = emission_sample(px, py, erng);
+        vec3 e = emission_sample(px, py, erng, seen);
         if (bvh_spent || bvh_cut) break;
+        if (pc.pilot != 0u) continue;
         emitted += dvec3(e);
         samples++;
     }
+    if (pc.pilot != 0u && seen) busy[pixel] = 1u;
     if (samples > 0u) direct[pixel] += dvec4(emitted, double(samples));
 }

@@ -101,6 +101,8 @@ pub struct Renderer {
     order: Buffer,
     active: u32,
     direct: Buffer,
+    /// Per pixel, 1 where the pilot eye pass met mirror, glass or emission (ray.comp).
+    busy: Buffer,
     image: Buffer,
     photons: Buffer,
     counter: Buffer,
@@ -268,6 +270,7 @@ impl Renderer {
             order: storage("hit-point order", slots * 4)?,
             active: 0,
             direct: storage("direct emission", pixels * 32)?,
+            busy: storage("emission-sampled pixels", pixels * 4)?,
             image: storage("image", pixels * 16)?,
             photons: storage("photon records", capacity as u64 * record_size)?,
             counter: storage("photon counter", 4)?,
@@ -288,6 +291,7 @@ impl Renderer {
         r.ctx.run(|cmd| {
             r.accum.cmd_fill(cmd, 0);
             r.direct.cmd_fill(cmd, 0);
+            r.busy.cmd_fill(cmd, 0);
             Ok(())
         })?;
         r.ray_ms = r.ray_pass(0, true)?.iter().map(|s| s.duration_ms).sum();
@@ -324,7 +328,7 @@ impl Renderer {
             emission_samples: samples,
             trace_hits: hits as u32,
             chunk,
-            pad0: 0,
+            pilot: (eye_pass == 0) as u32,
         };
         let mut pushes = vec![push(0, total.min(per), trace_hits)];
         let mut done = total.min(per);
@@ -359,11 +363,11 @@ impl Renderer {
         let pixels = self.gpu.pixels();
         let scene = self.scene_buffers();
         let (profiler, k) = (&self.profiler, &self.kernels);
-        let (hit_points, direct, cut) = (&self.hit_points, &self.direct, &self.cut);
+        let (hit_points, direct, cut, busy) = (&self.hit_points, &self.direct, &self.cut, &self.busy);
         self.ctx.run(|cmd| {
             profiler.scope(cmd, "ray", || {
                 for push in &pushes {
-                    ray::record(&k.ray, cmd, &scene, hit_points, direct, cut, pixels, push)?;
+                    ray::record(&k.ray, cmd, &scene, hit_points, direct, cut, busy, pixels, push)?;
                     barrier(&self.ctx, cmd); // the next dispatch adds to the same `direct`
                 }
                 Ok(())
@@ -508,14 +512,13 @@ impl Renderer {
         let total = self.settings.photons_per_pass;
         // SPPM traces new hit points before every photon pass but the first, which uses the eye pass the
         // renderer was made with (and probed).
-        // PPM keeps its hit points; its later eye passes only add emission samples.
+        // PPM keeps its hit points; an eye pass per photon pass adds emission samples (eye pass 0, in
+        // `new`, was the pilot that only marks the pixels needing them: ray.comp).
         let mut stages = Vec::new();
-        if self.passes > 0 {
-            match self.settings.mode {
-                Mode::Sppm => stages = self.ray_pass(self.passes as u32, true)?,
-                Mode::Ppm if self.settings.emission_samples > 0 => stages = self.ray_pass(self.passes as u32, false)?,
-                Mode::Ppm => {}
-            }
+        match self.settings.mode {
+            Mode::Sppm if self.passes > 0 => stages = self.ray_pass(self.passes as u32, true)?,
+            Mode::Ppm if self.settings.emission_samples > 0 => stages = self.ray_pass(self.passes as u32 + 1, false)?,
+            _ => {}
         }
         let (batch_stages, records, batches) = self.run_batches(self.emitted, total, GridUse::Gather)?;
         stages.extend(batch_stages);
@@ -643,6 +646,11 @@ impl Renderer {
 
     pub fn read_accum(&self) -> Result<Vec<PassAccum>> {
         self.ctx.download_prefix(&self.accum, self.gpu.slots() as usize)
+    }
+
+    /// Per pixel, 1 where the pilot eye pass marked it for all its emission samples.
+    pub fn read_busy(&self) -> Result<Vec<u32>> {
+        self.ctx.download_prefix(&self.busy, self.gpu.pixels() as usize)
     }
 
     /// Per pixel: the emission samples' sum (rgb) and count (w).

@@ -22,7 +22,8 @@ pub struct RayPush {
     /// Which dispatch of the eye pass this is: an eye pass whose emission samples do not fit one thread's
     /// loop budget runs in several (`PathLimits::emission_per_dispatch`), each with its own streams.
     pub chunk: u32,
-    pub pad0: u32,
+    /// 1: eye pass 0, a pilot whose emission samples only mark the pixels that need them (ray.comp).
+    pub pilot: u32,
 }
 
 /// `RayPush::jitter` for a random position in every pixel (SPPM's box filter).
@@ -58,12 +59,13 @@ pub fn record(
     hit_points: &Buffer,
     direct: &Buffer,
     cut: &Buffer,
+    busy: &Buffer,
     pixels: u32,
     push: &RayPush,
 ) -> Result<()> {
     k.dispatch(
         cmd,
-        &[&scene.bindings()[..], &[hit_points, direct, cut]].concat(),
+        &[&scene.bindings()[..], &[hit_points, direct, cut, busy]].concat(),
         bytemuck::bytes_of(push),
         pixels as u64,
     )

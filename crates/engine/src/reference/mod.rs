@@ -26,8 +26,8 @@ fn camera_ray(g: &GpuScene, px: u32, py: u32, j: [f32; 2]) -> Vec3 {
 
 /// One emission-only eye sample of ray.comp's `emission_sample`: the emission met along the specular chain
 /// through a random point of the pixel, one Fresnel branch chosen with probability f. `cut` counts a path
-/// ended at the depth backstop.
-fn emission_sample(g: &GpuScene, px: u32, py: u32, rng: &mut Rng, cut: &mut u32) -> Vec3 {
+/// ended at the depth backstop; `seen` is set if the path met a mirror, glass or an emitter's front.
+fn emission_sample(g: &GpuScene, px: u32, py: u32, rng: &mut Rng, cut: &mut u32, seen: &mut bool) -> Vec3 {
     let j = [rng.float(), rng.float()];
     let mut o = v3(g.params.eye);
     let mut d = camera_ray(g, px, py, j);
@@ -38,8 +38,11 @@ fn emission_sample(g: &GpuScene, px: u32, py: u32, rng: &mut Rng, cut: &mut u32)
         let front = d.dot(h.normal) < 0.0;
         let nf = if front { h.normal } else { -h.normal };
         if m.surface == SURFACE_DIFFUSE {
-            return if front { thr * v3(m.emission) } else { Vec3::ZERO };
+            let e = if front { thr * v3(m.emission) } else { Vec3::ZERO };
+            *seen |= e.max_element() > 0.0;
+            return e;
         }
+        *seen = true;
         if m.surface == SURFACE_MIRROR {
             thr *= v3(m.color);
             d = reflect(d, nf);
@@ -73,10 +76,11 @@ pub struct EyePass {
 
 /// A whole eye pass: the ray kernel's dispatches `pushes` (`Renderer::ray_pushes`), hit points from the
 /// one that traces them, emission samples summed over all.
-pub fn eye_pass(g: &GpuScene, pushes: &[RayPush]) -> EyePass {
+/// `busy`: per pixel, whether the pilot marked it (ray.comp); the pilot pass (push.pilot) sets it.
+pub fn eye_pass(g: &GpuScene, pushes: &[RayPush], busy: &mut [u32]) -> EyePass {
     let mut out = EyePass { hits: Vec::new(), direct: vec![[0f64; 4]; g.pixels() as usize], cut: 0 };
     for push in pushes {
-        let one = ray_pass(g, push);
+        let one = ray_pass(g, push, busy);
         if push.trace_hits != 0 {
             out.hits = one.hits;
         }
@@ -92,7 +96,7 @@ pub fn eye_pass(g: &GpuScene, pushes: &[RayPush]) -> EyePass {
 
 /// One dispatch of eye pass `push.pass` as `ray.comp` runs it: hit points (with `push.trace_hits`; a negative `jitter`
 /// draws a random position in each pixel) and the emission samples.
-pub fn ray_pass(g: &GpuScene, push: &RayPush) -> EyePass {
+pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
     let p = &g.params;
     let slots = p.hit_slots as usize;
     let trace_hits = push.trace_hits != 0;
@@ -185,10 +189,22 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush) -> EyePass {
             }
         }
         let mut rng = Rng::new(p.seed as u64 | ((SALT_EMISSION as u64) << 32), ((push.chunk as u64) << 48) | stream);
-        for _ in 0..push.emission_samples {
-            emitted += emission_sample(g, px, py, &mut rng, &mut out.cut).as_dvec3();
+        let pilot = push.pilot != 0;
+        let mut want = push.emission_samples;
+        if !pilot && busy[pixel as usize] == 0 {
+            want = if push.chunk == 0 { want.min(1) } else { 0 };
         }
-        samples += push.emission_samples;
+        let mut seen = false;
+        for _ in 0..want {
+            let e = emission_sample(g, px, py, &mut rng, &mut out.cut, &mut seen);
+            if !pilot {
+                emitted += e.as_dvec3();
+                samples += 1;
+            }
+        }
+        if pilot && seen {
+            busy[pixel as usize] = 1;
+        }
         if samples > 0 {
             out.direct[pixel as usize] = [emitted.x, emitted.y, emitted.z, samples as f64];
         }
