@@ -416,8 +416,8 @@ fn render(args: RenderArgs) -> Result<()> {
             let l = renderer.path_limits();
             eprintln!(
                 "warning: {} photon paths reached {} surface interactions and {} eye paths {} specular bounces, \
-                 and were ended there: the scene traps light (facing mirrors, albedo near 1); the energy they \
-                 still carried is missing from the image",
+                 and were ended there: the scene traps light (glass by internal reflection, facing mirrors, \
+                 albedo near 1); the energy they still carried is missing from the image",
                 last.photon_paths_cut, l.photon_depth, last.eye_paths_cut, l.eye_depth
             );
         }
