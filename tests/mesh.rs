@@ -150,13 +150,12 @@ fn a_degenerate_bvh_stops_the_render_instead_of_losing_hits() {
     let floor = s.quads.iter().position(|q| q.normal().y > 0.9).unwrap();
     let q = s.quads[floor];
     let mut mesh = Mesh { name: "stack".into(), positions: Vec::new(), normals: None, indices: Vec::new(), materials: Vec::new() };
-    for k in 0..70_000u32 {
-        let lift = Vec3::Y * 1e-3;
+    let lift = Vec3::Y * 1e-3;
+    for _ in 0..70_000u32 {
         let base = mesh.positions.len() as u32;
         mesh.positions.extend([q.origin + lift, q.origin + q.edge_u + lift, q.origin + q.edge_v + lift]);
         mesh.indices.push([base, base + 1, base + 2]);
         mesh.materials.push(q.material);
-        let _ = k;
     }
     s.meshes.push(mesh);
     let ctx = ctx();
