@@ -3,6 +3,7 @@
 #ifndef GEOMETRY_GLSL
 #define GEOMETRY_GLSL
 #include "bvh.glsl"
+#include "sampling.glsl"
 
 // BVH traversal steps this thread's subgroup may still take (lavapipe's loop budget, less what the
 // kernel's other loops may take: PathLimits). Kernels set bvh_left at the start and call bvh_sync() at the
@@ -26,6 +27,23 @@ void bvh_sync() {
 // the scene's size was wrong for a scene with one huge primitive: a 1000 m floor made it 10 cm.)
 vec3 offset_ray(vec3 p, vec3 n) {
     return p + (params.eps_rel * max(max(abs(p.x), abs(p.y)), abs(p.z)) + params.eps) * n;
+}
+
+// One branch at a smooth dielectric, reflection with probability f (Fresnel) else refraction: the
+// branch's weight f / f = 1 leaves the path's throughput as it is. `u` uniform in [0, 1); nf faces the
+// incoming ray; o and d become the new ray.
+void glass_branch(vec3 pos, vec3 nf, bool front, float ior, float u, inout vec3 o, inout vec3 d) {
+    float eta = front ? 1.0 / ior : ior;
+    float cos_i = -dot(d, nf);
+    float cos_t;
+    float f = fresnel_dielectric(cos_i, eta, cos_t);
+    if (u < f) {
+        d = reflect(d, nf);
+        o = offset_ray(pos, nf);
+    } else {
+        d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
+        o = offset_ray(pos, -nf);
+    }
 }
 
 struct Hit {

@@ -154,17 +154,7 @@ void main() {
             d = reflect(d, nf);
             o = offset_ray(h.pos, nf);
         } else {
-            float eta = front ? 1.0 / m.ior : m.ior;
-            float cos_i = -dot(d, nf);
-            float cos_t;
-            float f = fresnel_dielectric(cos_i, eta, cos_t);
-            if (rng_float(rng) < f) {
-                d = reflect(d, nf);
-                o = offset_ray(h.pos, nf);
-            } else {
-                d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
-                o = offset_ray(h.pos, -nf);
-            }
+            glass_branch(h.pos, nf, front, m.ior, rng_float(rng), o, d);
         }
     }
 }

@@ -88,17 +88,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen) {
             o = offset_ray(h.pos, nf);
             continue;
         }
-        float eta = front ? 1.0 / m.ior : m.ior;
-        float cos_i = -dot(d, nf);
-        float cos_t;
-        float f = fresnel_dielectric(cos_i, eta, cos_t);
-        if (rng_float(rng) < f) {
-            d = reflect(d, nf);
-            o = offset_ray(h.pos, nf);
-        } else {
-            d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
-            o = offset_ray(h.pos, -nf);
-        }
+        glass_branch(h.pos, nf, front, m.ior, rng_float(rng), o, d);
     }
     return vec3(0.0);
 }

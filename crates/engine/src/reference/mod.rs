@@ -14,7 +14,7 @@ use ppm_vk_kernels::ray::RayPush;
 use crate::gpu_scene::GpuScene;
 use crate::settings::ProbeMode;
 use rng::Rng;
-use trace::{cosine_direction, fresnel_dielectric, intersect_scene, oct_decode, oct_encode, offset_ray, reflect, v3, PI};
+use trace::{cosine_direction, fresnel_dielectric, glass_branch, intersect_scene, oct_decode, oct_encode, offset_ray, reflect, v3, PI};
 
 /// The camera ray through point `jitter` of pixel (px, py), as ray.comp's `camera_ray`.
 fn camera_ray(g: &GpuScene, px: u32, py: u32, j: [f32; 2]) -> Vec3 {
@@ -49,16 +49,7 @@ fn emission_sample(g: &GpuScene, px: u32, py: u32, rng: &mut Rng, cut: &mut u32,
             o = offset_ray(g, h.pos, nf);
             continue;
         }
-        let eta = if front { 1.0 / m.ior } else { m.ior };
-        let cos_i = -d.dot(nf);
-        let (f, cos_t) = fresnel_dielectric(cos_i, eta);
-        if rng.float() < f {
-            d = reflect(d, nf);
-            o = offset_ray(g, h.pos, nf);
-        } else {
-            d = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
-            o = offset_ray(g, h.pos, -nf);
-        }
+        (o, d) = glass_branch(g, h.pos, nf, front, m.ior, rng.float(), d);
     }
     *cut += 1;
     Vec3::ZERO
@@ -266,16 +257,7 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             d = reflect(d, nf);
             o = offset_ray(g, h.pos, nf);
         } else {
-            let eta = if front { 1.0 / m.ior } else { m.ior };
-            let cos_i = -d.dot(nf);
-            let (f, cos_t) = fresnel_dielectric(cos_i, eta);
-            if rng.float() < f {
-                d = reflect(d, nf);
-                o = offset_ray(g, h.pos, nf);
-            } else {
-                d = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
-                o = offset_ray(g, h.pos, -nf);
-            }
+            (o, d) = glass_branch(g, h.pos, nf, front, m.ior, rng.float(), d);
         }
     }
     false

@@ -84,6 +84,19 @@ pub fn offset_ray(g: &GpuScene, p: Vec3, n: Vec3) -> Vec3 {
     p + (g.params.eps_rel * p.abs().max_element() + g.params.eps) * n
 }
 
+/// geometry.glsl's `glass_branch`: reflection with probability f (Fresnel), else refraction, for the
+/// uniform number `u`; `nf` faces the incoming direction `d`. Returns the new (origin, direction).
+pub fn glass_branch(g: &GpuScene, pos: Vec3, nf: Vec3, front: bool, ior: f32, u: f32, d: Vec3) -> (Vec3, Vec3) {
+    let eta = if front { 1.0 / ior } else { ior };
+    let cos_i = -d.dot(nf);
+    let (f, cos_t) = fresnel_dielectric(cos_i, eta);
+    if u < f {
+        (offset_ray(g, pos, nf), reflect(d, nf))
+    } else {
+        (offset_ray(g, pos, -nf), (eta * d + (eta * cos_i - cos_t) * nf).normalize())
+    }
+}
+
 /// GLSL's reflect(d, n) = d - 2 dot(n, d) n.
 pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
     d - 2.0 * n.dot(d) * n
