@@ -167,3 +167,43 @@ fn bad_input_is_a_clear_error() {
     let e = fails(&["render", CORNELL, "--report", "/tmp/r.txt", "--passes", "1", "--photons-per-pass", "1000", "--resolution", "8x8", "--out", "/tmp/ppm-vk-never.png"]);
     assert!(e.contains(".json or .csv"), "{e}");
 }
+
+/// Paths ended at a depth backstop are a warning once they are more than a rounding accident: a camera
+/// between two parallel perfect mirrors (its centre pixel looks along the corridor for ever) gets one,
+/// and the run report counts the cut paths; cornell-spheres gets none.
+#[test]
+fn render_warns_when_light_is_trapped() {
+    let dir = scratch("trapped");
+    let scene = dir.join("corridor.toml");
+    std::fs::write(
+        &scene,
+        "[camera]\neye = [0.0, 0.0, 0.0]\nlook_at = [0.0, 0.0, -1.0]\nup = [0.0, 1.0, 0.0]\nvfov = 40.0\n\
+         resolution = [9, 9]\n[materials.mirror]\nmirror = [1.0, 1.0, 1.0]\n[materials.light]\nemission = [5.0, 5.0, 5.0]\n\
+         [[quad]]\norigin = [-5.0, -5.0, -1.0]\nedge_u = [10.0, 0.0, 0.0]\nedge_v = [0.0, 10.0, 0.0]\nmaterial = \"mirror\"\n\
+         [[quad]]\norigin = [-5.0, -5.0, 1.0]\nedge_u = [0.0, 10.0, 0.0]\nedge_v = [10.0, 0.0, 0.0]\nmaterial = \"mirror\"\n\
+         [[quad]]\norigin = [-0.2, 0.9, -0.2]\nedge_u = [0.4, 0.0, 0.0]\nedge_v = [0.0, 0.0, 0.4]\nmaterial = \"light\"\n",
+    )
+    .unwrap();
+    let report = dir.join("run.json");
+    let run = bin()
+        .args(["render", "--passes", "1", "--photons-per-pass", "10000", "--mode", "ppm", "--emission-samples", "0", "--out"])
+        .arg(dir.join("img.exr"))
+        .arg("--report")
+        .arg(&report)
+        .arg(&scene)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(stderr.contains("warning:") && stderr.contains("specular bounces"), "{stderr}");
+    let report: RunReport = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert!(report.passes[0].eye_paths_cut >= 1);
+    let quiet = bin()
+        .args(["render", CORNELL, "--passes", "2", "--photons-per-pass", "20000", "--resolution", "32x32", "--out"])
+        .arg(dir.join("cornell.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&quiet.stderr);
+    assert!(quiet.status.success() && !stderr.contains("warning:"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
