@@ -4,6 +4,7 @@
 mod common;
 
 use common::{assert_clean, cornell, ctx};
+use ppm_vk_engine::layout::{HitPoint, HitStats};
 use ppm_vk_engine::reference;
 use ppm_vk_engine::{ProbeMode, Renderer, Settings};
 use ppm_vk_kernels::photon::SALT_PROBE;
@@ -15,18 +16,24 @@ fn settings(probe: ProbeMode) -> Settings {
     Settings { mode: ppm_vk_engine::Mode::Ppm, photons_per_pass: 20_000, probe, probe_photons: Some(PROBE_PHOTONS), ..Settings::default() }
 }
 
+/// The renderer's hit points and probed statistics, the CPU probe of the same hit points, and eq. 8's r:
+/// the CPU traces the same probe photons (same streams) and probes every hit point by brute force.
+fn gpu_and_cpu_probe(r: &Renderer) -> (Vec<HitPoint>, Vec<HitStats>, Vec<(f64, f64)>, f64) {
+    let g = r.gpu_scene();
+    let hits = r.read_hit_points().unwrap();
+    let gpu = r.read_stats().unwrap();
+    let photons = reference::photon_pass(g, 0, PROBE_PHOTONS, SALT_PROBE);
+    let r0 = g.initial_radius as f64;
+    let start = vec![HitStats { r2: r0 * r0, ..Default::default() }; hits.len()];
+    let cpu = reference::probe(&hits, &start, &photons, r.settings().probe, r.settings().probe_beta);
+    (hits, gpu, cpu, r0)
+}
+
 fn probe_case(mode: ProbeMode) {
     let ctx = ctx();
     let scene = cornell(RES, RES);
     let r = Renderer::new(&ctx, &scene, settings(mode)).unwrap();
-    let g = r.gpu_scene().clone();
-    let hits = r.read_hit_points().unwrap();
-    let gpu = r.read_stats().unwrap();
-    // The CPU traces the same probe photons (same streams) and probes every hit point by brute force.
-    let photons = reference::photon_pass(&g, 0, PROBE_PHOTONS, SALT_PROBE);
-    let r0 = g.initial_radius as f64;
-    let start = vec![ppm_vk_engine::layout::HitStats { r2: r0 * r0, ..Default::default() }; hits.len()];
-    let cpu = reference::probe(&hits, &start, &photons, mode, r.settings().probe_beta);
+    let (hits, gpu, cpu, r0) = gpu_and_cpu_probe(&r);
     let (mut live, mut agree, mut enlarged, mut worst) = (0usize, 0usize, 0usize, 0f64);
     for (i, (h, (s, (ratio, r2)))) in hits.iter().zip(gpu.iter().zip(&cpu)).enumerate() {
         if h.is_empty() {
@@ -170,13 +177,7 @@ fn sppm_probe_leaves_pixels_without_a_hit_point_at_r() {
     let scene = cornell(RES, RES);
     let settings = Settings { mode: ppm_vk_engine::Mode::Sppm, ..settings(ProbeMode::ScaleFree) };
     let r = Renderer::new(&ctx, &scene, settings).unwrap();
-    let g = r.gpu_scene().clone();
-    let hits = r.read_hit_points().unwrap();
-    let gpu = r.read_stats().unwrap();
-    let photons = reference::photon_pass(&g, 0, PROBE_PHOTONS, SALT_PROBE);
-    let r0 = g.initial_radius as f64;
-    let start = vec![ppm_vk_engine::layout::HitStats { r2: r0 * r0, ..Default::default() }; hits.len()];
-    let cpu = reference::probe(&hits, &start, &photons, ProbeMode::ScaleFree, r.settings().probe_beta);
+    let (hits, gpu, cpu, r0) = gpu_and_cpu_probe(&r);
     let empty: Vec<usize> = (0..hits.len()).filter(|&i| hits[i].is_empty()).collect();
     println!("{} of {} pixels have no hit point", empty.len(), hits.len());
     assert!(!empty.is_empty(), "the test needs pixels without a hit point (the light is in view)");

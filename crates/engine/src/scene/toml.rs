@@ -686,6 +686,12 @@ material = "light"
     /// Asserts the error is located at `line` and names `path`.
     fn assert_err(text: &str, line: usize, path: &str, needle: &str) {
         let e = err(text);
+        assert_located(&e, line, path, needle);
+        assert!(!e.contains('\n'), "error {e:?} should be one line");
+    }
+
+    /// Asserts that error text `e` starts at `t.toml:line:`, names field `path` and contains `needle`.
+    fn assert_located(e: &str, line: usize, path: &str, needle: &str) {
         let prefix = format!("t.toml:{line}:");
         assert!(
             e.starts_with(&prefix),
@@ -696,7 +702,6 @@ material = "light"
             "error {e:?} should name field {path:?}"
         );
         assert!(e.contains(needle), "error {e:?} should contain {needle:?}");
-        assert!(!e.contains('\n'), "error {e:?} should be one line");
     }
 
     #[test]
@@ -1347,16 +1352,7 @@ material = "light"
             Ok(_) => panic!("expected an error for\n{lines}"),
             Err(e) => format!("{e:#}").replace(&format!("{}/", dir.0.display()), ""),
         };
-        let prefix = format!("t.toml:{line}:");
-        assert!(
-            e.starts_with(&prefix),
-            "error {e:?} should start with {prefix:?}"
-        );
-        assert!(
-            e.contains(&format!(" {path}: ")),
-            "error {e:?} should name {path:?}"
-        );
-        assert!(e.contains(needle), "error {e:?} should contain {needle:?}");
+        assert_located(&e, line, path, needle);
     }
 
     fn positions(s: &Scene) -> Vec<Vec3> {
