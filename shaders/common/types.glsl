@@ -134,6 +134,16 @@ struct Photon {
     uint dir;        // direction of travel, octahedral snorm 2x16
 };
 
+// A Photon as the four 64-bit words of its std430 layout (layout.rs asserts the offsets), low half first.
+// lavapipe stores a vector one component per lane: four words are half the scattered stores of eight
+// fields (photon.comp's append, grid_scatter.comp's copy).
+u64vec4 photon_words(Photon p) {
+    return u64vec4(packUint2x32(uvec2(floatBitsToUint(p.pos.x), floatBitsToUint(p.pos.y))),
+                   packUint2x32(uvec2(floatBitsToUint(p.pos.z), p.cell)),
+                   packUint2x32(uvec2(floatBitsToUint(p.flux.r), floatBitsToUint(p.flux.g))),
+                   packUint2x32(uvec2(floatBitsToUint(p.flux.b), p.dir)));
+}
+
 // Paths the tracing kernels ended at their depth backstop (RenderParams.max_photon_depth, max_eye_depth)
 // rather than by roulette, absorption or escape: each such path is a (bounded) loss the renderer reports.
 struct PathCounters {

@@ -12,7 +12,7 @@ layout(local_size_x = 64) in;
 #include "types.glsl"
 #include "bindings.glsl"
 layout(std430, binding = 6) readonly buffer Lights { Light lights[]; };
-layout(std430, binding = 7) writeonly buffer Photons { Photon photons[]; };
+layout(std430, binding = 7) writeonly buffer Photons { u64vec4 photons[]; }; // Photon records (photon_words)
 layout(std430, binding = 8) buffer Counter { uint photon_count; };
 layout(std430, binding = 9) buffer Cut { PathCounters cut; };
 layout(push_constant) uniform PhotonPush {
@@ -36,7 +36,7 @@ void emit(Photon rec) {
     uint base = 0u;
     if (subgroupElect()) base = atomicAdd(photon_count, subgroupBallotBitCount(ballot));
     uint at = subgroupBroadcastFirst(base) + subgroupBallotExclusiveBitCount(ballot);
-    if (at < params.photon_capacity) photons[at] = rec;
+    if (at < params.photon_capacity) photons[at] = photon_words(rec);
 }
 
 // The light a photon leaves, for the uniform number u (the first of its stream): the first whose running
