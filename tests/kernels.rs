@@ -15,7 +15,7 @@ use common::*;
 use glam::Vec3;
 use ppm_vk_engine::layout::{HitPoint, HitStats, PassAccum, Photon};
 use ppm_vk_engine::reference::{self, trace};
-use ppm_vk_engine::{Mode, Renderer, Settings};
+use ppm_vk_engine::{Mode, ProbeMode, Renderer, Settings};
 use ppm_vk_kernels::photon::SALT_PHOTON;
 
 const RES: u32 = 32;
@@ -449,6 +449,32 @@ fn lookup_cut_short_is_an_error() {
     assert_clean(&ctx);
 }
 
+/// The grid's cells follow the radii as they shrink (Renderer::fit_grid). Which photons a lookup finds
+/// does not depend on the cell size, so the image must equal, bit for bit, one rendered with the cells
+/// fixed at their starting size; and the cells must really have shrunk.
+#[test]
+fn shrinking_cells_leave_the_image_unchanged() {
+    let ctx = ctx();
+    let scene = cornell(2 * RES, 2 * RES);
+    for mode in [Mode::Sppm, Mode::Ppm] {
+        let base = Settings { mode, probe: ProbeMode::ScaleFree, cone_k: Some(1.1), ..settings() };
+        let mut adaptive = Renderer::new(&ctx, &scene, base.clone()).unwrap();
+        let start = adaptive.gpu_scene().params.cell_size;
+        let mut fixed = Renderer::new(&ctx, &scene, Settings { grid_cell: Some(start), ..base }).unwrap();
+        let mut cells = Vec::new();
+        for _ in 0..6 {
+            let stats = adaptive.pass().unwrap();
+            assert!(stats.cell_size >= 2.0 * stats.radius_max, "{mode:?}: cell {} under twice the radius {}", stats.cell_size, stats.radius_max);
+            cells.push(stats.cell_size / start);
+            assert_eq!(fixed.pass().unwrap().cell_size, start);
+        }
+        println!("{mode:?}: cell / starting cell after each pass {cells:?}");
+        assert!(cells[5] < 0.8, "{mode:?}: the cells did not follow the radii: {cells:?}");
+        assert!(adaptive.image().unwrap().pixels == fixed.image().unwrap().pixels, "{mode:?}: the image depends on the cell size");
+    }
+    assert_clean(&ctx);
+}
+
 #[test]
 fn gather_with_cone_filter_matches_brute_force() {
     gather_case(Some(1.1), GridShape::default());
@@ -484,6 +510,12 @@ fn update_matches_reference() {
         let after = r.read_stats().unwrap();
         let hits = r.read_hit_points().unwrap();
         check_update(&format!("update round {round}"), &hits, &before, &accum, &after, alpha, r.gpu_scene().params.flux_fixed);
+        // The largest radius it reports, as the f32 the lookups read: over the live hit points (all of
+        // PPM's non-empty slots) and over every slot it visited.
+        let max = r.radius_max().unwrap();
+        let live = after.iter().zip(&hits).filter(|(_, h)| !h.is_empty()).map(|(s, _)| s.r2 as f32).fold(0.0, f32::max);
+        assert!(live > 0.0);
+        assert_eq!((max.live, max.all), (live, live), "round {round}: largest R^2");
         // The update clears the accumulators for the next pass.
         let cleared = r.read_accum().unwrap();
         assert!(cleared.iter().all(|a| *a == PassAccum::default()), "round {round}: accumulators not cleared");

@@ -30,10 +30,8 @@ pub struct GpuScene {
     pub lo: [f32; 3],
     /// Area of all surfaces (photons land only on them): sizes the grid's hash table.
     pub surface_area: f64,
-    /// Buckets allocated for the photon grid; `params.grid_mask + 1` of them are in use.
-    pub grid_allocated: u32,
-    /// The table size was set by `Settings::grid_buckets`, not from the cell size.
-    pub grid_fixed: bool,
+    /// The photon grid's bucket count set by `Settings::grid_buckets`; `None`: sized from the cell.
+    pub fixed_buckets: Option<u32>,
 }
 
 fn arr(v: Vec3) -> [f32; 3] {
@@ -175,7 +173,6 @@ impl GpuScene {
             None => cell_size,
         };
         let surface_area = scene_surface_area(scene);
-        let grid_allocated = settings.grid_buckets.unwrap_or_else(|| grid_buckets(surface_area, cell_size, photon_capacity));
         let cam = &scene.camera;
         let forward = (cam.look_at - cam.eye).normalize();
         let right = forward.cross(cam.up).normalize();
@@ -224,22 +221,19 @@ impl GpuScene {
             total_power,
             lo: arr(lo),
             surface_area,
-            grid_allocated,
-            grid_fixed: settings.grid_buckets.is_some(),
+            fixed_buckets: settings.grid_buckets,
         };
         g.set_grid_cell(cell_size, photon_capacity);
         Ok(g)
     }
 
-    /// Sets the photon grid's cell size (and with it the grid's origin and the part of the hash table in
-    /// use). Lookups need cells at least twice the largest search radius.
+    /// Sets the photon grid's cell size (and with it the grid's origin and the hash
+    /// table's buckets, `params.grid_mask + 1`). Lookups read at most 2x2x2 cells where the cells are at
+    /// least twice the largest search radius; any size gives the same photons.
     pub fn set_grid_cell(&mut self, cell_size: f32, photon_capacity: u32) {
         self.params.cell_size = cell_size;
         self.params.grid_min = arr(Vec3::from(self.lo) - Vec3::splat(cell_size));
-        let buckets = match self.grid_fixed {
-            true => self.grid_allocated,
-            false => grid_buckets(self.surface_area, cell_size, photon_capacity).min(self.grid_allocated),
-        };
+        let buckets = self.fixed_buckets.unwrap_or_else(|| grid_buckets(self.surface_area, cell_size, photon_capacity));
         self.params.grid_mask = buckets - 1;
     }
 

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context as _, Result};
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
-use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers, UpdatePush};
+use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers, RadiusMax, UpdatePush};
 use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, Triangle};
 use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PathLimits, PhotonPush, SALT_EYE, SALT_PHOTON, SALT_PROBE};
@@ -38,6 +38,10 @@ pub struct PassStats {
     pub photon_paths_cut: u64,
     /// Eye paths of the whole render so far that reached the depth backstop.
     pub eye_paths_cut: u64,
+    /// The largest search radius after this pass's update, over the hit points live in it.
+    pub radius_max: f32,
+    /// The photon grid's cell size for the next pass (twice `radius_max`, see `Renderer::fit_grid`).
+    pub cell_size: f32,
     /// Host wall time of the pass, submission to completion.
     pub wall_ms: f64,
     /// GPU time of each stage (timestamp queries), in order.
@@ -109,6 +113,8 @@ pub struct Renderer {
     /// Each batch's record count, copied from `counter`, to detect overflow after the pass.
     batch_log: Buffer,
     grid: Grid,
+    /// The largest R^2 the update saw (two f32 bit patterns, `gather::RadiusMax`).
+    r2_max: Buffer,
     profiler: Profiler,
     /// Photons per batch: the whole pass until a pass overflows the record buffer.
     batch: u32,
@@ -192,7 +198,6 @@ impl Renderer {
         gpu.params.max_eye_depth = limits.eye_depth;
         gpu.params.photon_bvh_budget = limits.photon_bvh_budget;
         gpu.params.eye_bvh_budget = limits.eye_bvh_budget;
-        let cells = gpu.grid_allocated;
         let slots = gpu.slots() as u64;
         let pixels = gpu.pixels() as u64;
         let need = |what: &str, bytes: u64| -> Result<()> {
@@ -275,7 +280,8 @@ impl Renderer {
             photons: storage("photon records", capacity as u64 * record_size)?,
             counter: storage("photon counter", 4)?,
             batch_log: storage("batch log", MAX_BATCHES as u64 * 4)?,
-            grid: Grid::new(ctx, cells, capacity)?,
+            grid: Grid::new(ctx, gpu.params.grid_mask + 1, capacity)?,
+            r2_max: storage("largest radius", 8)?,
             profiler: Profiler::new(ctx, 8 + 7 * MAX_BATCHES)?,
             batch: settings.photons_per_pass,
             passes: 0,
@@ -287,7 +293,6 @@ impl Renderer {
             kernels,
         };
         drop(stats_init);
-        r.grid.set_cells(r.gpu.params.grid_mask + 1)?;
         r.ctx.run(|cmd| {
             r.accum.cmd_fill(cmd, 0);
             r.direct.cmd_fill(cmd, 0);
@@ -490,20 +495,39 @@ impl Renderer {
         let gpu_ms = stages.iter().map(|s| s.duration_ms).sum();
         let (stats, hits) = (self.read_stats()?, self.read_hit_points()?);
         self.probe_report = Some(ProbeReport::new(&stats, &hits, self.gpu.initial_radius, photons, gpu_ms));
-        // Cells twice the largest radius the probe left, so lookups stay within 2x2x2 cells.
-        let r2_max = stats.iter().zip(&hits).filter(|(_, h)| h.pixel != u32::MAX).map(|(s, _)| s.r2).fold(0f64, f64::max);
-        let cell = 2.0 * (r2_max.sqrt() as f32) * (1.0 + f32::EPSILON * 4.0);
+        // The largest radius as the update would report it (as f32, the lookups' precision).
+        let radius_max = RadiusMax {
+            live: stats.iter().zip(&hits).filter(|(_, h)| !h.is_empty()).map(|(s, _)| s.r2 as f32).fold(0.0, f32::max),
+            all: stats.iter().map(|s| s.r2 as f32).fold(0.0, f32::max),
+        };
+        self.fit_grid(radius_max)
+    }
+
+    /// Sizes the photon grid's cells for the next pass from the largest radii after this one. Which
+    /// photons a lookup finds does not depend on the cell size (the image is the same bit for bit); its
+    /// cost does. Cells twice the largest live radius keep every live hit point's lookup within 2x2x2
+    /// cells, and follow the radii as they shrink (eq. 3), so a lookup reads ever fewer photons outside
+    /// its sphere. An SPPM slot not live this pass may be larger when it next is: its window is then
+    /// wider, but covers the area a window sized for it would ((r + r_live)^2 against (2r)^2), so it reads
+    /// no more photons; cells at least 1/8 of twice the largest radius of any slot bound its window to
+    /// 17 cells a side, within the loop budget and the 1024-cell range of a cell key (grid.glsl).
+    fn fit_grid(&mut self, max: RadiusMax) -> Result<()> {
+        let r2 = max.live.max(max.all / 64.0);
+        let cell = 2.0 * r2.sqrt() * (1.0 + f32::EPSILON * 4.0);
         if let Some(c) = self.settings.grid_cell {
             // A set cell size must keep lookups under 1024 cells a side (grid_key in grid.glsl).
-            if cell > 512.0 * c {
-                bail!("grid cell {c} is under 1/512 of twice the largest radius after the probe ({cell})");
+            let widest = 2.0 * max.all.sqrt();
+            if widest > 512.0 * c {
+                bail!("grid cell {c} is under 1/512 of twice the largest search radius ({widest})");
             }
-        } else if cell > self.gpu.params.cell_size {
-            self.gpu.set_grid_cell(cell, self.gpu.params.photon_capacity);
-            self.grid.set_cells(self.gpu.params.grid_mask + 1)?;
-            self.ctx.upload(&self.params, bytemuck::bytes_of(&self.gpu.params))?;
+            return Ok(());
         }
-        Ok(())
+        if !(cell.is_finite() && cell > 0.0) || cell == self.gpu.params.cell_size {
+            return Ok(());
+        }
+        self.gpu.set_grid_cell(cell, self.gpu.params.photon_capacity);
+        self.grid.set_cells(&self.ctx, self.gpu.params.grid_mask + 1)?;
+        self.ctx.upload(&self.params, bytemuck::bytes_of(&self.gpu.params))
     }
 
     /// One photon pass: `photons_per_pass` photons traced and gathered, then the progressive update.
@@ -524,14 +548,13 @@ impl Renderer {
         stages.extend(batch_stages);
         // The update in its own submission, so an overflowed try above never touches the statistics.
         self.profiler.reset();
-        let push = self.update_push();
-        let hits = self.hit_buffers();
-        let (profiler, k) = (&self.profiler, &self.kernels);
-        self.ctx.run(|cmd| profiler.scope(cmd, "update", || gather::record_update(&k.update, cmd, &hits, &push)))?;
+        self.ctx.run(|cmd| self.profiler.scope(cmd, "update", || self.record_update(cmd)))?;
         stages.extend(self.profiler.read()?);
         self.passes += 1;
         self.emitted += total as u64;
         let cut = self.path_counters()?;
+        let radius_max = self.radius_max()?;
+        self.fit_grid(radius_max)?;
         Ok(PassStats {
             index: self.passes,
             photons: total as u64,
@@ -540,6 +563,8 @@ impl Renderer {
             batches,
             photon_paths_cut: cut.photon_paths as u64,
             eye_paths_cut: cut.eye_paths as u64,
+            radius_max: radius_max.live.sqrt(),
+            cell_size: self.gpu.params.cell_size,
             wall_ms: start.elapsed().as_secs_f64() * 1e3,
             stages,
         })
@@ -709,10 +734,22 @@ impl Renderer {
 
     /// Runs the update kernel alone (after `trace_and_gather`).
     pub fn update_only(&mut self) -> Result<()> {
-        let push = self.update_push();
-        let hits = self.hit_buffers();
-        let k = &self.kernels;
-        self.ctx.run(|cmd| gather::record_update(&k.update, cmd, &hits, &push))
+        self.ctx.run(|cmd| self.record_update(cmd))
+    }
+
+    /// The largest R^2 the last update saw (see `update.comp`).
+    pub fn radius_max(&self) -> Result<RadiusMax> {
+        let bits: Vec<u32> = self.ctx.download_prefix(&self.r2_max, 2)?;
+        Ok(RadiusMax::from_bits([bits[0], bits[1]]))
+    }
+
+    /// Records the update (eq. 3, 6, 14) and the reduction to the largest radius after it.
+    fn record_update(&self, cmd: vk::CommandBuffer) -> Result<()> {
+        self.r2_max.cmd_fill(cmd, 0);
+        barrier(&self.ctx, cmd);
+        gather::record_update(&self.kernels.update, cmd, &self.hit_buffers(), &self.r2_max, &self.update_push())?;
+        barrier(&self.ctx, cmd);
+        Ok(())
     }
 
     /// Sets the emitted-photon total the resolve divides by (tests start it near 2^32 this way).

@@ -51,6 +51,11 @@ pub struct PassRecord {
     pub photon_paths_cut: u64,
     #[serde(default)]
     pub eye_paths_cut: u64,
+    /// The largest live search radius after this pass, and the grid cell the next pass uses (`PassStats`).
+    #[serde(default)]
+    pub radius_max: f32,
+    #[serde(default)]
+    pub cell_size: f32,
     /// GPU milliseconds per stage, steps summed into their stage (`lookup/count` into `lookup`).
     pub stage_ms: BTreeMap<String, f64>,
     /// GPU start of each stage in milliseconds since the render's first timestamp, for traces.
@@ -90,6 +95,8 @@ impl PassRecord {
             batches: stats.batches,
             photon_paths_cut: stats.photon_paths_cut,
             eye_paths_cut: stats.eye_paths_cut,
+            radius_max: stats.radius_max,
+            cell_size: stats.cell_size,
             stage_ms,
             stage_start_ms,
             error: None,
@@ -196,6 +203,8 @@ mod tests {
             batches: 1,
             photon_paths_cut: 0,
             eye_paths_cut: 0,
+            radius_max: 0.01,
+            cell_size: 0.02,
             wall_ms: 12.5,
             stages: vec![
                 ScopeTiming { name: "photon", start_ms: 100.0, duration_ms: 3.0 },
