@@ -40,6 +40,10 @@ pub struct BenchArgs {
     /// Cone filter constant k >= 1, or `off`, as for `render`.
     #[arg(long, default_value = "off", value_parser = crate::parse_cone)]
     cone: Cone,
+    /// Also time the photon kernel against variants of itself with parts removed, down to tracing only
+    /// (its ceiling in this design), on each case's first batch.
+    #[arg(long)]
+    breakdown: bool,
     /// Where to write the JSON results.
     #[arg(long, default_value = "bench.json")]
     json: PathBuf,
@@ -111,6 +115,24 @@ fn reset_peak_rss() {
 
 fn mib(bytes: u64) -> f64 {
     bytes as f64 / (1u64 << 20) as f64
+}
+
+/// The photon kernel's variants, each as a fraction of the trace-only ceiling (intersections per second).
+fn print_breakdown(variants: &[ppm_vk_engine::PhotonVariant]) {
+    let Some(ceiling) = variants.iter().find(|v| v.name == "trace only").map(|v| v.steps_per_second()) else {
+        return;
+    };
+    for v in variants {
+        println!(
+            "    photon kernel, {:<16} {:>8.1} ms for {} photons, {:>6.2} M intersections, {:>6.1} M/s, {:>5.1}% of trace only",
+            v.name,
+            v.gpu_ms,
+            v.photons,
+            v.steps as f64 / 1e6,
+            v.steps_per_second() / 1e6,
+            100.0 * v.steps_per_second() / ceiling
+        );
+    }
 }
 
 pub fn run(args: BenchArgs) -> Result<()> {
@@ -188,6 +210,10 @@ pub fn run(args: BenchArgs) -> Result<()> {
         let (dev_after, rss_after) = (ctx.memory_usage(), host_rss());
         renderer.resolve()?; // the first resolve compiles its pipeline
         let resolve_ms = median((0..3).map(|_| renderer.resolve()).collect::<Result<Vec<_>>>()?);
+        let breakdown = match args.breakdown {
+            true => renderer.photon_breakdown(case.photons)?,
+            false => Vec::new(),
+        };
         let stage: Vec<f64> = STAGES.iter().map(|s| median(measured.iter().map(|p| p.stage_ms(s)).collect())).collect();
         let wall = median(measured.iter().map(|p| p.wall_ms).collect());
         let rate = case.photons as f64 / (wall * 1e-3) / 1e6;
@@ -209,6 +235,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             mib(dev_after.peak_reserved_bytes),
             rss_peak.map_or("-".to_string(), |b| format!("{:.0}", mib(b)))
         );
+        print_breakdown(&breakdown);
         results.push(json!({
             "photons_per_pass": case.photons,
             "width": case.width,
@@ -223,6 +250,13 @@ pub fn run(args: BenchArgs) -> Result<()> {
             "resolve_ms_median": resolve_ms,
             "photons_per_second": rate * 1e6,
             "photon_stage_ns_per_photon": stage[1] * 1e6 / case.photons as f64,
+            "photon_breakdown": breakdown.iter().map(|v| json!({
+                "variant": v.name,
+                "photons": v.photons,
+                "gpu_ms": v.gpu_ms,
+                "intersections": v.steps,
+                "intersections_per_second": v.steps_per_second(),
+            })).collect::<Vec<_>>(),
             "bvh": {
                 "triangles": bvh.triangles,
                 "nodes": bvh.nodes,

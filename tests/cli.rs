@@ -107,7 +107,7 @@ fn bench_writes_cases_with_stages_and_memory() {
     let json_path = dir.join("bench.json");
     let run = bin()
         .args(["bench", "--cases", "10k@16x16,20k@32x32", "--warmup", "1", "--passes", "3", "--mode", "ppm"])
-        .args(["--probe", "scale-free", "--cone", "1.1", "--validate", "--json"])
+        .args(["--probe", "scale-free", "--cone", "1.1", "--validate", "--breakdown", "--json"])
         .arg(&json_path)
         .output()
         .unwrap();
@@ -125,6 +125,16 @@ fn bench_writes_cases_with_stages_and_memory() {
         }
         assert_eq!(c["pass_wall_ms_all"].as_array().unwrap().len(), 3);
         assert!(c["photons_per_second"].as_f64().unwrap() > 0.0);
+        // The photon kernel against its variants: every photon path hits the closed box at least once,
+        // every record is left at an intersection, and the trace-only ceiling is the fastest per step.
+        let variants = c["photon_breakdown"].as_array().unwrap();
+        let names: Vec<&str> = variants.iter().map(|v| v["variant"].as_str().unwrap()).collect();
+        assert_eq!(names, ["as rendered", "no record stores", "no append", "trace only"]);
+        let steps = |i: usize| variants[i]["intersections"].as_u64().unwrap();
+        let photons = c["photons_per_pass"].as_u64().unwrap();
+        assert!(steps(0) >= photons && steps(0) as f64 >= c["records_per_pass"].as_f64().unwrap(), "{variants:?}");
+        assert_eq!((steps(1), steps(2)), (steps(0), steps(0)), "removing the append changed the paths: {variants:?}");
+        assert!(steps(3) >= photons, "{variants:?}");
         // Memory is bounded: the passes allocate nothing that outlives them.
         let dev = &c["device_memory"];
         assert!(dev["peak_reserved_bytes"].as_u64().unwrap() >= dev["in_use_bytes_after_measured"].as_u64().unwrap());

@@ -30,13 +30,24 @@ layout(push_constant) uniform PhotonPush {
 #include "grid.glsl"
 #include "invocation.glsl"
 
+// Variants that `ppm-vk bench` times against this kernel to show where a step's time goes
+// (Renderer::photon_breakdown); never rendered with. PHOTON_NO_STORE: the append reserves its slots but
+// stores nothing. PHOTON_NO_APPEND: no append. PHOTON_TRACE_ONLY: the same photons leave the lights, but
+// every hit is a diffuse bounce with no material, roulette or record, and a path ends after
+// PHOTON_TRACE_ONLY hits: only the intersections, the direction draws and the loop remain, the ceiling
+// of this design. PHOTON_COUNT_STEPS: counts the intersections traced in cut.pad0 (an untimed run).
+
 // Appends a record; the active lanes of a subgroup reserve their slots with one atomic.
 void emit(Photon rec) {
+#ifndef PHOTON_NO_APPEND
     uvec4 ballot = subgroupBallot(true);
     uint base = 0u;
     if (subgroupElect()) base = atomicAdd(photon_count, subgroupBallotBitCount(ballot));
     uint at = subgroupBroadcastFirst(base) + subgroupBallotExclusiveBitCount(ballot);
+#ifndef PHOTON_NO_STORE
     if (at < params.photon_capacity) photons[at] = photon_words(rec);
+#endif
+#endif
 }
 
 // The light a photon leaves, for the uniform number u (the first of its stream): the first whose running
@@ -125,6 +136,9 @@ void main() {
             alive = false;
             continue;
         }
+#ifdef PHOTON_COUNT_STEPS
+        atomicAdd(cut.pad0, 1u); // per lane: a subgroup-aggregated count undercounts in this loop
+#endif
         Hit h;
         if (!intersect_scene(o, d, 0.0, 1e30, h)) {
             // Out of traversal steps: an error (bvh_cut) or a long path's end (bvh_spent); either way this
@@ -135,9 +149,16 @@ void main() {
             continue;
         }
         depth++;
-        Material m = materials[h.material];
         bool front = dot(d, h.normal) < 0.0;
         vec3 nf = front ? h.normal : -h.normal;
+#ifdef PHOTON_TRACE_ONLY
+        alive = depth < PHOTON_TRACE_ONLY;
+        lobe = nf;
+        pending = true;
+        o = offset_ray(h.pos, nf);
+        continue;
+#endif
+        Material m = materials[h.material];
         if (m.surface == SURFACE_DIFFUSE) {
             float p = max(m.color.r, max(m.color.g, m.color.b));
             if (p <= 0.0) { alive = false; continue; } // a black emitter absorbs

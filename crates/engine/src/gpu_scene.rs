@@ -237,6 +237,12 @@ impl GpuScene {
         self.params.grid_mask = buckets - 1;
     }
 
+    /// The most buckets the grid's table can be given (all cell sizes): allocated once, so memory never
+    /// grows with the passes as the cells shrink and want more buckets (`grid_buckets`).
+    pub fn max_buckets(&self) -> u32 {
+        self.fixed_buckets.unwrap_or_else(|| grid_buckets(f64::INFINITY, 1.0, self.params.photon_capacity))
+    }
+
     pub fn pixels(&self) -> u32 {
         self.params.width * self.params.height
     }

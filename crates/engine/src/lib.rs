@@ -31,6 +31,6 @@ pub mod settings;
 pub use image_io::RgbImage;
 pub use ppm_vk_device::{Context, ContextOptions, DeviceInfo, ScopeTiming};
 pub use ppm_vk_kernels::layout;
-pub use renderer::{PassStats, ProbeReport, Renderer};
+pub use renderer::{PassStats, PhotonVariant, ProbeReport, Renderer};
 pub use scene::Scene;
 pub use settings::{Mode, ProbeMode, Settings};

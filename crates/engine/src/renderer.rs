@@ -124,6 +124,24 @@ pub struct Renderer {
     probe_report: Option<ProbeReport>,
 }
 
+/// One variant of the photon kernel timed by [`Renderer::photon_breakdown`].
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PhotonVariant {
+    pub name: &'static str,
+    pub photons: u32,
+    /// GPU time of the one dispatch.
+    pub gpu_ms: f64,
+    /// Intersections it traced (path segments).
+    pub steps: u64,
+}
+
+impl PhotonVariant {
+    /// Intersections per second.
+    pub fn steps_per_second(&self) -> f64 {
+        self.steps as f64 / (self.gpu_ms * 1e-3)
+    }
+}
+
 /// What the batches of photons feed their grid to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum GridUse {
@@ -227,15 +245,7 @@ impl Renderer {
         }
         need("the hit-point statistics", slots * std::mem::size_of::<HitStats>() as u64)?;
 
-        // The tracing kernels with this scene compiled in, where it is small enough (see specialize.rs).
-        let traced = |k: &reflected::KernelInfo| -> Result<ComputePipeline> {
-            let inline = gpu.spheres.len() + gpu.quads.len() <= MAX_INLINE_PRIMITIVES && gpu.params.num_triangles == 0;
-            if !inline || !settings.specialize {
-                return pipeline(ctx, k);
-            }
-            let constants = specialize::scene_constants(&gpu.spheres, &gpu.quads, &gpu.lights);
-            pipeline_from(ctx, k, &specialize::compile(k, &constants)?)
-        };
+        let traced = |k: &reflected::KernelInfo| tracing_pipeline(ctx, &gpu, &settings, k, &[]);
         // Hit points per gather thread (measured, shaders/common/neighbours.glsl): four share their photon
         // reads, except PPM's without the probe, which gather fastest one at a time.
         let group = match (settings.mode, settings.probe) {
@@ -280,7 +290,7 @@ impl Renderer {
             photons: storage("photon records", capacity as u64 * record_size)?,
             counter: storage("photon counter", 4)?,
             batch_log: storage("batch log", MAX_BATCHES as u64 * 4)?,
-            grid: Grid::new(ctx, gpu.params.grid_mask + 1, capacity)?,
+            grid: Grid::new(ctx, gpu.max_buckets(), capacity)?,
             r2_max: storage("largest radius", 8)?,
             profiler: Profiler::new(ctx, 8 + 7 * MAX_BATCHES)?,
             batch: settings.photons_per_pass,
@@ -293,6 +303,7 @@ impl Renderer {
             kernels,
         };
         drop(stats_init);
+        r.grid.set_cells(r.gpu.params.grid_mask + 1)?;
         r.ctx.run(|cmd| {
             r.accum.cmd_fill(cmd, 0);
             r.direct.cmd_fill(cmd, 0);
@@ -526,7 +537,7 @@ impl Renderer {
             return Ok(());
         }
         self.gpu.set_grid_cell(cell, self.gpu.params.photon_capacity);
-        self.grid.set_cells(&self.ctx, self.gpu.params.grid_mask + 1)?;
+        self.grid.set_cells(self.gpu.params.grid_mask + 1)?;
         self.ctx.upload(&self.params, bytemuck::bytes_of(&self.gpu.params))
     }
 
@@ -732,6 +743,51 @@ impl Renderer {
         self.ctx.download_prefix(&self.photons, n[0] as usize)
     }
 
+    /// Times the photon kernel as this render uses it against variants of itself with parts removed
+    /// (photon.comp: no record stores, no append, trace only), each over the same first `photons`
+    /// photons, and counts the intersections each traces (an untimed run of each). For `ppm-vk bench`:
+    /// the trace-only variant is this design's ceiling. The render's state is left as it was.
+    pub fn photon_breakdown(&mut self, photons: u32) -> Result<Vec<PhotonVariant>> {
+        let saved: Vec<PathCounters> = self.ctx.download_prefix(&self.cut, 1)?;
+        let photons = photons.min(self.batch); // one batch: the records must fit
+        let run = |r: &Self, defines: &[(&str, &str)], counted: bool| -> Result<(f64, u64)> {
+            let defines = [defines, if counted { &[("PHOTON_COUNT_STEPS", "1")][..] } else { &[] }].concat();
+            let k = tracing_pipeline(&r.ctx, &r.gpu, &r.settings, &reflected::PHOTON, &defines)?;
+            let push = PhotonPush { first: 0, count: photons, salt: SALT_PHOTON, per_thread: r.limits.per_thread, pad0: 0 };
+            // Twice, timing the second: lavapipe compiles a pipeline at its first dispatch.
+            let mut ms = 0.0;
+            for _ in 0..2 {
+                r.ctx.upload(&r.cut, bytemuck::bytes_of(&PathCounters::default()))?;
+                r.profiler.reset();
+                r.ctx.run(|cmd| {
+                    r.counter.cmd_fill(cmd, 0);
+                    barrier(&r.ctx, cmd);
+                    let scene = r.scene_buffers();
+                    r.profiler.scope(cmd, "photon", || photon::record(&k, cmd, &scene, &r.lights, &r.photons, &r.counter, &r.cut, &push))
+                })?;
+                ms = r.profiler.read()?.iter().map(|s| s.duration_ms).sum();
+            }
+            let steps = r.ctx.download_prefix::<PathCounters>(&r.cut, 1)?[0].pad0 as u64;
+            Ok((ms, steps))
+        };
+        let (_, full_steps) = run(self, &[], true)?;
+        // Trace-only paths as long as the real ones on average, so both amortise a path's start alike.
+        let segments = ((full_steps as f64 / photons as f64).round() as u32).clamp(1, self.limits.photon_depth).to_string();
+        let mut out = Vec::new();
+        for (name, defines) in [
+            ("as rendered", vec![]),
+            ("no record stores", vec![("PHOTON_NO_STORE", "1")]),
+            ("no append", vec![("PHOTON_NO_APPEND", "1")]),
+            ("trace only", vec![("PHOTON_TRACE_ONLY", segments.as_str())]),
+        ] {
+            let (gpu_ms, _) = run(self, &defines, false)?;
+            let (_, steps) = run(self, &defines, true)?;
+            out.push(PhotonVariant { name, photons, gpu_ms, steps });
+        }
+        self.ctx.upload(&self.cut, bytemuck::cast_slice(&saved))?;
+        Ok(out)
+    }
+
     /// Runs the update kernel alone (after `trace_and_gather`).
     pub fn update_only(&mut self) -> Result<()> {
         self.ctx.run(|cmd| self.record_update(cmd))
@@ -755,6 +811,29 @@ impl Renderer {
     /// Sets the emitted-photon total the resolve divides by (tests start it near 2^32 this way).
     pub fn set_emitted(&mut self, emitted: u64) {
         self.emitted = emitted;
+    }
+}
+
+/// A tracing kernel (ray or photon) for this scene, with `defines` added to its source: compiled with the
+/// scene as constants where it is small enough (see specialize.rs), else with the scene in buffers.
+fn tracing_pipeline(
+    ctx: &Context,
+    gpu: &GpuScene,
+    settings: &Settings,
+    k: &reflected::KernelInfo,
+    defines: &[(&str, &str)],
+) -> Result<ComputePipeline> {
+    let inline = settings.specialize
+        && gpu.spheres.len() + gpu.quads.len() <= MAX_INLINE_PRIMITIVES
+        && gpu.params.num_triangles == 0;
+    if inline {
+        let constants = specialize::scene_constants(&gpu.spheres, &gpu.quads, &gpu.lights);
+        let defines = [&[("SCENE_CONSTANTS", "1")][..], defines].concat();
+        pipeline_from(ctx, k, &specialize::compile_with(k, &defines, &constants)?)
+    } else if defines.is_empty() {
+        pipeline(ctx, k)
+    } else {
+        pipeline_from(ctx, k, &specialize::compile_with(k, defines, "")?)
     }
 }
 

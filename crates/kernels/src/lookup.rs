@@ -36,69 +36,43 @@ pub struct Grid {
 }
 
 impl Grid {
-    /// A grid of `cells` buckets (see [`Grid::set_cells`]) over a record buffer of `capacity` records.
+    /// `cells` must be a power of two, at least [`SCAN_BLOCK`] and at most 65536 blocks.
     pub fn new(ctx: &Context, cells: u32, capacity: u32) -> Result<Grid> {
-        check_cells(cells)?;
-        let record_size = std::mem::size_of::<crate::layout::Photon>() as u64;
-        let table = Table::new(ctx, cells)?;
+        if !cells.is_power_of_two() || cells < SCAN_BLOCK || cells / SCAN_BLOCK > 65536 {
+            bail!("photon grid: {cells} buckets is not a power of two in [{SCAN_BLOCK}, {}]", SCAN_BLOCK as u64 * 65536);
+        }
+        let cell_count = Buffer::new(ctx, "grid cell_count", cells as u64 * 4, BufferKind::Storage)?;
         let status = Buffer::new(ctx, "grid lookup status", 4, BufferKind::Storage)?;
         ctx.run(|cmd| {
+            cell_count.cmd_fill(cmd, 0);
             status.cmd_fill(cmd, 0);
             Ok(())
         })?;
         Ok(Grid {
             cells,
             allocated: cells,
-            cell_count: table.cell_count,
-            cell_start: table.cell_start,
-            block_sums: table.block_sums,
-            sorted: Buffer::new(ctx, "grid sorted records", capacity as u64 * record_size, BufferKind::Storage)?,
-            status,
-        })
-    }
-
-    /// Uses `cells` buckets from now on (the kernels' hash mask must agree): a power of two, at least
-    /// [`SCAN_BLOCK`] and at most 65536 blocks. The table grows when they are more than it holds (the
-    /// renderer shrinks the cells as the radii shrink, and smaller cells want more buckets); it never
-    /// shrinks, so the memory is the largest table the render needed.
-    pub fn set_cells(&mut self, ctx: &Context, cells: u32) -> Result<()> {
-        check_cells(cells)?;
-        if cells > self.allocated {
-            let table = Table::new(ctx, cells)?;
-            (self.cell_count, self.cell_start, self.block_sums) = (table.cell_count, table.cell_start, table.block_sums);
-            self.allocated = cells;
-        }
-        self.cells = cells;
-        Ok(())
-    }
-}
-
-fn check_cells(cells: u32) -> Result<()> {
-    if !cells.is_power_of_two() || cells < SCAN_BLOCK || cells / SCAN_BLOCK > 65536 {
-        bail!("photon grid: {cells} buckets is not a power of two in [{SCAN_BLOCK}, {}]", SCAN_BLOCK as u64 * 65536);
-    }
-    Ok(())
-}
-
-/// The hash table's buffers; `cell_count` starts zeroed (the count kernel adds, the scatter clears).
-struct Table {
-    cell_count: Buffer,
-    cell_start: Buffer,
-    block_sums: Buffer,
-}
-
-impl Table {
-    fn new(ctx: &Context, cells: u32) -> Result<Table> {
-        let cell_count = Buffer::new(ctx, "grid cell_count", cells as u64 * 4, BufferKind::Storage)?;
-        ctx.run(|cmd| {
-            cell_count.cmd_fill(cmd, 0);
-            Ok(())
-        })?;
-        Ok(Table {
             cell_count,
             cell_start: Buffer::new(ctx, "grid cell_start", (cells as u64 + 1) * 4, BufferKind::Storage)?,
             block_sums: Buffer::new(ctx, "grid block_sums", (cells / SCAN_BLOCK) as u64 * 4, BufferKind::Storage)?,
+            sorted: Buffer::new(
+                ctx,
+                "grid sorted records",
+                capacity as u64 * std::mem::size_of::<crate::layout::Photon>() as u64,
+                BufferKind::Storage,
+            )?,
+            status,
         })
+    }
+}
+
+impl Grid {
+    /// Uses the first `cells` buckets (the kernels' hash mask must agree).
+    pub fn set_cells(&mut self, cells: u32) -> Result<()> {
+        if !cells.is_power_of_two() || cells < SCAN_BLOCK || cells > self.allocated {
+            bail!("photon grid: {cells} buckets in use is not a power of two in [{SCAN_BLOCK}, {}]", self.allocated);
+        }
+        self.cells = cells;
+        Ok(())
     }
 }
 

@@ -80,11 +80,6 @@ pub fn scene_constants(spheres: &[Sphere], quads: &[Quad], lights: &[Light]) -> 
     s
 }
 
-/// Compiles `kernel` with `SCENE_CONSTANTS` defined and `constants` as scene_constants.glsl.
-pub fn compile(kernel: &KernelInfo, constants: &str) -> Result<Vec<u32>> {
-    compile_with(kernel, &[("SCENE_CONSTANTS", "1")], constants)
-}
-
 /// Compiles `kernel` again with `defines` (name, value) added, and `constants` as scene_constants.glsl
 /// for kernels that include it.
 pub fn compile_with(kernel: &KernelInfo, defines: &[(&str, &str)], constants: &str) -> Result<Vec<u32>> {
