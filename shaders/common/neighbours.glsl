@@ -129,9 +129,9 @@ void for_each_photon_near_group() {
     }
 }
 
-// Whether this subgroup's lookups may have run into lavapipe's loop limit (with a margin for the
-// kernel's other loops).
+// Whether this subgroup's lookups may have run into the device's loop limit (params.lookup_limit: the
+// budget less a margin for the kernel's other loops; never on a device without one).
 bool lookup_may_be_cut() {
-    return subgroupAdd(lookup_steps) >= 60000u;
+    return subgroupAdd(lookup_steps) >= params.lookup_limit;
 }
 #endif

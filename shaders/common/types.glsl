@@ -91,7 +91,7 @@ struct RenderParams {
     uint num_triangles; // triangles in the BVH (0: no meshes, the BVH is not traversed)
     uint photon_bvh_budget; // BVH traversal steps one photon thread may take in all (PathLimits)
     uint eye_bvh_budget;    // the same for one eye thread
-    uint pad0;
+    uint lookup_limit;      // loop steps a subgroup's lookups may take (neighbours.glsl); 0xffffffff: no limit
 };
 
 // A diffuse point seen from a pixel (PPM pass 1). Fixed for the whole render.

@@ -216,6 +216,7 @@ impl Renderer {
         gpu.params.max_eye_depth = limits.eye_depth;
         gpu.params.photon_bvh_budget = limits.photon_bvh_budget;
         gpu.params.eye_bvh_budget = limits.eye_bvh_budget;
+        gpu.params.lookup_limit = ppm_vk_kernels::lookup::lookup_limit(ctx.info().loop_budget);
         let slots = gpu.slots() as u64;
         let pixels = gpu.pixels() as u64;
         let need = |what: &str, bytes: u64| -> Result<()> {

@@ -98,12 +98,14 @@ pub struct RenderParams {
     /// BVH traversal steps one photon thread / one eye thread may take in all (`PathLimits`).
     pub photon_bvh_budget: u32,
     pub eye_bvh_budget: u32,
-    pub pad0: u32,
+    /// Loop steps a subgroup's photon lookups may take before one may have been cut short by the
+    /// device's loop budget (`lookup_limit`); `u32::MAX` where the device has none.
+    pub lookup_limit: u32,
 }
 gpu_struct!(RenderParams {
     eye, tan_half_fov, right, aspect, up, width, forward, height, grid_min, cell_size, grid_mask,
     num_spheres, num_quads, num_lights, eps, max_photon_depth, max_eye_depth, hit_slots, photon_capacity,
-    seed, flux_fixed, eps_rel, num_triangles, photon_bvh_budget, eye_bvh_budget, pad0
+    seed, flux_fixed, eps_rel, num_triangles, photon_bvh_budget, eye_bvh_budget, lookup_limit
 });
 
 #[repr(C)]

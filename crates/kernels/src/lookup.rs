@@ -7,6 +7,17 @@ use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, P
 
 use crate::push_struct;
 
+/// Loop steps of a subgroup that the gather and probe kernels keep for their loops other than the
+/// lookups (their per-thread setup loops are unrolled; this is a margin, not a count).
+pub const LOOKUP_MARGIN: u32 = 5535;
+
+/// `RenderParams::lookup_limit` for a device's loop budget (`DeviceInfo::loop_budget`): a subgroup
+/// whose lookups take this many steps may have been cut short, and says so (neighbours.glsl), which
+/// stops the render with an error. A device without a budget (`None`) never stops one.
+pub fn lookup_limit(budget: Option<u32>) -> u32 {
+    budget.map_or(u32::MAX, |b| b.saturating_sub(LOOKUP_MARGIN))
+}
+
 /// Buckets scanned per workgroup in `grid_scan.comp` (256 threads x 4).
 pub const SCAN_BLOCK: u32 = 1024;
 
@@ -132,5 +143,19 @@ impl Lookup {
                 capacity as u64,
             )
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lookups_are_limited_only_on_a_device_with_a_loop_budget() {
+        // lavapipe's 65535 steps per SIMD group: the lookups stop the render at 60000 (neighbours.glsl).
+        assert_eq!(lookup_limit(Some(65535)), 60000);
+        // No budget: no subgroup's step count (a u32) ever reaches the limit.
+        assert_eq!(lookup_limit(None), u32::MAX);
+        assert_eq!(lookup_limit(Some(100)), 0);
     }
 }
