@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use anyhow::{bail, Context as _, Result};
+use anyhow::{bail, ensure, Context as _, Result};
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
 use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers, UpdatePush};
 use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, Triangle};
@@ -15,6 +15,7 @@ use ppm_vk_kernels::resolve::{self, ResolvePush};
 use ppm_vk_kernels::specialize::{self, MAX_INLINE_PRIMITIVES};
 use ppm_vk_kernels::{pipeline, pipeline_from, reflected};
 
+use crate::checkpoint::{self, Checkpoint};
 use crate::gpu_scene::GpuScene;
 use crate::image_io::RgbImage;
 use crate::scene::Scene;
@@ -116,6 +117,9 @@ pub struct Renderer {
     emitted: u64,
     ray_ms: f64,
     probe_report: Option<ProbeReport>,
+    /// What a checkpoint records the render is of.
+    scene_name: String,
+    scene_sha256: String,
 }
 
 /// What the batches of photons feed their grid to.
@@ -164,8 +168,73 @@ impl ProbeReport {
 const MAX_BATCHES: u32 = 1024;
 
 impl Renderer {
-    /// Uploads the scene, allocates per-hit-point state and runs the ray pass.
+    /// Uploads the scene, allocates per-hit-point state and runs the ray pass (and the probe pass).
     pub fn new(ctx: &Context, scene: &Scene, settings: Settings) -> Result<Renderer> {
+        let mut r = Renderer::prepare(ctx, scene, settings)?;
+        if r.settings.probe != ProbeMode::Off {
+            r.probe_pass()?;
+        }
+        Ok(r)
+    }
+
+    /// The render's state after the passes so far, to continue later with [`Renderer::resume`]; `build`
+    /// names the build (its kernels), which the resume must match.
+    pub fn checkpoint(&self, build: &str) -> Result<Checkpoint> {
+        let header = checkpoint::Header {
+            build: build.into(),
+            scene_name: self.scene_name.clone(),
+            scene_sha256: self.scene_sha256.clone(),
+            settings: self.settings.clone(),
+            passes: self.passes,
+            emitted: self.emitted,
+            batch: self.batch,
+            grid_cell: self.gpu.params.cell_size,
+            probe: self.probe_report.clone(),
+            sections: vec![],
+            payload_sha256: String::new(),
+        };
+        let hit_points = match self.settings.mode {
+            Mode::Ppm => self.read_hit_points()?,
+            Mode::Sppm => vec![],
+        };
+        let cut = self.ctx.download_prefix(&self.cut, 1)?[0];
+        let (stats, direct, busy) = (self.read_stats()?, self.read_direct()?, self.read_busy()?);
+        Ok(Checkpoint { header, stats, hit_points, direct, busy, cut }.seal())
+    }
+
+    /// Continues the render `checkpoint` saved: the passes after it give the image the uninterrupted
+    /// render would have, bit for bit. Fails, saying what differs, unless the checkpoint is of `scene`
+    /// rendered with `settings` by `build`.
+    pub fn resume(ctx: &Context, scene: &Scene, settings: Settings, checkpoint: &Checkpoint, build: &str) -> Result<Renderer> {
+        checkpoint.check(scene, &settings, build).context("cannot resume from this checkpoint")?;
+        let mut r = Renderer::prepare(ctx, scene, settings)?;
+        let c = checkpoint;
+        let (slots, pixels) = (r.gpu.slots() as usize, r.gpu.pixels() as usize);
+        let ppm_hits = if r.settings.mode == Mode::Ppm { slots } else { 0 };
+        ensure!(
+            c.stats.len() == slots && c.hit_points.len() == ppm_hits && c.direct.len() == pixels && c.busy.len() == pixels,
+            "the checkpoint's buffers do not fit this render ({slots} hit points, {pixels} pixels)"
+        );
+        r.write_stats(&c.stats)?;
+        r.ctx.upload(&r.direct, bytemuck::cast_slice(&c.direct))?;
+        r.ctx.upload(&r.busy, bytemuck::cast_slice(&c.busy))?;
+        r.ctx.upload(&r.cut, bytemuck::bytes_of(&c.cut))?;
+        if r.settings.mode == Mode::Ppm {
+            r.ctx.upload(&r.hit_points, bytemuck::cast_slice(&c.hit_points))?;
+            r.set_order(morton_order(&c.hit_points))?;
+        }
+        let h = &c.header;
+        (r.passes, r.emitted, r.batch, r.probe_report) = (h.passes, h.emitted, h.batch.max(1), h.probe.clone());
+        if h.grid_cell != r.gpu.params.cell_size {
+            r.gpu.set_grid_cell(h.grid_cell, r.gpu.params.photon_capacity);
+            r.grid.set_cells(r.gpu.params.grid_mask + 1)?;
+            r.ctx.upload(&r.params, bytemuck::bytes_of(&r.gpu.params))?;
+        }
+        Ok(r)
+    }
+
+    /// [`Renderer::new`] up to the probe pass.
+    fn prepare(ctx: &Context, scene: &Scene, settings: Settings) -> Result<Renderer> {
         settings.validate()?;
         let max_range = ctx.limits().max_storage_buffer_range as u64;
         let record_size = std::mem::size_of::<Photon>() as u64;
@@ -251,6 +320,8 @@ impl Renderer {
         let stats_init = vec![HitStats { r2, ..Default::default() }; slots as usize];
         let mut r = Renderer {
             probe_report: None,
+            scene_name: scene.name.clone(),
+            scene_sha256: scene.content_sha256(),
             params: ctx.buffer_from("params", &[gpu.params])?,
             spheres: ctx.buffer_from("spheres", &gpu.spheres)?,
             quads: ctx.buffer_from("quads", &gpu.quads)?,
@@ -303,12 +374,14 @@ impl Renderer {
             Mode::Ppm => morton_order(&r.read_hit_points()?),
             Mode::Sppm => pixel_order(r.gpu.params.width, r.gpu.params.height),
         };
-        r.active = order.len() as u32;
-        r.ctx.upload(&r.order, bytemuck::cast_slice(&order))?;
-        if r.settings.probe != ProbeMode::Off {
-            r.probe_pass()?;
-        }
+        r.set_order(order)?;
         Ok(r)
+    }
+
+    /// The hit-point slots the gather and the update visit, in this order.
+    fn set_order(&mut self, order: Vec<u32>) -> Result<()> {
+        self.active = order.len() as u32;
+        self.ctx.upload(&self.order, bytemuck::cast_slice(&order))
     }
 
     /// The ray kernel's dispatches for eye pass `eye_pass` (the CPU reference, `reference::eye_pass`,

@@ -310,6 +310,37 @@ impl Scene {
         out
     }
 
+    /// SHA-256 (hex) of everything that shapes the image: camera and resolution, the materials' surfaces
+    /// and emission, spheres, quads and every mesh's vertices, normals, indices and materials. Names
+    /// (the scene's, materials', mesh paths) are left out: moving a scene's directory keeps its hash.
+    /// Checkpoints use it to refuse resuming a render of another scene.
+    pub fn content_sha256(&self) -> String {
+        use sha2::Digest;
+        use std::fmt::Write as _;
+        /// Feeds `Debug` text straight into the hash (exact: floats print as their shortest round trip).
+        struct Feed<'a>(&'a mut sha2::Sha256);
+        impl fmt::Write for Feed<'_> {
+            fn write_str(&mut self, s: &str) -> fmt::Result {
+                self.0.update(s.as_bytes());
+                Ok(())
+            }
+        }
+        let mut h = sha2::Sha256::new();
+        let surfaces: Vec<(Surface, Vec3)> = self.materials.iter().map(|m| (m.surface, m.emission)).collect();
+        // Writing into a hash cannot fail.
+        let _ = write!(Feed(&mut h), "{:?}", (&self.camera, &surfaces, &self.spheres, &self.quads));
+        let floats = |v: &[Vec3]| -> Vec<u8> { v.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect() };
+        for m in &self.meshes {
+            h.update((m.positions.len() as u64).to_le_bytes());
+            h.update(floats(&m.positions));
+            h.update(floats(m.normals.as_deref().unwrap_or(&[])));
+            h.update((m.indices.len() as u64).to_le_bytes());
+            h.update(m.indices.iter().flatten().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>());
+            h.update(m.materials.iter().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>());
+        }
+        h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+    }
+
     /// Triangles in all meshes.
     pub fn triangle_count(&self) -> usize {
         self.meshes.iter().map(|m| m.indices.len()).sum()
