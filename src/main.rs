@@ -264,7 +264,16 @@ fn devices() -> Result<()> {
     }
     for d in list {
         let status = if d.missing.is_empty() { "usable".to_string() } else { format!("lacks {}", d.missing.join(", ")) };
-        println!("[{}] {} ({}, Vulkan {}, {}): {}", d.index, d.name, d.kind, d.api_version, d.driver, status);
+        println!(
+            "[{}] {} ({}, Vulkan {}, {}, {} MiB): {}",
+            d.index,
+            d.name,
+            d.kind,
+            d.api_version,
+            d.driver,
+            d.memory_bytes >> 20,
+            status
+        );
     }
     Ok(())
 }

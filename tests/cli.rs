@@ -320,3 +320,22 @@ fn signals_during_set_up_write_nothing() {
         assert_eq!(stderr.contains("interrupted during set-up"), !second, "second signal: {second}\n{stderr}");
     }
 }
+
+/// Limits are checked before any pass: an image whose hit points exceed the device's largest buffer
+/// (lavapipe: 128 MiB, 48 bytes a hit point: 4096x4096 needs 768 MiB) says what to lower and writes
+/// nothing; an unknown device lists the ones there are.
+#[test]
+fn device_limits_are_checked_before_work() {
+    let dir = scratch("limits");
+    let out = dir.join("never.exr");
+    let out = out.to_str().unwrap();
+    let e = fails(&["render", CORNELL, "--resolution", "4096x4096", "--passes", "1", "--out", out]);
+    assert!(e.contains("the hit points need 768 MiB") && e.contains("lower the resolution (4096x4096)"), "{e}");
+    assert!(!dir.join("never.exr").exists());
+    let e = fails(&["render", CORNELL, "--device", "nosuch", "--out", out]);
+    assert!(e.contains("no Vulkan device matches \"nosuch\"; devices:"), "{e}");
+    let e = fails(&["render", CORNELL, "--photons-per-pass", "0", "--out", out]);
+    assert!(e.contains("--photons-per-pass"), "{e}");
+    let e = fails(&["render", CORNELL, "--beta", "1", "--out", out]);
+    assert!(e.contains("must be in (0, 1)"), "{e}");
+}

@@ -264,32 +264,35 @@ impl Renderer {
         let cells = gpu.grid_allocated;
         let slots = gpu.slots() as u64;
         let pixels = gpu.pixels() as u64;
-        let need = |what: &str, bytes: u64| -> Result<()> {
-            if bytes > max_range {
-                bail!(
-                    "{what} needs {} MiB, more than this device's largest buffer ({} MiB): lower the resolution \
-                     ({}x{}) or the hit points per pixel ({})",
-                    bytes >> 20,
-                    max_range >> 20,
-                    gpu.params.width,
-                    gpu.params.height,
-                    settings.slots()
-                );
-            }
-            Ok(())
-        };
-        need("the hit points", slots * std::mem::size_of::<HitPoint>() as u64)?;
         let triangles = gpu.bvh_triangles.len() as u64;
+        let bvh_bytes = triangles * std::mem::size_of::<Triangle>() as u64 + gpu.bvh_nodes.len() as u64 * 32;
         if triangles * std::mem::size_of::<Triangle>() as u64 > max_range || gpu.bvh_nodes.len() as u64 * 32 > max_range {
             bail!(
                 "the scene's {triangles} triangles need {} MiB for their BVH, more than this device's largest \
                  buffer ({} MiB): use meshes of at most {} triangles in all",
-                (triangles * std::mem::size_of::<Triangle>() as u64 + gpu.bvh_nodes.len() as u64 * 32) >> 20,
+                bvh_bytes >> 20,
                 max_range >> 20,
                 max_range / std::mem::size_of::<Triangle>() as u64
             );
         }
-        need("the hit-point statistics", slots * std::mem::size_of::<HitStats>() as u64)?;
+        // Every buffer within the device's largest binding and all of them within its memory, checked
+        // before anything is allocated.
+        let size = std::mem::size_of::<HitPoint>() as u64;
+        let per_pixel = [
+            ("the hit points", slots * size),
+            ("the hit-point statistics", slots * std::mem::size_of::<HitStats>() as u64),
+            ("the pass accumulators", slots * std::mem::size_of::<PassAccum>() as u64),
+            ("the direct emission", pixels * 32),
+            ("the image", pixels * 16),
+        ];
+        let advice = format!(
+            "lower the resolution ({}x{}) or the hit points per pixel ({})",
+            gpu.params.width,
+            gpu.params.height,
+            settings.slots()
+        );
+        let others = [("the photon records and their sorted copy", 2 * capacity as u64 * record_size), ("the BVH", bvh_bytes)];
+        fits_device(&per_pixel, &others, max_range, ctx.info().memory_bytes, &advice)?;
 
         // The tracing kernels with this scene compiled in, where it is small enough (see specialize.rs).
         let traced = |k: &reflected::KernelInfo| -> Result<ComputePipeline> {
@@ -794,6 +797,27 @@ impl Renderer {
     }
 }
 
+/// Fails, saying what to lower, unless every buffer fits the device's largest storage binding
+/// (`max_range` bytes) and all of them its memory (`memory` bytes; 0: unknown, not checked).
+/// `per_pixel` grow with the image (`advice` says how to shrink them); `others` are checked for the total.
+fn fits_device(per_pixel: &[(&str, u64)], others: &[(&str, u64)], max_range: u64, memory: u64, advice: &str) -> Result<()> {
+    if let Some((what, bytes)) = per_pixel.iter().find(|(_, b)| *b > max_range) {
+        bail!("{what} need {} MiB, more than this device's largest buffer ({} MiB): {advice}", bytes >> 20, max_range >> 20);
+    }
+    let total: u64 = per_pixel.iter().chain(others).map(|(_, b)| b).sum();
+    if memory > 0 && total > memory {
+        let list: Vec<String> = per_pixel.iter().chain(others).map(|(w, b)| format!("{w} {} MiB", b >> 20)).collect();
+        bail!(
+            "the render needs {} MiB of device memory, more than this device has ({} MiB: {}): {advice}, or \
+             --photons-per-pass",
+            total >> 20,
+            memory >> 20,
+            list.join(", ")
+        );
+    }
+    Ok(())
+}
+
 /// Every pixel, in Morton order of its (x, y).
 fn pixel_order(width: u32, height: u32) -> Vec<u32> {
     fn spread(v: u32) -> u64 {
@@ -837,4 +861,27 @@ fn morton_order(hits: &[HitPoint]) -> Vec<u32> {
         .collect();
     keyed.sort_unstable();
     keyed.into_iter().map(|(_, i)| i).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fits_device;
+
+    /// Each limit at its bound: a buffer of exactly the largest binding and a total of exactly the
+    /// device's memory fit; a byte more is an error naming the buffer and what to lower.
+    #[test]
+    fn buffers_are_checked_against_the_device_limits() {
+        let (range, memory) = (128 << 20, 512 << 20);
+        let others = [("records", 256 << 20)];
+        assert!(fits_device(&[("hits", range)], &others, range, memory, "lower it").is_ok());
+        let e = fits_device(&[("hits", range + 1)], &others, range, memory, "lower it").unwrap_err().to_string();
+        assert!(e.contains("hits need 128 MiB") && e.contains("largest buffer (128 MiB): lower it"), "{e}");
+        let full = [("hits", 128 << 20), ("stats", 128 << 20)];
+        assert!(fits_device(&full, &others, range, memory, "lower it").is_ok());
+        let over = [("hits", 128 << 20), ("stats", 128 << 20), ("order", 1)];
+        let e = fits_device(&over, &others, range, memory, "lower it").unwrap_err().to_string();
+        assert!(e.contains("512 MiB of device memory") && e.contains("records 256 MiB") && e.contains("lower it"), "{e}");
+        // Unknown memory (0) is not checked.
+        assert!(fits_device(&over, &others, range, 0, "lower it").is_ok());
+    }
 }
