@@ -165,31 +165,28 @@ impl From<ProbeArg> for ProbeMode {
     }
 }
 
-/// A number of seconds: positive and finite.
+/// A number that `ok` accepts; `range` says which in the error.
+fn parse_in<T: std::str::FromStr + std::fmt::Display + Copy>(s: &str, ok: fn(T) -> bool, range: &str) -> Result<T, String>
+where
+    T::Err: std::fmt::Display,
+{
+    match s.parse::<T>() {
+        Ok(v) if ok(v) => Ok(v),
+        Ok(v) => Err(format!("must be {range}, got {v}")),
+        Err(e) => Err(format!("{s:?}: {e}")),
+    }
+}
+
 fn parse_seconds(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(t) if t.is_finite() && t > 0.0 => Ok(t),
-        Ok(t) => Err(format!("must be a positive number of seconds, got {t}")),
-        Err(e) => Err(format!("{s:?}: {e}")),
-    }
+    parse_in(s, |t: f64| t.is_finite() && t > 0.0, "a positive number of seconds")
 }
 
-/// A fraction in the open interval (0, 1).
 fn parse_fraction(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(f) if f > 0.0 && f < 1.0 => Ok(f),
-        Ok(f) => Err(format!("must be in (0, 1), got {f}")),
-        Err(e) => Err(format!("{s:?}: {e}")),
-    }
+    parse_in(s, |f: f32| f > 0.0 && f < 1.0, "in (0, 1)")
 }
 
-/// A positive finite number.
 fn parse_positive(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(f) if f.is_finite() && f > 0.0 => Ok(f),
-        Ok(f) => Err(format!("must be positive and finite, got {f}")),
-        Err(e) => Err(format!("{s:?}: {e}")),
-    }
+    parse_in(s, |f: f32| f.is_finite() && f > 0.0, "positive and finite")
 }
 
 /// `--checkpoint` took seconds before it took a file: a number is that old use, and says what replaced it.
