@@ -1,7 +1,7 @@
 //! The `ppm-vk` command: render a scene, list devices, benchmark.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -10,7 +10,7 @@ use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_vk_engine::metrics::{compare, cornell_regions, Reference, Region};
 use ppm_vk_engine::report::{file_sha256, PassRecord, RunHeader, RunReport, SCHEMA};
-use ppm_vk_engine::{Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings};
+use ppm_vk_engine::{Checkpoint, Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings};
 
 mod bench;
 mod compare;
@@ -60,29 +60,30 @@ struct RenderArgs {
     /// filter; the lower error at equal time from 10 s on); `ppm`: hit points fixed at pixel centres.
     #[arg(long, value_enum, default_value_t = ModeArg::Sppm)]
     mode: ModeArg,
-    /// Photon passes to run (default 100 unless --time is given).
-    #[arg(long, conflicts_with = "time")]
+    /// Photon passes the render has when done (default 100 unless --time is given); a resumed render
+    /// counts the passes of its checkpoint.
+    #[arg(long, conflicts_with = "time", value_parser = clap::value_parser!(u64).range(1..))]
     passes: Option<u64>,
     /// Render for this many seconds of wall time instead of a pass count.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_seconds)]
     time: Option<f64>,
     /// Photons emitted per pass.
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u32).range(1..))]
     photons_per_pass: u32,
     /// Fraction of new photons kept per pass (eq. 3, 6), in (0, 1).
-    #[arg(long, default_value_t = 0.7)]
+    #[arg(long, default_value_t = 0.7, value_parser = parse_fraction)]
     alpha: f32,
     /// Seed of all random streams.
     #[arg(long, default_value_t = 0)]
     seed: u32,
     /// Starting search radius in scene units (default: the paper's eq. 8).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_positive)]
     radius: Option<f32>,
     /// Override the scene's resolution, e.g. 256x256.
     #[arg(long, value_parser = parse_resolution)]
     resolution: Option<(u32, u32)>,
     /// Hit points per pixel (glass splits an eye path into both Fresnel branches up to this many).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=8))]
     hit_slots: u32,
     /// Eye paths per pixel and pass that only collect the emission seen directly or through mirrors and
     /// glass: the light's edges and its images converge this many times faster (0: the hit-point path's
@@ -93,11 +94,11 @@ struct RenderArgs {
     /// Photon probing (eq. 7-9): `paper` is eq. 9 as printed, `scale-free` is r' = r (1 + lambda / r^2).
     #[arg(long, value_enum, default_value_t = ProbeArg::Off)]
     probe: ProbeArg,
-    /// beta of eq. 9 as a fraction of r (the paper's best: 0.2 = r/5).
-    #[arg(long, default_value_t = 0.2)]
+    /// beta of eq. 9 as a fraction of r in (0, 1) (the paper's best: 0.2 = r/5).
+    #[arg(long, default_value_t = 0.2, value_parser = parse_fraction)]
     beta: f32,
     /// Photons the probe pass emits (default: --photons-per-pass, as in the paper).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     probe_photons: Option<u32>,
     /// Cone filter (eq. 10-14): its constant k >= 1, or `off`.
     #[arg(long, default_value = "off", value_parser = parse_cone)]
@@ -117,7 +118,7 @@ struct RenderArgs {
     regions: Vec<Region>,
     /// Evaluate the error against --reference after every N passes (it reads the image back; the
     /// overhead is printed).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
     error_every: u64,
     /// Write a run report: per pass wall time, GPU time per stage, photons, errors (.json or .csv).
     #[arg(long)]
@@ -125,9 +126,18 @@ struct RenderArgs {
     /// Write the per-pass stage timeline as a Chrome trace (opens in Perfetto or chrome://tracing).
     #[arg(long)]
     trace: Option<PathBuf>,
-    /// Also write the image every N seconds while rendering (0: only at the end).
-    #[arg(long, default_value_t = 0.0)]
-    checkpoint: f64,
+    /// Save the whole state of the render to FILE (at the end, when interrupted, and every
+    /// --checkpoint-every seconds), so `--resume FILE` can continue it.
+    #[arg(long, value_name = "FILE", value_parser = parse_checkpoint_path)]
+    checkpoint: Option<PathBuf>,
+    /// Also write the image (and the --checkpoint) every this many seconds while rendering [default:
+    /// 300 with --checkpoint, else only at the end].
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    checkpoint_every: Option<f64>,
+    /// Continue the render saved in FILE by --checkpoint. Give the scene and settings it was made with (it
+    /// refuses others, saying which); --passes counts its passes too.
+    #[arg(long, value_name = "FILE")]
+    resume: Option<PathBuf>,
     #[command(flatten)]
     device: DeviceArgs,
 }
@@ -153,6 +163,41 @@ impl From<ProbeArg> for ProbeMode {
             ProbeArg::ScaleFree => ProbeMode::ScaleFree,
         }
     }
+}
+
+/// A number that `ok` accepts; `range` says which in the error.
+fn parse_in<T: std::str::FromStr + std::fmt::Display + Copy>(s: &str, ok: fn(T) -> bool, range: &str) -> Result<T, String>
+where
+    T::Err: std::fmt::Display,
+{
+    match s.parse::<T>() {
+        Ok(v) if ok(v) => Ok(v),
+        Ok(v) => Err(format!("must be {range}, got {v}")),
+        Err(e) => Err(format!("{s:?}: {e}")),
+    }
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    parse_in(s, |t: f64| t.is_finite() && t > 0.0, "a positive number of seconds")
+}
+
+fn parse_fraction(s: &str) -> Result<f32, String> {
+    parse_in(s, |f: f32| f > 0.0 && f < 1.0, "in (0, 1)")
+}
+
+fn parse_positive(s: &str) -> Result<f32, String> {
+    parse_in(s, |f: f32| f.is_finite() && f > 0.0, "positive and finite")
+}
+
+/// `--checkpoint` took seconds before it took a file: a number is that old use, and says what replaced it.
+fn parse_checkpoint_path(s: &str) -> Result<PathBuf, String> {
+    if s.parse::<f64>().is_ok() {
+        return Err(format!(
+            "--checkpoint now names the file to save the render's state to; to write the image every {s} s, \
+             use --checkpoint-every {s} (with --checkpoint FILE it saves the state too)"
+        ));
+    }
+    Ok(PathBuf::from(s))
 }
 
 fn parse_region(s: &str) -> Result<Region, String> {
@@ -195,7 +240,10 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render(args) => render(args),
+        Command::Render(args) => match render(args) {
+            Ok(Ended::Signal(sig)) => std::process::exit(128 + sig),
+            other => other.map(|_| ()),
+        },
         Command::Devices => devices(),
         Command::Bench(args) => bench::run(args),
         Command::Compare(args) => compare::run(args),
@@ -213,7 +261,16 @@ fn devices() -> Result<()> {
     }
     for d in list {
         let status = if d.missing.is_empty() { "usable".to_string() } else { format!("lacks {}", d.missing.join(", ")) };
-        println!("[{}] {} ({}, Vulkan {}, {}): {}", d.index, d.name, d.kind, d.api_version, d.driver, status);
+        println!(
+            "[{}] {} ({}, Vulkan {}, {}, {} MiB): {}",
+            d.index,
+            d.name,
+            d.kind,
+            d.api_version,
+            d.driver,
+            d.memory_bytes >> 20,
+            status
+        );
     }
     Ok(())
 }
@@ -236,7 +293,44 @@ pub fn check_validation(ctx: &Context) -> Result<()> {
     Ok(())
 }
 
-fn render(args: RenderArgs) -> Result<()> {
+/// The build a checkpoint names: its kernels and engine must be the ones that continue it.
+const BUILD: &str = env!("PPM_VK_GIT_REV");
+
+/// How a render ended.
+enum Ended {
+    Done,
+    /// By this signal (SIGINT, SIGTERM) after writing what it had: exit 128 + signal.
+    Signal(i32),
+}
+
+/// The first SIGINT or SIGTERM is stored (its number) for the render loop to stop after the pass in flight;
+/// a second one exits at once, with 128 + its number.
+fn watch_signals() -> Result<Arc<AtomicUsize>> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let first = Arc::new(AtomicUsize::new(0));
+    let seen = Arc::new(AtomicBool::new(false));
+    for sig in [SIGINT, SIGTERM] {
+        // Registered first, so it runs before `seen` is set: exits only when a signal came before.
+        signal_hook::flag::register_conditional_shutdown(sig, 128 + sig, seen.clone())
+            .context("installing the signal handlers")?;
+        signal_hook::flag::register(sig, seen.clone()).context("installing the signal handlers")?;
+        // compare_exchange keeps the first signal's number (a plain store would keep the last).
+        let first = first.clone();
+        // SAFETY: the action only does an atomic compare-exchange, which is async-signal-safe.
+        unsafe { signal_hook::low_level::register(sig, move || {
+            let _ = first.compare_exchange(0, sig as usize, Ordering::SeqCst, Ordering::SeqCst);
+        }) }
+        .context("installing the signal handlers")?;
+    }
+    Ok(first)
+}
+
+fn render(args: RenderArgs) -> Result<Ended> {
+    let signal = watch_signals()?;
+    let interrupted = || match signal.load(Ordering::SeqCst) {
+        0 => None,
+        s => Some(s as i32),
+    };
     let ext = args.out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
     if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
         bail!("--out {}: the extension must be .exr or .png", args.out.display());
@@ -245,11 +339,6 @@ fn render(args: RenderArgs) -> Result<()> {
         let ext = report.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
         if !matches!(ext.as_deref(), Some("json") | Some("csv")) {
             bail!("--report {}: the extension must be .json or .csv", report.display());
-        }
-    }
-    if let Some(t) = args.time {
-        if !(t.is_finite() && t > 0.0) {
-            bail!("--time must be a positive number of seconds, got {t}");
         }
     }
     let mut scene = load_scene(&args.scene)?;
@@ -277,24 +366,32 @@ fn render(args: RenderArgs) -> Result<()> {
         emission_samples: args.emission_samples,
         ..Settings::default()
     };
-    // Ctrl-C ends the render after the pass in flight; the image is written as usual.
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        ctrlc::set_handler(move || {
-            if stop.swap(true, Ordering::SeqCst) {
-                eprintln!("\nsecond interrupt: exiting without writing the image");
-                std::process::exit(130);
-            }
-        })
-        .context("installing the Ctrl-C handler")?;
+    settings.validate()?;
+    // A checkpoint that does not fit is refused here, before the device opens.
+    let resumed = match &args.resume {
+        Some(path) => {
+            let c = Checkpoint::load(path)?;
+            c.check(&scene, &settings, BUILD).with_context(|| format!("cannot resume from {}", path.display()))?;
+            Some(c)
+        }
+        None => None,
+    };
+    let set_up_interrupted = |sig: i32| {
+        eprintln!("interrupted during set-up: no pass done, nothing written");
+        Ok(Ended::Signal(sig))
+    };
+    if let Some(sig) = interrupted() {
+        return set_up_interrupted(sig);
     }
 
     let ctx = args.device.open()?;
     let info = ctx.info().clone();
     eprintln!("device: {} ({}, {})", info.name, info.kind, info.driver);
     let started = Instant::now();
-    let mut renderer = Renderer::new(&ctx, &scene, settings)?;
+    let mut renderer = match &resumed {
+        Some(c) => Renderer::resume(&ctx, &scene, settings, c, BUILD)?,
+        None => Renderer::new(&ctx, &scene, settings)?,
+    };
     let setup_s = started.elapsed().as_secs_f64();
     let g = renderer.gpu_scene();
     eprintln!(
@@ -307,6 +404,9 @@ fn render(args: RenderArgs) -> Result<()> {
         renderer.settings().photons_per_pass,
         renderer.ray_ms()
     );
+    if resumed.is_some() {
+        eprintln!("resumed after pass {} ({} photons)", renderer.passes(), renderer.emitted());
+    }
 
     if let Some(p) = renderer.probe_report() {
         let q = p.lambda_ratio_quantiles;
@@ -315,12 +415,12 @@ fn render(args: RenderArgs) -> Result<()> {
             p.photons, p.enlarged, p.hit_points, p.empty, q[0], q[1], q[2], q[3], q[4], p.mean_radius_ratio, p.gpu_ms
         );
     }
-    if args.error_every == 0 {
-        bail!("--error-every must be at least 1");
+    if let Some(sig) = interrupted() {
+        return set_up_interrupted(sig);
     }
     let mut report = RunReport::new(RunHeader {
         schema: SCHEMA.into(),
-        git_revision: env!("PPM_VK_GIT_REV").into(),
+        git_revision: BUILD.into(),
         device: info.name.clone(),
         device_kind: info.kind.clone(),
         driver: info.driver.clone(),
@@ -348,12 +448,23 @@ fn render(args: RenderArgs) -> Result<()> {
         ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {msg} (eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
+    // What is saved when: the image (and the state, with --checkpoint) every `save_every`, and at the end.
+    let save_every = args.checkpoint_every.or(args.checkpoint.as_ref().map(|_| 300.0));
+    let save = |renderer: &mut Renderer| -> Result<()> {
+        renderer.image()?.save(&args.out)?;
+        match &args.checkpoint {
+            Some(path) => renderer.checkpoint(BUILD)?.save(path),
+            None => Ok(()),
+        }
+    };
     let loop_start = Instant::now();
     let mut history: Vec<PassStats> = Vec::new();
-    let mut last_checkpoint = Instant::now();
-    while (history.len() as u64) < passes {
-        if stop.load(Ordering::SeqCst) {
+    let mut last_save = Instant::now();
+    let mut ended = Ended::Done;
+    while renderer.passes() < passes {
+        if let Some(sig) = interrupted() {
             bar.println("interrupted: writing the image of the passes done so far");
+            ended = Ended::Signal(sig);
             break;
         }
         if let Some(b) = budget {
@@ -361,12 +472,15 @@ fn render(args: RenderArgs) -> Result<()> {
                 break;
             }
         }
-        let s = renderer.pass()?;
+        let s = match renderer.pass() {
+            Ok(s) => s,
+            Err(e) => return Err(save_after_failure(&mut renderer, &args.out, e)),
+        };
         let elapsed = loop_start.elapsed().as_secs_f64();
-        let rate = renderer.emitted() as f64 / elapsed / 1e6;
+        let rate = (s.photons * (history.len() as u64 + 1)) as f64 / elapsed / 1e6;
         match budget {
             Some(b) => bar.set_position((elapsed / b.as_secs_f64() * 1000.0).min(1000.0) as u64),
-            None => bar.set_position(history.len() as u64 + 1),
+            None => bar.set_position(s.index),
         }
         bar.set_message(format!("pass {} | {:.2} M photons/s | {:.1} ms/pass", s.index, rate, s.wall_ms));
         let origin = *gpu_origin.get_or_insert(s.stages.first().map(|t| t.start_ms).unwrap_or(0.0));
@@ -385,19 +499,23 @@ fn render(args: RenderArgs) -> Result<()> {
         }
         report.passes.push(record);
         history.push(s);
-        if args.checkpoint > 0.0 && last_checkpoint.elapsed().as_secs_f64() >= args.checkpoint {
-            renderer.image()?.save(&args.out)?;
-            last_checkpoint = Instant::now();
+        if save_every.is_some_and(|t| last_save.elapsed().as_secs_f64() >= t) {
+            save(&mut renderer)?;
+            last_save = Instant::now();
         }
     }
     bar.finish_and_clear();
+    if history.is_empty() && matches!(ended, Ended::Signal(_)) && resumed.is_none() {
+        eprintln!("interrupted before the first pass ended: nothing written");
+        return Ok(ended);
+    }
     let loop_s = loop_start.elapsed().as_secs_f64();
     let image = renderer.image()?;
     let bad = image.count_non_finite();
     if bad > 0 {
         bail!("the image has {bad} non-finite pixels: not written (this is a bug; please report it)");
     }
-    image.save(&args.out)?;
+    save(&mut renderer)?;
     check_validation(&ctx)?;
 
     let emitted = renderer.emitted();
@@ -406,16 +524,19 @@ fn render(args: RenderArgs) -> Result<()> {
         history.len(),
         emitted,
         loop_s,
-        emitted as f64 / loop_s.max(1e-9) / 1e6,
+        history.iter().map(|s| s.photons).sum::<u64>() as f64 / loop_s.max(1e-9) / 1e6,
         setup_s,
         args.out.display()
     );
+    if let Some(path) = &args.checkpoint {
+        println!("checkpoint after pass {}: {}", renderer.passes(), path.display());
+    }
     print_stage_summary(&history, args.profile);
     // Paths ended at a depth backstop are counted in every report; a share above 1e-4 of the paths traced
     // is worth a warning (a glass sphere strands about 2e-5 of them by rounding, which is not).
     if let Some(last) = history.last() {
         let pixels = renderer.gpu_scene().pixels() as f64;
-        let eye_paths = pixels * (renderer.settings().slots() + renderer.settings().emission_samples).max(1) as f64 * (history.len() as f64 + 1.0);
+        let eye_paths = pixels * (renderer.settings().slots() + renderer.settings().emission_samples).max(1) as f64 * (renderer.passes() as f64 + 1.0);
         let photon_share = last.photon_paths_cut as f64 / last.emitted_total.max(1) as f64;
         let eye_share = last.eye_paths_cut as f64 / eye_paths;
         if photon_share > 1e-4 || eye_share > 1e-4 {
@@ -446,7 +567,21 @@ fn render(args: RenderArgs) -> Result<()> {
         report.save_chrome_trace(path)?;
         println!("trace: {}", path.display());
     }
-    Ok(())
+    if let Ended::Signal(sig) = ended {
+        eprintln!("interrupted by signal {sig} after pass {}: image, report and checkpoint written", renderer.passes());
+    }
+    Ok(ended)
+}
+
+/// A pass failed (the device lost, out of memory): saves the image of the passes before it if the device
+/// still answers, and returns the pass's error saying what was kept. The checkpoint is not rewritten: a
+/// failed pass may have left part of its work in the state; the last one saved stays valid.
+fn save_after_failure(renderer: &mut Renderer, out: &std::path::Path, error: anyhow::Error) -> anyhow::Error {
+    let pass = renderer.passes() + 1;
+    match renderer.image().and_then(|image| image.save(out)) {
+        Ok(()) => error.context(format!("pass {pass} failed; the image of the {} passes before it is in {}", pass - 1, out.display())),
+        Err(e) => error.context(format!("pass {pass} failed, and the image could not be saved either ({e:#})")),
+    }
 }
 
 fn print_stage_summary(history: &[PassStats], full: bool) {

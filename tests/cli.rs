@@ -217,3 +217,135 @@ fn render_warns_when_light_is_trapped() {
     assert!(quiet.status.success() && !stderr.contains("warning:"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--checkpoint` + `--resume` from the command line: 2 passes, then resumed to 4, give the file of 4
+/// uninterrupted passes byte for byte; the same command with another setting is refused naming it; the
+/// old `--checkpoint SECONDS` says what replaced it.
+#[test]
+fn resume_continues_a_render_from_its_checkpoint() {
+    let dir = scratch("resume");
+    let (whole, resumed, ckpt) = (dir.join("whole.exr"), dir.join("resumed.exr"), dir.join("state.ckpt"));
+    let render = |passes: &str, out: &PathBuf, extra: &[&std::ffi::OsStr]| {
+        let run = bin()
+            .args(["render", CORNELL, "--mode", "ppm", "--probe", "scale-free", "--passes", passes])
+            .args(["--photons-per-pass", "10000", "--resolution", "32x32", "--validate", "--out"])
+            .arg(out)
+            .args(extra)
+            .output()
+            .unwrap();
+        (run.status.success(), String::from_utf8_lossy(&run.stderr).to_string())
+    };
+    let (ok, e) = render("4", &whole, &[]);
+    assert!(ok, "{e}");
+    let (ok, e) = render("2", &resumed, &["--checkpoint".as_ref(), ckpt.as_os_str()]);
+    assert!(ok && ckpt.exists(), "{e}");
+    let (ok, e) = render("4", &resumed, &["--resume".as_ref(), ckpt.as_os_str()]);
+    assert!(ok && e.contains("resumed after pass 2"), "{e}");
+    assert!(std::fs::read(&whole).unwrap() == std::fs::read(&resumed).unwrap(), "the resumed image differs");
+    let (ok, e) = render("4", &resumed, &["--resume".as_ref(), ckpt.as_os_str(), "--alpha".as_ref(), "0.5".as_ref()]);
+    assert!(!ok && e.contains("other settings") && e.contains("alpha: 0.7 in the checkpoint, 0.5 now"), "{e}");
+    let e = fails(&["render", CORNELL, "--checkpoint", "60"]);
+    assert!(e.contains("--checkpoint-every 60"), "{e}");
+}
+
+/// Starts a render and returns it with its stderr, line by line, once a line contains `ready`.
+fn spawn_until(args: &[&str], dir: &std::path::Path, ready: &str) -> (std::process::Child, std::sync::mpsc::Receiver<String>) {
+    use std::io::BufRead;
+    let mut child = bin()
+        .args(["render", CORNELL, "--photons-per-pass", "10000", "--passes", "100000000"])
+        .args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (send, lines) = std::sync::mpsc::channel();
+    let stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+    std::thread::spawn(move || stderr.lines().map_while(Result::ok).for_each(|l| drop(send.send(l))));
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
+    loop {
+        let line = lines.recv_timeout(deadline.saturating_duration_since(std::time::Instant::now()));
+        match line {
+            Ok(l) if l.contains(ready) => return (child, lines),
+            Ok(_) => {}
+            Err(e) => panic!("no line with {ready:?} from the render: {e}"),
+        }
+    }
+}
+
+fn signal(child: &std::process::Child, sig: i32) {
+    // SAFETY: kill(2) on our own child's pid.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, sig) }, 0);
+}
+
+/// The rest of a child's stderr, after it exited.
+fn rest(lines: std::sync::mpsc::Receiver<String>) -> String {
+    lines.iter().collect::<Vec<_>>().join("\n")
+}
+
+/// SIGTERM in the middle of a render: the pass in flight ends, the image, the report and the checkpoint
+/// are written, all of the same passes, and the exit status is 143 (128 + SIGTERM).
+#[test]
+fn sigterm_finishes_the_pass_and_writes_everything() {
+    let dir = scratch("sigterm");
+    let args = ["--resolution", "32x32", "--out", "img.exr", "--report", "run.json", "--checkpoint", "state.ckpt"];
+    let (mut child, lines) = spawn_until(&[&args[..], &["--checkpoint-every", "0.001"]].concat(), &dir, "scene cornell-spheres");
+    // The checkpoint appears after the first pass: the render is under way.
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
+    while !dir.join("state.ckpt").exists() {
+        assert!(std::time::Instant::now() < deadline, "no checkpoint after 120 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    signal(&child, libc::SIGTERM);
+    let status = child.wait().unwrap();
+    let stderr = rest(lines);
+    assert_eq!(status.code(), Some(143), "{stderr}");
+    assert!(stderr.contains("interrupted by signal 15"), "{stderr}");
+    let report = RunReport::load_json(&dir.join("run.json")).unwrap();
+    let passes = report.passes.last().expect("a pass in the report").pass;
+    let checkpoint = ppm_vk_engine::Checkpoint::load(&dir.join("state.ckpt")).unwrap();
+    assert_eq!(checkpoint.header.passes, passes, "the checkpoint and the report tell different passes");
+    assert!(dir.join("img.exr").exists());
+}
+
+/// Set-up at 512x512 with the probe takes seconds on lavapipe; a SIGINT during it stops the render
+/// before its first pass, writing nothing (no 0-pass image), with status 130. A second SIGINT exits at
+/// once, without waiting for the set-up to end.
+#[test]
+fn signals_during_set_up_write_nothing() {
+    for second in [false, true] {
+        let dir = scratch(&format!("sigint-{second}"));
+        let args = ["--resolution", "512x512", "--probe", "scale-free", "--out", "img.exr", "--report", "run.json"];
+        let (mut child, lines) = spawn_until(&args, &dir, "device:");
+        signal(&child, libc::SIGINT);
+        if second {
+            std::thread::sleep(std::time::Duration::from_millis(100));
+            signal(&child, libc::SIGINT);
+        }
+        let status = child.wait().unwrap();
+        let stderr = rest(lines);
+        assert_eq!(status.code(), Some(130), "{stderr}");
+        assert!(!dir.join("img.exr").exists() && !dir.join("run.json").exists(), "wrote output:\n{stderr}");
+        // The first signal alone waits for the set-up and says so; the second does not wait.
+        assert_eq!(stderr.contains("interrupted during set-up"), !second, "second signal: {second}\n{stderr}");
+    }
+}
+
+/// Limits are checked before any pass: an image whose hit points exceed the device's largest buffer
+/// (lavapipe: 128 MiB, 48 bytes a hit point: 4096x4096 needs 768 MiB) says what to lower and writes
+/// nothing; an unknown device lists the ones there are.
+#[test]
+fn device_limits_are_checked_before_work() {
+    let dir = scratch("limits");
+    let out = dir.join("never.exr");
+    let out = out.to_str().unwrap();
+    let e = fails(&["render", CORNELL, "--resolution", "4096x4096", "--passes", "1", "--out", out]);
+    assert!(e.contains("the hit points need 768 MiB") && e.contains("lower the resolution (4096x4096)"), "{e}");
+    assert!(!dir.join("never.exr").exists());
+    let e = fails(&["render", CORNELL, "--device", "nosuch", "--out", out]);
+    assert!(e.contains("no Vulkan device matches \"nosuch\"; devices:"), "{e}");
+    let e = fails(&["render", CORNELL, "--photons-per-pass", "0", "--out", out]);
+    assert!(e.contains("--photons-per-pass"), "{e}");
+    let e = fails(&["render", CORNELL, "--beta", "1", "--out", out]);
+    assert!(e.contains("must be in (0, 1)"), "{e}");
+}

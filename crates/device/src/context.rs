@@ -29,6 +29,8 @@ pub struct DeviceInfo {
     /// a limit: lavapipe (llvmpipe) stops every loop after 65535 (gallivm's LP_MAX_TGSI_LOOP_ITERATIONS).
     /// `None`: no such limit is known for this driver.
     pub loop_budget: Option<u32>,
+    /// Bytes of its largest device-local memory heap (what buffers can take in all).
+    pub memory_bytes: u64,
     /// Whether it has everything the kernels need; if not, what is missing.
     pub missing: Vec<String>,
 }
@@ -157,6 +159,13 @@ fn describe(instance: &ash::Instance, index: usize, pd: vk::PhysicalDevice) -> D
         _ => "other",
     };
     let loop_budget = (driver_props.driver_id == vk::DriverId::MESA_LLVMPIPE).then_some(LAVAPIPE_LOOP_BUDGET);
+    let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
+    let memory_bytes = memory.memory_heaps[..memory.memory_heap_count as usize]
+        .iter()
+        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|h| h.size)
+        .max()
+        .unwrap_or(0);
     DeviceInfo {
         index,
         name,
@@ -164,6 +173,7 @@ fn describe(instance: &ash::Instance, index: usize, pd: vk::PhysicalDevice) -> D
         api_version: api_string(props.api_version),
         driver: driver.trim().to_string(),
         loop_budget,
+        memory_bytes,
         missing: missing_features(instance, pd),
     }
 }

@@ -274,7 +274,7 @@ pub(crate) fn srgb_encode_u8(linear: f32) -> u8 {
 
 /// Writes through a sibling temporary file (`name.tmp.<ext>`) and renames it over `path`, so a reader
 /// or an interrupted render never sees a truncated image.
-fn write_atomically(
+pub(crate) fn write_atomically(
     path: &Path,
     ext: &str,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<()>,

@@ -19,6 +19,7 @@
 //! Every kernel has a CPU twin in [`reference`] that the tests compare against on identical inputs.
 
 pub mod bvh;
+pub mod checkpoint;
 pub mod gpu_scene;
 pub mod image_io;
 pub mod metrics;
@@ -28,6 +29,7 @@ pub mod report;
 pub mod scene;
 pub mod settings;
 
+pub use checkpoint::Checkpoint;
 pub use image_io::RgbImage;
 pub use ppm_vk_device::{Context, ContextOptions, DeviceInfo, ScopeTiming};
 pub use ppm_vk_kernels::layout;

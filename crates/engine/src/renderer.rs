@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use anyhow::{bail, Context as _, Result};
+use anyhow::{bail, ensure, Context as _, Result};
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
 use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers, RadiusMax, UpdatePush};
 use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, Triangle};
@@ -15,6 +15,7 @@ use ppm_vk_kernels::resolve::{self, ResolvePush};
 use ppm_vk_kernels::specialize::{self, MAX_INLINE_PRIMITIVES};
 use ppm_vk_kernels::{pipeline, pipeline_from, reflected};
 
+use crate::checkpoint::{self, Checkpoint};
 use crate::gpu_scene::GpuScene;
 use crate::image_io::RgbImage;
 use crate::scene::Scene;
@@ -122,6 +123,9 @@ pub struct Renderer {
     emitted: u64,
     ray_ms: f64,
     probe_report: Option<ProbeReport>,
+    /// What a checkpoint records the render is of.
+    scene_name: String,
+    scene_sha256: String,
 }
 
 /// One variant of the photon kernel timed by [`Renderer::photon_breakdown`].
@@ -188,8 +192,69 @@ impl ProbeReport {
 const MAX_BATCHES: u32 = 1024;
 
 impl Renderer {
-    /// Uploads the scene, allocates per-hit-point state and runs the ray pass.
+    /// Uploads the scene, allocates per-hit-point state and runs the ray pass (and the probe pass).
     pub fn new(ctx: &Context, scene: &Scene, settings: Settings) -> Result<Renderer> {
+        let mut r = Renderer::prepare(ctx, scene, settings)?;
+        if r.settings.probe != ProbeMode::Off {
+            r.probe_pass()?;
+        }
+        Ok(r)
+    }
+
+    /// The render's state after the passes so far, to continue later with [`Renderer::resume`]; `build`
+    /// names the build (its kernels), which the resume must match.
+    pub fn checkpoint(&self, build: &str) -> Result<Checkpoint> {
+        let header = checkpoint::Header {
+            build: build.into(),
+            scene_name: self.scene_name.clone(),
+            scene_sha256: self.scene_sha256.clone(),
+            settings: self.settings.clone(),
+            passes: self.passes,
+            emitted: self.emitted,
+            batch: self.batch,
+            grid_cell: self.gpu.params.cell_size,
+            probe: self.probe_report.clone(),
+            sections: vec![],
+            payload_sha256: String::new(),
+        };
+        let hit_points = match self.settings.mode {
+            Mode::Ppm => self.read_hit_points()?,
+            Mode::Sppm => vec![],
+        };
+        let cut = self.ctx.download_prefix(&self.cut, 1)?[0];
+        let (stats, direct, busy) = (self.read_stats()?, self.read_direct()?, self.read_busy()?);
+        Ok(Checkpoint { header, stats, hit_points, direct, busy, cut }.seal())
+    }
+
+    /// Continues the render `checkpoint` saved: the passes after it give the image the uninterrupted
+    /// render would have, bit for bit. Fails, saying what differs, unless the checkpoint is of `scene`
+    /// rendered with `settings` by `build`.
+    pub fn resume(ctx: &Context, scene: &Scene, settings: Settings, checkpoint: &Checkpoint, build: &str) -> Result<Renderer> {
+        checkpoint.check(scene, &settings, build).context("cannot resume from this checkpoint")?;
+        let mut r = Renderer::prepare(ctx, scene, settings)?;
+        let c = checkpoint;
+        let (slots, pixels) = (r.gpu.slots() as usize, r.gpu.pixels() as usize);
+        let ppm_hits = if r.settings.mode == Mode::Ppm { slots } else { 0 };
+        ensure!(
+            c.stats.len() == slots && c.hit_points.len() == ppm_hits && c.direct.len() == pixels && c.busy.len() == pixels,
+            "the checkpoint's buffers do not fit this render ({slots} hit points, {pixels} pixels)"
+        );
+        r.write_stats(&c.stats)?;
+        r.ctx.upload(&r.direct, bytemuck::cast_slice(&c.direct))?;
+        r.ctx.upload(&r.busy, bytemuck::cast_slice(&c.busy))?;
+        r.ctx.upload(&r.cut, bytemuck::bytes_of(&c.cut))?;
+        if r.settings.mode == Mode::Ppm {
+            r.ctx.upload(&r.hit_points, bytemuck::cast_slice(&c.hit_points))?;
+            r.set_order(morton_order(&c.hit_points))?;
+        }
+        let h = &c.header;
+        (r.passes, r.emitted, r.batch, r.probe_report) = (h.passes, h.emitted, h.batch.max(1), h.probe.clone());
+        r.use_cell(h.grid_cell)?;
+        Ok(r)
+    }
+
+    /// [`Renderer::new`] up to the probe pass.
+    fn prepare(ctx: &Context, scene: &Scene, settings: Settings) -> Result<Renderer> {
         settings.validate()?;
         let max_range = ctx.limits().max_storage_buffer_range as u64;
         let record_size = std::mem::size_of::<Photon>() as u64;
@@ -219,32 +284,35 @@ impl Renderer {
         gpu.params.lookup_limit = ppm_vk_kernels::lookup::lookup_limit(ctx.info().loop_budget);
         let slots = gpu.slots() as u64;
         let pixels = gpu.pixels() as u64;
-        let need = |what: &str, bytes: u64| -> Result<()> {
-            if bytes > max_range {
-                bail!(
-                    "{what} needs {} MiB, more than this device's largest buffer ({} MiB): lower the resolution \
-                     ({}x{}) or the hit points per pixel ({})",
-                    bytes >> 20,
-                    max_range >> 20,
-                    gpu.params.width,
-                    gpu.params.height,
-                    settings.slots()
-                );
-            }
-            Ok(())
-        };
-        need("the hit points", slots * std::mem::size_of::<HitPoint>() as u64)?;
         let triangles = gpu.bvh_triangles.len() as u64;
+        let bvh_bytes = triangles * std::mem::size_of::<Triangle>() as u64 + gpu.bvh_nodes.len() as u64 * 32;
         if triangles * std::mem::size_of::<Triangle>() as u64 > max_range || gpu.bvh_nodes.len() as u64 * 32 > max_range {
             bail!(
                 "the scene's {triangles} triangles need {} MiB for their BVH, more than this device's largest \
                  buffer ({} MiB): use meshes of at most {} triangles in all",
-                (triangles * std::mem::size_of::<Triangle>() as u64 + gpu.bvh_nodes.len() as u64 * 32) >> 20,
+                bvh_bytes >> 20,
                 max_range >> 20,
                 max_range / std::mem::size_of::<Triangle>() as u64
             );
         }
-        need("the hit-point statistics", slots * std::mem::size_of::<HitStats>() as u64)?;
+        // Every buffer within the device's largest binding and all of them within its memory, checked
+        // before anything is allocated.
+        let size = std::mem::size_of::<HitPoint>() as u64;
+        let per_pixel = [
+            ("the hit points", slots * size),
+            ("the hit-point statistics", slots * std::mem::size_of::<HitStats>() as u64),
+            ("the pass accumulators", slots * std::mem::size_of::<PassAccum>() as u64),
+            ("the direct emission", pixels * 32),
+            ("the image", pixels * 16),
+        ];
+        let advice = format!(
+            "lower the resolution ({}x{}) or the hit points per pixel ({})",
+            gpu.params.width,
+            gpu.params.height,
+            settings.slots()
+        );
+        let others = [("the photon records and their sorted copy", 2 * capacity as u64 * record_size), ("the BVH", bvh_bytes)];
+        fits_device(&per_pixel, &others, max_range, ctx.info().memory_bytes, &advice)?;
 
         let traced = |k: &reflected::KernelInfo| tracing_pipeline(ctx, &gpu, &settings, k, &[]);
         // Hit points per gather thread (measured, shaders/common/neighbours.glsl): four share their photon
@@ -267,6 +335,8 @@ impl Renderer {
         let stats_init = vec![HitStats { r2, ..Default::default() }; slots as usize];
         let mut r = Renderer {
             probe_report: None,
+            scene_name: scene.name.clone(),
+            scene_sha256: scene.content_sha256(),
             params: ctx.buffer_from("params", &[gpu.params])?,
             spheres: ctx.buffer_from("spheres", &gpu.spheres)?,
             quads: ctx.buffer_from("quads", &gpu.quads)?,
@@ -320,12 +390,14 @@ impl Renderer {
             Mode::Ppm => morton_order(&r.read_hit_points()?),
             Mode::Sppm => pixel_order(r.gpu.params.width, r.gpu.params.height),
         };
-        r.active = order.len() as u32;
-        r.ctx.upload(&r.order, bytemuck::cast_slice(&order))?;
-        if r.settings.probe != ProbeMode::Off {
-            r.probe_pass()?;
-        }
+        r.set_order(order)?;
         Ok(r)
+    }
+
+    /// The hit-point slots the gather and the update visit, in this order.
+    fn set_order(&mut self, order: Vec<u32>) -> Result<()> {
+        self.active = order.len() as u32;
+        self.ctx.upload(&self.order, bytemuck::cast_slice(&order))
     }
 
     /// The ray kernel's dispatches for eye pass `eye_pass` (the CPU reference, `reference::eye_pass`,
@@ -534,6 +606,11 @@ impl Renderer {
             }
             return Ok(());
         }
+        self.use_cell(cell)
+    }
+
+    /// Gives the photon grid cells of size `cell` from the next batch on.
+    fn use_cell(&mut self, cell: f32) -> Result<()> {
         if !(cell.is_finite() && cell > 0.0) || cell == self.gpu.params.cell_size {
             return Ok(());
         }
@@ -838,6 +915,27 @@ fn tracing_pipeline(
     }
 }
 
+/// Fails, saying what to lower, unless every buffer fits the device's largest storage binding
+/// (`max_range` bytes) and all of them its memory (`memory` bytes; 0: unknown, not checked).
+/// `per_pixel` grow with the image (`advice` says how to shrink them); `others` are checked for the total.
+fn fits_device(per_pixel: &[(&str, u64)], others: &[(&str, u64)], max_range: u64, memory: u64, advice: &str) -> Result<()> {
+    if let Some((what, bytes)) = per_pixel.iter().find(|(_, b)| *b > max_range) {
+        bail!("{what} need {} MiB, more than this device's largest buffer ({} MiB): {advice}", bytes >> 20, max_range >> 20);
+    }
+    let total: u64 = per_pixel.iter().chain(others).map(|(_, b)| b).sum();
+    if memory > 0 && total > memory {
+        let list: Vec<String> = per_pixel.iter().chain(others).map(|(w, b)| format!("{w} {} MiB", b >> 20)).collect();
+        bail!(
+            "the render needs {} MiB of device memory, more than this device has ({} MiB: {}): {advice}, or \
+             --photons-per-pass",
+            total >> 20,
+            memory >> 20,
+            list.join(", ")
+        );
+    }
+    Ok(())
+}
+
 /// Every pixel, in Morton order of its (x, y).
 fn pixel_order(width: u32, height: u32) -> Vec<u32> {
     fn spread(v: u32) -> u64 {
@@ -881,4 +979,27 @@ fn morton_order(hits: &[HitPoint]) -> Vec<u32> {
         .collect();
     keyed.sort_unstable();
     keyed.into_iter().map(|(_, i)| i).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fits_device;
+
+    /// Each limit at its bound: a buffer of exactly the largest binding and a total of exactly the
+    /// device's memory fit; a byte more is an error naming the buffer and what to lower.
+    #[test]
+    fn buffers_are_checked_against_the_device_limits() {
+        let (range, memory) = (128 << 20, 512 << 20);
+        let others = [("records", 256 << 20)];
+        assert!(fits_device(&[("hits", range)], &others, range, memory, "lower it").is_ok());
+        let e = fits_device(&[("hits", range + 1)], &others, range, memory, "lower it").unwrap_err().to_string();
+        assert!(e.contains("hits need 128 MiB") && e.contains("largest buffer (128 MiB): lower it"), "{e}");
+        let full = [("hits", 128 << 20), ("stats", 128 << 20)];
+        assert!(fits_device(&full, &others, range, memory, "lower it").is_ok());
+        let over = [("hits", 128 << 20), ("stats", 128 << 20), ("order", 1)];
+        let e = fits_device(&over, &others, range, memory, "lower it").unwrap_err().to_string();
+        assert!(e.contains("512 MiB of device memory") && e.contains("records 256 MiB") && e.contains("lower it"), "{e}");
+        // Unknown memory (0) is not checked.
+        assert!(fits_device(&over, &others, range, 0, "lower it").is_ok());
+    }
 }

@@ -260,5 +260,10 @@ mod tests {
             assert!(l.photon_depth >= MIN_DEPTH && l.eye_depth >= MIN_EYE_DEPTH, "{l:?}");
         }
         assert!(PathLimits::with_bvh(Some(65535), 500, 1, 8, 4, 4096, 1024).is_err());
+        // A device without a loop limit (any but lavapipe) takes the caps and an unbounded traversal,
+        // however many primitives the scene has.
+        let l = PathLimits::with_bvh(None, 500, 1, 8, 4, 4096, 1024).unwrap();
+        assert_eq!((l.photon_depth, l.eye_depth, l.photon_bvh_budget, l.eye_bvh_budget), (4096, 1024, u32::MAX, u32::MAX));
+        assert_eq!(l.emission_per_dispatch, 4);
     }
 }

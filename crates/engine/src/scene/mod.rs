@@ -27,6 +27,15 @@ pub const MAX_RESOLUTION: u32 = 16384;
 /// large is far more likely a mistake than a scene meant for this renderer.
 pub const MAX_TRIANGLES: usize = 1 << 24;
 
+/// Most spheres and quads a scene may hold together: 2^16. Every ray tests each of them in turn (only
+/// triangles have a BVH), so a pass over more would take hours; lavapipe's loop budget already stops far
+/// below this (`PathLimits`).
+pub const MAX_SHAPES: usize = 1 << 16;
+
+/// Largest scene file read: 16 MiB, well above 2^16 shapes written out (about 6 MiB). Parsing allocates
+/// in proportion to the text, so this bounds what a hostile file can make the parser take.
+pub const MAX_SCENE_BYTES: u64 = 16 << 20;
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     pub eye: Vec3,
@@ -234,8 +243,7 @@ impl Scene {
     pub fn load(path: &Path) -> anyhow::Result<Scene> {
         // The io error goes into the message itself (not only an anyhow context) so
         // that `{}` formatting still says why the file could not be read.
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| anyhow::anyhow!("{}: cannot read scene file: {e}", path.display()))?;
+        let text = read_bounded(path, MAX_SCENE_BYTES, "scene file")?;
         Scene::parse(&text, &path.display().to_string())
     }
 
@@ -308,6 +316,37 @@ impl Scene {
             }
         }
         out
+    }
+
+    /// SHA-256 (hex) of everything that shapes the image: camera and resolution, the materials' surfaces
+    /// and emission, spheres, quads and every mesh's vertices, normals, indices and materials. Names
+    /// (the scene's, materials', mesh paths) are left out: moving a scene's directory keeps its hash.
+    /// Checkpoints use it to refuse resuming a render of another scene.
+    pub fn content_sha256(&self) -> String {
+        use sha2::Digest;
+        use std::fmt::Write as _;
+        /// Feeds `Debug` text straight into the hash (exact: floats print as their shortest round trip).
+        struct Feed<'a>(&'a mut sha2::Sha256);
+        impl fmt::Write for Feed<'_> {
+            fn write_str(&mut self, s: &str) -> fmt::Result {
+                self.0.update(s.as_bytes());
+                Ok(())
+            }
+        }
+        let mut h = sha2::Sha256::new();
+        let surfaces: Vec<(Surface, Vec3)> = self.materials.iter().map(|m| (m.surface, m.emission)).collect();
+        // Writing into a hash cannot fail.
+        let _ = write!(Feed(&mut h), "{:?}", (&self.camera, &surfaces, &self.spheres, &self.quads));
+        let floats = |v: &[Vec3]| -> Vec<u8> { v.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect() };
+        for m in &self.meshes {
+            h.update((m.positions.len() as u64).to_le_bytes());
+            h.update(floats(&m.positions));
+            h.update(floats(m.normals.as_deref().unwrap_or(&[])));
+            h.update((m.indices.len() as u64).to_le_bytes());
+            h.update(m.indices.iter().flatten().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>());
+            h.update(m.materials.iter().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>());
+        }
+        h.finalize().iter().map(|b| format!("{b:02x}")).collect()
     }
 
     /// Triangles in all meshes.
@@ -415,6 +454,16 @@ impl Scene {
         for (i, m) in self.meshes.iter().enumerate() {
             check_mesh(m, &format!("mesh[{i}]"), self.materials.len())?;
         }
+        let shapes = self.spheres.len() + self.quads.len();
+        if shapes > MAX_SHAPES {
+            return Err(invalid(
+                "",
+                format!(
+                    "{shapes} spheres and quads, more than MAX_SHAPES = {MAX_SHAPES} (every ray tests each \
+                     one; put large geometry in a mesh, which has a BVH)"
+                ),
+            ));
+        }
         let triangles = self.triangle_count();
         if triangles > MAX_TRIANGLES {
             return Err(invalid(
@@ -435,6 +484,23 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// Most bytes an OBJ file may have: 2 GiB, room for [`MAX_TRIANGLES`] triangles written out.
+pub const MAX_MESH_BYTES: u64 = 2 << 30;
+
+/// Reads a regular file of at most `max` bytes as text; anything else (a device such as /dev/zero, a
+/// directory, a larger file) is an error naming the path, before reading a byte.
+pub(crate) fn read_bounded(path: &Path, max: u64, what: &str) -> anyhow::Result<String> {
+    let cannot = |e: &dyn fmt::Display| anyhow::anyhow!("{}: cannot read {what}: {e}", path.display());
+    let meta = std::fs::metadata(path).map_err(|e| cannot(&e))?;
+    if !meta.is_file() {
+        return Err(cannot(&"not a regular file"));
+    }
+    if meta.len() > max {
+        anyhow::bail!("{}: {} bytes, more than a {what} may have ({max})", path.display(), meta.len());
+    }
+    std::fs::read_to_string(path).map_err(|e| cannot(&e))
 }
 
 pub(crate) fn fmt_vec(v: [f32; 3]) -> String {

@@ -48,7 +48,7 @@ pub(super) fn import(
     max_triangles: usize,
 ) -> Result<usize> {
     let shown = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| {
+    let text = super::read_bounded(path, super::MAX_MESH_BYTES, "OBJ file").map_err(|e| {
         let hint = if demo::is_generated(path) {
             format!(
                 " (a generated demo mesh: run `{}` to write it)",
@@ -57,7 +57,7 @@ pub(super) fn import(
         } else {
             String::new()
         };
-        anyhow!("{shown}: cannot read OBJ file: {e}{hint}")
+        anyhow!("{e}{hint}")
     })?;
     let stats = prescan(&text, &shown, max_triangles)?;
     if stats.triangles == 0 {
