@@ -251,12 +251,7 @@ impl Reader {
     }
 
     /// `node` with its attributes substituted and (with `deep`) its children converted.
-    fn element(
-        &mut self,
-        src: &Src,
-        node: roxmltree::Node,
-        deep: bool,
-    ) -> Result<Elem> {
+    fn element(&mut self, src: &Src, node: roxmltree::Node, deep: bool) -> Result<Elem> {
         let pos = src.doc.text_pos_at(node.range().start);
         let mut e = Elem {
             tag: node.tag_name().name().to_string(),
@@ -342,13 +337,21 @@ struct Props<'a> {
 }
 
 const PROPERTY_TAGS: &[&str] = &[
-    "float", "integer", "boolean", "string", "point", "vector", "rgb", "spectrum", "transform",
+    "float",
+    "integer",
+    "boolean",
+    "string",
+    "point",
+    "vector",
+    "rgb",
+    "spectrum",
+    "transform",
     "texture",
 ];
 
 impl<'a> Props<'a> {
     /// The property children of `owner`; the other children are the caller's (`objects`).
-    fn of(owner: &'a Elem) -> Result<(Props<'a>, Vec<&'a Elem>)> {
+    fn of(owner: &'a Elem) -> (Props<'a>, Vec<&'a Elem>) {
         let mut items = Vec::new();
         let mut objects = Vec::new();
         for c in &owner.children {
@@ -358,7 +361,7 @@ impl<'a> Props<'a> {
                 objects.push(c);
             }
         }
-        Ok((Props { owner, items }, objects))
+        (Props { owner, items }, objects)
     }
 
     fn get(&self, name: &str) -> Option<&'a Elem> {
@@ -434,9 +437,9 @@ impl<'a> Props<'a> {
     /// Refuses the properties nothing read.
     fn finish(&self) -> Result<()> {
         match self.items.iter().find(|(_, used)| !used.get()) {
-            Some((e, _)) if e.tag == "texture" => Err(e.err(
-                "textures are not supported (only constant colours: rgb, float, spectrum)",
-            )),
+            Some((e, _)) if e.tag == "texture" => Err(
+                e.err("textures are not supported (only constant colours: rgb, float, spectrum)")
+            ),
             Some((e, _)) => Err(e.err(format!(
                 "parameter not read by ppm-vk for {} (see docs/mitsuba.md)",
                 self.owner.what()
@@ -511,9 +514,9 @@ fn color(e: &Elem) -> Result<Vec3> {
             }
             Ok(Vec3::splat(number(e, v)? as f32))
         }
-        "texture" => Err(e.err(
-            "textures are not supported (only constant colours: rgb, float, spectrum)",
-        )),
+        "texture" => {
+            Err(e.err("textures are not supported (only constant colours: rgb, float, spectrum)"))
+        }
         _ => Err(e.err("expected a colour: <rgb>, <float> or <spectrum>")),
     }
 }
@@ -537,11 +540,17 @@ fn transform(e: &Elem) -> Result<DAffine3> {
                 let v = step.required("value")?;
                 match numbers(step, v)?[..] {
                     // Row-major, as written.
-                    ref n if n.len() == 16 => DMat4::from_cols_array(n.try_into().unwrap()).transpose(),
+                    ref n if n.len() == 16 => {
+                        DMat4::from_cols_array(n.try_into().unwrap()).transpose()
+                    }
                     ref n if n.len() == 9 => {
                         DMat4::from_mat3(DMat3::from_cols_array(n.try_into().unwrap()).transpose())
                     }
-                    _ => return Err(step.err(format!("value: expected 16 or 9 numbers, got \"{v}\""))),
+                    _ => {
+                        return Err(
+                            step.err(format!("value: expected 16 or 9 numbers, got \"{v}\""))
+                        )
+                    }
                 }
             }
             "lookat" => {
@@ -683,6 +692,11 @@ impl Builder {
             "bsdf" => {
                 let b = self.bsdf(e)?;
                 match &b.id {
+                    Some(id) if self.bsdfs.contains_key(id) => {
+                        return Err(e.err(format!(
+                            "the id \"{id}\" is already taken (ids are unique, as in Mitsuba)"
+                        )));
+                    }
                     Some(id) => {
                         self.bsdfs.insert(id.clone(), b);
                     }
@@ -704,23 +718,40 @@ impl Builder {
     /// Integrators only choose how Mitsuba estimates the image; ppm-vk computes the same image
     /// (all paths) with its own. What would make Mitsuba's image differ is warned about.
     fn integrator(&mut self, e: &Elem) -> Result<()> {
-        const FULL: &[&str] = &["path", "volpath", "volpathmis", "ptracer", "prb", "prbvolpath"];
+        const FULL: &[&str] = &[
+            "path",
+            "volpath",
+            "volpathmis",
+            "ptracer",
+            "prb",
+            "prbvolpath",
+        ];
         if !FULL.contains(&e.kind()) {
-            self.warn(e, "ppm-vk renders all light paths (global illumination), not this integrator's image");
+            self.warn(
+                e,
+                "ppm-vk renders all light paths (global illumination), not this integrator's image",
+            );
         }
-        let (props, _) = Props::of(e)?;
+        let (props, _) = Props::of(e);
         if let Some(d) = props.float("max_depth")? {
             if d != -1.0 {
-                self.warn(e, format!("max_depth {d} ignored: ppm-vk renders paths of any length"));
+                self.warn(
+                    e,
+                    format!("max_depth {d} ignored: ppm-vk renders paths of any length"),
+                );
             }
         }
         Ok(())
     }
 
     fn bsdf(&mut self, e: &Elem) -> Result<Bsdf> {
-        let (props, objects) = Props::of(e)?;
+        let (props, objects) = Props::of(e);
         let id = e.attr("id").map(str::to_string);
-        let nested: Vec<&Elem> = objects.iter().copied().filter(|c| c.tag == "bsdf").collect();
+        let nested: Vec<&Elem> = objects
+            .iter()
+            .copied()
+            .filter(|c| c.tag == "bsdf")
+            .collect();
         if let Some(o) = objects.iter().find(|c| c.tag != "bsdf") {
             return Err(o.err(format!("not expected inside {}", e.what())));
         }
@@ -752,7 +783,11 @@ impl Builder {
                     return Err(e.err("wraps a two-sided bsdf (Mitsuba refuses this too)"));
                 }
                 props.finish()?;
-                return Ok(Bsdf { two_sided: true, id, ..inner });
+                return Ok(Bsdf {
+                    two_sided: true,
+                    id,
+                    ..inner
+                });
             }
             kind @ ("conductor" | "roughconductor") => {
                 let material = props.string("material")?.unwrap_or("none");
@@ -763,7 +798,13 @@ impl Builder {
                     )));
                 }
                 if kind == "roughconductor" {
-                    props.ignore(&["alpha", "alpha_u", "alpha_v", "distribution", "sample_visible"]);
+                    props.ignore(&[
+                        "alpha",
+                        "alpha_u",
+                        "alpha_v",
+                        "distribution",
+                        "sample_visible",
+                    ]);
                     self.warn(e, "rough conductor rendered as a smooth mirror (ppm-vk has no glossy reflection)");
                 }
                 Surface::Mirror {
@@ -798,12 +839,24 @@ impl Builder {
                     )));
                 }
                 if kind == "roughdielectric" {
-                    props.ignore(&["alpha", "alpha_u", "alpha_v", "distribution", "sample_visible"]);
+                    props.ignore(&[
+                        "alpha",
+                        "alpha_u",
+                        "alpha_v",
+                        "distribution",
+                        "sample_visible",
+                    ]);
                     self.warn(e, "rough dielectric rendered as smooth glass (ppm-vk has no glossy transmission)");
                 }
-                let surface = Surface::Glass { ior: (int / ext) as f32 };
+                let surface = Surface::Glass {
+                    ior: (int / ext) as f32,
+                };
                 props.finish()?;
-                return Ok(Bsdf { surface, two_sided: true, id });
+                return Ok(Bsdf {
+                    surface,
+                    two_sided: true,
+                    id,
+                });
             }
             "thindielectric" => {
                 return Err(e.err(
@@ -837,15 +890,27 @@ impl Builder {
         };
         let mut candidate = name.to_string();
         for n in 2.. {
-            match self.scene.materials.iter().position(|m| m.name == candidate) {
-                Some(i) if self.scene.materials[i] == Material { name: candidate.clone(), ..wanted.clone() } => {
+            match self
+                .scene
+                .materials
+                .iter()
+                .position(|m| m.name == candidate)
+            {
+                Some(i)
+                    if self.scene.materials[i]
+                        == Material {
+                            name: candidate.clone(),
+                            ..wanted.clone()
+                        } =>
+                {
                     return i as u32
                 }
                 Some(_) => candidate = format!("{name}#{n}"),
                 None => break,
             }
         }
-        self.origins.insert(format!("materials.{candidate}"), e.clone());
+        self.origins
+            .insert(format!("materials.{candidate}"), e.clone());
         self.scene.materials.push(Material {
             name: candidate,
             ..wanted
@@ -856,7 +921,7 @@ impl Builder {
     fn shape(&mut self, e: &Elem) -> Result<()> {
         let index = self.shapes;
         self.shapes += 1;
-        let (props, objects) = Props::of(e)?;
+        let (props, objects) = Props::of(e);
         let mut bsdf: Option<(Bsdf, &Elem)> = None;
         let mut emission: Option<(Vec3, &Elem)> = None;
         for o in objects {
@@ -870,11 +935,16 @@ impl Builder {
                     } else {
                         let id = o.required("id")?;
                         self.bsdfs.get(id).cloned().ok_or_else(|| {
-                            let mut known: Vec<&str> = self.bsdfs.keys().map(String::as_str).collect();
+                            let mut known: Vec<&str> =
+                                self.bsdfs.keys().map(String::as_str).collect();
                             known.sort();
                             o.err(format!(
                                 "no bsdf with id \"{id}\" defined before it (known: {})",
-                                if known.is_empty() { "none".to_string() } else { known.join(", ") }
+                                if known.is_empty() {
+                                    "none".to_string()
+                                } else {
+                                    known.join(", ")
+                                }
                             ))
                         })?
                     };
@@ -884,7 +954,7 @@ impl Builder {
                     if o.kind() != "area" {
                         return Err(o.err("only area emitters are supported on shapes"));
                     }
-                    let (ep, rest) = Props::of(o)?;
+                    let (ep, rest) = Props::of(o);
                     if let Some(r) = rest.first() {
                         return Err(r.err(format!("not expected inside {}", o.what())));
                     }
@@ -914,7 +984,11 @@ impl Builder {
         if emission.max_element() > 0.0 && !matches!(bsdf.surface, Surface::Diffuse { .. }) {
             return Err(emitter_at.err(format!(
                 "an area emitter on a {} surface: ppm-vk lights are diffuse (or black) only",
-                if matches!(bsdf.surface, Surface::Glass { .. }) { "dielectric" } else { "conductor" }
+                if matches!(bsdf.surface, Surface::Glass { .. }) {
+                    "dielectric"
+                } else {
+                    "conductor"
+                }
             )));
         }
         let name = match (&bsdf.id, emission.max_element() > 0.0) {
@@ -926,7 +1000,15 @@ impl Builder {
         let flip = props.boolean("flip_normals")?;
         let closed = match e.kind() {
             "rectangle" => {
-                self.quad(e, &to_world, flip, [-1.0, -1.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], material);
+                self.quad(
+                    e,
+                    &to_world,
+                    flip,
+                    [-1.0, -1.0, 0.0],
+                    [2.0, 0.0, 0.0],
+                    [0.0, 2.0, 0.0],
+                    material,
+                );
                 Closed::No
             }
             "cube" => {
@@ -940,7 +1022,15 @@ impl Builder {
                         if side < 0.0 {
                             std::mem::swap(&mut u, &mut v);
                         }
-                        self.quad(e, &to_world, flip, origin.to_array(), u.to_array(), v.to_array(), material);
+                        self.quad(
+                            e,
+                            &to_world,
+                            flip,
+                            origin.to_array(),
+                            u.to_array(),
+                            v.to_array(),
+                            material,
+                        );
                     }
                 }
                 Closed::Yes
@@ -955,7 +1045,9 @@ impl Builder {
                     let a = step * f64::from(i);
                     DVec3::new(r * a.cos(), r * a.sin(), 0.0)
                 }));
-                let triangles = (0..n).map(|i| ([0, 1 + i, 1 + (i + 1) % n], material)).collect();
+                let triangles = (0..n)
+                    .map(|i| ([0, 1 + i, 1 + (i + 1) % n], material))
+                    .collect();
                 let raw = RawMesh {
                     name: format!("{} disk", e.loc),
                     positions,
@@ -969,20 +1061,29 @@ impl Builder {
             "sphere" => {
                 let center = props.point("center")?.unwrap_or(DVec3::ZERO);
                 let radius = props.float("radius")?.unwrap_or(1.0);
-                let m = to_world * DAffine3::from_translation(center) * DAffine3::from_scale(DVec3::splat(radius));
+                let m = to_world
+                    * DAffine3::from_translation(center)
+                    * DAffine3::from_scale(DVec3::splat(radius));
                 let gram = m.matrix3.transpose() * m.matrix3;
                 let s2 = gram.x_axis.x;
                 let off = (gram - DMat3::from_diagonal(DVec3::splat(s2))).to_cols_array();
                 if off.iter().any(|x| x.abs() > 1e-6 * s2) {
-                    return Err(e.err("to_world scales the sphere non-uniformly (an ellipsoid): not supported"));
+                    return Err(e.err(
+                        "to_world scales the sphere non-uniformly (an ellipsoid): not supported",
+                    ));
                 }
                 if emission.max_element() > 0.0 {
-                    return Err(emitter_at.err("an emitting sphere: ppm-vk lights are quads and triangles (use a mesh)"));
+                    return Err(emitter_at.err(
+                        "an emitting sphere: ppm-vk lights are quads and triangles (use a mesh)",
+                    ));
                 }
                 if flip && matches!(bsdf.surface, Surface::Glass { .. }) {
-                    return Err(e.err("flip_normals on a dielectric sphere (its inside outside) is not supported"));
+                    return Err(e.err(
+                        "flip_normals on a dielectric sphere (its inside outside) is not supported",
+                    ));
                 }
-                self.origins.insert(format!("sphere[{}]", self.scene.spheres.len()), e.clone());
+                self.origins
+                    .insert(format!("sphere[{}]", self.scene.spheres.len()), e.clone());
                 self.scene.spheres.push(Sphere {
                     center: m.translation.as_vec3(),
                     radius: s2.sqrt() as f32,
@@ -996,7 +1097,10 @@ impl Builder {
                 let i = obj::import(
                     &mut self.scene,
                     &path,
-                    &ObjImport { transform: to_world, material: Some(material) },
+                    &ObjImport {
+                        transform: to_world,
+                        material: Some(material),
+                    },
                     MAX_TRIANGLES,
                 )
                 .map_err(|err| e.err(format!("{err:#}")))?;
@@ -1022,9 +1126,9 @@ impl Builder {
                 closed(&self.scene.meshes[i])
             }
             _ => {
-                return Err(e.err(
-                    "unsupported shape (read: rectangle, cube, disk, sphere, obj, ply)",
-                ))
+                return Err(
+                    e.err("unsupported shape (read: rectangle, cube, disk, sphere, obj, ply)")
+                )
             }
         };
         props.finish()?;
@@ -1049,13 +1153,23 @@ impl Builder {
     /// The quad `origin + s u + t v` (object space) placed by `m`; its front normal is `u x v` turned
     /// as Mitsuba turns normals (the inverse transpose), and flipped with `flip`.
     #[allow(clippy::too_many_arguments)]
-    fn quad(&mut self, e: &Elem, m: &DAffine3, flip: bool, origin: [f64; 3], u: [f64; 3], v: [f64; 3], material: u32) {
+    fn quad(
+        &mut self,
+        e: &Elem,
+        m: &DAffine3,
+        flip: bool,
+        origin: [f64; 3],
+        u: [f64; 3],
+        v: [f64; 3],
+        material: u32,
+    ) {
         let (mut u, mut v) = (m.transform_vector3(u.into()), m.transform_vector3(v.into()));
         // A mirroring transform turns u x v against the inverse-transposed normal.
         if (m.matrix3.determinant() < 0.0) != flip {
             std::mem::swap(&mut u, &mut v);
         }
-        self.origins.insert(format!("quad[{}]", self.scene.quads.len()), e.clone());
+        self.origins
+            .insert(format!("quad[{}]", self.scene.quads.len()), e.clone());
         self.scene.quads.push(Quad {
             origin: m.transform_point3(origin.into()).as_vec3(),
             edge_u: u.as_vec3(),
@@ -1065,7 +1179,8 @@ impl Builder {
     }
 
     fn mesh(&mut self, e: &Elem, raw: RawMesh, m: &DAffine3, flip: bool) -> Result<usize> {
-        let i = obj::add_mesh(&mut self.scene, raw, m, flip).map_err(|err| e.err(format!("{err:#}")))?;
+        let i = obj::add_mesh(&mut self.scene, raw, m, flip)
+            .map_err(|err| e.err(format!("{err:#}")))?;
         self.origins.insert(format!("mesh[{i}]"), e.clone());
         Ok(i)
     }
@@ -1081,12 +1196,14 @@ impl Builder {
 
     fn camera(&mut self) -> Result<()> {
         let Some(e) = self.sensor.take() else {
-            return Err(self.root.err("no <sensor>: give a perspective sensor (ppm-vk has no default camera)"));
+            return Err(self
+                .root
+                .err("no <sensor>: give a perspective sensor (ppm-vk has no default camera)"));
         };
         if e.kind() != "perspective" {
             return Err(e.err("only the perspective (pinhole) sensor is supported"));
         }
-        let (props, objects) = Props::of(&e)?;
+        let (props, objects) = Props::of(&e);
         let mut size = (768, 576); // hdrfilm's defaults
         let mut film_seen = false;
         for o in objects {
@@ -1109,15 +1226,24 @@ impl Builder {
         let m = props.transform("to_world")?;
         for name in ["principal_point_offset_x", "principal_point_offset_y"] {
             if props.float(name)?.is_some_and(|v| v != 0.0) {
-                return Err(props.get(name).unwrap().err("an off-centre principal point is not supported"));
+                return Err(props
+                    .get(name)
+                    .unwrap()
+                    .err("an off-centre principal point is not supported"));
             }
         }
         props.ignore(&["near_clip", "shutter_open", "shutter_close"]);
         let far = props.float("far_clip")?;
         props.finish()?;
         let l = m.matrix3;
-        if (l.transpose() * l - DMat3::IDENTITY).to_cols_array().iter().any(|x| x.abs() > 1e-4) {
-            return Err(e.err("to_world of the sensor has a scale or shear (Mitsuba refuses scale factors too)"));
+        if (l.transpose() * l - DMat3::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .any(|x| x.abs() > 1e-4)
+        {
+            return Err(e.err(
+                "to_world of the sensor has a scale or shear (Mitsuba refuses scale factors too)",
+            ));
         }
         if l.determinant() < 0.0 {
             return Err(e.err("to_world of the sensor mirrors the image: not supported"));
@@ -1146,32 +1272,56 @@ impl Builder {
                 })
                 .fold(0.0, f64::max);
             if far < farthest {
-                self.warn(&e, format!("far_clip {far} ignored: ppm-vk renders the scene out to {farthest:.3}"));
+                self.warn(
+                    &e,
+                    format!(
+                        "far_clip {far} ignored: ppm-vk renders the scene out to {farthest:.3}"
+                    ),
+                );
             }
         }
         Ok(())
     }
 
     fn film(&mut self, o: &Elem) -> Result<(u32, u32)> {
-        let (fp, rest) = Props::of(o)?;
+        let (fp, rest) = Props::of(o);
         let size = |name: &str, default: u32| -> Result<u32> {
             match fp.float(name)? {
                 None => Ok(default),
                 Some(v) if v >= 1.0 && v.fract() == 0.0 && v <= f64::from(u32::MAX) => Ok(v as u32),
-                Some(v) => Err(fp.get(name).unwrap().err(format!("must be a positive integer, got {v}"))),
+                Some(v) => Err(fp
+                    .get(name)
+                    .unwrap()
+                    .err(format!("must be a positive integer, got {v}"))),
             }
         };
         let size = (size("width", 768)?, size("height", 576)?);
-        for name in ["crop_offset_x", "crop_offset_y", "crop_width", "crop_height"] {
+        for name in [
+            "crop_offset_x",
+            "crop_offset_y",
+            "crop_width",
+            "crop_height",
+        ] {
             if let Some(p) = fp.get(name) {
                 return Err(p.err("a crop window is not supported"));
             }
         }
         // Output encoding only: the image is the same.
-        fp.ignore(&["pixel_format", "component_format", "file_format", "banner", "high_quality_edges", "sample_border", "compensate"]);
+        fp.ignore(&[
+            "pixel_format",
+            "component_format",
+            "file_format",
+            "banner",
+            "high_quality_edges",
+            "sample_border",
+            "compensate",
+        ]);
         fp.finish()?;
         match rest[..] {
-            [] => self.warn(o, "no rfilter: Mitsuba's default is gaussian; ppm-vk renders with a box filter"),
+            [] => self.warn(
+                o,
+                "no rfilter: Mitsuba's default is gaussian; ppm-vk renders with a box filter",
+            ),
             [r] if r.tag == "rfilter" && r.kind() == "box" => {}
             [r] if r.tag == "rfilter" => self.warn(r, "ppm-vk renders with a box filter"),
             _ => return Err(rest[0].err(format!("not expected inside {}", o.what()))),
@@ -1206,7 +1356,10 @@ fn fov_x(props: &Props, aspect: f64, e: &Elem) -> Result<f64> {
     let (fov, axis) = match (props.float("fov")?, props.string("focal_length")?) {
         (Some(_), Some(_)) => return Err(e.err("give either fov or focal_length, not both")),
         (Some(fov), None) => {
-            let axis = props.string("fov_axis")?.unwrap_or("x").to_ascii_lowercase();
+            let axis = props
+                .string("fov_axis")?
+                .unwrap_or("x")
+                .to_ascii_lowercase();
             let axis = match axis.as_str() {
                 "smaller" => if aspect > 1.0 { "y" } else { "x" }.to_string(),
                 "larger" => if aspect > 1.0 { "x" } else { "y" }.to_string(),
@@ -1218,7 +1371,10 @@ fn fov_x(props: &Props, aspect: f64, e: &Elem) -> Result<f64> {
             let f = focal.unwrap_or("50mm");
             let mm = number(e, f.strip_suffix("mm").unwrap_or(f))?;
             // The diagonal of a 36 x 24 mm frame.
-            ((36f64.hypot(24.0) / (2.0 * mm)).atan().to_degrees() * 2.0, "diagonal".to_string())
+            (
+                (36f64.hypot(24.0) / (2.0 * mm)).atan().to_degrees() * 2.0,
+                "diagonal".to_string(),
+            )
         }
     };
     if !(fov > 0.0 && fov < 180.0) {
@@ -1229,7 +1385,11 @@ fn fov_x(props: &Props, aspect: f64, e: &Elem) -> Result<f64> {
         "x" => fov,
         "y" => (2.0 * (half * aspect).atan()).to_degrees(),
         "diagonal" => (2.0 * (half / (1.0 + 1.0 / (aspect * aspect)).sqrt()).atan()).to_degrees(),
-        other => return Err(e.err(format!("fov_axis \"{other}\": expected x, y, diagonal, smaller or larger"))),
+        other => {
+            return Err(e.err(format!(
+                "fov_axis \"{other}\": expected x, y, diagonal, smaller or larger"
+            )))
+        }
     };
     Ok(x)
 }
@@ -1252,7 +1412,9 @@ fn closed(m: &Mesh) -> Closed {
     for t in &m.indices {
         for k in 0..3 {
             let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
-            *edges.entry(if a < b { [a, b] } else { [b, a] }).or_default() += 1;
+            *edges
+                .entry(if a < b { [a, b] } else { [b, a] })
+                .or_default() += 1;
         }
     }
     if edges.values().all(|&n| n == 2) {
@@ -1268,7 +1430,8 @@ fn read_ply(path: &Path, material: u32) -> Result<RawMesh> {
     use ply_rs_bw::parser::Parser;
     use ply_rs_bw::ply::{DefaultElement, Property};
     let shown = path.display().to_string();
-    let file = std::fs::File::open(path).map_err(|e| anyhow!("{shown}: cannot read PLY file: {e}"))?;
+    let file =
+        std::fs::File::open(path).map_err(|e| anyhow!("{shown}: cannot read PLY file: {e}"))?;
     let ply = Parser::<DefaultElement>::new()
         .read_ply(&mut std::io::BufReader::new(file))
         .map_err(|e| anyhow!("{shown}: malformed PLY: {e}"))?;
@@ -1285,24 +1448,41 @@ fn read_ply(path: &Path, material: u32) -> Result<RawMesh> {
             _ => return None,
         })
     };
-    let vertices = ply.payload.get("vertex").ok_or_else(|| anyhow!("{shown}: no vertex element"))?;
+    let vertices = ply
+        .payload
+        .get("vertex")
+        .ok_or_else(|| anyhow!("{shown}: no vertex element"))?;
     let mut positions = Vec::with_capacity(vertices.len());
     let mut normals = Vec::with_capacity(vertices.len());
-    let has_normals = vertices.first().is_some_and(|v| ["nx", "ny", "nz"].iter().all(|k| v.contains_key(*k)));
+    let has_normals = vertices
+        .first()
+        .is_some_and(|v| ["nx", "ny", "nz"].iter().all(|k| v.contains_key(*k)));
     for (k, v) in vertices.iter().enumerate() {
         let get = |name: &str| -> Result<f64> {
-            let x = v.get(name).and_then(scalar).ok_or_else(|| anyhow!("{shown}: vertex {k} has no number {name}"))?;
-            if x.is_finite() { Ok(x) } else { bail!("{shown}: vertex {k}: {name} is not finite") }
+            let x = v
+                .get(name)
+                .and_then(scalar)
+                .ok_or_else(|| anyhow!("{shown}: vertex {k} has no number {name}"))?;
+            if x.is_finite() {
+                Ok(x)
+            } else {
+                bail!("{shown}: vertex {k}: {name} is not finite")
+            }
         };
         positions.push(DVec3::new(get("x")?, get("y")?, get("z")?));
         if has_normals {
             normals.push(DVec3::new(get("nx")?, get("ny")?, get("nz")?));
         }
     }
-    let faces = ply.payload.get("face").ok_or_else(|| anyhow!("{shown}: no face element"))?;
+    let faces = ply
+        .payload
+        .get("face")
+        .ok_or_else(|| anyhow!("{shown}: no face element"))?;
     let mut triangles = Vec::new();
     for (f, face) in faces.iter().enumerate() {
-        let list = face.get("vertex_indices").or_else(|| face.get("vertex_index"));
+        let list = face
+            .get("vertex_indices")
+            .or_else(|| face.get("vertex_index"));
         let idx: Vec<i64> = match list {
             Some(Property::ListChar(l)) => l.iter().map(|&i| i64::from(i)).collect(),
             Some(Property::ListUChar(l)) => l.iter().map(|&i| i64::from(i)).collect(),
@@ -1312,11 +1492,20 @@ fn read_ply(path: &Path, material: u32) -> Result<RawMesh> {
             Some(Property::ListUInt(l)) => l.iter().map(|&i| i64::from(i)).collect(),
             _ => bail!("{shown}: face {f} has no integer list vertex_indices"),
         };
-        if let Some(&bad) = idx.iter().find(|&&i| i < 0 || i as usize >= positions.len()) {
-            bail!("{shown}: face {f} has vertex index {bad}, out of range ({} vertices)", positions.len());
+        if let Some(&bad) = idx
+            .iter()
+            .find(|&&i| i < 0 || i as usize >= positions.len())
+        {
+            bail!(
+                "{shown}: face {f} has vertex index {bad}, out of range ({} vertices)",
+                positions.len()
+            );
         }
         if idx.len() < 3 {
-            bail!("{shown}: face {f} has {} corners (at least 3 make a surface)", idx.len());
+            bail!(
+                "{shown}: face {f} has {} corners (at least 3 make a surface)",
+                idx.len()
+            );
         }
         for k in 1..idx.len() - 1 {
             triangles.push(([idx[0] as u32, idx[k] as u32, idx[k + 1] as u32], material));
@@ -1359,8 +1548,10 @@ mod tests {
     /// `body` after [`HEAD`], in a scene file of its own (with `files` beside it).
     fn load_in(dir: &TempDir, body: &str, defines: &[(&str, &str)]) -> Result<Scene> {
         let path = dir.write("scene.xml", &format!("{HEAD}{body}\n</scene>\n"));
-        let defines: Vec<(String, String)> =
-            defines.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+        let defines: Vec<(String, String)> = defines
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect();
         load(&path, &defines)
     }
 
@@ -1389,10 +1580,15 @@ mod tests {
 
     /// The corners of a quad, as a sorted list (so that corner order does not matter).
     fn corners(q: &Quad) -> Vec<[i64; 3]> {
-        let mut c: Vec<[i64; 3]> = [q.origin, q.origin + q.edge_u, q.origin + q.edge_v, q.origin + q.edge_u + q.edge_v]
-            .iter()
-            .map(|p| p.to_array().map(|x| (x * 1e4).round() as i64))
-            .collect();
+        let mut c: Vec<[i64; 3]> = [
+            q.origin,
+            q.origin + q.edge_u,
+            q.origin + q.edge_v,
+            q.origin + q.edge_u + q.edge_v,
+        ]
+        .iter()
+        .map(|p| p.to_array().map(|x| (x * 1e4).round() as i64))
+        .collect();
         c.sort();
         c
     }
@@ -1402,7 +1598,8 @@ mod tests {
         assert_eq!(got.len(), want.len(), "{got:?}\nvs\n{want:?}");
         for w in want {
             assert!(
-                got.iter().any(|g| corners(g) == corners(w) && g.normal().distance(w.normal()) < 1e-5),
+                got.iter()
+                    .any(|g| corners(g) == corners(w) && g.normal().distance(w.normal()) < 1e-5),
                 "no quad like {w:?} (normal {}) among {got:?}",
                 w.normal()
             );
@@ -1422,25 +1619,64 @@ mod tests {
     fn each_transform_of_a_rectangle_matches_its_toml_quad() {
         let cases: &[(&str, &str)] = &[
             // [-1, 1]^2 at z = 0, normal +z.
-            ("", "origin = [-1, -1, 0]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]"),
-            (r#"<translate x="1" y="2" z="3"/>"#, "origin = [0, 1, 3]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]"),
-            (r#"<translate value="1 2 3"/>"#, "origin = [0, 1, 3]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]"),
-            (r#"<scale x="2" y="3"/>"#, "origin = [-2, -3, 0]\nedge_u = [4, 0, 0]\nedge_v = [0, 6, 0]"),
-            (r#"<scale value="0.5"/>"#, "origin = [-0.5, -0.5, 0]\nedge_u = [1, 0, 0]\nedge_v = [0, 1, 0]"),
+            (
+                "",
+                "origin = [-1, -1, 0]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]",
+            ),
+            (
+                r#"<translate x="1" y="2" z="3"/>"#,
+                "origin = [0, 1, 3]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]",
+            ),
+            (
+                r#"<translate value="1 2 3"/>"#,
+                "origin = [0, 1, 3]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]",
+            ),
+            (
+                r#"<scale x="2" y="3"/>"#,
+                "origin = [-2, -3, 0]\nedge_u = [4, 0, 0]\nedge_v = [0, 6, 0]",
+            ),
+            (
+                r#"<scale value="0.5"/>"#,
+                "origin = [-0.5, -0.5, 0]\nedge_u = [1, 0, 0]\nedge_v = [0, 1, 0]",
+            ),
             // Right-handed: +90 degrees about y takes +z to +x.
-            (r#"<rotate y="1" angle="90"/>"#, "origin = [0, -1, 1]\nedge_u = [0, 0, -2]\nedge_v = [0, 2, 0]"),
+            (
+                r#"<rotate y="1" angle="90"/>"#,
+                "origin = [0, -1, 1]\nedge_u = [0, 0, -2]\nedge_v = [0, 2, 0]",
+            ),
             // -90 degrees about x takes +z to +y (the reference's floor).
-            (r#"<rotate value="1, 0, 0" angle="-90"/>"#, "origin = [-1, 0, 1]\nedge_u = [2, 0, 0]\nedge_v = [0, 0, -2]"),
+            (
+                r#"<rotate value="1, 0, 0" angle="-90"/>"#,
+                "origin = [-1, 0, 1]\nedge_u = [2, 0, 0]\nedge_v = [0, 0, -2]",
+            ),
             // Document order: scale first, then translate (the centre moves by 1)...
-            (r#"<scale value="2"/><translate x="1"/>"#, "origin = [-1, -2, 0]\nedge_u = [4, 0, 0]\nedge_v = [0, 4, 0]"),
+            (
+                r#"<scale value="2"/><translate x="1"/>"#,
+                "origin = [-1, -2, 0]\nedge_u = [4, 0, 0]\nedge_v = [0, 4, 0]",
+            ),
             // ...against translate first, then scale (the translation is scaled too).
-            (r#"<translate x="1"/><scale value="2"/>"#, "origin = [0, -2, 0]\nedge_u = [4, 0, 0]\nedge_v = [0, 4, 0]"),
-            (r#"<matrix value="2 0 0 1  0 2 0 0  0 0 2 0  0 0 0 1"/>"#, "origin = [-1, -2, 0]\nedge_u = [4, 0, 0]\nedge_v = [0, 4, 0]"),
+            (
+                r#"<translate x="1"/><scale value="2"/>"#,
+                "origin = [0, -2, 0]\nedge_u = [4, 0, 0]\nedge_v = [0, 4, 0]",
+            ),
+            (
+                r#"<matrix value="2 0 0 1  0 2 0 0  0 0 2 0  0 0 0 1"/>"#,
+                "origin = [-1, -2, 0]\nedge_u = [4, 0, 0]\nedge_v = [0, 4, 0]",
+            ),
             // lookat: z to the target direction (+x), y up, x = up x dir = -z.
-            (r#"<lookat origin="0, 0, 0" target="1, 0, 0" up="0, 1, 0"/>"#, "origin = [0, -1, 1]\nedge_u = [0, 0, -2]\nedge_v = [0, 2, 0]"),
+            (
+                r#"<lookat origin="0, 0, 0" target="1, 0, 0" up="0, 1, 0"/>"#,
+                "origin = [0, -1, 1]\nedge_u = [0, 0, -2]\nedge_v = [0, 2, 0]",
+            ),
             // A mirror keeps the normal Mitsuba computes with the inverse transpose: +z.
-            (r#"<scale x="-1"/>"#, "origin = [-1, -1, 0]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]"),
-            (r#"<scale z="-1"/>"#, "origin = [-1, -1, 0]\nedge_u = [0, 2, 0]\nedge_v = [2, 0, 0]"),
+            (
+                r#"<scale x="-1"/>"#,
+                "origin = [-1, -1, 0]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]",
+            ),
+            (
+                r#"<scale z="-1"/>"#,
+                "origin = [-1, -1, 0]\nedge_u = [0, 2, 0]\nedge_v = [2, 0, 0]",
+            ),
         ];
         for (transform, quad) in cases {
             let want = toml_quads(&format!("[[quad]]\n{quad}\nmaterial = \"m\"\n"));
@@ -1448,7 +1684,10 @@ mod tests {
         }
         // flip_normals turns the normal to -z.
         let want = toml_quads("[[quad]]\norigin = [-1, -1, 0]\nedge_u = [0, 2, 0]\nedge_v = [2, 0, 0]\nmaterial = \"m\"\n");
-        assert_same_quads(&rectangle("", r#"<boolean name="flip_normals" value="true"/>"#), &want);
+        assert_same_quads(
+            &rectangle("", r#"<boolean name="flip_normals" value="true"/>"#),
+            &want,
+        );
     }
 
     #[test]
@@ -1464,12 +1703,19 @@ mod tests {
                 ("[-1, -1, -1]", "[0, 2, 0]", "[2, 0, 0]"),
             ] {
                 let (u, v) = if inward { (v, u) } else { (u, v) };
-                s += &format!("[[quad]]\norigin = {o}\nedge_u = {u}\nedge_v = {v}\nmaterial = \"m\"\n");
+                s += &format!(
+                    "[[quad]]\norigin = {o}\nedge_u = {u}\nedge_v = {v}\nmaterial = \"m\"\n"
+                );
             }
             toml_quads(&s)
         };
         let cube = |extra: &str| {
-            load_body(&format!(r#"<shape type="cube">{extra}<bsdf type="diffuse"/></shape>"#)).unwrap().quads[1..].to_vec()
+            load_body(&format!(
+                r#"<shape type="cube">{extra}<bsdf type="diffuse"/></shape>"#
+            ))
+            .unwrap()
+            .quads[1..]
+                .to_vec()
         };
         let outward = cube("");
         assert_same_quads(&outward, &box_toml(false));
@@ -1477,7 +1723,10 @@ mod tests {
             // Outward: the normal points away from the centre.
             assert!(q.normal().dot(q.origin + 0.5 * (q.edge_u + q.edge_v)) > 0.99);
         }
-        assert_same_quads(&cube(r#"<boolean name="flip_normals" value="true"/>"#), &box_toml(true));
+        assert_same_quads(
+            &cube(r#"<boolean name="flip_normals" value="true"/>"#),
+            &box_toml(true),
+        );
         // A mirroring transform keeps them outward (Mitsuba flips the winding of a mirrored mesh).
         let mirrored = cube(r#"<transform name="to_world"><scale x="-1"/></transform>"#);
         assert_same_quads(&mirrored, &box_toml(false));
@@ -1507,12 +1756,18 @@ mod tests {
         }
         assert_eq!(s.emitting_triangles().len(), DISK_SEGMENTS as usize);
         let flipped = load_body(r#"<shape type="disk"><boolean name="flip_normals" value="true"/><bsdf type="diffuse"/></shape>"#).unwrap();
-        assert!(flipped.meshes[0].triangles().all(|t| t.normal().distance(Vec3::NEG_Z) < 1e-5));
+        assert!(flipped.meshes[0]
+            .triangles()
+            .all(|t| t.normal().distance(Vec3::NEG_Z) < 1e-5));
     }
 
     #[test]
     fn sphere_from_center_radius_or_to_world_matches_toml() {
-        let want = Sphere { center: Vec3::new(1.0, 2.0, 3.0), radius: 0.5, material: 1 };
+        let want = Sphere {
+            center: Vec3::new(1.0, 2.0, 3.0),
+            radius: 0.5,
+            material: 1,
+        };
         for body in [
             r#"<point name="center" x="1" y="2" z="3"/><float name="radius" value="0.5"/>"#,
             r#"<point name="center" value="1, 2, 3"/><float name="radius" value="0.5"/>"#,
@@ -1520,12 +1775,23 @@ mod tests {
             // Both: centre and radius first, then to_world.
             r#"<float name="radius" value="0.25"/><transform name="to_world"><scale value="2"/><translate x="1" y="2" z="3"/></transform>"#,
         ] {
-            let s = load_body(&format!(r#"<shape type="sphere">{body}<bsdf type="diffuse"/></shape>"#)).unwrap();
+            let s = load_body(&format!(
+                r#"<shape type="sphere">{body}<bsdf type="diffuse"/></shape>"#
+            ))
+            .unwrap();
             let got = s.spheres[0];
-            assert!(got.center.distance(want.center) < 1e-6 && (got.radius - want.radius).abs() < 1e-6, "{body}: {got:?}");
+            assert!(
+                got.center.distance(want.center) < 1e-6 && (got.radius - want.radius).abs() < 1e-6,
+                "{body}: {got:?}"
+            );
         }
-        let e = error(r#"<shape type="sphere"><transform name="to_world"><scale x="2"/></transform></shape>"#);
-        assert!(e.contains("<shape type=\"sphere\">") && e.contains("non-uniformly"), "{e}");
+        let e = error(
+            r#"<shape type="sphere"><transform name="to_world"><scale x="2"/></transform></shape>"#,
+        );
+        assert!(
+            e.contains("<shape type=\"sphere\">") && e.contains("non-uniformly"),
+            "{e}"
+        );
     }
 
     /// A unit square at z = 0 as two triangles facing +z, as an OBJ and an ASCII PLY (one quad face).
@@ -1560,15 +1826,35 @@ mod tests {
                 let area: f32 = m.triangles().map(|t| t.area()).sum();
                 assert!((area - 4.0).abs() < 1e-5, "{kind}: area {area}");
                 for t in m.triangles() {
-                    assert!(t.normal().distance(normal) < 1e-5, "{kind} flip {flip}: {}", t.normal());
+                    assert!(
+                        t.normal().distance(normal) < 1e-5,
+                        "{kind} flip {flip}: {}",
+                        t.normal()
+                    );
                     assert!(t.p.iter().all(|p| (p.y - 1.0).abs() < 1e-6));
                 }
                 // The bsdf is the XML's: the MTL is never read.
-                assert_eq!(s.materials[m.materials[0] as usize].surface, Surface::Diffuse { albedo: Vec3::splat(0.5) });
+                assert_eq!(
+                    s.materials[m.materials[0] as usize].surface,
+                    Surface::Diffuse {
+                        albedo: Vec3::splat(0.5)
+                    }
+                );
             }
         }
-        let e = format!("{:#}", load_in(&dir, r#"<shape type="ply"><string name="filename" value="none.ply"/></shape>"#, &[]).unwrap_err());
-        assert!(e.contains("<shape type=\"ply\">") && e.contains("none.ply: cannot read PLY file"), "{e}");
+        let e = format!(
+            "{:#}",
+            load_in(
+                &dir,
+                r#"<shape type="ply"><string name="filename" value="none.ply"/></shape>"#,
+                &[]
+            )
+            .unwrap_err()
+        );
+        assert!(
+            e.contains("<shape type=\"ply\">") && e.contains("none.ply: cannot read PLY file"),
+            "{e}"
+        );
     }
 
     fn camera(sensor_body: &str, film: &str) -> Result<Camera> {
@@ -1587,14 +1873,23 @@ mod tests {
     #[test]
     fn camera_lookat_and_fov_axes_match_the_toml_camera() {
         let look = r#"<transform name="to_world"><lookat origin="0, 1, 2.9" target="0, 0.8, 0" up="0, 1, 0"/></transform>"#;
-        let c = camera(&format!(r#"<float name="fov" value="50"/><string name="fov_axis" value="y"/>{look}"#), "").unwrap();
+        let c = camera(
+            &format!(r#"<float name="fov" value="50"/><string name="fov_axis" value="y"/>{look}"#),
+            "",
+        )
+        .unwrap();
         assert_eq!((c.width, c.height), (768, 576));
         assert!((c.vfov_deg - 50.0).abs() < 1e-4, "{c:?}");
         assert!(c.eye.distance(Vec3::new(0.0, 1.0, 2.9)) < 1e-6);
         let dir = (c.look_at - c.eye).normalize();
         assert!(dir.distance(Vec3::new(0.0, -0.2, -2.9).normalize()) < 1e-6);
         // up is orthogonalised by Mitsuba's lookat; it spans the same plane with dir as (0, 1, 0).
-        assert!(c.up.cross(dir).normalize().distance(Vec3::Y.cross(dir).normalize()) < 1e-6);
+        assert!(
+            c.up.cross(dir)
+                .normalize()
+                .distance(Vec3::Y.cross(dir).normalize())
+                < 1e-6
+        );
 
         // Horizontal fov 60 on a 2:1 image: vertical 2 atan(tan 30 / 2).
         let want = 2.0 * ((30f64.to_radians().tan()) / 2.0).atan().to_degrees();
@@ -1604,10 +1899,19 @@ mod tests {
             ("larger", 60.0),
             ("y", want),
             ("smaller", want),
-            ("diagonal", 2.0 * (30f64.to_radians().tan() * (1.0 + 0.25f64).sqrt()).atan().to_degrees()),
+            (
+                "diagonal",
+                2.0 * (30f64.to_radians().tan() * (1.0 + 0.25f64).sqrt())
+                    .atan()
+                    .to_degrees(),
+            ),
         ] {
             let c = camera(&format!(r#"<float name="fov" value="{fov}"/><string name="fov_axis" value="{axis}"/>{look}"#), film).unwrap();
-            assert!((f64::from(c.vfov_deg) - want).abs() < 1e-4, "{axis}: {} vs {want}", c.vfov_deg);
+            assert!(
+                (f64::from(c.vfov_deg) - want).abs() < 1e-4,
+                "{axis}: {} vs {want}",
+                c.vfov_deg
+            );
         }
         // focal_length: 50mm by default, on the diagonal of a 36 x 24 mm frame.
         let c = camera(look, film).unwrap();
@@ -1617,11 +1921,17 @@ mod tests {
 
         // The same camera by rotate + translate: looking down -z from (0, 0, 3) is a 180 degree turn.
         let c = camera(r#"<float name="fov" value="40"/><transform name="to_world"><rotate y="1" angle="180"/><translate z="3"/></transform>"#, "").unwrap();
-        assert!(c.eye.distance(Vec3::new(0.0, 0.0, 3.0)) < 1e-6 && (c.look_at - c.eye).normalize().distance(Vec3::NEG_Z) < 1e-6);
+        assert!(
+            c.eye.distance(Vec3::new(0.0, 0.0, 3.0)) < 1e-6
+                && (c.look_at - c.eye).normalize().distance(Vec3::NEG_Z) < 1e-6
+        );
         assert!(c.up.distance(Vec3::Y) < 1e-6);
 
         let e = format!("{:#}", camera(r#"<float name="fov" value="40"/><transform name="to_world"><scale x="-1"/></transform>"#, "").unwrap_err());
-        assert!(e.contains("mirrors the image") && e.contains("<sensor type=\"perspective\">"), "{e}");
+        assert!(
+            e.contains("mirrors the image") && e.contains("<sensor type=\"perspective\">"),
+            "{e}"
+        );
         let e = format!("{:#}", camera(r#"<float name="fov" value="40"/><transform name="to_world"><scale value="2"/></transform>"#, "").unwrap_err());
         assert!(e.contains("scale"), "{e}");
     }
@@ -1636,53 +1946,152 @@ mod tests {
         )
         .unwrap();
         let surface = |i: usize| s.materials[s.spheres[i].material as usize].surface;
-        assert_eq!(surface(0), Surface::Mirror { reflectance: Vec3::new(0.9, 0.8, 0.7) });
+        assert_eq!(
+            surface(0),
+            Surface::Mirror {
+                reflectance: Vec3::new(0.9, 0.8, 0.7)
+            }
+        );
         assert_eq!(surface(1), Surface::Glass { ior: 1.2 });
         assert_eq!(surface(2), Surface::Glass { ior: 1.333 });
         // Mitsuba's defaults: bk7 in air.
-        assert_eq!(surface(3), Surface::Glass { ior: (1.5046f64 / 1.000277) as f32 });
+        assert_eq!(
+            surface(3),
+            Surface::Glass {
+                ior: (1.5046f64 / 1.000277) as f32
+            }
+        );
         assert!(s.warnings.is_empty(), "{:?}", s.warnings);
         // The light of HEAD: a black emitter with radiance 1, a quad facing -y.
         let lamp = &s.materials[s.quads[0].material as usize];
-        assert_eq!((lamp.surface, lamp.emission), (Surface::Diffuse { albedo: Vec3::ZERO }, Vec3::ONE));
+        assert_eq!(
+            (lamp.surface, lamp.emission),
+            (Surface::Diffuse { albedo: Vec3::ZERO }, Vec3::ONE)
+        );
         assert!(s.quads[0].normal().distance(Vec3::NEG_Y) < 1e-6);
 
         let s = load_body(r#"<shape type="sphere"><bsdf type="roughconductor"><float name="alpha" value="0.1"/></bsdf></shape>"#).unwrap();
-        assert_eq!(s.materials[s.spheres[0].material as usize].surface, Surface::Mirror { reflectance: Vec3::ONE });
-        assert!(s.warnings.len() == 1 && s.warnings[0].contains("rough conductor rendered as a smooth mirror"), "{:?}", s.warnings);
+        assert_eq!(
+            s.materials[s.spheres[0].material as usize].surface,
+            Surface::Mirror {
+                reflectance: Vec3::ONE
+            }
+        );
+        assert!(
+            s.warnings.len() == 1
+                && s.warnings[0].contains("rough conductor rendered as a smooth mirror"),
+            "{:?}",
+            s.warnings
+        );
         // One-sided diffuse on an open shape: warned; on a closed one or twosided: not.
         let s = load_body(r#"<shape type="rectangle"><bsdf type="diffuse"/></shape><shape type="cube"><bsdf type="diffuse"/></shape>"#).unwrap();
-        assert!(s.warnings.len() == 1 && s.warnings[0].contains("one-sided in Mitsuba"), "{:?}", s.warnings);
+        assert!(
+            s.warnings.len() == 1 && s.warnings[0].contains("one-sided in Mitsuba"),
+            "{:?}",
+            s.warnings
+        );
         // A shape without a bsdf is diffuse 0.5, as in Mitsuba.
         let s = load_body(r#"<shape type="cube"/>"#).unwrap();
-        assert_eq!(s.materials[s.quads[1].material as usize].surface, Surface::Diffuse { albedo: Vec3::splat(0.5) });
+        assert_eq!(
+            s.materials[s.quads[1].material as usize].surface,
+            Surface::Diffuse {
+                albedo: Vec3::splat(0.5)
+            }
+        );
     }
 
     #[test]
     fn refused_and_malformed_input_is_located() {
         // (body, the element named, the line in the file (HEAD has 11 lines), what is said)
         let cases: &[(&str, &str, usize, &str)] = &[
-            (r#"<shape type="cylinder"/>"#, r#"<shape type="cylinder">"#, 12, "unsupported shape"),
-            (r#"<shape type="cube"><ref id="nowhere"/></shape>"#, r#"<ref id="nowhere">"#, 12, "no bsdf with id \"nowhere\""),
-            (r#"<shape type="cube"><float name="radius" value="$r"/></shape>"#, r#"<float name="radius">"#, 12, "undefined parameter $r"),
-            ("\n<shape type=\"cube\"><bsdf type=\"thindielectric\"/></shape>", r#"<bsdf type="thindielectric">"#, 13, "thin dielectric"),
-            (r#"<shape type="cube"><bsdf type="plastic"/></shape>"#, r#"<bsdf type="plastic">"#, 12, "unsupported bsdf"),
-            (r#"<shape type="cube"><bsdf type="diffuse"><texture name="reflectance" type="bitmap"/></bsdf></shape>"#, r#"<texture type="bitmap" name="reflectance">"#, 12, "textures are not supported"),
-            (r#"<emitter type="envmap"/>"#, r#"<emitter type="envmap">"#, 12, "only area emitters"),
-            (r#"<shape type="sphere"><emitter type="area"/></shape>"#, r#"<emitter type="area">"#, 12, "emitting sphere"),
-            (r#"<shape type="cube"><float name="radiuss" value="1"/></shape>"#, r#"<float name="radiuss">"#, 12, "parameter not read"),
-            (r#"<shape type="rectangle"><bsdf type="diffuse"><rgb name="reflectance" value="2, 0, 0"/></bsdf></shape>"#, r#"<bsdf type="diffuse">"#, 12, "must be in [0, 1]"),
-            (r#"<shape type="cube"><bsdf type="dielectric"><float name="int_ior" value="1"/><float name="ext_ior" value="1.5"/></bsdf></shape>"#, r#"<bsdf type="dielectric">"#, 12, "int_ior 1 < ext_ior 1.5"),
+            (
+                r#"<bsdf type="diffuse" id="a"/><bsdf type="conductor" id="a"/>"#,
+                r#"<bsdf type="conductor" id="a">"#,
+                12,
+                "the id \"a\" is already taken",
+            ),
+            (
+                r#"<shape type="cylinder"/>"#,
+                r#"<shape type="cylinder">"#,
+                12,
+                "unsupported shape",
+            ),
+            (
+                r#"<shape type="cube"><ref id="nowhere"/></shape>"#,
+                r#"<ref id="nowhere">"#,
+                12,
+                "no bsdf with id \"nowhere\"",
+            ),
+            (
+                r#"<shape type="cube"><float name="radius" value="$r"/></shape>"#,
+                r#"<float name="radius">"#,
+                12,
+                "undefined parameter $r",
+            ),
+            (
+                "\n<shape type=\"cube\"><bsdf type=\"thindielectric\"/></shape>",
+                r#"<bsdf type="thindielectric">"#,
+                13,
+                "thin dielectric",
+            ),
+            (
+                r#"<shape type="cube"><bsdf type="plastic"/></shape>"#,
+                r#"<bsdf type="plastic">"#,
+                12,
+                "unsupported bsdf",
+            ),
+            (
+                r#"<shape type="cube"><bsdf type="diffuse"><texture name="reflectance" type="bitmap"/></bsdf></shape>"#,
+                r#"<texture type="bitmap" name="reflectance">"#,
+                12,
+                "textures are not supported",
+            ),
+            (
+                r#"<emitter type="envmap"/>"#,
+                r#"<emitter type="envmap">"#,
+                12,
+                "only area emitters",
+            ),
+            (
+                r#"<shape type="sphere"><emitter type="area"/></shape>"#,
+                r#"<emitter type="area">"#,
+                12,
+                "emitting sphere",
+            ),
+            (
+                r#"<shape type="cube"><float name="radiuss" value="1"/></shape>"#,
+                r#"<float name="radiuss">"#,
+                12,
+                "parameter not read",
+            ),
+            (
+                r#"<shape type="rectangle"><bsdf type="diffuse"><rgb name="reflectance" value="2, 0, 0"/></bsdf></shape>"#,
+                r#"<bsdf type="diffuse">"#,
+                12,
+                "must be in [0, 1]",
+            ),
+            (
+                r#"<shape type="cube"><bsdf type="dielectric"><float name="int_ior" value="1"/><float name="ext_ior" value="1.5"/></bsdf></shape>"#,
+                r#"<bsdf type="dielectric">"#,
+                12,
+                "int_ior 1 < ext_ior 1.5",
+            ),
         ];
         for (body, element, line, says) in cases {
             let e = error(body);
-            assert!(e.contains(&format!("scene.xml:{line}:")), "{e} should be at line {line}");
+            assert!(
+                e.contains(&format!("scene.xml:{line}:")),
+                "{e} should be at line {line}"
+            );
             assert!(e.contains(element), "{e} should name {element}");
             assert!(e.contains(says), "{e} should say {says}");
         }
         // Malformed XML: roxmltree's position.
         let e = error("<shape type=\"cube\">\n  <bsdf type=\"diffuse\">\n</shape>");
-        assert!(e.contains("scene.xml:14:1: malformed XML: expected 'bsdf' tag"), "{e}");
+        assert!(
+            e.contains("scene.xml:14:1: malformed XML: expected 'bsdf' tag"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -1690,7 +2099,10 @@ mod tests {
         let dir = TempDir::new("mitsuba-inc");
         std::fs::create_dir_all(dir.0.join("sub")).unwrap();
         // Included from sub/, it includes its sibling relative to itself.
-        dir.write("sub/materials.xml", r#"<scene version="3.0.0"><include filename="more.xml"/></scene>"#);
+        dir.write(
+            "sub/materials.xml",
+            r#"<scene version="3.0.0"><include filename="more.xml"/></scene>"#,
+        );
         dir.write("sub/more.xml", r#"<scene version="3.0.0"><bsdf type="diffuse" id="grey"><rgb name="reflectance" value="$albedo"/></bsdf></scene>"#);
         let body = r#"<default name="albedo" value="0.25"/><default name="albedo_" value="0.75"/>
             <include filename="sub/materials.xml"/>
@@ -1706,16 +2118,43 @@ mod tests {
         assert_eq!(s.materials[s.quads[1].material as usize].name, "grey");
         let s = load_in(&dir, body, &[("albedo", "0.5")]).unwrap();
         assert_eq!((albedo(&s, 1), albedo(&s, 7)), (0.5, 0.75));
-        let e = format!("{:#}", load_in(&dir, body, &[("albdo", "0.5")]).unwrap_err());
-        assert!(e.contains("-D albdo=0.5: the scene never uses $albdo"), "{e}");
+        let e = format!(
+            "{:#}",
+            load_in(&dir, body, &[("albdo", "0.5")]).unwrap_err()
+        );
+        assert!(
+            e.contains("-D albdo=0.5: the scene never uses $albdo"),
+            "{e}"
+        );
 
         // A cycle: a includes b includes a.
-        dir.write("a.xml", r#"<scene version="3.0.0"><include filename="b.xml"/></scene>"#);
-        dir.write("b.xml", "<scene version=\"3.0.0\">\n<include filename=\"a.xml\"/></scene>");
-        let e = format!("{:#}", load_in(&dir, r#"<include filename="a.xml"/>"#, &[]).unwrap_err());
-        assert!(e.contains("b.xml:2:1: <include>: include cycle: ") && e.contains("a.xml -> ") && e.ends_with("a.xml"), "{e}");
-        let e = format!("{:#}", load_in(&dir, r#"<include filename="missing.xml"/>"#, &[]).unwrap_err());
-        assert!(e.contains("scene.xml:12:1: <include>: ") && e.contains("missing.xml: cannot read scene file"), "{e}");
+        dir.write(
+            "a.xml",
+            r#"<scene version="3.0.0"><include filename="b.xml"/></scene>"#,
+        );
+        dir.write(
+            "b.xml",
+            "<scene version=\"3.0.0\">\n<include filename=\"a.xml\"/></scene>",
+        );
+        let e = format!(
+            "{:#}",
+            load_in(&dir, r#"<include filename="a.xml"/>"#, &[]).unwrap_err()
+        );
+        assert!(
+            e.contains("b.xml:2:1: <include>: include cycle: ")
+                && e.contains("a.xml -> ")
+                && e.ends_with("a.xml"),
+            "{e}"
+        );
+        let e = format!(
+            "{:#}",
+            load_in(&dir, r#"<include filename="missing.xml"/>"#, &[]).unwrap_err()
+        );
+        assert!(
+            e.contains("scene.xml:12:1: <include>: ")
+                && e.contains("missing.xml: cannot read scene file"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -265,7 +265,11 @@ pub(super) fn add_mesh(
     let mut warnings = Vec::new();
     let lin = transform.matrix3;
     let reverse = (lin.determinant() < 0.0) != flip;
-    let normal_matrix = if flip { -lin.inverse().transpose() } else { lin.inverse().transpose() };
+    let normal_matrix = if flip {
+        -lin.inverse().transpose()
+    } else {
+        lin.inverse().transpose()
+    };
     let positions: Vec<Vec3> = raw
         .positions
         .iter()
