@@ -22,6 +22,9 @@ pub struct BenchArgs {
     /// Scene to benchmark.
     #[arg(long, default_value = "scenes/cornell-spheres.toml")]
     scene: PathBuf,
+    /// Override a Mitsuba scene's parameter: `-D name=value` sets what `$name` stands for (repeatable).
+    #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = ppm_vk_engine::scene::parse_define)]
+    pub defines: Vec<(String, String)>,
     /// Cases as PHOTONS@WIDTHxHEIGHT, comma-separated (photon counts accept k and M suffixes).
     #[arg(long, default_value = DEFAULT_CASES)]
     cases: String,
@@ -146,7 +149,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         other => bail!("--mode {other:?}: expected ppm or sppm"),
     };
     let loading = std::time::Instant::now();
-    let base = crate::load_scene(&args.scene)?;
+    let base = crate::load_scene(&args.scene, &args.defines)?;
     let load_s = loading.elapsed().as_secs_f64();
     let ctx = args.device.open()?;
     let info = ctx.info().clone();

@@ -23,6 +23,9 @@ use crate::DeviceArgs;
 pub struct CompareArgs {
     /// Scene file.
     scene: PathBuf,
+    /// Override a Mitsuba scene's parameter: `-D name=value` sets what `$name` stands for (repeatable).
+    #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = ppm_vk_engine::scene::parse_define)]
+    pub defines: Vec<(String, String)>,
     /// Reference image (EXR, full resolution; a `_var.exr` beside it is used to remove its noise).
     #[arg(long)]
     reference: PathBuf,
@@ -99,7 +102,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
     if !(args.time.is_finite() && args.time > 0.0) {
         bail!("--time must be a positive number of seconds");
     }
-    let mut scene = crate::load_scene(&args.scene)?;
+    let mut scene = crate::load_scene(&args.scene, &args.defines)?;
     if let Some((w, h)) = args.resolution {
         scene = scene.with_resolution(w, h);
     }

@@ -54,8 +54,11 @@ impl DeviceArgs {
 
 #[derive(Args)]
 struct RenderArgs {
-    /// Scene file (TOML; see docs/scene-format.md).
+    /// Scene file: TOML (see docs/scene-format.md) or Mitsuba 3 XML (.xml, see docs/mitsuba.md).
     scene: PathBuf,
+    /// Override a Mitsuba scene's parameter: `-D name=value` sets what `$name` stands for (repeatable).
+    #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = ppm_vk_engine::scene::parse_define)]
+    pub defines: Vec<(String, String)>,
     /// `sppm`: stochastic PPM, new hit points every pass at a random point of each pixel (anti-aliased, box
     /// filter; the lower error at equal time from 10 s on); `ppm`: hit points fixed at pixel centres.
     #[arg(long, value_enum, default_value_t = ModeArg::Sppm)]
@@ -275,9 +278,10 @@ fn devices() -> Result<()> {
     Ok(())
 }
 
-/// Loads a scene and writes what loading approximated (MTL features, dropped triangles) to stderr.
-pub fn load_scene(path: &std::path::Path) -> Result<Scene> {
-    let scene = Scene::load(path)?;
+/// Loads a scene (with a Mitsuba scene's `-D` overrides) and writes what loading approximated (MTL
+/// features, dropped triangles, Mitsuba features) to stderr.
+pub fn load_scene(path: &std::path::Path, defines: &[(String, String)]) -> Result<Scene> {
+    let scene = Scene::load_with(path, defines)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
@@ -341,7 +345,7 @@ fn render(args: RenderArgs) -> Result<Ended> {
             bail!("--report {}: the extension must be .json or .csv", report.display());
         }
     }
-    let mut scene = load_scene(&args.scene)?;
+    let mut scene = load_scene(&args.scene, &args.defines)?;
     if let Some((w, h)) = args.resolution {
         scene = scene.with_resolution(w, h);
     }

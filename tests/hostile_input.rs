@@ -54,7 +54,15 @@ fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
     vec![
         ("toml", load_toml, vec!["scenes/cornell-spheres.toml", "scenes/cornell-mesh.toml", "scenes/glass-on-table.toml", "scenes/furnace.toml"]),
         ("obj", load_obj, vec!["scenes/meshes/cornell-box.obj", "scenes/meshes/furnace-sphere.obj"]),
+        ("xml", load_xml, vec!["../shared/reference/cornell-spheres.xml"]),
     ]
+}
+
+/// A Mitsuba scene, read from a file (includes and meshes resolve against its directory).
+fn load_xml(text: &str) -> anyhow::Result<Scene> {
+    let path = scratch("xml").join("s.xml");
+    std::fs::write(&path, text)?;
+    Scene::load(&path)
 }
 
 fn load_toml(text: &str) -> anyhow::Result<Scene> {

@@ -10,6 +10,8 @@ use ppm_vk_engine::{Context, ContextOptions, Scene};
 pub const CORNELL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell-spheres.toml");
 /// The white-furnace scene: a closed box of uniform albedo 0.5 and emission 1.
 pub const FURNACE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/furnace.toml");
+/// The Mitsuba 3 scene the reference was rendered from: cornell-spheres as Mitsuba XML.
+pub const CORNELL_XML: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/reference/cornell-spheres.xml");
 /// The Mitsuba reference of cornell-spheres (512 x 512), in the repository root's sibling `shared/`.
 pub const CORNELL_REFERENCE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/reference/cornell-spheres.exr");
 

@@ -8,6 +8,7 @@
 //! and column it came from.
 
 pub mod demo;
+mod mitsuba;
 mod obj;
 mod toml;
 
@@ -16,6 +17,7 @@ use std::path::Path;
 
 use glam::{DVec3, Vec3};
 
+pub use mitsuba::{parse_define, DISK_SEGMENTS, MAX_INCLUDE_DEPTH, MAX_NESTING};
 pub use obj::ObjImport;
 
 /// Largest accepted image side; larger is almost certainly a typo and would
@@ -238,9 +240,29 @@ fn invalid(path: impl Into<String>, message: impl Into<String>) -> Invalid {
 }
 
 impl Scene {
-    /// Reads and parses a scene file; every error message starts with the path. Mesh files are found
-    /// relative to the scene file's directory.
+    /// Reads and parses a scene file: Mitsuba 3 XML for a `.xml` file (see `docs/mitsuba.md`), else
+    /// the TOML format. Every error message starts with the path. Mesh files are found relative to
+    /// the scene file's directory.
     pub fn load(path: &Path) -> anyhow::Result<Scene> {
+        Scene::load_with(path, &[])
+    }
+
+    /// [`Scene::load`] with `defines` (`name`, `value`) overriding a Mitsuba scene's `<default>`
+    /// parameters, as Mitsuba's `-D name=value` (a name the scene never uses is an error). A TOML
+    /// scene has no parameters: `defines` must be empty for it.
+    pub fn load_with(path: &Path, defines: &[(String, String)]) -> anyhow::Result<Scene> {
+        let is_xml = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+        if is_xml {
+            return mitsuba::load(path, defines);
+        }
+        if let Some((name, value)) = defines.first() {
+            anyhow::bail!(
+                "{}: -D {name}={value}: parameters are for Mitsuba scenes (.xml); a TOML scene has none",
+                path.display()
+            );
+        }
         // The io error goes into the message itself (not only an anyhow context) so
         // that `{}` formatting still says why the file could not be read.
         let text = read_bounded(path, MAX_SCENE_BYTES, "scene file")?;

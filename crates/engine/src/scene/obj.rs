@@ -194,11 +194,8 @@ pub(super) fn import(
         Ok(k)
     };
 
-    let lin = import.transform.matrix3;
-    let flip = lin.determinant() < 0.0;
-    let normal_matrix = lin.inverse().transpose();
-    let mut positions: Vec<Vec3> = Vec::new();
-    let mut normals: Vec<Vec3> = Vec::new();
+    let mut positions: Vec<DVec3> = Vec::new();
+    let mut normals: Vec<DVec3> = Vec::new();
     // Whether every vertex came with a normal, and whether any did.
     let (mut all_normals, mut any_normals) = (true, false);
     let mut triangles: Vec<([u32; 3], u32)> = Vec::new();
@@ -211,23 +208,82 @@ pub(super) fn import(
         let material = material_of(m.material_id, &model.name)?;
         let base =
             u32::try_from(positions.len()).map_err(|_| anyhow!("{shown}: too many vertices"))?;
-        for p in m.positions.chunks_exact(3) {
-            let p = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
-            positions.push(import.transform.transform_point3(p).as_vec3());
-        }
+        let dvec = |p: &[f32]| DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+        positions.extend(m.positions.chunks_exact(3).map(dvec));
         if !m.normals.is_empty() && m.normals.len() == m.positions.len() {
             any_normals = true;
-            for n in m.normals.chunks_exact(3) {
-                let n = DVec3::new(f64::from(n[0]), f64::from(n[1]), f64::from(n[2]));
-                normals.push((normal_matrix * n).normalize_or_zero().as_vec3());
-            }
+            normals.extend(m.normals.chunks_exact(3).map(dvec));
         } else {
             any_normals |= !m.normals.is_empty();
             all_normals = false;
         }
         for t in m.indices.chunks_exact(3) {
-            let [a, b, c] = [t[0] + base, t[1] + base, t[2] + base];
-            triangles.push((if flip { [a, c, b] } else { [a, b, c] }, material));
+            triangles.push(([t[0] + base, t[1] + base, t[2] + base], material));
+        }
+    }
+    if stats.skipped > 0 {
+        warnings.push(format!(
+            "{shown}: {} point and line elements ignored (only faces are surfaces)",
+            stats.skipped
+        ));
+    }
+    let raw = RawMesh {
+        name: shown,
+        positions,
+        normals: (all_normals && any_normals).then_some(normals),
+        partial_normals: any_normals && !all_normals,
+        triangles,
+    };
+    scene.warnings.extend(warnings);
+    add_mesh(scene, raw, &import.transform, false)
+}
+
+/// A triangle mesh as its file gives it, in object space: what [`add_mesh`] places and cleans.
+pub(super) struct RawMesh {
+    /// The file as shown in messages (it names the mesh).
+    pub name: String,
+    pub positions: Vec<DVec3>,
+    /// One per position when every vertex has one.
+    pub normals: Option<Vec<DVec3>>,
+    /// Some vertices had a normal and some not (they are all dropped, with a warning).
+    pub partial_normals: bool,
+    /// Counter-clockwise seen from the front, with their material (an index into `Scene::materials`).
+    pub triangles: Vec<([u32; 3], u32)>,
+}
+
+/// Places `raw` in the scene by `transform` (its inverse transpose for normals) and appends it to
+/// `scene.meshes`; returns its index. A mirroring transform reverses the winding so that the front
+/// side stays the one the file meant; `flip` turns every triangle (and normal) around on top of that.
+/// Degenerate triangles are dropped with a warning, and the vertices only they used with them.
+pub(super) fn add_mesh(
+    scene: &mut Scene,
+    raw: RawMesh,
+    transform: &DAffine3,
+    flip: bool,
+) -> Result<usize> {
+    let shown = raw.name;
+    let mut warnings = Vec::new();
+    let lin = transform.matrix3;
+    let reverse = (lin.determinant() < 0.0) != flip;
+    let normal_matrix = if flip {
+        -lin.inverse().transpose()
+    } else {
+        lin.inverse().transpose()
+    };
+    let positions: Vec<Vec3> = raw
+        .positions
+        .iter()
+        .map(|&p| transform.transform_point3(p).as_vec3())
+        .collect();
+    let normals: Option<Vec<Vec3>> = raw.normals.map(|n| {
+        n.iter()
+            .map(|&n| (normal_matrix * n).normalize_or_zero().as_vec3())
+            .collect()
+    });
+    let mut triangles = raw.triangles;
+    if reverse {
+        for (t, _) in &mut triangles {
+            t.swap(1, 2);
         }
     }
     if let Some(k) = positions.iter().position(|p| !p.is_finite()) {
@@ -261,12 +317,6 @@ pub(super) fn import(
             "{shown}: {dropped} degenerate triangles dropped (zero area or a repeated vertex)"
         ));
     }
-    if stats.skipped > 0 {
-        warnings.push(format!(
-            "{shown}: {} point and line elements ignored (only faces are surfaces)",
-            stats.skipped
-        ));
-    }
     let mut remap = vec![u32::MAX; positions.len()];
     let mut kept: Vec<u32> = Vec::new();
     let mut indices = Vec::with_capacity(triangles.len());
@@ -282,7 +332,7 @@ pub(super) fn import(
         }));
         materials.push(*material);
     }
-    let normals = if all_normals && any_normals {
+    let normals = if let Some(normals) = normals {
         let n: Vec<Vec3> = kept.iter().map(|&i| normals[i as usize]).collect();
         match n.iter().position(|v| *v == Vec3::ZERO) {
             None => Some(n),
@@ -295,7 +345,7 @@ pub(super) fn import(
             }
         }
     } else {
-        if any_normals {
+        if raw.partial_normals {
             warnings.push(format!(
                 "{shown}: vertex normals dropped (flat shading): only some vertices have one"
             ));

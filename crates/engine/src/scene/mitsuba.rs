@@ -1,0 +1,2181 @@
+//! Mitsuba 3 scene files (XML): the subset that photon-mapping test scenes use, read into the one
+//! [`Scene`]. See `docs/mitsuba.md` for what is read, approximated and refused.
+//!
+//! Reading is two-stage. First each file is parsed by roxmltree into an owned tree of [`Elem`]s in
+//! document order, as Mitsuba's parser does it: `$name` parameters substituted in every attribute
+//! (`-D` overrides first, then `<default>`s), `<include>`s spliced in place (relative to the including
+//! file, cycles and nesting deeper than Mitsuba's limit refused). Then the scene's elements are
+//! interpreted into cameras, materials, quads, spheres and meshes. Every error names the file, line,
+//! column and element: `<file>:<line>:<col>: <shape type="rectangle" id="floor">: <what>`; every
+//! approximation is one line of `Scene::warnings`.
+
+use std::cell::Cell;
+use std::collections::HashMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+use anyhow::{anyhow, bail, Result};
+use glam::{DAffine3, DMat3, DMat4, DVec3, DVec4, Vec3};
+
+use super::obj::{self, RawMesh};
+use super::{Camera, Material, Mesh, ObjImport, Quad, Scene, Sphere, Surface, MAX_TRIANGLES};
+
+/// Deepest `<include>` nesting, Mitsuba's own limit (`ParserConfig::max_include_depth`).
+pub const MAX_INCLUDE_DEPTH: usize = 15;
+
+/// Elements nested deeper than this are refused (real scenes nest about five deep: scene, shape,
+/// bsdf, bsdf, rgb).
+pub const MAX_NESTING: usize = 64;
+
+/// Triangles in the fan a `disk` becomes. The polygon's radius is enlarged so that its area is the
+/// disk's exactly (an emitting disk keeps its power); its outline then lies between 2.6e-5 of the
+/// radius inside the circle (edge midpoints) and 5.1e-5 outside (corners).
+pub const DISK_SEGMENTS: u32 = 256;
+
+/// `name=value` of a `-D` override; the name is what `$name` refers to.
+pub fn parse_define(s: &str) -> Result<(String, String), String> {
+    let (name, value) = s
+        .split_once('=')
+        .ok_or_else(|| format!("{s:?}: expected NAME=VALUE"))?;
+    if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        return Err(format!(
+            "{s:?}: the name must be letters, digits and underscores (it is used as $NAME)"
+        ));
+    }
+    Ok((name.to_string(), value.to_string()))
+}
+
+/// Reads the Mitsuba scene at `path`; `defines` override its `<default>` parameters (as Mitsuba's
+/// `-D name=value`: one the scene never uses is an error).
+pub(super) fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene> {
+    let mut reader = Reader {
+        params: defines
+            .iter()
+            .map(|(k, v)| Param {
+                key: format!("${k}"),
+                value: v.clone(),
+                used: false,
+            })
+            .collect(),
+        open: Vec::new(),
+    };
+    let shown = path.display().to_string();
+    let (root, children) = reader.read(path, &shown, None)?;
+    if let Some(p) = reader.params.iter().find(|p| !p.used) {
+        bail!(
+            "{shown}: -D {}={}: the scene never uses ${0} (Mitsuba refuses unused parameters too)",
+            &p.key[1..],
+            p.value
+        );
+    }
+    let name = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or(&shown)
+        .to_string();
+    let mut b = Builder::new(name, root);
+    for e in &children {
+        b.top_level(e)?;
+    }
+    b.finish()
+}
+
+// ---------------------------------------------------------------------------
+// Stage 1: XML files to one owned tree, parameters substituted, includes spliced.
+
+/// Where an element starts.
+#[derive(Clone, Debug)]
+struct Loc {
+    file: Rc<str>,
+    line: u32,
+    col: u32,
+}
+
+impl fmt::Display for Loc {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}:{}", self.file, self.line, self.col)
+    }
+}
+
+/// An XML element with its attributes substituted.
+#[derive(Clone, Debug)]
+struct Elem {
+    tag: String,
+    attrs: Vec<(String, String)>,
+    children: Vec<Elem>,
+    loc: Loc,
+}
+
+impl Elem {
+    fn attr(&self, name: &str) -> Option<&str> {
+        self.attrs
+            .iter()
+            .find(|(k, _)| k == name)
+            .map(|(_, v)| v.as_str())
+    }
+
+    fn kind(&self) -> &str {
+        self.attr("type").unwrap_or("")
+    }
+
+    /// The element as messages name it: `<shape type="rectangle" id="floor">`, `<float name="fov">`.
+    fn what(&self) -> String {
+        let mut s = format!("<{}", self.tag);
+        for key in ["type", "id", "name"] {
+            if let Some(v) = self.attr(key) {
+                s += &format!(" {key}=\"{v}\"");
+            }
+        }
+        s + ">"
+    }
+
+    fn err(&self, msg: impl fmt::Display) -> anyhow::Error {
+        anyhow!("{}: {}: {msg}", self.loc, self.what())
+    }
+
+    fn warning(&self, msg: impl fmt::Display) -> String {
+        format!("{}: {}: {msg}", self.loc, self.what())
+    }
+
+    fn required(&self, name: &str) -> Result<&str> {
+        self.attr(name)
+            .ok_or_else(|| self.err(format!("needs the attribute {name}")))
+    }
+}
+
+struct Param {
+    /// `$name`.
+    key: String,
+    value: String,
+    used: bool,
+}
+
+struct Reader {
+    /// `-D` overrides first, then `<default>`s as they come (an override wins over a default).
+    params: Vec<Param>,
+    /// Canonical paths of the files being read, outermost first (to catch include cycles).
+    open: Vec<PathBuf>,
+}
+
+impl Reader {
+    /// The root element of the file at `path` and its children (includes spliced in).
+    fn read(
+        &mut self,
+        path: &Path,
+        shown: &str,
+        included_at: Option<&Elem>,
+    ) -> Result<(Elem, Vec<Elem>)> {
+        let at = |msg: String| match included_at {
+            Some(e) => e.err(msg),
+            None => anyhow!(msg),
+        };
+        // Bounded and regular files only, as for TOML scenes (a device file would be read forever).
+        let text = super::read_bounded(path, super::MAX_SCENE_BYTES, "scene file")
+            .map_err(|e| at(format!("{shown}: {e:#}")))?;
+        let canonical = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+        if let Some(i) = self.open.iter().position(|p| *p == canonical) {
+            let chain: Vec<String> = self.open[i..]
+                .iter()
+                .chain([&canonical])
+                .map(|p| p.display().to_string())
+                .collect();
+            return Err(at(format!("include cycle: {}", chain.join(" -> "))));
+        }
+        if self.open.len() > MAX_INCLUDE_DEPTH {
+            return Err(at(format!(
+                "includes nested deeper than {MAX_INCLUDE_DEPTH} files (Mitsuba's limit)"
+            )));
+        }
+        let doc = roxmltree::Document::parse(&text).map_err(|e| {
+            let p = e.pos();
+            at(format!("{shown}:{}:{}: malformed XML: {e}", p.row, p.col))
+        })?;
+        self.open.push(canonical);
+        let file: Rc<str> = shown.into();
+        let src = Src {
+            doc: &doc,
+            file,
+            dir: path.parent().unwrap_or(Path::new("")),
+        };
+        let root = doc.root_element();
+        let mut top = Vec::new();
+        // The root is read like any element (its attributes substituted), without its children.
+        let root_elem = self.element(&src, root, false)?;
+        if root.tag_name().name() == "scene" {
+            if let Some(v) = root_elem.attr("version") {
+                let major = v.split('.').next().and_then(|m| m.parse::<u32>().ok());
+                if major.is_none_or(|m| m < 2) {
+                    return Err(root_elem.err(format!(
+                        "version {v}: only scenes of version 2 and 3 are read (older ones name \
+                         their parameters differently)"
+                    )));
+                }
+            }
+            for child in root.children().filter(|n| n.is_element()) {
+                self.convert(&src, child, &mut top)?;
+            }
+        } else {
+            // An included file may hold one object instead of a scene.
+            self.convert(&src, root, &mut top)?;
+        }
+        self.open.pop();
+        Ok((root_elem, top))
+    }
+
+    /// Appends what `node` stands for to `out`: itself, an included file's elements, or nothing (a
+    /// `<default>`).
+    fn convert(&mut self, src: &Src, node: roxmltree::Node, out: &mut Vec<Elem>) -> Result<()> {
+        let e = self.element(src, node, true)?;
+        match e.tag.as_str() {
+            "default" => {
+                let name = e.required("name")?;
+                let value = e.required("value")?;
+                if name.is_empty() {
+                    return Err(e.err("the name must not be empty"));
+                }
+                let key = format!("${name}");
+                if !self.params.iter().any(|p| p.key == key) {
+                    self.params.push(Param {
+                        key,
+                        value: value.to_string(),
+                        used: true,
+                    });
+                }
+            }
+            "include" => {
+                let file = e.required("filename")?;
+                let path = src.dir.join(file);
+                let shown = path.display().to_string();
+                let (_, children) = self.read(&path, &shown, Some(&e))?;
+                out.extend(children);
+            }
+            _ => out.push(e),
+        }
+        Ok(())
+    }
+
+    /// `node` with its attributes substituted and (with `deep`) its children converted.
+    fn element(&mut self, src: &Src, node: roxmltree::Node, deep: bool) -> Result<Elem> {
+        let pos = src.doc.text_pos_at(node.range().start);
+        let mut e = Elem {
+            tag: node.tag_name().name().to_string(),
+            attrs: Vec::new(),
+            children: Vec::new(),
+            loc: Loc {
+                file: src.file.clone(),
+                line: pos.row,
+                col: pos.col,
+            },
+        };
+        for a in node.attributes() {
+            let value = self
+                .substitute(a.value())
+                .map_err(|m| e.err(format!("attribute {}=\"{}\": {m}", a.name(), a.value())))?;
+            e.attrs.push((a.name().to_string(), value));
+        }
+        if deep {
+            // Bounded, as the reader and the scene's drop recurse per level (a fuzzed file nested
+            // thousands deep overflowed the stack).
+            if node.ancestors().take(MAX_NESTING + 2).count() > MAX_NESTING {
+                return Err(e.err(format!("elements nested deeper than {MAX_NESTING} levels")));
+            }
+            let mut children = Vec::new();
+            for child in node.children().filter(|n| n.is_element()) {
+                self.convert(src, child, &mut children)?;
+            }
+            e.children = children;
+        }
+        Ok(e)
+    }
+
+    /// Mitsuba's substitution: every `$key` (longest keys first) not escaped as `\$` is replaced;
+    /// a `$` left over is an undefined parameter; `\$` then becomes `$`.
+    fn substitute(&mut self, value: &str) -> Result<String, String> {
+        if !value.contains('$') {
+            return Ok(value.to_string());
+        }
+        let mut order: Vec<usize> = (0..self.params.len()).collect();
+        order.sort_by_key(|&i| std::cmp::Reverse(self.params[i].key.len()));
+        let mut s = value.to_string();
+        for i in order {
+            let p = &mut self.params[i];
+            let mut pos = 0;
+            while let Some(k) = s[pos..].find(&p.key).map(|k| k + pos) {
+                if k > 0 && s.as_bytes()[k - 1] == b'\\' {
+                    pos = k + p.key.len();
+                } else {
+                    s.replace_range(k..k + p.key.len(), &p.value);
+                    p.used = true;
+                    pos = k + p.value.len();
+                }
+            }
+        }
+        let bytes = s.as_bytes();
+        for (k, _) in s.match_indices('$') {
+            if k > 0 && bytes[k - 1] == b'\\' {
+                continue;
+            }
+            let name: String = s[k + 1..]
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect();
+            return Err(format!(
+                "undefined parameter ${name} (give it a <default name=\"{name}\" value=\"...\"/> \
+                 or -D {name}=...)"
+            ));
+        }
+        Ok(s.replace("\\$", "$"))
+    }
+}
+
+/// The file being read.
+struct Src<'a, 'input> {
+    doc: &'a roxmltree::Document<'input>,
+    file: Rc<str>,
+    dir: &'a Path,
+}
+
+// ---------------------------------------------------------------------------
+// Property values.
+
+/// The properties (`<float name=..>`, `<transform name=..>`, ...) of one plugin element. Each one
+/// read is marked; [`Props::finish`] refuses those never read, as Mitsuba refuses unused properties.
+struct Props<'a> {
+    owner: &'a Elem,
+    items: Vec<(&'a Elem, Cell<bool>)>,
+}
+
+const PROPERTY_TAGS: &[&str] = &[
+    "float",
+    "integer",
+    "boolean",
+    "string",
+    "point",
+    "vector",
+    "rgb",
+    "spectrum",
+    "transform",
+    "texture",
+];
+
+impl<'a> Props<'a> {
+    /// The property children of `owner`; the other children are the caller's (`objects`).
+    fn of(owner: &'a Elem) -> (Props<'a>, Vec<&'a Elem>) {
+        let mut items = Vec::new();
+        let mut objects = Vec::new();
+        for c in &owner.children {
+            if PROPERTY_TAGS.contains(&c.tag.as_str()) && c.attr("name").is_some() {
+                items.push((c, Cell::new(false)));
+            } else {
+                objects.push(c);
+            }
+        }
+        (Props { owner, items }, objects)
+    }
+
+    fn get(&self, name: &str) -> Option<&'a Elem> {
+        self.items
+            .iter()
+            .find(|(e, _)| e.attr("name") == Some(name))
+            .map(|(e, used)| {
+                used.set(true);
+                *e
+            })
+    }
+
+    /// Marks `names` read without reading them: they do not change the image.
+    fn ignore(&self, names: &[&str]) {
+        for n in names {
+            self.get(n);
+        }
+    }
+
+    fn float(&self, name: &str) -> Result<Option<f64>> {
+        self.get(name)
+            .map(|e| {
+                expect_tag(e, &["float", "integer"])?;
+                number(e, e.required("value")?)
+            })
+            .transpose()
+    }
+
+    fn string(&self, name: &str) -> Result<Option<&'a str>> {
+        self.get(name)
+            .map(|e| {
+                expect_tag(e, &["string"])?;
+                e.required("value")
+            })
+            .transpose()
+    }
+
+    fn boolean(&self, name: &str) -> Result<bool> {
+        let Some(e) = self.get(name) else {
+            return Ok(false);
+        };
+        expect_tag(e, &["boolean"])?;
+        match e.required("value")? {
+            "true" => Ok(true),
+            "false" => Ok(false),
+            v => Err(e.err(format!("expected true or false, got \"{v}\""))),
+        }
+    }
+
+    fn point(&self, name: &str) -> Result<Option<DVec3>> {
+        self.get(name)
+            .map(|e| {
+                expect_tag(e, &["point", "vector"])?;
+                vector(e, 0.0)
+            })
+            .transpose()
+    }
+
+    fn color(&self, name: &str) -> Result<Option<Vec3>> {
+        self.get(name).map(color).transpose()
+    }
+
+    fn transform(&self, name: &str) -> Result<DAffine3> {
+        match self.get(name) {
+            Some(e) => {
+                expect_tag(e, &["transform"])?;
+                transform(e)
+            }
+            None => Ok(DAffine3::IDENTITY),
+        }
+    }
+
+    /// Refuses the properties nothing read.
+    fn finish(&self) -> Result<()> {
+        match self.items.iter().find(|(_, used)| !used.get()) {
+            Some((e, _)) if e.tag == "texture" => Err(
+                e.err("textures are not supported (only constant colours: rgb, float, spectrum)")
+            ),
+            Some((e, _)) => Err(e.err(format!(
+                "parameter not read by ppm-vk for {} (see docs/mitsuba.md)",
+                self.owner.what()
+            ))),
+            None => Ok(()),
+        }
+    }
+}
+
+fn expect_tag(e: &Elem, tags: &[&str]) -> Result<()> {
+    if tags.contains(&e.tag.as_str()) {
+        Ok(())
+    } else {
+        Err(e.err(format!("expected a <{}> here", tags.join("> or <"))))
+    }
+}
+
+fn number(e: &Elem, s: &str) -> Result<f64> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| e.err(format!("\"{s}\" is not a number")))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(e.err(format!("{s} is not finite")))
+    }
+}
+
+/// Numbers separated by commas and/or spaces.
+fn numbers(e: &Elem, s: &str) -> Result<Vec<f64>> {
+    s.split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|w| !w.is_empty())
+        .map(|w| number(e, w))
+        .collect()
+}
+
+/// `value="x, y, z"` (one number: all three), else the attributes x, y, z (absent: `default`).
+fn vector(e: &Elem, default: f64) -> Result<DVec3> {
+    if let Some(v) = e.attr("value") {
+        return match numbers(e, v)?[..] {
+            [x] => Ok(DVec3::splat(x)),
+            [x, y, z] => Ok(DVec3::new(x, y, z)),
+            _ => Err(e.err(format!("value \"{v}\": expected 1 or 3 numbers"))),
+        };
+    }
+    let c = |k: &str| e.attr(k).map_or(Ok(default), |s| number(e, s));
+    Ok(DVec3::new(c("x")?, c("y")?, c("z")?))
+}
+
+/// A constant colour: `<rgb>`, `<float>` (grey) or a `<spectrum>` of one value (grey).
+fn color(e: &Elem) -> Result<Vec3> {
+    match e.tag.as_str() {
+        "rgb" => {
+            let v = e.required("value")?;
+            match numbers(e, v)?[..] {
+                [x] => Ok(Vec3::splat(x as f32)),
+                [r, g, b] => Ok(Vec3::new(r as f32, g as f32, b as f32)),
+                _ => Err(e.err(format!("value \"{v}\": expected 3 numbers r, g, b"))),
+            }
+        }
+        "float" => Ok(Vec3::splat(number(e, e.required("value")?)? as f32)),
+        "spectrum" => {
+            let v = e.attr("value").ok_or_else(|| {
+                e.err("only a constant spectrum (value=\"x\") is read, not a file")
+            })?;
+            if v.contains(':') {
+                return Err(e.err(
+                    "a sampled spectrum (wavelength:value pairs) is not supported: ppm-vk renders \
+                     RGB (give an rgb)",
+                ));
+            }
+            Ok(Vec3::splat(number(e, v)? as f32))
+        }
+        "texture" => {
+            Err(e.err("textures are not supported (only constant colours: rgb, float, spectrum)"))
+        }
+        _ => Err(e.err("expected a colour: <rgb>, <float> or <spectrum>")),
+    }
+}
+
+/// A `<transform>`: its steps in document order, each applied after the ones before (M = step * M).
+fn transform(e: &Elem) -> Result<DAffine3> {
+    let mut m = DMat4::IDENTITY;
+    for step in &e.children {
+        let s = match step.tag.as_str() {
+            "translate" => DMat4::from_translation(vector(step, 0.0)?),
+            "scale" => DMat4::from_scale(vector(step, 1.0)?),
+            "rotate" => {
+                let axis = vector(step, 0.0)?;
+                let angle = number(step, step.required("angle")?)?;
+                if axis.length() == 0.0 {
+                    return Err(step.err("the rotation axis (x, y, z or value) is zero"));
+                }
+                DMat4::from_axis_angle(axis.normalize(), angle.to_radians())
+            }
+            "matrix" => {
+                let v = step.required("value")?;
+                match numbers(step, v)?[..] {
+                    // Row-major, as written.
+                    ref n if n.len() == 16 => {
+                        DMat4::from_cols_array(n.try_into().unwrap()).transpose()
+                    }
+                    ref n if n.len() == 9 => {
+                        DMat4::from_mat3(DMat3::from_cols_array(n.try_into().unwrap()).transpose())
+                    }
+                    _ => {
+                        return Err(
+                            step.err(format!("value: expected 16 or 9 numbers, got \"{v}\""))
+                        )
+                    }
+                }
+            }
+            "lookat" => {
+                let p = |k: &str| -> Result<DVec3> {
+                    let v = step.required(k)?;
+                    match numbers(step, v)?[..] {
+                        [x, y, z] => Ok(DVec3::new(x, y, z)),
+                        _ => Err(step.err(format!("{k}=\"{v}\": expected 3 numbers"))),
+                    }
+                };
+                let (origin, target, up) = (p("origin")?, p("target")?, p("up")?);
+                let dir = (target - origin).normalize_or_zero();
+                let left = up.cross(dir).normalize_or_zero();
+                if dir == DVec3::ZERO || left == DVec3::ZERO {
+                    return Err(step.err(
+                        "origin equals target, or up is zero or parallel to the view direction",
+                    ));
+                }
+                // Mitsuba's look_at: camera x = left, y = up, z = forward.
+                DMat4::from_cols(
+                    left.extend(0.0),
+                    dir.cross(left).extend(0.0),
+                    dir.extend(0.0),
+                    origin.extend(1.0),
+                )
+            }
+            _ => return Err(step.err("expected translate, rotate, scale, matrix or lookat")),
+        };
+        m = s * m;
+    }
+    if m.row(3) != DVec4::new(0.0, 0.0, 0.0, 1.0) || !m.is_finite() {
+        return Err(e.err(format!(
+            "not an affine transform (last row {:?}, must be [0, 0, 0, 1])",
+            m.row(3).to_array()
+        )));
+    }
+    Ok(DAffine3::from_mat4(m))
+}
+
+// ---------------------------------------------------------------------------
+// Stage 2: the scene's elements to a Scene.
+
+/// A BSDF as ppm-vk reads it.
+#[derive(Clone, Debug)]
+struct Bsdf {
+    surface: Surface,
+    /// Wrapped in `twosided` (or, for a dielectric, two-sided by nature).
+    two_sided: bool,
+    id: Option<String>,
+}
+
+/// Indices of the refraction of Mitsuba's named materials (`int_ior="bk7"`), from its documentation.
+const IOR_TABLE: &[(&str, f64)] = &[
+    ("vacuum", 1.0),
+    ("helium", 1.000036),
+    ("hydrogen", 1.000132),
+    ("air", 1.000277),
+    ("carbon dioxide", 1.00045),
+    ("water", 1.3330),
+    ("acetone", 1.36),
+    ("ethanol", 1.361),
+    ("carbon tetrachloride", 1.461),
+    ("glycerol", 1.4729),
+    ("benzene", 1.501),
+    ("silicone oil", 1.52045),
+    ("bromine", 1.661),
+    ("water ice", 1.31),
+    ("fused quartz", 1.458),
+    ("pyrex", 1.470),
+    ("acrylic glass", 1.49),
+    ("polypropylene", 1.49),
+    ("bk7", 1.5046),
+    ("sodium chloride", 1.544),
+    ("amber", 1.55),
+    ("pet", 1.5750),
+    ("diamond", 2.419),
+];
+
+/// What the scene's objects became, and where each came from (to locate a failed check).
+struct Builder {
+    scene: Scene,
+    root: Elem,
+    bsdfs: HashMap<String, Bsdf>,
+    /// Field path prefix (`quad[3]`, `materials.white`, `camera`) -> the element it came from.
+    origins: HashMap<String, Elem>,
+    sensor: Option<Elem>,
+    shapes: usize,
+}
+
+/// Shapes whose back side can be seen (a one-sided BSDF on them renders differently here).
+#[derive(Clone, Copy, PartialEq)]
+enum Closed {
+    Yes,
+    No,
+}
+
+impl Builder {
+    fn new(name: String, root: Elem) -> Builder {
+        Builder {
+            scene: Scene {
+                name,
+                camera: Camera {
+                    eye: Vec3::ZERO,
+                    look_at: Vec3::NEG_Z,
+                    up: Vec3::Y,
+                    vfov_deg: 0.0,
+                    width: 0,
+                    height: 0,
+                },
+                materials: Vec::new(),
+                spheres: Vec::new(),
+                quads: Vec::new(),
+                meshes: Vec::new(),
+                warnings: Vec::new(),
+            },
+            root,
+            bsdfs: HashMap::new(),
+            origins: HashMap::new(),
+            sensor: None,
+            shapes: 0,
+        }
+    }
+
+    fn warn(&mut self, e: &Elem, msg: impl fmt::Display) {
+        self.scene.warnings.push(e.warning(msg));
+    }
+
+    fn top_level(&mut self, e: &Elem) -> Result<()> {
+        match e.tag.as_str() {
+            "integrator" => self.integrator(e),
+            "sensor" => {
+                if self.sensor.is_some() {
+                    self.warn(e, "a second sensor: ignored (ppm-vk renders the first, as Mitsuba does by default)");
+                } else {
+                    self.sensor = Some(e.clone());
+                }
+                Ok(())
+            }
+            "bsdf" => {
+                let b = self.bsdf(e)?;
+                match &b.id {
+                    Some(id) if self.bsdfs.contains_key(id) => {
+                        return Err(e.err(format!(
+                            "the id \"{id}\" is already taken (ids are unique, as in Mitsuba)"
+                        )));
+                    }
+                    Some(id) => {
+                        self.bsdfs.insert(id.clone(), b);
+                    }
+                    None => self.warn(e, "a top-level bsdf without an id cannot be used: ignored"),
+                }
+                Ok(())
+            }
+            "shape" => self.shape(e),
+            "emitter" => Err(e.err(
+                "only area emitters inside a shape are supported (no point, spot, directional, \
+                 constant or environment lights)",
+            )),
+            "texture" => Err(e.err("textures are not supported")),
+            "medium" => Err(e.err("participating media are not supported")),
+            _ => Err(e.err("not supported here (see docs/mitsuba.md for the subset read)")),
+        }
+    }
+
+    /// Integrators only choose how Mitsuba estimates the image; ppm-vk computes the same image
+    /// (all paths) with its own. What would make Mitsuba's image differ is warned about.
+    fn integrator(&mut self, e: &Elem) -> Result<()> {
+        const FULL: &[&str] = &[
+            "path",
+            "volpath",
+            "volpathmis",
+            "ptracer",
+            "prb",
+            "prbvolpath",
+        ];
+        if !FULL.contains(&e.kind()) {
+            self.warn(
+                e,
+                "ppm-vk renders all light paths (global illumination), not this integrator's image",
+            );
+        }
+        let (props, _) = Props::of(e);
+        if let Some(d) = props.float("max_depth")? {
+            if d != -1.0 {
+                self.warn(
+                    e,
+                    format!("max_depth {d} ignored: ppm-vk renders paths of any length"),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    fn bsdf(&mut self, e: &Elem) -> Result<Bsdf> {
+        let (props, objects) = Props::of(e);
+        let id = e.attr("id").map(str::to_string);
+        let nested: Vec<&Elem> = objects
+            .iter()
+            .copied()
+            .filter(|c| c.tag == "bsdf")
+            .collect();
+        if let Some(o) = objects.iter().find(|c| c.tag != "bsdf") {
+            return Err(o.err(format!("not expected inside {}", e.what())));
+        }
+        if e.kind() != "twosided" {
+            if let Some(n) = nested.first() {
+                return Err(n.err(format!("a bsdf nested in {} is not supported", e.what())));
+            }
+        }
+        let surface = match e.kind() {
+            "diffuse" => Surface::Diffuse {
+                albedo: props.color("reflectance")?.unwrap_or(Vec3::splat(0.5)),
+            },
+            "twosided" => {
+                let inner = match nested[..] {
+                    [one] => self.bsdf(one)?,
+                    [a, b] => {
+                        let (x, y) = (self.bsdf(a)?, self.bsdf(b)?);
+                        if x.surface != y.surface {
+                            return Err(b.err(
+                                "a different bsdf on the back side is not supported (ppm-vk \
+                                 surfaces are the same on both sides)",
+                            ));
+                        }
+                        x
+                    }
+                    _ => return Err(e.err("needs one nested bsdf")),
+                };
+                if inner.two_sided || matches!(inner.surface, Surface::Glass { .. }) {
+                    return Err(e.err("wraps a two-sided bsdf (Mitsuba refuses this too)"));
+                }
+                props.finish()?;
+                return Ok(Bsdf {
+                    two_sided: true,
+                    id,
+                    ..inner
+                });
+            }
+            kind @ ("conductor" | "roughconductor") => {
+                let material = props.string("material")?.unwrap_or("none");
+                if material != "none" || props.get("eta").is_some() || props.get("k").is_some() {
+                    return Err(e.err(format!(
+                        "only a perfect mirror is read (material=\"none\", colour from \
+                         specular_reflectance), not the metal \"{material}\" or eta/k"
+                    )));
+                }
+                if kind == "roughconductor" {
+                    props.ignore(&[
+                        "alpha",
+                        "alpha_u",
+                        "alpha_v",
+                        "distribution",
+                        "sample_visible",
+                    ]);
+                    self.warn(e, "rough conductor rendered as a smooth mirror (ppm-vk has no glossy reflection)");
+                }
+                Surface::Mirror {
+                    reflectance: props.color("specular_reflectance")?.unwrap_or(Vec3::ONE),
+                }
+            }
+            kind @ ("dielectric" | "roughdielectric") => {
+                let ior = |name: &str, default: &str| -> Result<f64> {
+                    let Some(p) = props.get(name) else {
+                        return ior_named(e, default);
+                    };
+                    match p.tag.as_str() {
+                        "float" => number(p, p.required("value")?),
+                        "string" => ior_named(p, p.required("value")?),
+                        _ => Err(p.err("expected a <float> or a <string> (a material name)")),
+                    }
+                };
+                let (int, ext) = (ior("int_ior", "bk7")?, ior("ext_ior", "air")?);
+                for name in ["specular_reflectance", "specular_transmittance"] {
+                    if let Some(c) = props.color(name)? {
+                        if c != Vec3::ONE {
+                            return Err(props.get(name).unwrap().err(
+                                "only 1 is supported (ppm-vk glass is clear and follows Fresnel)",
+                            ));
+                        }
+                    }
+                }
+                if int < ext {
+                    return Err(e.err(format!(
+                        "int_ior {int} < ext_ior {ext}: ppm-vk glass is denser than its outside \
+                         (relative index >= 1)"
+                    )));
+                }
+                if kind == "roughdielectric" {
+                    props.ignore(&[
+                        "alpha",
+                        "alpha_u",
+                        "alpha_v",
+                        "distribution",
+                        "sample_visible",
+                    ]);
+                    self.warn(e, "rough dielectric rendered as smooth glass (ppm-vk has no glossy transmission)");
+                }
+                let surface = Surface::Glass {
+                    ior: (int / ext) as f32,
+                };
+                props.finish()?;
+                return Ok(Bsdf {
+                    surface,
+                    two_sided: true,
+                    id,
+                });
+            }
+            "thindielectric" => {
+                return Err(e.err(
+                    "a thin dielectric (a pane that reflects and lets light through without \
+                     bending it) has no counterpart among ppm-vk's materials; model the pane as \
+                     a closed dielectric shape",
+                ))
+            }
+            _ => {
+                return Err(e.err(
+                    "unsupported bsdf (read: diffuse, twosided, conductor, roughconductor, \
+                     dielectric, roughdielectric)",
+                ))
+            }
+        };
+        props.finish()?;
+        Ok(Bsdf {
+            surface,
+            two_sided: false,
+            id,
+        })
+    }
+
+    /// Index of the scene material for `bsdf` with `emission`, named `name` (made on first use; the
+    /// same name for different contents gets a suffix).
+    fn material(&mut self, name: &str, bsdf: &Bsdf, emission: Vec3, e: &Elem) -> u32 {
+        let wanted = Material {
+            name: name.to_string(),
+            surface: bsdf.surface,
+            emission,
+        };
+        let mut candidate = name.to_string();
+        for n in 2.. {
+            match self
+                .scene
+                .materials
+                .iter()
+                .position(|m| m.name == candidate)
+            {
+                Some(i)
+                    if self.scene.materials[i]
+                        == Material {
+                            name: candidate.clone(),
+                            ..wanted.clone()
+                        } =>
+                {
+                    return i as u32
+                }
+                Some(_) => candidate = format!("{name}#{n}"),
+                None => break,
+            }
+        }
+        self.origins
+            .insert(format!("materials.{candidate}"), e.clone());
+        self.scene.materials.push(Material {
+            name: candidate,
+            ..wanted
+        });
+        (self.scene.materials.len() - 1) as u32
+    }
+
+    fn shape(&mut self, e: &Elem) -> Result<()> {
+        let index = self.shapes;
+        self.shapes += 1;
+        let (props, objects) = Props::of(e);
+        let mut bsdf: Option<(Bsdf, &Elem)> = None;
+        let mut emission: Option<(Vec3, &Elem)> = None;
+        for o in objects {
+            match o.tag.as_str() {
+                "bsdf" | "ref" => {
+                    if bsdf.is_some() {
+                        return Err(o.err("a second bsdf: a shape has one (as in Mitsuba)"));
+                    }
+                    let b = if o.tag == "bsdf" {
+                        self.bsdf(o)?
+                    } else {
+                        let id = o.required("id")?;
+                        self.bsdfs.get(id).cloned().ok_or_else(|| {
+                            let mut known: Vec<&str> =
+                                self.bsdfs.keys().map(String::as_str).collect();
+                            known.sort();
+                            o.err(format!(
+                                "no bsdf with id \"{id}\" defined before it (known: {})",
+                                if known.is_empty() {
+                                    "none".to_string()
+                                } else {
+                                    known.join(", ")
+                                }
+                            ))
+                        })?
+                    };
+                    bsdf = Some((b, o));
+                }
+                "emitter" => {
+                    if o.kind() != "area" {
+                        return Err(o.err("only area emitters are supported on shapes"));
+                    }
+                    let (ep, rest) = Props::of(o);
+                    if let Some(r) = rest.first() {
+                        return Err(r.err(format!("not expected inside {}", o.what())));
+                    }
+                    let radiance = ep.color("radiance")?.unwrap_or(Vec3::ONE);
+                    ep.finish()?;
+                    emission = Some((radiance, o));
+                }
+                "medium" => return Err(o.err("participating media are not supported")),
+                _ => return Err(o.err(format!("not expected inside {}", e.what()))),
+            }
+        }
+        // Mitsuba gives a shape without a bsdf a diffuse one of reflectance 0.5.
+        let (bsdf, bsdf_at) = bsdf.unwrap_or((
+            Bsdf {
+                surface: Surface::Diffuse {
+                    albedo: Vec3::splat(0.5),
+                },
+                two_sided: false,
+                id: None,
+            },
+            e,
+        ));
+        let shape_name = e
+            .attr("id")
+            .map_or_else(|| format!("shape[{index}]"), str::to_string);
+        let (emission, emitter_at) = emission.unwrap_or((Vec3::ZERO, e));
+        if emission.max_element() > 0.0 && !matches!(bsdf.surface, Surface::Diffuse { .. }) {
+            return Err(emitter_at.err(format!(
+                "an area emitter on a {} surface: ppm-vk lights are diffuse (or black) only",
+                if matches!(bsdf.surface, Surface::Glass { .. }) {
+                    "dielectric"
+                } else {
+                    "conductor"
+                }
+            )));
+        }
+        let name = match (&bsdf.id, emission.max_element() > 0.0) {
+            (Some(id), false) => id.clone(),
+            _ => shape_name,
+        };
+        let material = self.material(&name, &bsdf, emission, bsdf_at);
+        let to_world = props.transform("to_world")?;
+        let flip = props.boolean("flip_normals")?;
+        let closed = match e.kind() {
+            "rectangle" => {
+                self.quad(
+                    e,
+                    &to_world,
+                    flip,
+                    [-1.0, -1.0, 0.0],
+                    [2.0, 0.0, 0.0],
+                    [0.0, 2.0, 0.0],
+                    material,
+                );
+                Closed::No
+            }
+            "cube" => {
+                // Each face of [-1, 1]^3 with its normal outward: edges u x v along +axis, swapped
+                // for the face on the negative side.
+                for axis in 0..3 {
+                    let unit = |k: usize| DVec3::AXES[k % 3];
+                    for side in [1.0, -1.0] {
+                        let (mut u, mut v) = (2.0 * unit(axis + 1), 2.0 * unit(axis + 2));
+                        let origin = side * unit(axis) - 0.5 * (u + v);
+                        if side < 0.0 {
+                            std::mem::swap(&mut u, &mut v);
+                        }
+                        self.quad(
+                            e,
+                            &to_world,
+                            flip,
+                            origin.to_array(),
+                            u.to_array(),
+                            v.to_array(),
+                            material,
+                        );
+                    }
+                }
+                Closed::Yes
+            }
+            "disk" => {
+                let n = DISK_SEGMENTS;
+                let step = std::f64::consts::TAU / f64::from(n);
+                // The regular n-gon of area pi: radius sqrt(2 pi / (n sin(2 pi / n))).
+                let r = (std::f64::consts::TAU / (f64::from(n) * step.sin())).sqrt();
+                let mut positions = vec![DVec3::ZERO];
+                positions.extend((0..n).map(|i| {
+                    let a = step * f64::from(i);
+                    DVec3::new(r * a.cos(), r * a.sin(), 0.0)
+                }));
+                let triangles = (0..n)
+                    .map(|i| ([0, 1 + i, 1 + (i + 1) % n], material))
+                    .collect();
+                let raw = RawMesh {
+                    name: format!("{} disk", e.loc),
+                    positions,
+                    normals: None,
+                    partial_normals: false,
+                    triangles,
+                };
+                self.mesh(e, raw, &to_world, flip)?;
+                Closed::No
+            }
+            "sphere" => {
+                let center = props.point("center")?.unwrap_or(DVec3::ZERO);
+                let radius = props.float("radius")?.unwrap_or(1.0);
+                let m = to_world
+                    * DAffine3::from_translation(center)
+                    * DAffine3::from_scale(DVec3::splat(radius));
+                let gram = m.matrix3.transpose() * m.matrix3;
+                let s2 = gram.x_axis.x;
+                let off = (gram - DMat3::from_diagonal(DVec3::splat(s2))).to_cols_array();
+                if off.iter().any(|x| x.abs() > 1e-6 * s2) {
+                    return Err(e.err(
+                        "to_world scales the sphere non-uniformly (an ellipsoid): not supported",
+                    ));
+                }
+                if emission.max_element() > 0.0 {
+                    return Err(emitter_at.err(
+                        "an emitting sphere: ppm-vk lights are quads and triangles (use a mesh)",
+                    ));
+                }
+                if flip && matches!(bsdf.surface, Surface::Glass { .. }) {
+                    return Err(e.err(
+                        "flip_normals on a dielectric sphere (its inside outside) is not supported",
+                    ));
+                }
+                self.origins
+                    .insert(format!("sphere[{}]", self.scene.spheres.len()), e.clone());
+                self.scene.spheres.push(Sphere {
+                    center: m.translation.as_vec3(),
+                    radius: s2.sqrt() as f32,
+                    material,
+                });
+                Closed::Yes
+            }
+            "obj" => {
+                let path = self.file(e, &props)?;
+                props.ignore(&["flip_tex_coords"]);
+                let i = obj::import(
+                    &mut self.scene,
+                    &path,
+                    &ObjImport {
+                        transform: to_world,
+                        material: Some(material),
+                    },
+                    MAX_TRIANGLES,
+                )
+                .map_err(|err| e.err(format!("{err:#}")))?;
+                self.origins.insert(format!("mesh[{i}]"), e.clone());
+                let m = &mut self.scene.meshes[i];
+                if flip {
+                    m.indices.iter_mut().for_each(|t| t.swap(1, 2));
+                    m.normals.iter_mut().flatten().for_each(|n| *n = -*n);
+                }
+                if props.boolean("face_normals")? {
+                    m.normals = None;
+                }
+                closed(m)
+            }
+            "ply" => {
+                let path = self.file(e, &props)?;
+                let face_normals = props.boolean("face_normals")?;
+                let mut raw = read_ply(&path, material).map_err(|err| e.err(format!("{err:#}")))?;
+                if face_normals {
+                    raw.normals = None;
+                }
+                let i = self.mesh(e, raw, &to_world, flip)?;
+                closed(&self.scene.meshes[i])
+            }
+            _ => {
+                return Err(
+                    e.err("unsupported shape (read: rectangle, cube, disk, sphere, obj, ply)")
+                )
+            }
+        };
+        props.finish()?;
+        let one_sided = match bsdf.surface {
+            Surface::Diffuse { albedo } => albedo != Vec3::ZERO,
+            Surface::Mirror { .. } => true,
+            Surface::Glass { .. } => false,
+        };
+        if closed == Closed::No && one_sided && !bsdf.two_sided {
+            self.warn(
+                bsdf_at,
+                format!(
+                    "one-sided in Mitsuba (black seen from behind) on {}, which ppm-vk renders \
+                     reflecting on both sides: wrap it in a twosided bsdf to say so",
+                    e.what()
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    /// The quad `origin + s u + t v` (object space) placed by `m`; its front normal is `u x v` turned
+    /// as Mitsuba turns normals (the inverse transpose), and flipped with `flip`.
+    #[allow(clippy::too_many_arguments)]
+    fn quad(
+        &mut self,
+        e: &Elem,
+        m: &DAffine3,
+        flip: bool,
+        origin: [f64; 3],
+        u: [f64; 3],
+        v: [f64; 3],
+        material: u32,
+    ) {
+        let (mut u, mut v) = (m.transform_vector3(u.into()), m.transform_vector3(v.into()));
+        // A mirroring transform turns u x v against the inverse-transposed normal.
+        if (m.matrix3.determinant() < 0.0) != flip {
+            std::mem::swap(&mut u, &mut v);
+        }
+        self.origins
+            .insert(format!("quad[{}]", self.scene.quads.len()), e.clone());
+        self.scene.quads.push(Quad {
+            origin: m.transform_point3(origin.into()).as_vec3(),
+            edge_u: u.as_vec3(),
+            edge_v: v.as_vec3(),
+            material,
+        });
+    }
+
+    fn mesh(&mut self, e: &Elem, raw: RawMesh, m: &DAffine3, flip: bool) -> Result<usize> {
+        let i = obj::add_mesh(&mut self.scene, raw, m, flip)
+            .map_err(|err| e.err(format!("{err:#}")))?;
+        self.origins.insert(format!("mesh[{i}]"), e.clone());
+        Ok(i)
+    }
+
+    /// The `filename` of a mesh shape, relative to the scene file's directory.
+    fn file(&self, e: &Elem, props: &Props) -> Result<PathBuf> {
+        let name = props
+            .string("filename")?
+            .ok_or_else(|| e.err("needs <string name=\"filename\" .../>"))?;
+        let dir = Path::new(&*e.loc.file).parent().unwrap_or(Path::new(""));
+        Ok(dir.join(name))
+    }
+
+    fn camera(&mut self) -> Result<()> {
+        let Some(e) = self.sensor.take() else {
+            return Err(self
+                .root
+                .err("no <sensor>: give a perspective sensor (ppm-vk has no default camera)"));
+        };
+        if e.kind() != "perspective" {
+            return Err(e.err("only the perspective (pinhole) sensor is supported"));
+        }
+        let (props, objects) = Props::of(&e);
+        let mut size = (768, 576); // hdrfilm's defaults
+        let mut film_seen = false;
+        for o in objects {
+            match (o.tag.as_str(), o.kind()) {
+                ("film", "hdrfilm") => {
+                    film_seen = true;
+                    size = self.film(o)?;
+                }
+                ("film", _) => return Err(o.err("only hdrfilm is supported")),
+                // The sampler decides only the noise of Mitsuba's estimate; ppm-vk's --seed is its own.
+                ("sampler", _) => {}
+                _ => return Err(o.err(format!("not expected inside {}", e.what()))),
+            }
+        }
+        if !film_seen {
+            self.warn(&e, "no film: hdrfilm's defaults (768 x 576, gaussian filter) apply; rendered with a box filter");
+        }
+        let aspect = f64::from(size.0) / f64::from(size.1);
+        let x_fov = fov_x(&props, aspect, &e)?;
+        let m = props.transform("to_world")?;
+        for name in ["principal_point_offset_x", "principal_point_offset_y"] {
+            if props.float(name)?.is_some_and(|v| v != 0.0) {
+                return Err(props
+                    .get(name)
+                    .unwrap()
+                    .err("an off-centre principal point is not supported"));
+            }
+        }
+        props.ignore(&["near_clip", "shutter_open", "shutter_close"]);
+        let far = props.float("far_clip")?;
+        props.finish()?;
+        let l = m.matrix3;
+        if (l.transpose() * l - DMat3::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .any(|x| x.abs() > 1e-4)
+        {
+            return Err(e.err(
+                "to_world of the sensor has a scale or shear (Mitsuba refuses scale factors too)",
+            ));
+        }
+        if l.determinant() < 0.0 {
+            return Err(e.err("to_world of the sensor mirrors the image: not supported"));
+        }
+        let eye = m.translation;
+        let vfov = 2.0 * ((0.5 * x_fov.to_radians()).tan() / aspect).atan();
+        self.scene.camera = Camera {
+            eye: eye.as_vec3(),
+            look_at: (eye + l.z_axis).as_vec3(),
+            up: l.y_axis.as_vec3(),
+            vfov_deg: vfov.to_degrees() as f32,
+            width: size.0,
+            height: size.1,
+        };
+        self.origins.insert("camera".into(), e.clone());
+        if let Some(far) = far {
+            let (lo, hi) = self.scene.bounds();
+            let farthest = (0..8)
+                .map(|k| {
+                    let c = DVec3::new(
+                        if k & 1 == 0 { lo.x } else { hi.x } as f64,
+                        if k & 2 == 0 { lo.y } else { hi.y } as f64,
+                        if k & 4 == 0 { lo.z } else { hi.z } as f64,
+                    );
+                    (c - eye).length()
+                })
+                .fold(0.0, f64::max);
+            if far < farthest {
+                self.warn(
+                    &e,
+                    format!(
+                        "far_clip {far} ignored: ppm-vk renders the scene out to {farthest:.3}"
+                    ),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    fn film(&mut self, o: &Elem) -> Result<(u32, u32)> {
+        let (fp, rest) = Props::of(o);
+        let size = |name: &str, default: u32| -> Result<u32> {
+            match fp.float(name)? {
+                None => Ok(default),
+                Some(v) if v >= 1.0 && v.fract() == 0.0 && v <= f64::from(u32::MAX) => Ok(v as u32),
+                Some(v) => Err(fp
+                    .get(name)
+                    .unwrap()
+                    .err(format!("must be a positive integer, got {v}"))),
+            }
+        };
+        let size = (size("width", 768)?, size("height", 576)?);
+        for name in [
+            "crop_offset_x",
+            "crop_offset_y",
+            "crop_width",
+            "crop_height",
+        ] {
+            if let Some(p) = fp.get(name) {
+                return Err(p.err("a crop window is not supported"));
+            }
+        }
+        // Output encoding only: the image is the same.
+        fp.ignore(&[
+            "pixel_format",
+            "component_format",
+            "file_format",
+            "banner",
+            "high_quality_edges",
+            "sample_border",
+            "compensate",
+        ]);
+        fp.finish()?;
+        match rest[..] {
+            [] => self.warn(
+                o,
+                "no rfilter: Mitsuba's default is gaussian; ppm-vk renders with a box filter",
+            ),
+            [r] if r.tag == "rfilter" && r.kind() == "box" => {}
+            [r] if r.tag == "rfilter" => self.warn(r, "ppm-vk renders with a box filter"),
+            _ => return Err(rest[0].err(format!("not expected inside {}", o.what()))),
+        }
+        Ok(size)
+    }
+
+    fn finish(mut self) -> Result<Scene> {
+        self.camera()?;
+        let root = self.root.clone();
+        self.scene.check().map_err(|inv| {
+            // The element of the field path's longest known prefix (`quad[3]` for `quad[3].edge_v`).
+            let mut path = inv.path.as_str();
+            let at = loop {
+                if let Some(e) = self.origins.get(path) {
+                    break e;
+                }
+                match path.rfind('.') {
+                    Some(i) => path = &path[..i],
+                    None => break &root,
+                }
+            };
+            at.err(&inv)
+        })?;
+        Ok(self.scene)
+    }
+}
+
+/// `fov` (with `fov_axis`) or `focal_length` as the horizontal field of view in degrees, as
+/// Mitsuba's `parse_fov`.
+fn fov_x(props: &Props, aspect: f64, e: &Elem) -> Result<f64> {
+    let (fov, axis) = match (props.float("fov")?, props.string("focal_length")?) {
+        (Some(_), Some(_)) => return Err(e.err("give either fov or focal_length, not both")),
+        (Some(fov), None) => {
+            let axis = props
+                .string("fov_axis")?
+                .unwrap_or("x")
+                .to_ascii_lowercase();
+            let axis = match axis.as_str() {
+                "smaller" => if aspect > 1.0 { "y" } else { "x" }.to_string(),
+                "larger" => if aspect > 1.0 { "x" } else { "y" }.to_string(),
+                _ => axis,
+            };
+            (fov, axis)
+        }
+        (None, focal) => {
+            let f = focal.unwrap_or("50mm");
+            let mm = number(e, f.strip_suffix("mm").unwrap_or(f))?;
+            // The diagonal of a 36 x 24 mm frame.
+            (
+                (36f64.hypot(24.0) / (2.0 * mm)).atan().to_degrees() * 2.0,
+                "diagonal".to_string(),
+            )
+        }
+    };
+    if !(fov > 0.0 && fov < 180.0) {
+        return Err(e.err(format!("fov must be in (0, 180) degrees, got {fov}")));
+    }
+    let half = (0.5 * fov.to_radians()).tan();
+    let x = match axis.as_str() {
+        "x" => fov,
+        "y" => (2.0 * (half * aspect).atan()).to_degrees(),
+        "diagonal" => (2.0 * (half / (1.0 + 1.0 / (aspect * aspect)).sqrt()).atan()).to_degrees(),
+        other => {
+            return Err(e.err(format!(
+                "fov_axis \"{other}\": expected x, y, diagonal, smaller or larger"
+            )))
+        }
+    };
+    Ok(x)
+}
+
+fn ior_named(e: &Elem, name: &str) -> Result<f64> {
+    if let Ok(v) = name.trim().parse::<f64>() {
+        return Ok(v);
+    }
+    IOR_TABLE
+        .iter()
+        .find(|(n, _)| n.eq_ignore_ascii_case(name.trim()))
+        .map(|(_, v)| *v)
+        .ok_or_else(|| e.err(format!("unknown index of refraction \"{name}\"")))
+}
+
+/// Whether every edge of `m` (by vertex position) is shared by exactly two triangles.
+fn closed(m: &Mesh) -> Closed {
+    let mut edges: HashMap<[[u32; 3]; 2], u32> = HashMap::new();
+    let key = |i: u32| m.positions[i as usize].to_array().map(f32::to_bits);
+    for t in &m.indices {
+        for k in 0..3 {
+            let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
+            *edges
+                .entry(if a < b { [a, b] } else { [b, a] })
+                .or_default() += 1;
+        }
+    }
+    if edges.values().all(|&n| n == 2) {
+        Closed::Yes
+    } else {
+        Closed::No
+    }
+}
+
+/// A PLY mesh (ASCII or binary): vertex x, y, z (and nx, ny, nz when all three are there), faces
+/// as `vertex_indices` (or `vertex_index`) lists, polygons split into fans from their first corner.
+fn read_ply(path: &Path, material: u32) -> Result<RawMesh> {
+    use ply_rs_bw::parser::Parser;
+    use ply_rs_bw::ply::{DefaultElement, Property};
+    let shown = path.display().to_string();
+    let file =
+        std::fs::File::open(path).map_err(|e| anyhow!("{shown}: cannot read PLY file: {e}"))?;
+    let ply = Parser::<DefaultElement>::new()
+        .read_ply(&mut std::io::BufReader::new(file))
+        .map_err(|e| anyhow!("{shown}: malformed PLY: {e}"))?;
+    let scalar = |p: &Property| -> Option<f64> {
+        Some(match *p {
+            Property::Float(v) => f64::from(v),
+            Property::Double(v) => v,
+            Property::Char(v) => f64::from(v),
+            Property::UChar(v) => f64::from(v),
+            Property::Short(v) => f64::from(v),
+            Property::UShort(v) => f64::from(v),
+            Property::Int(v) => f64::from(v),
+            Property::UInt(v) => f64::from(v),
+            _ => return None,
+        })
+    };
+    let vertices = ply
+        .payload
+        .get("vertex")
+        .ok_or_else(|| anyhow!("{shown}: no vertex element"))?;
+    let mut positions = Vec::with_capacity(vertices.len());
+    let mut normals = Vec::with_capacity(vertices.len());
+    let has_normals = vertices
+        .first()
+        .is_some_and(|v| ["nx", "ny", "nz"].iter().all(|k| v.contains_key(*k)));
+    for (k, v) in vertices.iter().enumerate() {
+        let get = |name: &str| -> Result<f64> {
+            let x = v
+                .get(name)
+                .and_then(scalar)
+                .ok_or_else(|| anyhow!("{shown}: vertex {k} has no number {name}"))?;
+            if x.is_finite() {
+                Ok(x)
+            } else {
+                bail!("{shown}: vertex {k}: {name} is not finite")
+            }
+        };
+        positions.push(DVec3::new(get("x")?, get("y")?, get("z")?));
+        if has_normals {
+            normals.push(DVec3::new(get("nx")?, get("ny")?, get("nz")?));
+        }
+    }
+    let faces = ply
+        .payload
+        .get("face")
+        .ok_or_else(|| anyhow!("{shown}: no face element"))?;
+    let mut triangles = Vec::new();
+    for (f, face) in faces.iter().enumerate() {
+        let list = face
+            .get("vertex_indices")
+            .or_else(|| face.get("vertex_index"));
+        let idx: Vec<i64> = match list {
+            Some(Property::ListChar(l)) => l.iter().map(|&i| i64::from(i)).collect(),
+            Some(Property::ListUChar(l)) => l.iter().map(|&i| i64::from(i)).collect(),
+            Some(Property::ListShort(l)) => l.iter().map(|&i| i64::from(i)).collect(),
+            Some(Property::ListUShort(l)) => l.iter().map(|&i| i64::from(i)).collect(),
+            Some(Property::ListInt(l)) => l.iter().map(|&i| i64::from(i)).collect(),
+            Some(Property::ListUInt(l)) => l.iter().map(|&i| i64::from(i)).collect(),
+            _ => bail!("{shown}: face {f} has no integer list vertex_indices"),
+        };
+        if let Some(&bad) = idx
+            .iter()
+            .find(|&&i| i < 0 || i as usize >= positions.len())
+        {
+            bail!(
+                "{shown}: face {f} has vertex index {bad}, out of range ({} vertices)",
+                positions.len()
+            );
+        }
+        if idx.len() < 3 {
+            bail!(
+                "{shown}: face {f} has {} corners (at least 3 make a surface)",
+                idx.len()
+            );
+        }
+        for k in 1..idx.len() - 1 {
+            triangles.push(([idx[0] as u32, idx[k] as u32, idx[k + 1] as u32], material));
+        }
+        if triangles.len() > MAX_TRIANGLES {
+            bail!("{shown}: face {f}: more than {MAX_TRIANGLES} triangles: the limit (MAX_TRIANGLES) is reached here");
+        }
+    }
+    if triangles.is_empty() {
+        bail!("{shown}: no faces: the mesh is empty");
+    }
+    Ok(RawMesh {
+        name: shown,
+        positions,
+        normals: has_normals.then_some(normals),
+        partial_normals: false,
+        triangles,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::TempDir;
+
+    /// A camera and a light, so that a scene with one more shape validates.
+    const HEAD: &str = r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film>
+    </sensor>
+    <shape type="rectangle" id="lamp">
+        <transform name="to_world"><rotate x="1" angle="90"/><translate y="3"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+        <emitter type="area"><rgb name="radiance" value="1"/></emitter>
+    </shape>
+"#;
+
+    /// `body` after [`HEAD`], in a scene file of its own (with `files` beside it).
+    fn load_in(dir: &TempDir, body: &str, defines: &[(&str, &str)]) -> Result<Scene> {
+        let path = dir.write("scene.xml", &format!("{HEAD}{body}\n</scene>\n"));
+        let defines: Vec<(String, String)> = defines
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect();
+        load(&path, &defines)
+    }
+
+    fn load_body(body: &str) -> Result<Scene> {
+        load_in(&TempDir::new("mitsuba"), body, &[])
+    }
+
+    /// The error of `body`, as one line.
+    fn error(body: &str) -> String {
+        match load_body(body) {
+            Ok(_) => panic!("expected an error for {body}"),
+            Err(e) => format!("{e:#}"),
+        }
+    }
+
+    /// The TOML quads of `quads` (inline tables) after the same camera and light as [`HEAD`].
+    fn toml_quads(quads: &str) -> Vec<Quad> {
+        let text = format!(
+            "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\nup = [0, 1, 0]\nvfov = 40\nresolution = [8, 8]\n\
+             [materials.m]\ndiffuse = [0.5, 0.5, 0.5]\n[materials.light]\nemission = [1, 1, 1]\n\
+             [[quad]]\norigin = [-1, 3, 1]\nedge_u = [2, 0, 0]\nedge_v = [0, 0, -2]\nmaterial = \"light\"\n{quads}"
+        );
+        let s = Scene::parse(&text, "test.toml").expect("TOML equivalent");
+        s.quads[1..].to_vec()
+    }
+
+    /// The corners of a quad, as a sorted list (so that corner order does not matter).
+    fn corners(q: &Quad) -> Vec<[i64; 3]> {
+        let mut c: Vec<[i64; 3]> = [
+            q.origin,
+            q.origin + q.edge_u,
+            q.origin + q.edge_v,
+            q.origin + q.edge_u + q.edge_v,
+        ]
+        .iter()
+        .map(|p| p.to_array().map(|x| (x * 1e4).round() as i64))
+        .collect();
+        c.sort();
+        c
+    }
+
+    /// Same corners and same front normal.
+    fn assert_same_quads(got: &[Quad], want: &[Quad]) {
+        assert_eq!(got.len(), want.len(), "{got:?}\nvs\n{want:?}");
+        for w in want {
+            assert!(
+                got.iter()
+                    .any(|g| corners(g) == corners(w) && g.normal().distance(w.normal()) < 1e-5),
+                "no quad like {w:?} (normal {}) among {got:?}",
+                w.normal()
+            );
+        }
+    }
+
+    fn rectangle(transform: &str, extra: &str) -> Vec<Quad> {
+        let s = load_body(&format!(
+            r#"<shape type="rectangle"><transform name="to_world">{transform}</transform>{extra}
+               <bsdf type="twosided"><bsdf type="diffuse"/></bsdf></shape>"#
+        ))
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        s.quads[1..].to_vec()
+    }
+
+    #[test]
+    fn each_transform_of_a_rectangle_matches_its_toml_quad() {
+        let cases: &[(&str, &str)] = &[
+            // [-1, 1]^2 at z = 0, normal +z.
+            (
+                "",
+                "origin = [-1, -1, 0]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]",
+            ),
+            (
+                r#"<translate x="1" y="2" z="3"/>"#,
+                "origin = [0, 1, 3]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]",
+            ),
+            (
+                r#"<translate value="1 2 3"/>"#,
+                "origin = [0, 1, 3]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]",
+            ),
+            (
+                r#"<scale x="2" y="3"/>"#,
+                "origin = [-2, -3, 0]\nedge_u = [4, 0, 0]\nedge_v = [0, 6, 0]",
+            ),
+            (
+                r#"<scale value="0.5"/>"#,
+                "origin = [-0.5, -0.5, 0]\nedge_u = [1, 0, 0]\nedge_v = [0, 1, 0]",
+            ),
+            // Right-handed: +90 degrees about y takes +z to +x.
+            (
+                r#"<rotate y="1" angle="90"/>"#,
+                "origin = [0, -1, 1]\nedge_u = [0, 0, -2]\nedge_v = [0, 2, 0]",
+            ),
+            // -90 degrees about x takes +z to +y (the reference's floor).
+            (
+                r#"<rotate value="1, 0, 0" angle="-90"/>"#,
+                "origin = [-1, 0, 1]\nedge_u = [2, 0, 0]\nedge_v = [0, 0, -2]",
+            ),
+            // Document order: scale first, then translate (the centre moves by 1)...
+            (
+                r#"<scale value="2"/><translate x="1"/>"#,
+                "origin = [-1, -2, 0]\nedge_u = [4, 0, 0]\nedge_v = [0, 4, 0]",
+            ),
+            // ...against translate first, then scale (the translation is scaled too).
+            (
+                r#"<translate x="1"/><scale value="2"/>"#,
+                "origin = [0, -2, 0]\nedge_u = [4, 0, 0]\nedge_v = [0, 4, 0]",
+            ),
+            (
+                r#"<matrix value="2 0 0 1  0 2 0 0  0 0 2 0  0 0 0 1"/>"#,
+                "origin = [-1, -2, 0]\nedge_u = [4, 0, 0]\nedge_v = [0, 4, 0]",
+            ),
+            // lookat: z to the target direction (+x), y up, x = up x dir = -z.
+            (
+                r#"<lookat origin="0, 0, 0" target="1, 0, 0" up="0, 1, 0"/>"#,
+                "origin = [0, -1, 1]\nedge_u = [0, 0, -2]\nedge_v = [0, 2, 0]",
+            ),
+            // A mirror keeps the normal Mitsuba computes with the inverse transpose: +z.
+            (
+                r#"<scale x="-1"/>"#,
+                "origin = [-1, -1, 0]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]",
+            ),
+            (
+                r#"<scale z="-1"/>"#,
+                "origin = [-1, -1, 0]\nedge_u = [0, 2, 0]\nedge_v = [2, 0, 0]",
+            ),
+        ];
+        for (transform, quad) in cases {
+            let want = toml_quads(&format!("[[quad]]\n{quad}\nmaterial = \"m\"\n"));
+            assert_same_quads(&rectangle(transform, ""), &want);
+        }
+        // flip_normals turns the normal to -z.
+        let want = toml_quads("[[quad]]\norigin = [-1, -1, 0]\nedge_u = [0, 2, 0]\nedge_v = [2, 0, 0]\nmaterial = \"m\"\n");
+        assert_same_quads(
+            &rectangle("", r#"<boolean name="flip_normals" value="true"/>"#),
+            &want,
+        );
+    }
+
+    #[test]
+    fn cube_is_six_outward_quads() {
+        let box_toml = |inward: bool| {
+            let mut s = String::new();
+            for (o, u, v) in [
+                ("[1, -1, -1]", "[0, 2, 0]", "[0, 0, 2]"),
+                ("[-1, -1, -1]", "[0, 0, 2]", "[0, 2, 0]"),
+                ("[-1, 1, -1]", "[0, 0, 2]", "[2, 0, 0]"),
+                ("[-1, -1, -1]", "[2, 0, 0]", "[0, 0, 2]"),
+                ("[-1, -1, 1]", "[2, 0, 0]", "[0, 2, 0]"),
+                ("[-1, -1, -1]", "[0, 2, 0]", "[2, 0, 0]"),
+            ] {
+                let (u, v) = if inward { (v, u) } else { (u, v) };
+                s += &format!(
+                    "[[quad]]\norigin = {o}\nedge_u = {u}\nedge_v = {v}\nmaterial = \"m\"\n"
+                );
+            }
+            toml_quads(&s)
+        };
+        let cube = |extra: &str| {
+            load_body(&format!(
+                r#"<shape type="cube">{extra}<bsdf type="diffuse"/></shape>"#
+            ))
+            .unwrap()
+            .quads[1..]
+                .to_vec()
+        };
+        let outward = cube("");
+        assert_same_quads(&outward, &box_toml(false));
+        for q in &outward {
+            // Outward: the normal points away from the centre.
+            assert!(q.normal().dot(q.origin + 0.5 * (q.edge_u + q.edge_v)) > 0.99);
+        }
+        assert_same_quads(
+            &cube(r#"<boolean name="flip_normals" value="true"/>"#),
+            &box_toml(true),
+        );
+        // A mirroring transform keeps them outward (Mitsuba flips the winding of a mirrored mesh).
+        let mirrored = cube(r#"<transform name="to_world"><scale x="-1"/></transform>"#);
+        assert_same_quads(&mirrored, &box_toml(false));
+    }
+
+    #[test]
+    fn disk_is_an_area_exact_fan_facing_z() {
+        let s = load_body(
+            r#"<shape type="disk"><transform name="to_world"><scale value="0.5"/><translate z="1"/></transform>
+               <bsdf type="diffuse"/><emitter type="area"><rgb name="radiance" value="2"/></emitter></shape>"#,
+        )
+        .unwrap();
+        let m = &s.meshes[0];
+        assert_eq!(m.indices.len(), DISK_SEGMENTS as usize);
+        let area: f64 = m.triangles().map(|t| f64::from(t.area())).sum();
+        let exact = std::f64::consts::PI * 0.25;
+        assert!((area / exact - 1.0).abs() < 1e-6, "area {area} vs {exact}");
+        for t in m.triangles() {
+            assert!(t.normal().distance(Vec3::Z) < 1e-5);
+            assert!(t.p.iter().all(|p| (p.z - 1.0).abs() < 1e-6));
+        }
+        // Every rim vertex 5.0e-5 outside the radius 0.5 (relative: (2 pi / n)^2 / 12), the centre
+        // at the centre.
+        for p in &m.positions {
+            let r = p.truncate().length();
+            assert!(r < 1e-6 || (r / 0.5 - 1.0 - 5.02e-5).abs() < 1e-6, "{p}");
+        }
+        assert_eq!(s.emitting_triangles().len(), DISK_SEGMENTS as usize);
+        let flipped = load_body(r#"<shape type="disk"><boolean name="flip_normals" value="true"/><bsdf type="diffuse"/></shape>"#).unwrap();
+        assert!(flipped.meshes[0]
+            .triangles()
+            .all(|t| t.normal().distance(Vec3::NEG_Z) < 1e-5));
+    }
+
+    #[test]
+    fn sphere_from_center_radius_or_to_world_matches_toml() {
+        let want = Sphere {
+            center: Vec3::new(1.0, 2.0, 3.0),
+            radius: 0.5,
+            material: 1,
+        };
+        for body in [
+            r#"<point name="center" x="1" y="2" z="3"/><float name="radius" value="0.5"/>"#,
+            r#"<point name="center" value="1, 2, 3"/><float name="radius" value="0.5"/>"#,
+            r#"<transform name="to_world"><scale value="0.5"/><translate x="1" y="2" z="3"/></transform>"#,
+            // Both: centre and radius first, then to_world.
+            r#"<float name="radius" value="0.25"/><transform name="to_world"><scale value="2"/><translate x="1" y="2" z="3"/></transform>"#,
+        ] {
+            let s = load_body(&format!(
+                r#"<shape type="sphere">{body}<bsdf type="diffuse"/></shape>"#
+            ))
+            .unwrap();
+            let got = s.spheres[0];
+            assert!(
+                got.center.distance(want.center) < 1e-6 && (got.radius - want.radius).abs() < 1e-6,
+                "{body}: {got:?}"
+            );
+        }
+        let e = error(
+            r#"<shape type="sphere"><transform name="to_world"><scale x="2"/></transform></shape>"#,
+        );
+        assert!(
+            e.contains("<shape type=\"sphere\">") && e.contains("non-uniformly"),
+            "{e}"
+        );
+    }
+
+    /// A unit square at z = 0 as two triangles facing +z, as an OBJ and an ASCII PLY (one quad face).
+    fn write_square_meshes(dir: &TempDir) {
+        dir.write("sq.obj", "mtllib ignored.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nusemtl nothing\nf 1 2 3 4\n");
+        dir.write(
+            "sq.ply",
+            "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+             element face 1\nproperty list uchar int vertex_indices\nend_header\n-1 -1 0\n1 -1 0\n1 1 0\n-1 1 0\n4 0 1 2 3\n",
+        );
+    }
+
+    #[test]
+    fn obj_and_ply_match_the_rectangle_with_to_world_and_flip() {
+        let dir = TempDir::new("mitsuba-mesh");
+        write_square_meshes(&dir);
+        for kind in ["obj", "ply"] {
+            for (flip, normal) in [("false", Vec3::Y), ("true", Vec3::NEG_Y)] {
+                let s = load_in(
+                    &dir,
+                    &format!(
+                        r#"<shape type="{kind}"><string name="filename" value="sq.{kind}"/>
+                           <boolean name="flip_normals" value="{flip}"/>
+                           <transform name="to_world"><rotate x="1" angle="-90"/><translate y="1"/></transform>
+                           <bsdf type="twosided"><bsdf type="diffuse"/></bsdf></shape>"#
+                    ),
+                    &[],
+                )
+                .unwrap_or_else(|e| panic!("{kind}: {e:#}"));
+                let m = &s.meshes[0];
+                assert_eq!(m.indices.len(), 2, "{kind}");
+                let area: f32 = m.triangles().map(|t| t.area()).sum();
+                assert!((area - 4.0).abs() < 1e-5, "{kind}: area {area}");
+                for t in m.triangles() {
+                    assert!(
+                        t.normal().distance(normal) < 1e-5,
+                        "{kind} flip {flip}: {}",
+                        t.normal()
+                    );
+                    assert!(t.p.iter().all(|p| (p.y - 1.0).abs() < 1e-6));
+                }
+                // The bsdf is the XML's: the MTL is never read.
+                assert_eq!(
+                    s.materials[m.materials[0] as usize].surface,
+                    Surface::Diffuse {
+                        albedo: Vec3::splat(0.5)
+                    }
+                );
+            }
+        }
+        let e = format!(
+            "{:#}",
+            load_in(
+                &dir,
+                r#"<shape type="ply"><string name="filename" value="none.ply"/></shape>"#,
+                &[]
+            )
+            .unwrap_err()
+        );
+        assert!(
+            e.contains("<shape type=\"ply\">") && e.contains("none.ply: cannot read PLY file"),
+            "{e}"
+        );
+    }
+
+    fn camera(sensor_body: &str, film: &str) -> Result<Camera> {
+        let dir = TempDir::new("mitsuba-cam");
+        let path = dir.write(
+            "cam.xml",
+            &format!(
+                r#"<scene version="3.0.0"><sensor type="perspective">{sensor_body}
+                   <film type="hdrfilm">{film}<rfilter type="box"/></film></sensor>
+                   <shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape></scene>"#
+            ),
+        );
+        load(&path, &[]).map(|s| s.camera)
+    }
+
+    #[test]
+    fn camera_lookat_and_fov_axes_match_the_toml_camera() {
+        let look = r#"<transform name="to_world"><lookat origin="0, 1, 2.9" target="0, 0.8, 0" up="0, 1, 0"/></transform>"#;
+        let c = camera(
+            &format!(r#"<float name="fov" value="50"/><string name="fov_axis" value="y"/>{look}"#),
+            "",
+        )
+        .unwrap();
+        assert_eq!((c.width, c.height), (768, 576));
+        assert!((c.vfov_deg - 50.0).abs() < 1e-4, "{c:?}");
+        assert!(c.eye.distance(Vec3::new(0.0, 1.0, 2.9)) < 1e-6);
+        let dir = (c.look_at - c.eye).normalize();
+        assert!(dir.distance(Vec3::new(0.0, -0.2, -2.9).normalize()) < 1e-6);
+        // up is orthogonalised by Mitsuba's lookat; it spans the same plane with dir as (0, 1, 0).
+        assert!(
+            c.up.cross(dir)
+                .normalize()
+                .distance(Vec3::Y.cross(dir).normalize())
+                < 1e-6
+        );
+
+        // Horizontal fov 60 on a 2:1 image: vertical 2 atan(tan 30 / 2).
+        let want = 2.0 * ((30f64.to_radians().tan()) / 2.0).atan().to_degrees();
+        let film = r#"<integer name="width" value="200"/><integer name="height" value="100"/>"#;
+        for (axis, fov) in [
+            ("x", 60.0),
+            ("larger", 60.0),
+            ("y", want),
+            ("smaller", want),
+            (
+                "diagonal",
+                2.0 * (30f64.to_radians().tan() * (1.0 + 0.25f64).sqrt())
+                    .atan()
+                    .to_degrees(),
+            ),
+        ] {
+            let c = camera(&format!(r#"<float name="fov" value="{fov}"/><string name="fov_axis" value="{axis}"/>{look}"#), film).unwrap();
+            assert!(
+                (f64::from(c.vfov_deg) - want).abs() < 1e-4,
+                "{axis}: {} vs {want}",
+                c.vfov_deg
+            );
+        }
+        // focal_length: 50mm by default, on the diagonal of a 36 x 24 mm frame.
+        let c = camera(look, film).unwrap();
+        let diag = 2.0 * (36f64.hypot(24.0) / 100.0).atan();
+        let half_w = (0.5 * diag).tan() / (1.0 + 0.25f64).sqrt();
+        assert!((f64::from(c.vfov_deg) - (2.0 * (half_w / 2.0).atan()).to_degrees()).abs() < 1e-4);
+
+        // The same camera by rotate + translate: looking down -z from (0, 0, 3) is a 180 degree turn.
+        let c = camera(r#"<float name="fov" value="40"/><transform name="to_world"><rotate y="1" angle="180"/><translate z="3"/></transform>"#, "").unwrap();
+        assert!(
+            c.eye.distance(Vec3::new(0.0, 0.0, 3.0)) < 1e-6
+                && (c.look_at - c.eye).normalize().distance(Vec3::NEG_Z) < 1e-6
+        );
+        assert!(c.up.distance(Vec3::Y) < 1e-6);
+
+        let e = format!("{:#}", camera(r#"<float name="fov" value="40"/><transform name="to_world"><scale x="-1"/></transform>"#, "").unwrap_err());
+        assert!(
+            e.contains("mirrors the image") && e.contains("<sensor type=\"perspective\">"),
+            "{e}"
+        );
+        let e = format!("{:#}", camera(r#"<float name="fov" value="40"/><transform name="to_world"><scale value="2"/></transform>"#, "").unwrap_err());
+        assert!(e.contains("scale"), "{e}");
+    }
+
+    #[test]
+    fn materials_conductor_dielectric_and_emitter() {
+        let s = load_body(
+            r#"<shape type="sphere"><bsdf type="conductor"><rgb name="specular_reflectance" value="0.9, 0.8, 0.7"/></bsdf></shape>
+               <shape type="sphere"><bsdf type="dielectric"><float name="int_ior" value="1.5"/><float name="ext_ior" value="1.25"/></bsdf></shape>
+               <shape type="sphere"><bsdf type="dielectric"><string name="int_ior" value="water"/><string name="ext_ior" value="vacuum"/></bsdf></shape>
+               <shape type="sphere"><bsdf type="dielectric"/></shape>"#,
+        )
+        .unwrap();
+        let surface = |i: usize| s.materials[s.spheres[i].material as usize].surface;
+        assert_eq!(
+            surface(0),
+            Surface::Mirror {
+                reflectance: Vec3::new(0.9, 0.8, 0.7)
+            }
+        );
+        assert_eq!(surface(1), Surface::Glass { ior: 1.2 });
+        assert_eq!(surface(2), Surface::Glass { ior: 1.333 });
+        // Mitsuba's defaults: bk7 in air.
+        assert_eq!(
+            surface(3),
+            Surface::Glass {
+                ior: (1.5046f64 / 1.000277) as f32
+            }
+        );
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        // The light of HEAD: a black emitter with radiance 1, a quad facing -y.
+        let lamp = &s.materials[s.quads[0].material as usize];
+        assert_eq!(
+            (lamp.surface, lamp.emission),
+            (Surface::Diffuse { albedo: Vec3::ZERO }, Vec3::ONE)
+        );
+        assert!(s.quads[0].normal().distance(Vec3::NEG_Y) < 1e-6);
+
+        let s = load_body(r#"<shape type="sphere"><bsdf type="roughconductor"><float name="alpha" value="0.1"/></bsdf></shape>"#).unwrap();
+        assert_eq!(
+            s.materials[s.spheres[0].material as usize].surface,
+            Surface::Mirror {
+                reflectance: Vec3::ONE
+            }
+        );
+        assert!(
+            s.warnings.len() == 1
+                && s.warnings[0].contains("rough conductor rendered as a smooth mirror"),
+            "{:?}",
+            s.warnings
+        );
+        // One-sided diffuse on an open shape: warned; on a closed one or twosided: not.
+        let s = load_body(r#"<shape type="rectangle"><bsdf type="diffuse"/></shape><shape type="cube"><bsdf type="diffuse"/></shape>"#).unwrap();
+        assert!(
+            s.warnings.len() == 1 && s.warnings[0].contains("one-sided in Mitsuba"),
+            "{:?}",
+            s.warnings
+        );
+        // A shape without a bsdf is diffuse 0.5, as in Mitsuba.
+        let s = load_body(r#"<shape type="cube"/>"#).unwrap();
+        assert_eq!(
+            s.materials[s.quads[1].material as usize].surface,
+            Surface::Diffuse {
+                albedo: Vec3::splat(0.5)
+            }
+        );
+    }
+
+    #[test]
+    fn refused_and_malformed_input_is_located() {
+        // (body, the element named, the line in the file (HEAD has 11 lines), what is said)
+        let cases: &[(&str, &str, usize, &str)] = &[
+            (
+                r#"<bsdf type="diffuse" id="a"/><bsdf type="conductor" id="a"/>"#,
+                r#"<bsdf type="conductor" id="a">"#,
+                12,
+                "the id \"a\" is already taken",
+            ),
+            (
+                r#"<shape type="cylinder"/>"#,
+                r#"<shape type="cylinder">"#,
+                12,
+                "unsupported shape",
+            ),
+            (
+                r#"<shape type="cube"><ref id="nowhere"/></shape>"#,
+                r#"<ref id="nowhere">"#,
+                12,
+                "no bsdf with id \"nowhere\"",
+            ),
+            (
+                r#"<shape type="cube"><float name="radius" value="$r"/></shape>"#,
+                r#"<float name="radius">"#,
+                12,
+                "undefined parameter $r",
+            ),
+            (
+                "\n<shape type=\"cube\"><bsdf type=\"thindielectric\"/></shape>",
+                r#"<bsdf type="thindielectric">"#,
+                13,
+                "thin dielectric",
+            ),
+            (
+                r#"<shape type="cube"><bsdf type="plastic"/></shape>"#,
+                r#"<bsdf type="plastic">"#,
+                12,
+                "unsupported bsdf",
+            ),
+            (
+                r#"<shape type="cube"><bsdf type="diffuse"><texture name="reflectance" type="bitmap"/></bsdf></shape>"#,
+                r#"<texture type="bitmap" name="reflectance">"#,
+                12,
+                "textures are not supported",
+            ),
+            (
+                r#"<emitter type="envmap"/>"#,
+                r#"<emitter type="envmap">"#,
+                12,
+                "only area emitters",
+            ),
+            (
+                r#"<shape type="sphere"><emitter type="area"/></shape>"#,
+                r#"<emitter type="area">"#,
+                12,
+                "emitting sphere",
+            ),
+            (
+                r#"<shape type="cube"><float name="radiuss" value="1"/></shape>"#,
+                r#"<float name="radiuss">"#,
+                12,
+                "parameter not read",
+            ),
+            (
+                r#"<shape type="rectangle"><bsdf type="diffuse"><rgb name="reflectance" value="2, 0, 0"/></bsdf></shape>"#,
+                r#"<bsdf type="diffuse">"#,
+                12,
+                "must be in [0, 1]",
+            ),
+            (
+                r#"<shape type="cube"><bsdf type="dielectric"><float name="int_ior" value="1"/><float name="ext_ior" value="1.5"/></bsdf></shape>"#,
+                r#"<bsdf type="dielectric">"#,
+                12,
+                "int_ior 1 < ext_ior 1.5",
+            ),
+        ];
+        for (body, element, line, says) in cases {
+            let e = error(body);
+            assert!(
+                e.contains(&format!("scene.xml:{line}:")),
+                "{e} should be at line {line}"
+            );
+            assert!(e.contains(element), "{e} should name {element}");
+            assert!(e.contains(says), "{e} should say {says}");
+        }
+        // Malformed XML: roxmltree's position.
+        let e = error("<shape type=\"cube\">\n  <bsdf type=\"diffuse\">\n</shape>");
+        assert!(
+            e.contains("scene.xml:14:1: malformed XML: expected 'bsdf' tag"),
+            "{e}"
+        );
+        // Nesting past the bound is refused, not a stack overflow (found by tests/hostile_input.rs).
+        let deep = format!("{}{}", "<bsdf type=\"twosided\">".repeat(1000), "</bsdf>".repeat(1000));
+        let e = error(&deep);
+        assert!(e.contains(&format!("nested deeper than {MAX_NESTING} levels")), "{e}");
+    }
+
+    #[test]
+    fn defaults_overrides_refs_and_includes() {
+        let dir = TempDir::new("mitsuba-inc");
+        std::fs::create_dir_all(dir.0.join("sub")).unwrap();
+        // Included from sub/, it includes its sibling relative to itself.
+        dir.write(
+            "sub/materials.xml",
+            r#"<scene version="3.0.0"><include filename="more.xml"/></scene>"#,
+        );
+        dir.write("sub/more.xml", r#"<scene version="3.0.0"><bsdf type="diffuse" id="grey"><rgb name="reflectance" value="$albedo"/></bsdf></scene>"#);
+        let body = r#"<default name="albedo" value="0.25"/><default name="albedo_" value="0.75"/>
+            <include filename="sub/materials.xml"/>
+            <shape type="cube"><ref id="grey"/></shape>
+            <shape type="cube"><bsdf type="diffuse"><float name="reflectance" value="$albedo_"/></bsdf></shape>"#;
+        let albedo = |s: &Scene, i: usize| match s.materials[s.quads[i].material as usize].surface {
+            Surface::Diffuse { albedo } => albedo.x,
+            _ => panic!(),
+        };
+        let s = load_in(&dir, body, &[]).unwrap_or_else(|e| panic!("{e:#}"));
+        // $albedo_ is not $albedo followed by "_": the longer name is substituted first.
+        assert_eq!((albedo(&s, 1), albedo(&s, 7)), (0.25, 0.75));
+        assert_eq!(s.materials[s.quads[1].material as usize].name, "grey");
+        let s = load_in(&dir, body, &[("albedo", "0.5")]).unwrap();
+        assert_eq!((albedo(&s, 1), albedo(&s, 7)), (0.5, 0.75));
+        let e = format!(
+            "{:#}",
+            load_in(&dir, body, &[("albdo", "0.5")]).unwrap_err()
+        );
+        assert!(
+            e.contains("-D albdo=0.5: the scene never uses $albdo"),
+            "{e}"
+        );
+
+        // A cycle: a includes b includes a.
+        dir.write(
+            "a.xml",
+            r#"<scene version="3.0.0"><include filename="b.xml"/></scene>"#,
+        );
+        dir.write(
+            "b.xml",
+            "<scene version=\"3.0.0\">\n<include filename=\"a.xml\"/></scene>",
+        );
+        let e = format!(
+            "{:#}",
+            load_in(&dir, r#"<include filename="a.xml"/>"#, &[]).unwrap_err()
+        );
+        assert!(
+            e.contains("b.xml:2:1: <include>: include cycle: ")
+                && e.contains("a.xml -> ")
+                && e.ends_with("a.xml"),
+            "{e}"
+        );
+        let e = format!(
+            "{:#}",
+            load_in(&dir, r#"<include filename="missing.xml"/>"#, &[]).unwrap_err()
+        );
+        assert!(
+            e.contains("scene.xml:12:1: <include>: ")
+                && e.contains("missing.xml: cannot read scene file"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn parse_define_takes_name_and_value() {
+        assert_eq!(parse_define("spp=16"), Ok(("spp".into(), "16".into())));
+        assert_eq!(parse_define("v=a=b"), Ok(("v".into(), "a=b".into())));
+        assert!(parse_define("spp").is_err());
+        assert!(parse_define("$spp=1").is_err());
+    }
+}
