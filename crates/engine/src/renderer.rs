@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context as _, Result};
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
-use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers, UpdatePush};
+use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers};
 use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, Triangle};
 use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PathLimits, PhotonPush, SALT_EYE, SALT_PHOTON, SALT_PROBE};
@@ -13,6 +13,7 @@ use ppm_vk_kernels::probe::{self, ProbePush, MODE_PAPER, MODE_SCALE_FREE};
 use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers, JITTER_RANDOM};
 use ppm_vk_kernels::resolve::{self, ResolvePush};
 use ppm_vk_kernels::specialize::{self, MAX_INLINE_PRIMITIVES};
+use ppm_vk_kernels::update::{self, UpdatePush};
 use ppm_vk_kernels::{pipeline, pipeline_from, reflected};
 
 use crate::gpu_scene::GpuScene;
@@ -527,7 +528,7 @@ impl Renderer {
         let push = self.update_push();
         let hits = self.hit_buffers();
         let (profiler, k) = (&self.profiler, &self.kernels);
-        self.ctx.run(|cmd| profiler.scope(cmd, "update", || gather::record_update(&k.update, cmd, &hits, &push)))?;
+        self.ctx.run(|cmd| profiler.scope(cmd, "update", || update::record_update(&k.update, cmd, &hits, &push)))?;
         stages.extend(self.profiler.read()?);
         self.passes += 1;
         self.emitted += total as u64;
@@ -712,7 +713,7 @@ impl Renderer {
         let push = self.update_push();
         let hits = self.hit_buffers();
         let k = &self.kernels;
-        self.ctx.run(|cmd| gather::record_update(&k.update, cmd, &hits, &push))
+        self.ctx.run(|cmd| update::record_update(&k.update, cmd, &hits, &push))
     }
 
     /// Sets the emitted-photon total the resolve divides by (tests start it near 2^32 this way).

@@ -1,5 +1,5 @@
-//! Stage 4, `shaders/gather/`: per hit point, this batch's photons within R (gather.comp), then the
-//! progressive radius and flux update (update.comp, eq. 3, 6, 14).
+//! Stage 4, `shaders/gather/`: per hit point, this batch's photons within R (gather.comp); the progressive
+//! update that follows is stage 4b, [`crate::update`].
 
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
@@ -17,17 +17,6 @@ pub struct GatherPush {
     pub cone_k: f32,
 }
 push_struct!(GatherPush, GATHER);
-
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct UpdatePush {
-    pub count: u32,
-    pub alpha: f32,
-    /// `RenderParams::flux_fixed`.
-    pub flux_fixed: f32,
-    pub pad0: u32,
-}
-push_struct!(UpdatePush, UPDATE);
 
 /// Per-hit-point state the gather and update read and write.
 pub struct HitBuffers<'a> {
@@ -72,8 +61,4 @@ pub fn record_gather(
 ) -> Result<()> {
     let threads = push.count.div_ceil(k.group) as u64;
     k.pipeline.dispatch(cmd, &grid_reader_bindings(params, hits, grid), bytemuck::bytes_of(push), threads)
-}
-
-pub fn record_update(k: &ComputePipeline, cmd: vk::CommandBuffer, hits: &HitBuffers, push: &UpdatePush) -> Result<()> {
-    k.dispatch(cmd, &[hits.stats, hits.accum, hits.order, hits.hit_points], bytemuck::bytes_of(push), push.count as u64)
 }
