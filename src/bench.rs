@@ -166,7 +166,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         ctx.reset_memory_peak();
         reset_peak_rss();
         let mut renderer = Renderer::new(&ctx, &scene, settings)?;
-        let bvh = renderer.gpu_scene().bvh_stats.clone();
+        let bvh = renderer.bvh_stats().clone();
         if bvh.triangles > 0 && results.is_empty() {
             println!(
                 "scene: {} triangles loaded in {:.2} s; BVH built in {:.2} s ({:.2} M triangles/s), {} nodes, depth {}, {:.1} MiB",
@@ -184,10 +184,10 @@ pub fn run(args: BenchArgs) -> Result<()> {
         }
         // Memory after the warm-up and after the measured passes: nothing should grow with passes.
         let (dev_before, rss_before) = (ctx.memory_usage(), host_rss());
-        let measured: Vec<PassStats> = (0..args.passes).map(|_| renderer.pass()).collect::<Result<_>>()?;
+        let measured: Vec<PassStats> = (0..args.passes).map(|_| renderer.pass()).collect::<Result<_, _>>()?;
         let (dev_after, rss_after) = (ctx.memory_usage(), host_rss());
         renderer.resolve()?; // the first resolve compiles its pipeline
-        let resolve_ms = median((0..3).map(|_| renderer.resolve()).collect::<Result<Vec<_>>>()?);
+        let resolve_ms = median((0..3).map(|_| renderer.resolve()).collect::<Result<Vec<_>, _>>()?);
         let stage: Vec<f64> = STAGES.iter().map(|s| median(measured.iter().map(|p| p.stage_ms(s)).collect())).collect();
         let wall = median(measured.iter().map(|p| p.wall_ms).collect());
         let rate = case.photons as f64 / (wall * 1e-3) / 1e6;

@@ -10,7 +10,7 @@ use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_vk_engine::metrics::{compare, cornell_regions, Reference, Region};
 use ppm_vk_engine::report::{file_sha256, PassRecord, RunHeader, RunReport, SCHEMA};
-use ppm_vk_engine::{Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings};
+use ppm_vk_engine::{open_device, Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings};
 
 mod bench;
 mod compare;
@@ -38,8 +38,9 @@ enum Command {
 
 #[derive(Args, Clone)]
 pub struct DeviceArgs {
-    /// Device index or name substring (see `ppm-vk devices`); default: $PPM_VK_DEVICE, else a discrete GPU.
-    #[arg(long)]
+    /// Device index or name substring (see `ppm-vk devices`); default: a discrete GPU, else an integrated
+    /// one, else any (lavapipe).
+    #[arg(long, env = "PPM_VK_DEVICE")]
     pub device: Option<String>,
     /// Enable the Vulkan validation layer and fail on any message it reports.
     #[arg(long)]
@@ -48,7 +49,7 @@ pub struct DeviceArgs {
 
 impl DeviceArgs {
     pub fn open(&self) -> Result<Context> {
-        Context::new(&ContextOptions { validation: self.validate, device: self.device.clone() })
+        Ok(open_device(&ContextOptions { validation: self.validate, device: self.device.clone() })?)
     }
 }
 
@@ -296,14 +297,13 @@ fn render(args: RenderArgs) -> Result<()> {
     let started = Instant::now();
     let mut renderer = Renderer::new(&ctx, &scene, settings)?;
     let setup_s = started.elapsed().as_secs_f64();
-    let g = renderer.gpu_scene();
     eprintln!(
         "scene {}: {}x{}, {} hit-point slots, initial radius {:.5}, {} photons/pass; ray pass {:.1} ms GPU",
         scene.name,
-        g.params.width,
-        g.params.height,
-        g.slots(),
-        g.initial_radius,
+        scene.camera.width,
+        scene.camera.height,
+        renderer.hit_point_slots(),
+        renderer.initial_radius(),
         renderer.settings().photons_per_pass,
         renderer.ray_ms()
     );
@@ -414,7 +414,7 @@ fn render(args: RenderArgs) -> Result<()> {
     // Paths ended at a depth backstop are counted in every report; a share above 1e-4 of the paths traced
     // is worth a warning (a glass sphere strands about 2e-5 of them by rounding, which is not).
     if let Some(last) = history.last() {
-        let pixels = renderer.gpu_scene().pixels() as f64;
+        let pixels = scene.camera.width as f64 * scene.camera.height as f64;
         let eye_paths = pixels * (renderer.settings().slots() + renderer.settings().emission_samples).max(1) as f64 * (history.len() as f64 + 1.0);
         let photon_share = last.photon_paths_cut as f64 / last.emitted_total.max(1) as f64;
         let eye_share = last.eye_paths_cut as f64 / eye_paths;

@@ -1,9 +1,10 @@
 //! The progressive loop on the GPU: the ray pass once, then photon passes (photon -> lookup -> gather ->
 //! update), and the resolve whenever an image is wanted.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::{bail, Context as _, Result};
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
 use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers};
 use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, Triangle};
@@ -16,10 +17,36 @@ use ppm_vk_kernels::specialize::{self, MAX_INLINE_PRIMITIVES};
 use ppm_vk_kernels::update::{self, UpdatePush};
 use ppm_vk_kernels::{pipeline, pipeline_from, reflected};
 
+use crate::error::{DeviceContext as _, Error, Result};
 use crate::gpu_scene::GpuScene;
 use crate::image_io::RgbImage;
 use crate::scene::Scene;
 use crate::settings::{Mode, ProbeMode, Settings};
+
+/// Cancels [`Renderer::pass`] from another thread: clone it, give one clone to the renderer
+/// ([`Renderer::set_cancel`]) and call [`CancelToken::cancel`] on the other. The pass stops at its next
+/// dispatch boundary with [`Error::Cancelled`]; the passes completed before it stay in the estimate.
+#[derive(Clone, Debug, Default)]
+pub struct CancelToken(Arc<AtomicBool>);
+
+impl CancelToken {
+    pub fn new() -> CancelToken {
+        CancelToken::default()
+    }
+
+    pub fn cancel(&self) {
+        self.0.store(true, Ordering::Relaxed);
+    }
+
+    pub fn is_cancelled(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+
+    /// Clears a cancellation, so the renderer can go on.
+    pub fn reset(&self) {
+        self.0.store(false, Ordering::Relaxed);
+    }
+}
 
 /// What one photon pass did and what it cost.
 #[derive(Clone, Debug)]
@@ -117,6 +144,7 @@ pub struct Renderer {
     emitted: u64,
     ray_ms: f64,
     probe_report: Option<ProbeReport>,
+    cancel: CancelToken,
 }
 
 /// What the batches of photons feed their grid to.
@@ -179,8 +207,9 @@ impl Renderer {
         // Depth backstops and photons per thread that keep every loop inside the device's budget. The
         // intersection loops are counted as loops even where the specialised kernels unroll them.
         let limits = if gpu.params.num_triangles > 0 { PathLimits::with_bvh } else { PathLimits::new };
+        let budget = ctx.info().loop_budget;
         let limits = limits(
-            ctx.info().loop_budget,
+            budget,
             gpu.params.num_spheres + gpu.params.num_quads,
             // choose_emitter's binary search
             u32::BITS - gpu.params.num_lights.leading_zeros() + 1,
@@ -188,7 +217,11 @@ impl Renderer {
             settings.emission_samples,
             settings.max_photon_depth,
             settings.max_eye_depth,
-        )?;
+        )
+        .map_err(|e| {
+            let lower = "the spheres and quads (or put them in meshes), the hit points per pixel or the emission samples";
+            Error::limit(format!("{e:#}"), None, budget.unwrap_or(0) as u64, lower)
+        })?;
         gpu.params.max_photon_depth = limits.photon_depth;
         gpu.params.max_eye_depth = limits.eye_depth;
         gpu.params.photon_bvh_budget = limits.photon_bvh_budget;
@@ -198,33 +231,30 @@ impl Renderer {
         let pixels = gpu.pixels() as u64;
         let need = |what: &str, bytes: u64| -> Result<()> {
             if bytes > max_range {
-                bail!(
-                    "{what} needs {} MiB, more than this device's largest buffer ({} MiB): lower the resolution \
-                     ({}x{}) or the hit points per pixel ({})",
-                    bytes >> 20,
-                    max_range >> 20,
+                let lower = format!(
+                    "the resolution ({}x{}) or the hit points per pixel ({})",
                     gpu.params.width,
                     gpu.params.height,
                     settings.slots()
                 );
+                return Err(Error::limit(format!("{what} (bytes in one buffer)"), Some(bytes), max_range, lower));
             }
             Ok(())
         };
         need("the hit points", slots * std::mem::size_of::<HitPoint>() as u64)?;
         let triangles = gpu.bvh_triangles.len() as u64;
-        if triangles * std::mem::size_of::<Triangle>() as u64 > max_range || gpu.bvh_nodes.len() as u64 * 32 > max_range {
-            bail!(
-                "the scene's {triangles} triangles need {} MiB for their BVH, more than this device's largest \
-                 buffer ({} MiB): use meshes of at most {} triangles in all",
-                (triangles * std::mem::size_of::<Triangle>() as u64 + gpu.bvh_nodes.len() as u64 * 32) >> 20,
-                max_range >> 20,
+        let bvh_bytes = (triangles * std::mem::size_of::<Triangle>() as u64).max(gpu.bvh_nodes.len() as u64 * 32);
+        if bvh_bytes > max_range {
+            let lower = format!(
+                "the scene's {triangles} triangles (at most {} in all)",
                 max_range / std::mem::size_of::<Triangle>() as u64
             );
+            return Err(Error::limit("the BVH (bytes in one buffer)", Some(bvh_bytes), max_range, lower));
         }
         need("the hit-point statistics", slots * std::mem::size_of::<HitStats>() as u64)?;
 
         // The tracing kernels with this scene compiled in, where it is small enough (see specialize.rs).
-        let traced = |k: &reflected::KernelInfo| -> Result<ComputePipeline> {
+        let traced = |k: &reflected::KernelInfo| -> anyhow::Result<ComputePipeline> {
             let inline = gpu.spheres.len() + gpu.quads.len() <= MAX_INLINE_PRIMITIVES && gpu.params.num_triangles == 0;
             if !inline || !settings.specialize {
                 return pipeline(ctx, k);
@@ -238,20 +268,25 @@ impl Renderer {
             (Mode::Ppm, ProbeMode::Off) => 1,
             _ => gather::GROUP,
         };
-        let kernels = Kernels {
-            ray: traced(&reflected::RAY)?,
-            probe: gather::with_group(ctx, &reflected::PROBE, group)?,
-            photon: traced(&reflected::PHOTON)?,
-            lookup: Lookup::new(ctx)?,
-            gather: gather::with_group(ctx, &reflected::GATHER, group)?,
-            update: pipeline(ctx, &reflected::UPDATE)?,
-            resolve: pipeline(ctx, &reflected::RESOLVE)?,
+        let pipelines = || -> anyhow::Result<Kernels> {
+            Ok(Kernels {
+                ray: traced(&reflected::RAY)?,
+                probe: gather::with_group(ctx, &reflected::PROBE, group)?,
+                photon: traced(&reflected::PHOTON)?,
+                lookup: Lookup::new(ctx)?,
+                gather: gather::with_group(ctx, &reflected::GATHER, group)?,
+                update: pipeline(ctx, &reflected::UPDATE)?,
+                resolve: pipeline(ctx, &reflected::RESOLVE)?,
+            })
         };
+        let kernels = pipelines().device("creating the compute pipelines")?;
         let storage = |name: &str, bytes: u64| Buffer::new(ctx, name, bytes, BufferKind::Storage);
         let r2 = (gpu.initial_radius as f64).powi(2);
         let stats_init = vec![HitStats { r2, ..Default::default() }; slots as usize];
-        let mut r = Renderer {
+        let buffers = || -> anyhow::Result<Renderer> {
+            Ok(Renderer {
             probe_report: None,
+            cancel: CancelToken::new(),
             params: ctx.buffer_from("params", &[gpu.params])?,
             spheres: ctx.buffer_from("spheres", &gpu.spheres)?,
             quads: ctx.buffer_from("quads", &gpu.quads)?,
@@ -286,26 +321,28 @@ impl Renderer {
             settings,
             gpu,
             kernels,
+        })
         };
+        let mut r = buffers().device("allocating the render's buffers")?;
         drop(stats_init);
-        r.grid.set_cells(r.gpu.params.grid_mask + 1)?;
+        r.grid.set_cells(r.gpu.params.grid_mask + 1).device("setting up the render")?;
         r.ctx.run(|cmd| {
             r.accum.cmd_fill(cmd, 0);
             r.direct.cmd_fill(cmd, 0);
             r.busy.cmd_fill(cmd, 0);
             Ok(())
-        })?;
+        }).device("setting up the render")?;
         r.ray_ms = r.ray_pass(0, true)?.iter().map(|s| s.duration_ms).sum();
         r.path_counters()?;
         // The gather walks the hit points in Morton order, so neighbouring threads read the same buckets.
         // PPM's hit points never move: order them by position once, on the host. SPPM's move every pass:
         // order the pixels by their screen position, which is nearly as coherent and never changes.
         let order = match r.settings.mode {
-            Mode::Ppm => morton_order(&r.read_hit_points()?),
+            Mode::Ppm => morton_order(&r.download(&r.hit_points, r.gpu.slots(), "reading the hit points")?),
             Mode::Sppm => pixel_order(r.gpu.params.width, r.gpu.params.height),
         };
         r.active = order.len() as u32;
-        r.ctx.upload(&r.order, bytemuck::cast_slice(&order))?;
+        r.ctx.upload(&r.order, bytemuck::cast_slice(&order)).device("setting up the render")?;
         if r.settings.probe != ProbeMode::Off {
             r.probe_pass()?;
         }
@@ -315,7 +352,7 @@ impl Renderer {
     /// The ray kernel's dispatches for eye pass `eye_pass` (the CPU reference, `reference::eye_pass`,
     /// takes the same): the first traces the hit points (with `trace_hits`) and as many emission samples as
     /// the loop budget lets one thread take (`PathLimits::emission_per_dispatch`), the others the rest.
-    pub fn ray_pushes(&self, eye_pass: u32, trace_hits: bool) -> Vec<RayPush> {
+    fn eye_pushes(&self, eye_pass: u32, trace_hits: bool) -> Vec<RayPush> {
         let jitter = match self.settings.mode {
             Mode::Ppm => [0.5, 0.5],
             Mode::Sppm => JITTER_RANDOM,
@@ -360,7 +397,7 @@ impl Renderer {
     /// a random point of each pixel; with `trace_hits` false only the emission samples (PPM's later passes).
     fn ray_pass(&mut self, eye_pass: u32, trace_hits: bool) -> Result<Vec<ScopeTiming>> {
         self.profiler.reset();
-        let pushes = self.ray_pushes(eye_pass, trace_hits);
+        let pushes = self.eye_pushes(eye_pass, trace_hits);
         let pixels = self.gpu.pixels();
         let scene = self.scene_buffers();
         let (profiler, k) = (&self.profiler, &self.kernels);
@@ -375,13 +412,14 @@ impl Renderer {
             })?;
             barrier(&self.ctx, cmd);
             Ok(())
-        })?;
-        self.profiler.read()
+        })
+        .device("the eye pass")?;
+        self.profiler.read().device("the eye pass")
     }
 
     /// Records photon tracing, the grid build and what uses the grid (the gather, or the probe's first
     /// phase) for one batch of photons `first..first+count` (global indices).
-    fn record_batch(&self, cmd: vk::CommandBuffer, first: u64, count: u32, log_index: u32, use_: GridUse) -> Result<()> {
+    fn record_batch(&self, cmd: vk::CommandBuffer, first: u64, count: u32, log_index: u32, use_: GridUse) -> anyhow::Result<()> {
         let ctx = &self.ctx;
         let scene = self.scene_buffers();
         let hits = self.hit_buffers();
@@ -436,7 +474,8 @@ impl Renderer {
         loop {
             let batches = total.div_ceil(self.batch);
             if batches > MAX_BATCHES {
-                bail!("a photon pass needs more than {MAX_BATCHES} batches: the scene leaves too many records per photon");
+                let what = "photon batches in one pass (the scene leaves too many records per photon)";
+                return Err(Error::limit(what, Some(batches as u64), MAX_BATCHES as u64, "the photons per pass"));
             }
             self.profiler.reset();
             let batch = self.batch;
@@ -446,34 +485,32 @@ impl Renderer {
                     self.record_batch(cmd, first + start as u64, batch.min(total - start), b, use_)?;
                 }
                 Ok(())
-            })?;
-            let log: Vec<u32> = self.ctx.download_prefix(&self.batch_log, batches as usize)?;
+            }).device("a photon pass")?;
+            let log: Vec<u32> = self.ctx.download_prefix(&self.batch_log, batches as usize).device("a photon pass")?;
             self.check_lookups()?;
             if log.iter().all(|&n| n as u64 <= capacity) {
-                return Ok((self.profiler.read()?, log.iter().map(|&n| n as u64).sum(), batches));
+                return Ok((self.profiler.read().device("a photon pass")?, log.iter().map(|&n| n as u64).sum(), batches));
             }
             if self.batch == 1 {
-                bail!("one photon left more records than the record buffer holds ({capacity})");
+                return Err(Error::limit("the records one photon left", None, capacity, "the photon depth (max_photon_depth)"));
             }
             self.batch = self.batch.div_ceil(2);
             self.ctx.run(|cmd| {
                 self.accum.cmd_fill(cmd, 0);
                 Ok(())
-            })?;
+            }).device("a photon pass")?;
         }
     }
 
     /// Fails if a gather or probe lookup may have stopped early: lavapipe ends every loop of a SIMD group
     /// after 65535 iterations in all, and a cut lookup would silently lose photons.
     fn check_lookups(&self) -> Result<()> {
-        let status: Vec<u32> = self.ctx.download_prefix(&self.grid.status, 1)?;
+        let status: Vec<u32> = self.ctx.download_prefix(&self.grid.status, 1).device("reading the lookup status")?;
         if status[0] != 0 {
-            bail!(
-                "a photon lookup reached the device's limit on loop iterations (lavapipe: 65535 per SIMD \
-                 group) and may have been cut short: too many photons in the grid cells one subgroup reads; \
-                 lower --photons-per-pass (now {})",
-                self.settings.photons_per_pass
-            );
+            let what = "a photon lookup may have been cut short at the device's limit on loop iterations per SIMD \
+                        group (too many photons in the grid cells one subgroup reads)";
+            let lower = format!("the photons per pass (now {})", self.settings.photons_per_pass);
+            return Err(Error::limit(what, None, self.ctx.info().loop_budget.unwrap_or(0) as u64, lower));
         }
         Ok(())
     }
@@ -486,10 +523,11 @@ impl Renderer {
         let push = self.probe_push(1);
         let hits = self.hit_buffers();
         let (profiler, k, params, grid) = (&self.profiler, &self.kernels, &self.params, &self.grid);
-        self.ctx.run(|cmd| profiler.scope(cmd, "probe", || probe::record(&k.probe, cmd, params, &hits, grid, &push)))?;
-        stages.extend(self.profiler.read()?);
+        self.ctx.run(|cmd| profiler.scope(cmd, "probe", || probe::record(&k.probe, cmd, params, &hits, grid, &push))).device("the probe pass")?;
+        stages.extend(self.profiler.read().device("the probe pass")?);
         let gpu_ms = stages.iter().map(|s| s.duration_ms).sum();
-        let (stats, hits) = (self.read_stats()?, self.read_hit_points()?);
+        let stats: Vec<HitStats> = self.download(&self.stats, self.gpu.slots(), "reading the probe's radii")?;
+        let hits: Vec<HitPoint> = self.download(&self.hit_points, self.gpu.slots(), "reading the hit points")?;
         self.probe_report = Some(ProbeReport::new(&stats, &hits, self.gpu.initial_radius, photons, gpu_ms));
         // Cells twice the largest radius the probe left, so lookups stay within 2x2x2 cells.
         let r2_max = stats.iter().zip(&hits).filter(|(_, h)| h.pixel != u32::MAX).map(|(s, _)| s.r2).fold(0f64, f64::max);
@@ -497,18 +535,22 @@ impl Renderer {
         if let Some(c) = self.settings.grid_cell {
             // A set cell size must keep lookups under 1024 cells a side (grid_key in grid.glsl).
             if cell > 512.0 * c {
-                bail!("grid cell {c} is under 1/512 of twice the largest radius after the probe ({cell})");
+                return Err(Error::Settings { field: "grid_cell", message: format!("{c} is under 1/512 of twice the largest radius after the probe ({cell})") });
             }
         } else if cell > self.gpu.params.cell_size {
             self.gpu.set_grid_cell(cell, self.gpu.params.photon_capacity);
-            self.grid.set_cells(self.gpu.params.grid_mask + 1)?;
-            self.ctx.upload(&self.params, bytemuck::bytes_of(&self.gpu.params))?;
+            self.grid.set_cells(self.gpu.params.grid_mask + 1).device("the probe pass")?;
+            self.ctx.upload(&self.params, bytemuck::bytes_of(&self.gpu.params)).device("the probe pass")?;
         }
         Ok(())
     }
 
     /// One photon pass: `photons_per_pass` photons traced and gathered, then the progressive update.
+    /// Returns [`Error::Cancelled`] if the renderer's [`CancelToken`] is set before the pass or between
+    /// its submissions (the eye pass, the photon batches, the update); a cancelled pass leaves the
+    /// estimate as the passes before it left it.
     pub fn pass(&mut self) -> Result<PassStats> {
+        self.check_cancel()?;
         let start = Instant::now();
         let total = self.settings.photons_per_pass;
         // SPPM traces new hit points before every photon pass but the first, which uses the eye pass the
@@ -521,15 +563,21 @@ impl Renderer {
             Mode::Ppm if self.settings.emission_samples > 0 => stages = self.ray_pass(self.passes as u32 + 1, false)?,
             _ => {}
         }
+        self.check_cancel()?;
         let (batch_stages, records, batches) = self.run_batches(self.emitted, total, GridUse::Gather)?;
         stages.extend(batch_stages);
+        if self.cancel.is_cancelled() {
+            // The batches' sums wait in the pass accumulators for the update: drop them.
+            self.ctx.run(|cmd| Ok(self.accum.cmd_fill(cmd, 0))).device("cancelling the photon pass")?;
+            return Err(Error::Cancelled);
+        }
         // The update in its own submission, so an overflowed try above never touches the statistics.
         self.profiler.reset();
         let push = self.update_push();
         let hits = self.hit_buffers();
         let (profiler, k) = (&self.profiler, &self.kernels);
-        self.ctx.run(|cmd| profiler.scope(cmd, "update", || update::record_update(&k.update, cmd, &hits, &push)))?;
-        stages.extend(self.profiler.read()?);
+        self.ctx.run(|cmd| profiler.scope(cmd, "update", || update::record_update(&k.update, cmd, &hits, &push))).device("the photon pass")?;
+        stages.extend(self.profiler.read().device("the photon pass")?);
         self.passes += 1;
         self.emitted += total as u64;
         let cut = self.path_counters()?;
@@ -546,6 +594,23 @@ impl Renderer {
         })
     }
 
+    /// Makes `token` the one [`Renderer::pass`] checks (the renderer starts with one of its own).
+    pub fn set_cancel(&mut self, token: CancelToken) {
+        self.cancel = token;
+    }
+
+    /// The token [`Renderer::pass`] checks: cancel a clone of it from another thread.
+    pub fn cancel_token(&self) -> CancelToken {
+        self.cancel.clone()
+    }
+
+    fn check_cancel(&self) -> Result<()> {
+        match self.cancel.is_cancelled() {
+            true => Err(Error::Cancelled),
+            false => Ok(()),
+        }
+    }
+
     /// Resolves the current estimate into an image buffer on the device (eq. 1-2) and returns its GPU time.
     pub fn resolve(&mut self) -> Result<f64> {
         self.profiler.reset();
@@ -557,24 +622,35 @@ impl Renderer {
             profiler.scope(cmd, "resolve", || resolve::record(&k.resolve, cmd, params, stats, direct, image, pixels, &push))?;
             barrier(&self.ctx, cmd);
             Ok(())
-        })?;
-        Ok(self.profiler.read()?.iter().map(|s| s.duration_ms).sum())
+        }).device("the resolve")?;
+        Ok(self.profiler.read().device("the resolve")?.iter().map(|s| s.duration_ms).sum())
     }
 
     /// The current image (resolves, then reads it back).
     pub fn image(&mut self) -> Result<RgbImage> {
         self.resolve()?;
-        let rgba: Vec<[f32; 4]> = self.ctx.download(&self.image).context("reading the image back")?;
+        let rgba: Vec<[f32; 4]> = self.ctx.download(&self.image).device("reading the image back")?;
         RgbImage::from_rgba(self.gpu.params.width, self.gpu.params.height, &rgba[..self.gpu.pixels() as usize])
+            .device("reading the image back")
     }
 
     pub fn settings(&self) -> &Settings {
         &self.settings
     }
 
-    /// The flattened scene and render constants the kernels use.
-    pub fn gpu_scene(&self) -> &GpuScene {
-        &self.gpu
+    /// What the BVH build over the scene's triangles made (all zero without triangles).
+    pub fn bvh_stats(&self) -> &crate::BvhStats {
+        &self.gpu.bvh_stats
+    }
+
+    /// Hit-point slots: pixels times hit points per pixel.
+    pub fn hit_point_slots(&self) -> u32 {
+        self.gpu.slots()
+    }
+
+    /// The starting radius of every hit point before the probe (eq. 8, or `Settings::initial_radius`).
+    pub fn initial_radius(&self) -> f32 {
+        self.gpu.initial_radius
     }
 
     pub fn context(&self) -> &Context {
@@ -615,19 +691,32 @@ impl Renderer {
     /// Fails if a BVH traversal ran out of the device's loop budget: its hit, and so the image, would be
     /// wrong.
     pub fn path_counters(&self) -> Result<PathCounters> {
-        let c: Vec<PathCounters> = self.ctx.download_prefix(&self.cut, 1)?;
+        let c: Vec<PathCounters> = self.ctx.download_prefix(&self.cut, 1).device("reading the path counters")?;
         if c[0].traversal_cut > 0 {
-            bail!(
-                "{} ray(s) through the triangle BVH reached the device's limit on loop iterations (lavapipe: \
-                 65535 per SIMD group; this render leaves photon threads {} and eye threads {} traversal \
-                 steps) and were stopped: the scene's triangles overlap so much that a ray visits most of \
-                 them (degenerate or duplicated geometry?)",
-                c[0].traversal_cut,
-                self.limits.photon_bvh_budget,
-                self.limits.eye_bvh_budget
+            let what = format!(
+                "{} ray(s) through the triangle BVH were stopped at the device's limit on loop iterations per \
+                 SIMD group (this render leaves photon threads {} and eye threads {} traversal steps)",
+                c[0].traversal_cut, self.limits.photon_bvh_budget, self.limits.eye_bvh_budget
             );
+            let lower = "the overlap of the scene's triangles (degenerate or duplicated geometry?)";
+            return Err(Error::limit(what, None, self.ctx.info().loop_budget.unwrap_or(0) as u64, lower));
         }
         Ok(c[0])
+    }
+
+    /// A device buffer's first `count` records (waits for the device).
+    fn download<T: bytemuck::Pod>(&self, buffer: &Buffer, count: u32, what: &str) -> Result<Vec<T>> {
+        self.ctx.download_prefix(buffer, count as usize).device(what)
+    }
+}
+
+/// Hooks into device state for the tests (feature `test-hooks`): read-backs, overwrites and single
+/// stages. Each waits for the device.
+#[cfg(feature = "test-hooks")]
+impl Renderer {
+    /// The flattened scene and render constants the kernels use.
+    pub fn gpu_scene(&self) -> &GpuScene {
+        &self.gpu
     }
 
     /// Photons per batch the passes currently use.
@@ -635,81 +724,84 @@ impl Renderer {
         self.batch
     }
 
-    // Read-backs of device state, for tests and tools. Each waits for the device.
+    /// The ray kernel's dispatches for eye pass `eye_pass` (see `eye_pushes`).
+    pub fn ray_pushes(&self, eye_pass: u32, trace_hits: bool) -> Vec<RayPush> {
+        self.eye_pushes(eye_pass, trace_hits)
+    }
 
-    pub fn read_hit_points(&self) -> Result<Vec<HitPoint>> {
+    pub fn read_hit_points(&self) -> anyhow::Result<Vec<HitPoint>> {
         self.ctx.download_prefix(&self.hit_points, self.gpu.slots() as usize)
     }
 
-    pub fn read_stats(&self) -> Result<Vec<HitStats>> {
+    pub fn read_stats(&self) -> anyhow::Result<Vec<HitStats>> {
         self.ctx.download_prefix(&self.stats, self.gpu.slots() as usize)
     }
 
-    pub fn read_accum(&self) -> Result<Vec<PassAccum>> {
+    pub fn read_accum(&self) -> anyhow::Result<Vec<PassAccum>> {
         self.ctx.download_prefix(&self.accum, self.gpu.slots() as usize)
     }
 
     /// Per pixel, 1 where the pilot eye pass marked it for all its emission samples.
-    pub fn read_busy(&self) -> Result<Vec<u32>> {
+    pub fn read_busy(&self) -> anyhow::Result<Vec<u32>> {
         self.ctx.download_prefix(&self.busy, self.gpu.pixels() as usize)
     }
 
     /// Per pixel: the emission samples' sum (rgb) and count (w).
-    pub fn read_direct(&self) -> Result<Vec<[f64; 4]>> {
+    pub fn read_direct(&self) -> anyhow::Result<Vec<[f64; 4]>> {
         self.ctx.download_prefix(&self.direct, self.gpu.pixels() as usize)
     }
 
     /// Overwrites the per-hit-point statistics (tests start counters near their limits this way).
-    pub fn write_stats(&self, stats: &[HitStats]) -> Result<()> {
+    pub fn write_stats(&self, stats: &[HitStats]) -> anyhow::Result<()> {
         if stats.len() != self.gpu.slots() as usize {
-            bail!("write_stats: {} entries for {} slots", stats.len(), self.gpu.slots());
+            anyhow::bail!("write_stats: {} entries for {} slots", stats.len(), self.gpu.slots());
         }
         self.ctx.upload(&self.stats, bytemuck::cast_slice(stats))
     }
 
     /// Overwrites the pass accumulators (tests feed the update chosen inputs this way).
-    pub fn write_accum(&self, accum: &[PassAccum]) -> Result<()> {
+    pub fn write_accum(&self, accum: &[PassAccum]) -> anyhow::Result<()> {
         if accum.len() != self.gpu.slots() as usize {
-            bail!("write_accum: {} entries for {} slots", accum.len(), self.gpu.slots());
+            anyhow::bail!("write_accum: {} entries for {} slots", accum.len(), self.gpu.slots());
         }
         self.ctx.upload(&self.accum, bytemuck::cast_slice(accum))
     }
 
     /// Traces and gathers one batch of photons with global indices `first..first+count` without the
     /// update, and returns the batch's records (the pass accumulators keep the gathered sums).
-    pub fn trace_and_gather(&mut self, first: u64, count: u32) -> Result<Vec<Photon>> {
+    pub fn trace_and_gather(&mut self, first: u64, count: u32) -> anyhow::Result<Vec<Photon>> {
         self.trace_batch(first, count, GridUse::Gather)
     }
 
     /// Traces one batch of probe photons (the probe's random streams) and runs the probe's first phase
     /// (per hit point N and the sum of d^2 / r^2 into the pass accumulators) without setting radii;
     /// returns the batch's records. `finish_probe` sets the radii (eq. 9).
-    pub fn trace_and_probe(&mut self, first: u64, count: u32) -> Result<Vec<Photon>> {
+    pub fn trace_and_probe(&mut self, first: u64, count: u32) -> anyhow::Result<Vec<Photon>> {
         self.trace_batch(first, count, GridUse::Probe)
     }
 
     /// The probe's second phase: lambda (eq. 7) and the starting radii (eq. 9) from the accumulators.
-    pub fn finish_probe(&mut self) -> Result<()> {
+    pub fn finish_probe(&mut self) -> anyhow::Result<()> {
         let push = self.probe_push(1);
         let hits = self.hit_buffers();
         let (k, params, grid) = (&self.kernels, &self.params, &self.grid);
         self.ctx.run(|cmd| probe::record(&k.probe, cmd, params, &hits, grid, &push))
     }
 
-    fn trace_batch(&mut self, first: u64, count: u32, use_: GridUse) -> Result<Vec<Photon>> {
+    fn trace_batch(&mut self, first: u64, count: u32, use_: GridUse) -> anyhow::Result<Vec<Photon>> {
         self.profiler.reset();
         self.ctx.run(|cmd| self.record_batch(cmd, first, count, 0, use_))?;
         let n: Vec<u32> = self.ctx.download_prefix(&self.counter, 1)?;
         self.check_lookups()?;
         self.path_counters()?;
         if n[0] > self.gpu.params.photon_capacity {
-            bail!("a test batch of {count} photons left {} records, over the capacity {}", n[0], self.gpu.params.photon_capacity);
+            anyhow::bail!("a test batch of {count} photons left {} records, over the capacity {}", n[0], self.gpu.params.photon_capacity);
         }
         self.ctx.download_prefix(&self.photons, n[0] as usize)
     }
 
     /// Runs the update kernel alone (after `trace_and_gather`).
-    pub fn update_only(&mut self) -> Result<()> {
+    pub fn update_only(&mut self) -> anyhow::Result<()> {
         let push = self.update_push();
         let hits = self.hit_buffers();
         let k = &self.kernels;

@@ -16,6 +16,8 @@ use std::path::Path;
 
 use glam::{DVec3, Vec3};
 
+use crate::error::{Error, Result};
+
 pub use obj::ObjImport;
 
 /// Largest accepted image side; larger is almost certainly a typo and would
@@ -229,27 +231,28 @@ fn invalid(path: impl Into<String>, message: impl Into<String>) -> Invalid {
 }
 
 impl Scene {
-    /// Reads and parses a scene file; every error message starts with the path. Mesh files are found
-    /// relative to the scene file's directory.
-    pub fn load(path: &Path) -> anyhow::Result<Scene> {
-        // The io error goes into the message itself (not only an anyhow context) so
-        // that `{}` formatting still says why the file could not be read.
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| anyhow::anyhow!("{}: cannot read scene file: {e}", path.display()))?;
+    /// Reads and parses a scene file. A file that cannot be read is [`Error::Io`]; anything wrong in
+    /// it is [`Error::Scene`] with its line, column and field. Mesh files are found relative to the
+    /// scene file's directory.
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         Scene::parse(&text, &path.display().to_string())
     }
 
-    /// Parses scene text; `origin` (usually the file name) prefixes every error, and mesh files are
-    /// found relative to its directory.
-    pub fn parse(text: &str, origin: &str) -> anyhow::Result<Scene> {
+    /// Parses scene text; `origin` (usually the file name) is the `file` of every error, and mesh files
+    /// are found relative to its directory.
+    pub fn parse(text: &str, origin: &str) -> Result<Scene> {
         toml::parse(text, origin)
     }
 
     /// Imports an OBJ file (and its MTL unless `import.material` is set) as a new mesh; returns its
     /// index in `meshes`. Its MTL materials are appended to `materials` (named `<path>:<MTL name>`),
-    /// what was approximated to `warnings`. Call [`Scene::validate`] when the scene is complete.
-    pub fn import_obj(&mut self, path: &Path, import: &ObjImport) -> anyhow::Result<usize> {
-        obj::import(self, path, import, MAX_TRIANGLES)
+    /// what was approximated to `warnings`. Call [`Scene::validate`] when the scene is complete. The
+    /// error is [`Error::Scene`] with no file of its own: its message starts with the OBJ or MTL file
+    /// and the line there.
+    pub fn import_obj(&mut self, path: impl AsRef<Path>, import: &ObjImport) -> Result<usize> {
+        obj::import(self, path.as_ref(), import, MAX_TRIANGLES).map_err(|e| Error::scene("", 0, 0, "", format!("{e:#}")))
     }
 
     /// Axis-aligned bounds `(min, max)` of all spheres, quads and mesh vertices; `(0, 0)` for an
@@ -363,10 +366,10 @@ impl Scene {
     /// Checks everything the renderer relies on: finite values, camera, material ranges (emission only
     /// on diffuse surfaces), sphere radii, non-degenerate quads and triangles, indices in range, at
     /// most [`MAX_TRIANGLES`], no emitting sphere, and at least one light (an emitting quad or mesh
-    /// triangle). The error is an [`Invalid`] (field path and message) under the scene's name.
-    pub fn validate(&self) -> anyhow::Result<()> {
-        self.check()
-            .map_err(|e| anyhow::anyhow!("scene {}: {e}", self.name))
+    /// triangle). The error is [`Error::Scene`] with the field's path, the scene's name as its `file`
+    /// and no line (a loader that knows where the field was written locates it instead).
+    pub fn validate(&self) -> Result<()> {
+        self.check().map_err(|e| Error::scene(&self.name, 0, 0, e.path, e.message))
     }
 
     /// [`Scene::validate`] with the field path kept apart, for loaders that can locate it.
