@@ -103,9 +103,13 @@ struct RenderArgs {
     /// Cone filter (eq. 10-14): its constant k >= 1, or `off`.
     #[arg(long, default_value = "off", value_parser = parse_cone)]
     cone: Cone,
-    /// Output image: .exr (linear HDR) or .png (tone-mapped sRGB).
-    #[arg(long, short, default_value = "out.png")]
-    out: PathBuf,
+    /// Output image: .exr (linear HDR) or .png (tone-mapped sRGB). Default: `<scene name>.exr` and a
+    /// `<scene name>.png` preview in the working directory.
+    #[arg(long, short)]
+    out: Option<PathBuf>,
+    /// Overwrite output images that already exist (without it, render refuses before it starts).
+    #[arg(long, short)]
+    force: bool,
     /// Print the per-pass stage timing table.
     #[arg(long)]
     profile: bool,
@@ -237,10 +241,37 @@ pub fn check_validation(ctx: &Context) -> Result<()> {
     Ok(())
 }
 
+/// The images `render` writes: `--out`, else `<scene name>.exr` plus a `<scene name>.png` preview.
+/// Existing files are refused unless `--force`, before any work is done.
+fn outputs(out: &Option<PathBuf>, scene_name: &str, force: bool) -> Result<Vec<PathBuf>> {
+    let paths = match out {
+        Some(out) => {
+            let ext = out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+            if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
+                bail!("--out {}: the extension must be .exr or .png", out.display());
+            }
+            vec![out.clone()]
+        }
+        None => vec![PathBuf::from(format!("{scene_name}.exr")), PathBuf::from(format!("{scene_name}.png"))],
+    };
+    if !force {
+        if let Some(p) = paths.iter().find(|p| p.exists()) {
+            bail!("{} exists: not overwritten (pass --force to overwrite, or --out to choose another file)", p.display());
+        }
+    }
+    Ok(paths)
+}
+
+fn save_all(image: &ppm_vk_engine::RgbImage, paths: &[PathBuf]) -> Result<()> {
+    for p in paths {
+        image.save(p)?;
+    }
+    Ok(())
+}
+
 fn render(args: RenderArgs) -> Result<()> {
-    let ext = args.out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
-    if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
-        bail!("--out {}: the extension must be .exr or .png", args.out.display());
+    if let Some(out) = &args.out {
+        outputs(&Some(out.clone()), "", true)?; // the extension, before the scene is read
     }
     if let Some(report) = &args.report {
         let ext = report.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
@@ -257,6 +288,7 @@ fn render(args: RenderArgs) -> Result<()> {
     if let Some((w, h)) = args.resolution {
         scene = scene.with_resolution(w, h);
     }
+    let out = outputs(&args.out, &scene.name, args.force)?;
     let reference = match &args.reference {
         Some(p) => Some(Reference::load(p)?),
         None => None,
@@ -386,7 +418,7 @@ fn render(args: RenderArgs) -> Result<()> {
         report.passes.push(record);
         history.push(s);
         if args.checkpoint > 0.0 && last_checkpoint.elapsed().as_secs_f64() >= args.checkpoint {
-            renderer.image()?.save(&args.out)?;
+            save_all(&renderer.image()?, &out)?;
             last_checkpoint = Instant::now();
         }
     }
@@ -397,7 +429,7 @@ fn render(args: RenderArgs) -> Result<()> {
     if bad > 0 {
         bail!("the image has {bad} non-finite pixels: not written (this is a bug; please report it)");
     }
-    image.save(&args.out)?;
+    save_all(&image, &out)?;
     check_validation(&ctx)?;
 
     let emitted = renderer.emitted();
@@ -408,7 +440,7 @@ fn render(args: RenderArgs) -> Result<()> {
         loop_s,
         emitted as f64 / loop_s.max(1e-9) / 1e6,
         setup_s,
-        args.out.display()
+        out.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
     );
     print_stage_summary(&history, args.profile);
     // Paths ended at a depth backstop are counted in every report; a share above 1e-4 of the paths traced

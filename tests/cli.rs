@@ -207,3 +207,26 @@ fn render_warns_when_light_is_trapped() {
     assert!(quiet.status.success() && !stderr.contains("warning:"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn render_names_its_output_after_the_scene_and_never_overwrites_silently() {
+    let dir = scratch("default-out");
+    let run = || {
+        let mut c = bin();
+        c.current_dir(&dir).args(["render", CORNELL, "--passes", "1", "--photons-per-pass", "2000", "--resolution", "8x8"]);
+        c
+    };
+    let first = run().output().unwrap();
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    let (exr, png) = (dir.join("cornell-spheres.exr"), dir.join("cornell-spheres.png"));
+    assert!(exr.exists() && png.exists(), "the scene's name, .exr and a .png preview");
+    let written = std::fs::read(&exr).unwrap();
+    // Again: refused before rendering, the file untouched.
+    let second = run().output().unwrap();
+    let stderr = String::from_utf8_lossy(&second.stderr);
+    assert!(!second.status.success() && stderr.contains("exists") && stderr.contains("--force"), "{stderr}");
+    assert_eq!(std::fs::read(&exr).unwrap(), written);
+    // With --force it overwrites.
+    let third = run().arg("--force").output().unwrap();
+    assert!(third.status.success(), "{}", String::from_utf8_lossy(&third.stderr));
+}
