@@ -19,6 +19,7 @@ mod plot;
 #[derive(Parser)]
 #[command(name = "ppm-vk", version = concat!(env!("CARGO_PKG_VERSION"), " (", env!("PPM_VK_GIT_REV"), ")"))]
 #[command(about = "Progressive photon mapping with photon probing and a cone filter, on Vulkan compute")]
+#[command(propagate_version = true)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -138,9 +139,23 @@ struct RenderArgs {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-enum ModeArg {
+pub(crate) enum ModeArg {
     Ppm,
     Sppm,
+}
+
+/// A value's name on the command line (kebab-case, as serde writes the engine's enums in JSON).
+pub(crate) fn cli_name(v: impl clap::ValueEnum) -> String {
+    v.to_possible_value().map_or_else(String::new, |p| p.get_name().to_string())
+}
+
+impl From<ModeArg> for Mode {
+    fn from(m: ModeArg) -> Mode {
+        match m {
+            ModeArg::Ppm => Mode::Ppm,
+            ModeArg::Sppm => Mode::Sppm,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -294,10 +309,7 @@ fn render(args: RenderArgs) -> Result<()> {
         None => None,
     };
     let settings = Settings {
-        mode: match args.mode {
-            ModeArg::Ppm => Mode::Ppm,
-            ModeArg::Sppm => Mode::Sppm,
-        },
+        mode: args.mode.into(),
         photons_per_pass: args.photons_per_pass,
         alpha: args.alpha,
         seed: args.seed,
