@@ -113,8 +113,10 @@ fn bench_writes_cases_with_stages_and_memory() {
         .unwrap();
     let stdout = String::from_utf8_lossy(&run.stdout);
     assert!(run.status.success(), "bench failed:\n{stdout}\n{}", String::from_utf8_lossy(&run.stderr));
-    assert!(stdout.contains("probe ScaleFree, cone 1.1"), "settings line missing:\n{stdout}");
+    assert!(stdout.contains("probe scale-free, cone 1.1"), "settings line missing:\n{stdout}");
     let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+    // The JSON names enums as the command line does.
+    assert_eq!((doc["mode"].as_str(), doc["probe"].as_str()), (Some("ppm"), Some("scale-free")));
     assert_eq!(doc["schema"], "ppm-vk-bench/1");
     let cases = doc["cases"].as_array().unwrap();
     assert_eq!(cases.len(), 2);

@@ -95,15 +95,15 @@ struct Kernels {
 /// A progressive photon mapping render in progress on one device.
 ///
 /// ```no_run
-/// # fn main() -> anyhow::Result<()> {
-/// use ppm_vk_engine::{Context, ContextOptions, Renderer, Scene, Settings};
-/// let ctx = Context::new(&ContextOptions::default())?;
-/// let scene = Scene::load("scenes/cornell-spheres.toml".as_ref())?;
+/// # fn main() -> Result<(), ppm_vk_engine::Error> {
+/// use ppm_vk_engine::{open_device, ContextOptions, Renderer, Scene, Settings};
+/// let ctx = open_device(&ContextOptions::default())?;
+/// let scene = Scene::load("scenes/cornell-spheres.toml")?;
 /// let mut renderer = Renderer::new(&ctx, &scene, Settings::default())?;
 /// for _ in 0..10 {
 ///     renderer.pass()?;
 /// }
-/// renderer.image()?.save("out.png".as_ref())?;
+/// renderer.image()?.save("out.png")?;
 /// # Ok(())
 /// # }
 /// ```
