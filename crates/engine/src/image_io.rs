@@ -268,12 +268,11 @@ impl RgbImage {
     }
 }
 
-/// A failed write as [`crate::Error::Io`]: the io error itself where there is one, else the encoder's.
+/// A failed write as [`crate::Error::Io`]: the kind of the io error in the chain (if any) and the
+/// whole chain as its message (which step failed: creating, encoding, renaming).
 fn write_error(path: &Path, e: anyhow::Error) -> crate::Error {
-    match e.downcast::<std::io::Error>() {
-        Ok(io) => crate::Error::io(path, io),
-        Err(e) => crate::Error::io(path, std::io::Error::other(format!("{e:#}"))),
-    }
+    let kind = e.chain().find_map(|c| c.downcast_ref::<std::io::Error>()).map_or(std::io::ErrorKind::Other, |io| io.kind());
+    crate::Error::io(path, std::io::Error::new(kind, format!("{e:#}")))
 }
 
 fn pixel_count(width: u32, height: u32) -> usize {
