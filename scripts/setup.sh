@@ -63,7 +63,7 @@ else
   ldconfig -p 2>/dev/null | grep -q 'libvulkan.so.1' || { say "no Vulkan loader (libvulkan.so.1): install your distribution's vulkan-loader"; ok=0; }
   has_vulkan_driver || { say "no Vulkan driver: install Mesa's Vulkan drivers (lavapipe) or your GPU's"; ok=0; }
   say "not a Debian system: shaderc is linked through the override in .cargo/config.toml, written for Debian's"
-  say "static libraries; elsewhere remove that block and set SHADERC_LIB_DIR (see README, 'Other distributions')"
+  say "static libraries; elsewhere remove that block and set SHADERC_LIB_DIR (see .cargo/config.toml)"
   [ $ok -eq 1 ] || exit 1
 fi
 

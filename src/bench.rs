@@ -8,10 +8,10 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use clap::Args;
-use ppm_vk_engine::{Mode, PassStats, Renderer, Settings};
+use ppm_vk_engine::{Mode, PassStats, ProbeMode, Renderer, Settings};
 use serde_json::json;
 
-use crate::{Cone, DeviceArgs, ProbeArg};
+use crate::{Cone, DeviceArgs, ModeArg, ProbeArg};
 
 /// The issue's matrix: 0.1M, 1M and 4M photons per pass at 256^2, 512^2 and 1024^2.
 const DEFAULT_CASES: &str = "100k@256x256,1M@256x256,4M@256x256,100k@512x512,1M@512x512,4M@512x512,\
@@ -35,8 +35,8 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 5)]
     passes: u32,
     /// `ppm` or `sppm` (SPPM adds an eye pass to every pass).
-    #[arg(long, default_value = "sppm")]
-    mode: String,
+    #[arg(long, value_enum, default_value_t = ModeArg::Sppm)]
+    mode: ModeArg,
     /// Photon probing (eq. 7-9), as for `render`.
     #[arg(long, value_enum, default_value_t = ProbeArg::Off)]
     probe: ProbeArg,
@@ -143,11 +143,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         bail!("--passes must be at least 1");
     }
     let cases = parse_cases(&args.cases)?;
-    let mode = match args.mode.as_str() {
-        "ppm" => Mode::Ppm,
-        "sppm" => Mode::Sppm,
-        other => bail!("--mode {other:?}: expected ppm or sppm"),
-    };
+    let mode = Mode::from(args.mode);
     let loading = std::time::Instant::now();
     let base = crate::load_scene(&args.scene, &args.defines)?;
     let load_s = loading.elapsed().as_secs_f64();
@@ -155,9 +151,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let info = ctx.info().clone();
     println!("device: {} ({}, {})", info.name, info.kind, info.driver);
     println!(
-        "mode {}, probe {:?}, cone {}; {} warm-up passes, median of {}",
-        args.mode,
-        args.probe,
+        "mode {}, probe {}, cone {}; {} warm-up passes, median of {}",
+        crate::cli_name(args.mode),
+        crate::cli_name(args.probe),
         args.cone.0.map_or("off".to_string(), |k| k.to_string()),
         args.warmup,
         args.passes
@@ -191,7 +187,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         ctx.reset_memory_peak();
         reset_peak_rss();
         let mut renderer = Renderer::new(&ctx, &scene, settings)?;
-        let bvh = renderer.gpu_scene().bvh_stats.clone();
+        let bvh = renderer.bvh_stats().clone();
         if bvh.triangles > 0 && results.is_empty() {
             println!(
                 "scene: {} triangles loaded in {:.2} s; BVH built in {:.2} s ({:.2} M triangles/s), {} nodes, depth {}, {:.1} MiB",
@@ -209,10 +205,10 @@ pub fn run(args: BenchArgs) -> Result<()> {
         }
         // Memory after the warm-up and after the measured passes: nothing should grow with passes.
         let (dev_before, rss_before) = (ctx.memory_usage(), host_rss());
-        let measured: Vec<PassStats> = (0..args.passes).map(|_| renderer.pass()).collect::<Result<_>>()?;
+        let measured: Vec<PassStats> = (0..args.passes).map(|_| renderer.pass()).collect::<Result<_, _>>()?;
         let (dev_after, rss_after) = (ctx.memory_usage(), host_rss());
         renderer.resolve()?; // the first resolve compiles its pipeline
-        let resolve_ms = median((0..3).map(|_| renderer.resolve()).collect::<Result<Vec<_>>>()?);
+        let resolve_ms = median((0..3).map(|_| renderer.resolve()).collect::<Result<Vec<_>, _>>()?);
         let breakdown = match args.breakdown {
             true => renderer.photon_breakdown(case.photons)?,
             false => Vec::new(),
@@ -285,8 +281,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
         "device": { "name": info.name, "kind": info.kind, "driver": info.driver, "api": info.api_version },
         "git_revision": env!("PPM_VK_GIT_REV"),
         "scene": args.scene.display().to_string(),
-        "mode": args.mode,
-        "probe": format!("{:?}", args.probe),
+        "mode": mode,
+        "probe": ProbeMode::from(args.probe),
         "cone_k": args.cone.0,
         "warmup_passes": args.warmup,
         "measured_passes": args.passes,

@@ -10,7 +10,7 @@ use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_vk_engine::metrics::{compare, cornell_regions, Reference, Region};
 use ppm_vk_engine::report::{file_sha256, PassRecord, RunHeader, RunReport, SCHEMA};
-use ppm_vk_engine::{Checkpoint, Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings};
+use ppm_vk_engine::{open_device, Checkpoint, Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings};
 
 mod bench;
 mod compare;
@@ -19,6 +19,7 @@ mod plot;
 #[derive(Parser)]
 #[command(name = "ppm-vk", version = concat!(env!("CARGO_PKG_VERSION"), " (", env!("PPM_VK_GIT_REV"), ")"))]
 #[command(about = "Progressive photon mapping with photon probing and a cone filter, on Vulkan compute")]
+#[command(propagate_version = true)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -38,8 +39,9 @@ enum Command {
 
 #[derive(Args, Clone)]
 pub struct DeviceArgs {
-    /// Device index or name substring (see `ppm-vk devices`); default: $PPM_VK_DEVICE, else a discrete GPU.
-    #[arg(long)]
+    /// Device index or name substring (see `ppm-vk devices`); default: a discrete GPU, else an integrated
+    /// one, else any (lavapipe).
+    #[arg(long, env = "PPM_VK_DEVICE")]
     pub device: Option<String>,
     /// Enable the Vulkan validation layer and fail on any message it reports.
     #[arg(long)]
@@ -48,7 +50,7 @@ pub struct DeviceArgs {
 
 impl DeviceArgs {
     pub fn open(&self) -> Result<Context> {
-        Context::new(&ContextOptions { validation: self.validate, device: self.device.clone() })
+        Ok(open_device(&ContextOptions { validation: self.validate, device: self.device.clone() })?)
     }
 }
 
@@ -106,9 +108,13 @@ struct RenderArgs {
     /// Cone filter (eq. 10-14): its constant k >= 1, or `off`.
     #[arg(long, default_value = "off", value_parser = parse_cone)]
     cone: Cone,
-    /// Output image: .exr (linear HDR) or .png (tone-mapped sRGB).
-    #[arg(long, short, default_value = "out.png")]
-    out: PathBuf,
+    /// Output image: .exr (linear HDR) or .png (tone-mapped sRGB). Default: `<scene name>.exr` and a
+    /// `<scene name>.png` preview in the working directory.
+    #[arg(long, short)]
+    out: Option<PathBuf>,
+    /// Overwrite output images that already exist (without it, render refuses before it starts).
+    #[arg(long, short)]
+    force: bool,
     /// Print the per-pass stage timing table.
     #[arg(long)]
     profile: bool,
@@ -146,9 +152,23 @@ struct RenderArgs {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-enum ModeArg {
+pub(crate) enum ModeArg {
     Ppm,
     Sppm,
+}
+
+/// A value's name on the command line (kebab-case, as serde writes the engine's enums in JSON).
+pub(crate) fn cli_name(v: impl clap::ValueEnum) -> String {
+    v.to_possible_value().map_or_else(String::new, |p| p.get_name().to_string())
+}
+
+impl From<ModeArg> for Mode {
+    fn from(m: ModeArg) -> Mode {
+        match m {
+            ModeArg::Ppm => Mode::Ppm,
+            ModeArg::Sppm => Mode::Sppm,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -329,15 +349,42 @@ fn watch_signals() -> Result<Arc<AtomicUsize>> {
     Ok(first)
 }
 
+/// The images `render` writes: `--out`, else `<scene name>.exr` plus a `<scene name>.png` preview.
+/// Existing files are refused unless `--force`, before any work is done.
+fn outputs(out: &Option<PathBuf>, scene_name: &str, force: bool) -> Result<Vec<PathBuf>> {
+    let paths = match out {
+        Some(out) => {
+            let ext = out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+            if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
+                bail!("--out {}: the extension must be .exr or .png", out.display());
+            }
+            vec![out.clone()]
+        }
+        None => vec![PathBuf::from(format!("{scene_name}.exr")), PathBuf::from(format!("{scene_name}.png"))],
+    };
+    if !force {
+        if let Some(p) = paths.iter().find(|p| p.exists()) {
+            bail!("{} exists: not overwritten (pass --force to overwrite, or --out to choose another file)", p.display());
+        }
+    }
+    Ok(paths)
+}
+
+fn save_all(image: &ppm_vk_engine::RgbImage, paths: &[PathBuf]) -> Result<()> {
+    for p in paths {
+        image.save(p)?;
+    }
+    Ok(())
+}
+
 fn render(args: RenderArgs) -> Result<Ended> {
     let signal = watch_signals()?;
     let interrupted = || match signal.load(Ordering::SeqCst) {
         0 => None,
         s => Some(s as i32),
     };
-    let ext = args.out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
-    if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
-        bail!("--out {}: the extension must be .exr or .png", args.out.display());
+    if let Some(out) = &args.out {
+        outputs(&Some(out.clone()), "", true)?; // the extension, before the scene is read
     }
     if let Some(report) = &args.report {
         let ext = report.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
@@ -349,15 +396,14 @@ fn render(args: RenderArgs) -> Result<Ended> {
     if let Some((w, h)) = args.resolution {
         scene = scene.with_resolution(w, h);
     }
+    // A resumed render continues the image it wrote before: it may overwrite it.
+    let out = outputs(&args.out, &scene.name, args.force || args.resume.is_some())?;
     let reference = match &args.reference {
         Some(p) => Some(Reference::load(p)?),
         None => None,
     };
     let settings = Settings {
-        mode: match args.mode {
-            ModeArg::Ppm => Mode::Ppm,
-            ModeArg::Sppm => Mode::Sppm,
-        },
+        mode: args.mode.into(),
         photons_per_pass: args.photons_per_pass,
         alpha: args.alpha,
         seed: args.seed,
@@ -397,14 +443,13 @@ fn render(args: RenderArgs) -> Result<Ended> {
         None => Renderer::new(&ctx, &scene, settings)?,
     };
     let setup_s = started.elapsed().as_secs_f64();
-    let g = renderer.gpu_scene();
     eprintln!(
         "scene {}: {}x{}, {} hit-point slots, initial radius {:.5}, {} photons/pass; ray pass {:.1} ms GPU",
         scene.name,
-        g.params.width,
-        g.params.height,
-        g.slots(),
-        g.initial_radius,
+        scene.camera.width,
+        scene.camera.height,
+        renderer.hit_point_slots(),
+        renderer.initial_radius(),
         renderer.settings().photons_per_pass,
         renderer.ray_ms()
     );
@@ -455,7 +500,7 @@ fn render(args: RenderArgs) -> Result<Ended> {
     // What is saved when: the image (and the state, with --checkpoint) every `save_every`, and at the end.
     let save_every = args.checkpoint_every.or(args.checkpoint.as_ref().map(|_| 300.0));
     let save = |renderer: &mut Renderer| -> Result<()> {
-        renderer.image()?.save(&args.out)?;
+        save_all(&renderer.image()?, &out)?;
         match &args.checkpoint {
             Some(path) => renderer.checkpoint(BUILD)?.save(path),
             None => Ok(()),
@@ -478,7 +523,7 @@ fn render(args: RenderArgs) -> Result<Ended> {
         }
         let s = match renderer.pass() {
             Ok(s) => s,
-            Err(e) => return Err(save_after_failure(&mut renderer, &args.out, e)),
+            Err(e) => return Err(save_after_failure(&mut renderer, &out, e.into())),
         };
         let elapsed = loop_start.elapsed().as_secs_f64();
         let rate = (s.photons * (history.len() as u64 + 1)) as f64 / elapsed / 1e6;
@@ -530,7 +575,7 @@ fn render(args: RenderArgs) -> Result<Ended> {
         loop_s,
         history.iter().map(|s| s.photons).sum::<u64>() as f64 / loop_s.max(1e-9) / 1e6,
         setup_s,
-        args.out.display()
+        out.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
     );
     if let Some(path) = &args.checkpoint {
         println!("checkpoint after pass {}: {}", renderer.passes(), path.display());
@@ -539,7 +584,7 @@ fn render(args: RenderArgs) -> Result<Ended> {
     // Paths ended at a depth backstop are counted in every report; a share above 1e-4 of the paths traced
     // is worth a warning (a glass sphere strands about 2e-5 of them by rounding, which is not).
     if let Some(last) = history.last() {
-        let pixels = renderer.gpu_scene().pixels() as f64;
+        let pixels = scene.camera.width as f64 * scene.camera.height as f64;
         let eye_paths = pixels * (renderer.settings().slots() + renderer.settings().emission_samples).max(1) as f64 * (renderer.passes() as f64 + 1.0);
         let photon_share = last.photon_paths_cut as f64 / last.emitted_total.max(1) as f64;
         let eye_share = last.eye_paths_cut as f64 / eye_paths;
@@ -580,10 +625,14 @@ fn render(args: RenderArgs) -> Result<Ended> {
 /// A pass failed (the device lost, out of memory): saves the image of the passes before it if the device
 /// still answers, and returns the pass's error saying what was kept. The checkpoint is not rewritten: a
 /// failed pass may have left part of its work in the state; the last one saved stays valid.
-fn save_after_failure(renderer: &mut Renderer, out: &std::path::Path, error: anyhow::Error) -> anyhow::Error {
+fn save_after_failure(renderer: &mut Renderer, out: &[PathBuf], error: anyhow::Error) -> anyhow::Error {
     let pass = renderer.passes() + 1;
-    match renderer.image().and_then(|image| image.save(out)) {
-        Ok(()) => error.context(format!("pass {pass} failed; the image of the {} passes before it is in {}", pass - 1, out.display())),
+    let saved = renderer.image().map_err(anyhow::Error::from).and_then(|image| save_all(&image, out));
+    match saved {
+        Ok(()) => {
+            let files: Vec<String> = out.iter().map(|p| p.display().to_string()).collect();
+            error.context(format!("pass {pass} failed; the image of the {} passes before it is in {}", pass - 1, files.join(", ")))
+        }
         Err(e) => error.context(format!("pass {pass} failed, and the image could not be saved either ({e:#})")),
     }
 }

@@ -113,8 +113,10 @@ fn bench_writes_cases_with_stages_and_memory() {
         .unwrap();
     let stdout = String::from_utf8_lossy(&run.stdout);
     assert!(run.status.success(), "bench failed:\n{stdout}\n{}", String::from_utf8_lossy(&run.stderr));
-    assert!(stdout.contains("probe ScaleFree, cone 1.1"), "settings line missing:\n{stdout}");
+    assert!(stdout.contains("probe scale-free, cone 1.1"), "settings line missing:\n{stdout}");
     let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+    // The JSON names enums as the command line does.
+    assert_eq!((doc["mode"].as_str(), doc["probe"].as_str()), (Some("ppm"), Some("scale-free")));
     assert_eq!(doc["schema"], "ppm-vk-bench/1");
     let cases = doc["cases"].as_array().unwrap();
     assert_eq!(cases.len(), 2);
@@ -340,7 +342,7 @@ fn device_limits_are_checked_before_work() {
     let out = dir.join("never.exr");
     let out = out.to_str().unwrap();
     let e = fails(&["render", CORNELL, "--resolution", "4096x4096", "--passes", "1", "--out", out]);
-    assert!(e.contains("the hit points need 768 MiB") && e.contains("lower the resolution (4096x4096)"), "{e}");
+    assert!(e.contains("the hit points (768 MiB in one buffer)") && e.contains("lower the resolution (4096x4096)"), "{e}");
     assert!(!dir.join("never.exr").exists());
     let e = fails(&["render", CORNELL, "--device", "nosuch", "--out", out]);
     assert!(e.contains("no Vulkan device matches \"nosuch\"; devices:"), "{e}");
@@ -348,4 +350,27 @@ fn device_limits_are_checked_before_work() {
     assert!(e.contains("--photons-per-pass"), "{e}");
     let e = fails(&["render", CORNELL, "--beta", "1", "--out", out]);
     assert!(e.contains("must be in (0, 1)"), "{e}");
+}
+
+#[test]
+fn render_names_its_output_after_the_scene_and_never_overwrites_silently() {
+    let dir = scratch("default-out");
+    let run = || {
+        let mut c = bin();
+        c.current_dir(&dir).args(["render", CORNELL, "--passes", "1", "--photons-per-pass", "2000", "--resolution", "8x8"]);
+        c
+    };
+    let first = run().output().unwrap();
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    let (exr, png) = (dir.join("cornell-spheres.exr"), dir.join("cornell-spheres.png"));
+    assert!(exr.exists() && png.exists(), "the scene's name, .exr and a .png preview");
+    let written = std::fs::read(&exr).unwrap();
+    // Again: refused before rendering, the file untouched.
+    let second = run().output().unwrap();
+    let stderr = String::from_utf8_lossy(&second.stderr);
+    assert!(!second.status.success() && stderr.contains("exists") && stderr.contains("--force"), "{stderr}");
+    assert_eq!(std::fs::read(&exr).unwrap(), written);
+    // With --force it overwrites.
+    let third = run().arg("--force").output().unwrap();
+    assert!(third.status.success(), "{}", String::from_utf8_lossy(&third.stderr));
 }

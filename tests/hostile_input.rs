@@ -62,12 +62,12 @@ fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
 fn load_xml(text: &str) -> anyhow::Result<Scene> {
     let path = scratch("xml").join("s.xml");
     std::fs::write(&path, text)?;
-    Scene::load(&path)
+    Ok(Scene::load(&path)?)
 }
 
 fn load_toml(text: &str) -> anyhow::Result<Scene> {
     // Mesh paths resolve against the real scenes/ directory, so mutated scenes still find (or miss) them.
-    Scene::parse(text, &format!("{ROOT}/scenes/fuzzed.toml"))
+    Ok(Scene::parse(text, &format!("{ROOT}/scenes/fuzzed.toml"))?)
 }
 
 /// The OBJ (with the cornell box's MTL beside it) imported by a minimal scene.
@@ -78,7 +78,7 @@ fn load_obj(text: &str) -> anyhow::Result<Scene> {
     std::fs::copy(format!("{ROOT}/scenes/meshes/furnace-sphere.mtl"), dir.join("furnace-sphere.mtl"))?;
     let scene = "[camera]\neye = [0.0, 1.0, 3.0]\nlook_at = [0.0, 1.0, 0.0]\nup = [0.0, 1.0, 0.0]\nvfov = 40.0\n\
                  resolution = [8, 8]\n\n[[mesh]]\nfile = \"m.obj\"\n";
-    Scene::parse(scene, &dir.join("s.toml").display().to_string())
+    Ok(Scene::parse(scene, &dir.join("s.toml").display().to_string())?)
 }
 
 /// One directory per test thread (tests run in parallel).

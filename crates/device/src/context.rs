@@ -13,7 +13,7 @@ pub struct ContextOptions {
     /// Enable `VK_LAYER_KHRONOS_validation` and collect its messages (see [`Context::validation_messages`]).
     pub validation: bool,
     /// Choose a device by index (as `ppm-vk devices` lists them) or by a case-insensitive substring of its
-    /// name. `None` reads the `PPM_VK_DEVICE` environment variable, then prefers a discrete GPU.
+    /// name. `None` prefers a discrete GPU, then an integrated one, then any (lavapipe).
     pub device: Option<String>,
 }
 
@@ -182,7 +182,7 @@ fn load_entry() -> Result<ash::Entry> {
     unsafe { ash::Entry::load() }.map_err(|e| {
         anyhow!(
             "cannot load the Vulkan loader (libvulkan.so.1): {e}. On Debian/Ubuntu: \
-             `sudo apt-get install libvulkan1 mesa-vulkan-drivers` (or run ./scripts/setup)"
+             `sudo apt-get install libvulkan1 mesa-vulkan-drivers` (or run scripts/setup.sh)"
         )
     })
 }
@@ -202,7 +202,7 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance
         if !found {
             bail!(
                 "validation was requested but VK_LAYER_KHRONOS_validation is not installed. On Debian/Ubuntu: \
-                 `sudo apt-get install vulkan-validationlayers` (or run ./scripts/setup)"
+                 `sudo apt-get install vulkan-validationlayers` (or run scripts/setup.sh)"
             );
         }
         layers.push(VALIDATION_LAYER.as_ptr());
@@ -226,7 +226,7 @@ impl Context {
         out
     }
 
-    /// Opens a device: by `options.device`, else `PPM_VK_DEVICE`, else the first suitable discrete GPU,
+    /// Opens a device: by `options.device`, else the first suitable discrete GPU,
     /// then integrated, then any (lavapipe).
     pub fn new(options: &ContextOptions) -> Result<Context> {
         let entry = load_entry()?;
@@ -269,7 +269,7 @@ impl Context {
             bail!("no Vulkan device found. On Debian/Ubuntu: `sudo apt-get install mesa-vulkan-drivers` for lavapipe (CPU)");
         }
         let infos: Vec<DeviceInfo> = pds.iter().enumerate().map(|(i, &pd)| describe(&instance, i, pd)).collect();
-        let wanted = options.device.clone().or_else(|| std::env::var("PPM_VK_DEVICE").ok().filter(|s| !s.is_empty()));
+        let wanted = options.device.clone().filter(|s| !s.is_empty());
         let chosen = match wanted {
             Some(w) => {
                 let hit = match w.parse::<usize>() {

@@ -612,6 +612,7 @@ impl BvhTracer {
 
 /// Generated meshes: the tests' closed shapes and triangle soups, and the build benchmark's input. Shared
 /// vertices are computed once per grid point, so the triangles around them see them bit for bit.
+#[cfg(any(test, feature = "test-hooks"))]
 pub mod meshes {
     use std::f32::consts::PI;
 

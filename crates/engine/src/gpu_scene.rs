@@ -1,11 +1,11 @@
 //! The scene as the kernels see it: flat records (crates/kernels/src/layout.rs) and the per-render
 //! constants. Both the GPU renderer and the CPU reference start from this one conversion.
 
-use anyhow::{bail, Result};
 use glam::Vec3;
 use ppm_vk_kernels::layout::{self, BvhNode, Light, Material, Quad, RenderParams, Sphere, Triangle, LIGHT_QUAD, LIGHT_TRIANGLE};
 use ppm_vk_kernels::lookup::SCAN_BLOCK;
 
+use crate::error::{Error, Result};
 use crate::bvh::{self, BvhOptions, BvhStats, TriangleInput};
 use crate::scene::{Scene, Surface};
 use crate::settings::Settings;
@@ -92,10 +92,11 @@ impl GpuScene {
             .iter()
             .flat_map(|m| m.triangles().map(|t| TriangleInput { v: t.p, material: t.material }))
             .collect();
-        let built = bvh::build(&input, &BvhOptions::default())?;
+        let built = bvh::build(&input, &BvhOptions::default())
+            .map_err(|e| Error::scene(&scene.name, 0, 0, "", format!("building the BVH: {e:#}")))?;
         if !built.dropped.is_empty() {
             // Scene validation drops degenerate triangles first, so this is a NaN or an area that rounds to 0.
-            bail!("scene {}: {} triangles are degenerate (zero area or not finite), e.g. input triangle {}", scene.name, built.dropped.len(), built.dropped[0]);
+            return Err(Error::scene(&scene.name, 0, 0, "", format!("{} triangles are degenerate (zero area or not finite), e.g. input triangle {}", built.dropped.len(), built.dropped[0])));
         }
 
         // Lights: emitting quads and triangles, chosen in proportion to their power (summed over RGB).
@@ -122,7 +123,7 @@ impl GpuScene {
         }
         let sum: f64 = lights.iter().map(|l| l.power.iter().map(|&p| p as f64).sum::<f64>()).sum();
         if lights.is_empty() || sum <= 0.0 {
-            bail!("scene {}: no light emits power", scene.name);
+            return Err(Error::scene(&scene.name, 0, 0, "", "no light emits power"));
         }
         let mut run = 0f64;
         for l in &mut lights {
@@ -140,12 +141,12 @@ impl GpuScene {
             previous = l.cdf as f64;
         }
         if let Some(i) = lights.iter().position(|l| !(l.prob > 0.0)) {
-            bail!(
-                "scene {}: light {i} of {} has too small a share of the total power to be chosen in an f32 \
-                 light table (split the scene's lights more evenly)",
-                scene.name,
+            let message = format!(
+                "light {i} of {} has too small a share of the total power to be chosen in an f32 light table \
+                 (split the scene's lights more evenly)",
                 lights.len()
             );
+            return Err(Error::scene(&scene.name, 0, 0, "", message));
         }
 
         // No photon carries more flux than it leaves its light with (roulette divides by the largest
@@ -153,13 +154,13 @@ impl GpuScene {
         let max_flux = lights.iter().flat_map(|l| l.power.map(|p| p as f64 / l.prob as f64)).fold(0f64, f64::max);
         let flux_fixed = 2f64.powi((2f64.powi(30) / max_flux).log2().floor() as i32) as f32;
         if !(flux_fixed.is_finite() && flux_fixed > 0.0) {
-            bail!("scene {}: light power {max_flux} W is out of the representable range", scene.name);
+            return Err(Error::scene(&scene.name, 0, 0, "", format!("light power {max_flux} W is out of the representable range")));
         }
         let (lo, hi) = scene.bounds();
         let extent = (hi - lo).max_element();
         let initial_radius = settings.initial_radius.unwrap_or_else(|| default_radius(scene));
         if !(initial_radius.is_finite() && initial_radius > 0.0) {
-            bail!("initial radius must be positive and finite, got {initial_radius}");
+            return Err(Error::Settings { field: "initial_radius", message: format!("must be positive and finite, got {initial_radius}") });
         }
         // Cells twice the starting radius: 2x2x2 cells per lookup. The probe may enlarge radii; the
         // renderer then widens the cells to twice the largest (GpuScene::set_grid_cell).
@@ -167,7 +168,7 @@ impl GpuScene {
         // A lookup window must stay under 1024 cells a side (grid_key in grid.glsl).
         let cell_size = match settings.grid_cell {
             Some(c) if !(c.is_finite() && c > 0.0 && c * 256.0 >= cell_size) => {
-                bail!("grid cell {c} must be positive and at least 1/256 of {cell_size} (twice the starting radius)")
+                return Err(Error::Settings { field: "grid_cell", message: format!("{c} must be positive and at least 1/256 of {cell_size} (twice the starting radius)") })
             }
             Some(c) => c,
             None => cell_size,

@@ -176,8 +176,13 @@ impl RgbImage {
     }
 
     /// Any EXR the `image` crate reads (RGB or RGBA, f32 or f16); alpha is dropped.
-    pub fn load_exr(path: &Path) -> Result<Self> {
-        Self::load_exr_inner(path).with_context(|| format!("reading {}", path.display()))
+    /// A file that cannot be opened or decoded is [`crate::Error::Io`].
+    pub fn load_exr(path: impl AsRef<Path>) -> crate::Result<Self> {
+        let path = path.as_ref();
+        match ImageReader::open(path) {
+            Err(e) => Err(crate::Error::io(path, e)),
+            Ok(_) => Self::load_exr_inner(path).map_err(|e| crate::Error::decode(path, format!("{e:#}"))),
+        }
     }
 
     fn load_exr_inner(path: &Path) -> Result<Self> {
@@ -203,7 +208,12 @@ impl RgbImage {
     }
 
     /// Linear float32 RGB OpenEXR, written atomically.
-    pub fn save_exr(&self, path: &Path) -> Result<()> {
+    pub fn save_exr(&self, path: impl AsRef<Path>) -> crate::Result<()> {
+        let path = path.as_ref();
+        self.save_exr_inner(path).map_err(|e| write_error(path, e))
+    }
+
+    fn save_exr_inner(&self, path: &Path) -> Result<()> {
         let raw: Vec<f32> = self.pixels.iter().flatten().copied().collect();
         let buf = ImageBuffer::<Rgb<f32>, _>::from_raw(self.width, self.height, raw)
             .context("pixel buffer does not match the image size")
@@ -212,7 +222,12 @@ impl RgbImage {
     }
 
     /// Tone-mapped 8-bit sRGB PNG: scale by 2^`exposure`, clamp to [0, 1], sRGB OETF; NaN becomes black.
-    pub fn save_png(&self, path: &Path, exposure: f32) -> Result<()> {
+    pub fn save_png(&self, path: impl AsRef<Path>, exposure: f32) -> crate::Result<()> {
+        let path = path.as_ref();
+        self.save_png_inner(path, exposure).map_err(|e| write_error(path, e))
+    }
+
+    fn save_png_inner(&self, path: &Path, exposure: f32) -> Result<()> {
         ensure!(
             exposure.is_finite(),
             "writing {}: exposure must be finite, got {exposure}",
@@ -232,7 +247,8 @@ impl RgbImage {
     }
 
     /// Chooses the format by extension: `.exr` (linear float) or `.png` (sRGB, exposure 0).
-    pub fn save(&self, path: &Path) -> Result<()> {
+    pub fn save(&self, path: impl AsRef<Path>) -> crate::Result<()> {
+        let path = path.as_ref();
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
@@ -240,16 +256,23 @@ impl RgbImage {
         match ext.as_deref() {
             Some("exr") => self.save_exr(path),
             Some("png") => self.save_png(path, 0.0),
-            _ => bail!(
-                "cannot write {}: unsupported extension (supported: .exr, .png)",
-                path.display()
-            ),
+            _ => Err(crate::Error::io(
+                path,
+                std::io::Error::new(std::io::ErrorKind::InvalidInput, "unsupported extension (supported: .exr, .png)"),
+            )),
         }
     }
 
     fn index(&self, x: u32, y: u32) -> usize {
         y as usize * self.width as usize + x as usize
     }
+}
+
+/// A failed write as [`crate::Error::Io`]: the kind of the io error in the chain (if any) and the
+/// whole chain as its message (which step failed: creating, encoding, renaming).
+fn write_error(path: &Path, e: anyhow::Error) -> crate::Error {
+    let kind = e.chain().find_map(|c| c.downcast_ref::<std::io::Error>()).map_or(std::io::ErrorKind::Other, |io| io.kind());
+    crate::Error::io(path, std::io::Error::new(kind, format!("{e:#}")))
 }
 
 fn pixel_count(width: u32, height: u32) -> usize {

@@ -1,38 +1,72 @@
 //! ppm-vk's engine: progressive photon mapping (Hachisuka et al. 2008) as Vulkan compute kernels, following
 //! Lee and Shin, "Improved Progressive Photon Mapping Using Photon Probing".
 //!
-//! Embedding it takes a context, a scene, a renderer, passes and an image:
+//! Embedding it takes a device, a scene, a renderer, passes and an image:
 //! ```no_run
-//! # fn main() -> anyhow::Result<()> {
-//! use ppm_vk_engine::{Context, ContextOptions, Renderer, Scene, Settings};
-//! let ctx = Context::new(&ContextOptions::default())?;
-//! let scene = Scene::load("scenes/cornell-spheres.toml".as_ref())?;
+//! # fn main() -> Result<(), ppm_vk_engine::Error> {
+//! use ppm_vk_engine::{open_device, ContextOptions, Renderer, Scene, Settings};
+//! let ctx = open_device(&ContextOptions::default())?;
+//! let scene = Scene::load("scenes/cornell-spheres.toml")?;
 //! let mut renderer = Renderer::new(&ctx, &scene, Settings { photons_per_pass: 200_000, ..Settings::default() })?;
 //! for _ in 0..20 {
 //!     let stats = renderer.pass()?;
 //!     println!("pass {}: {:.1} ms", stats.index, stats.wall_ms);
 //! }
-//! renderer.image()?.save("cornell.exr".as_ref())?;
+//! renderer.image()?.save("cornell.exr")?;
 //! # Ok(())
 //! # }
 //! ```
-//! Every kernel has a CPU twin in [`reference`] that the tests compare against on identical inputs.
+//! Every fallible call returns [`Error`], whose cases say what went wrong in terms a program can act
+//! on: a scene error with its file, line, column and field, a device limit with what to lower, an I/O
+//! error with its path, a device failure, a cancelled pass ([`CancelToken`]).
+//!
+//! The `test-hooks` feature makes public what only the tests need: the CPU twin of every kernel
+//! (`reference`), the BVH builder, the flattened GPU scene, the record layouts and the renderer's hooks
+//! that read and write device state.
 
-pub mod bvh;
 pub mod checkpoint;
-pub mod gpu_scene;
-pub mod image_io;
+mod error;
+mod image_io;
+mod renderer;
 pub mod metrics;
-pub mod reference;
-pub mod renderer;
 pub mod report;
 pub mod scene;
 pub mod settings;
 
+#[cfg(feature = "test-hooks")]
+pub mod bvh;
+#[cfg(not(feature = "test-hooks"))]
+#[allow(dead_code)] // what only the tests use
+mod bvh;
+#[cfg(feature = "test-hooks")]
+pub mod gpu_scene;
+#[cfg(not(feature = "test-hooks"))]
+#[allow(dead_code)]
+mod gpu_scene;
+#[cfg(feature = "test-hooks")]
+pub mod reference;
+#[cfg(all(test, not(feature = "test-hooks")))]
+mod reference;
+#[cfg(feature = "test-hooks")]
+pub use ppm_vk_kernels::layout;
+
+pub use bvh::BvhStats;
 pub use checkpoint::Checkpoint;
+pub use error::{Error, Result};
 pub use image_io::RgbImage;
 pub use ppm_vk_device::{Context, ContextOptions, DeviceInfo, ScopeTiming};
-pub use ppm_vk_kernels::layout;
-pub use renderer::{PassStats, PhotonVariant, ProbeReport, Renderer};
+pub use ppm_vk_kernels::layout::PathCounters;
+pub use ppm_vk_kernels::photon::PathLimits;
+pub use renderer::{CancelToken, PassStats, PhotonVariant, ProbeReport, Renderer};
 pub use scene::Scene;
 pub use settings::{Mode, ProbeMode, Settings};
+
+/// Opens a Vulkan device (see [`ContextOptions`]); a failure is [`Error::Device`].
+pub fn open_device(options: &ContextOptions) -> Result<Context> {
+    Context::new(options).map_err(Error::device("opening a Vulkan device"))
+}
+
+/// The devices the Vulkan loader sees, with what each lacks for ppm-vk.
+pub fn list_devices() -> Result<Vec<DeviceInfo>> {
+    Context::list_devices().map_err(Error::device("listing Vulkan devices"))
+}

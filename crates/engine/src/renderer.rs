@@ -1,11 +1,13 @@
 //! The progressive loop on the GPU: the ray pass once, then photon passes (photon -> lookup -> gather ->
 //! update), and the resolve whenever an image is wanted.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::{bail, ensure, Context as _, Result};
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
-use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers, RadiusMax, UpdatePush};
+use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers};
+use ppm_vk_kernels::update::RadiusMax;
 use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, Triangle};
 use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PathLimits, PhotonPush, SALT_EYE, SALT_PHOTON, SALT_PROBE};
@@ -13,13 +15,40 @@ use ppm_vk_kernels::probe::{self, ProbePush, MODE_PAPER, MODE_SCALE_FREE};
 use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers, JITTER_RANDOM};
 use ppm_vk_kernels::resolve::{self, ResolvePush};
 use ppm_vk_kernels::specialize::{self, MAX_INLINE_PRIMITIVES};
+use ppm_vk_kernels::update::{self, UpdatePush};
 use ppm_vk_kernels::{pipeline, pipeline_from, reflected};
 
 use crate::checkpoint::{self, Checkpoint};
+use crate::error::{DeviceContext as _, Error, Result};
 use crate::gpu_scene::GpuScene;
 use crate::image_io::RgbImage;
 use crate::scene::Scene;
 use crate::settings::{Mode, ProbeMode, Settings};
+
+/// Cancels [`Renderer::pass`] from another thread: clone it, give one clone to the renderer
+/// ([`Renderer::set_cancel`]) and call [`CancelToken::cancel`] on the other. The pass stops at its next
+/// dispatch boundary with [`Error::Cancelled`]; the passes completed before it stay in the estimate.
+#[derive(Clone, Debug, Default)]
+pub struct CancelToken(Arc<AtomicBool>);
+
+impl CancelToken {
+    pub fn new() -> CancelToken {
+        CancelToken::default()
+    }
+
+    pub fn cancel(&self) {
+        self.0.store(true, Ordering::Relaxed);
+    }
+
+    pub fn is_cancelled(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+
+    /// Clears a cancellation, so the renderer can go on.
+    pub fn reset(&self) {
+        self.0.store(false, Ordering::Relaxed);
+    }
+}
 
 /// What one photon pass did and what it cost.
 #[derive(Clone, Debug)]
@@ -72,15 +101,15 @@ struct Kernels {
 /// A progressive photon mapping render in progress on one device.
 ///
 /// ```no_run
-/// # fn main() -> anyhow::Result<()> {
-/// use ppm_vk_engine::{Context, ContextOptions, Renderer, Scene, Settings};
-/// let ctx = Context::new(&ContextOptions::default())?;
-/// let scene = Scene::load("scenes/cornell-spheres.toml".as_ref())?;
+/// # fn main() -> Result<(), ppm_vk_engine::Error> {
+/// use ppm_vk_engine::{open_device, ContextOptions, Renderer, Scene, Settings};
+/// let ctx = open_device(&ContextOptions::default())?;
+/// let scene = Scene::load("scenes/cornell-spheres.toml")?;
 /// let mut renderer = Renderer::new(&ctx, &scene, Settings::default())?;
 /// for _ in 0..10 {
 ///     renderer.pass()?;
 /// }
-/// renderer.image()?.save("out.png".as_ref())?;
+/// renderer.image()?.save("out.png")?;
 /// # Ok(())
 /// # }
 /// ```
@@ -123,6 +152,7 @@ pub struct Renderer {
     emitted: u64,
     ray_ms: f64,
     probe_report: Option<ProbeReport>,
+    cancel: CancelToken,
     /// What a checkpoint records the render is of.
     scene_name: String,
     scene_sha256: String,
@@ -217,12 +247,15 @@ impl Renderer {
             sections: vec![],
             payload_sha256: String::new(),
         };
+        let (slots, pixels) = (self.gpu.slots(), self.gpu.pixels());
         let hit_points = match self.settings.mode {
-            Mode::Ppm => self.read_hit_points()?,
+            Mode::Ppm => self.download(&self.hit_points, slots, "reading the hit points")?,
             Mode::Sppm => vec![],
         };
-        let cut = self.ctx.download_prefix(&self.cut, 1)?[0];
-        let (stats, direct, busy) = (self.read_stats()?, self.read_direct()?, self.read_busy()?);
+        let cut = self.download::<PathCounters>(&self.cut, 1, "reading the path counters")?[0];
+        let stats = self.download(&self.stats, slots, "reading the hit-point statistics")?;
+        let direct = self.download(&self.direct, pixels, "reading the direct emission")?;
+        let busy = self.download(&self.busy, pixels, "reading the emission-sampled pixels")?;
         Ok(Checkpoint { header, stats, hit_points, direct, busy, cut }.seal())
     }
 
@@ -230,21 +263,23 @@ impl Renderer {
     /// render would have, bit for bit. Fails, saying what differs, unless the checkpoint is of `scene`
     /// rendered with `settings` by `build`.
     pub fn resume(ctx: &Context, scene: &Scene, settings: Settings, checkpoint: &Checkpoint, build: &str) -> Result<Renderer> {
-        checkpoint.check(scene, &settings, build).context("cannot resume from this checkpoint")?;
+        let refused = |e: anyhow::Error| Error::Checkpoint { message: format!("cannot resume from this checkpoint: {e:#}") };
+        checkpoint.check(scene, &settings, build).map_err(refused)?;
         let mut r = Renderer::prepare(ctx, scene, settings)?;
         let c = checkpoint;
         let (slots, pixels) = (r.gpu.slots() as usize, r.gpu.pixels() as usize);
         let ppm_hits = if r.settings.mode == Mode::Ppm { slots } else { 0 };
-        ensure!(
-            c.stats.len() == slots && c.hit_points.len() == ppm_hits && c.direct.len() == pixels && c.busy.len() == pixels,
-            "the checkpoint's buffers do not fit this render ({slots} hit points, {pixels} pixels)"
-        );
-        r.write_stats(&c.stats)?;
-        r.ctx.upload(&r.direct, bytemuck::cast_slice(&c.direct))?;
-        r.ctx.upload(&r.busy, bytemuck::cast_slice(&c.busy))?;
-        r.ctx.upload(&r.cut, bytemuck::bytes_of(&c.cut))?;
+        if !(c.stats.len() == slots && c.hit_points.len() == ppm_hits && c.direct.len() == pixels && c.busy.len() == pixels) {
+            let message = format!("the checkpoint's buffers do not fit this render ({slots} hit points, {pixels} pixels)");
+            return Err(Error::Checkpoint { message });
+        }
+        let restore = |buffer: &Buffer, bytes: &[u8]| r.ctx.upload(buffer, bytes).device("restoring the checkpoint");
+        restore(&r.stats, bytemuck::cast_slice(&c.stats))?;
+        restore(&r.direct, bytemuck::cast_slice(&c.direct))?;
+        restore(&r.busy, bytemuck::cast_slice(&c.busy))?;
+        restore(&r.cut, bytemuck::bytes_of(&c.cut))?;
         if r.settings.mode == Mode::Ppm {
-            r.ctx.upload(&r.hit_points, bytemuck::cast_slice(&c.hit_points))?;
+            restore(&r.hit_points, bytemuck::cast_slice(&c.hit_points))?;
             r.set_order(morton_order(&c.hit_points))?;
         }
         let h = &c.header;
@@ -267,8 +302,9 @@ impl Renderer {
         // Depth backstops and photons per thread that keep every loop inside the device's budget. The
         // intersection loops are counted as loops even where the specialised kernels unroll them.
         let limits = if gpu.params.num_triangles > 0 { PathLimits::with_bvh } else { PathLimits::new };
+        let budget = ctx.info().loop_budget;
         let limits = limits(
-            ctx.info().loop_budget,
+            budget,
             gpu.params.num_spheres + gpu.params.num_quads,
             // choose_emitter's binary search
             u32::BITS - gpu.params.num_lights.leading_zeros() + 1,
@@ -276,7 +312,11 @@ impl Renderer {
             settings.emission_samples,
             settings.max_photon_depth,
             settings.max_eye_depth,
-        )?;
+        )
+        .map_err(|e| {
+            let lower = "the spheres and quads (or put them in meshes), the hit points per pixel or the emission samples";
+            Error::limit(format!("{e:#}"), None, budget.unwrap_or(0) as u64, lower)
+        })?;
         gpu.params.max_photon_depth = limits.photon_depth;
         gpu.params.max_eye_depth = limits.eye_depth;
         gpu.params.photon_bvh_budget = limits.photon_bvh_budget;
@@ -284,16 +324,16 @@ impl Renderer {
         gpu.params.lookup_limit = ppm_vk_kernels::lookup::lookup_limit(ctx.info().loop_budget);
         let slots = gpu.slots() as u64;
         let pixels = gpu.pixels() as u64;
-        let triangles = gpu.bvh_triangles.len() as u64;
-        let bvh_bytes = triangles * std::mem::size_of::<Triangle>() as u64 + gpu.bvh_nodes.len() as u64 * 32;
-        if triangles * std::mem::size_of::<Triangle>() as u64 > max_range || gpu.bvh_nodes.len() as u64 * 32 > max_range {
-            bail!(
-                "the scene's {triangles} triangles need {} MiB for their BVH, more than this device's largest \
-                 buffer ({} MiB): use meshes of at most {} triangles in all",
-                bvh_bytes >> 20,
-                max_range >> 20,
+        let tri_bytes = gpu.bvh_triangles.len() as u64 * std::mem::size_of::<Triangle>() as u64;
+        let node_bytes = gpu.bvh_nodes.len() as u64 * 32;
+        let bvh_bytes = tri_bytes + node_bytes;
+        if tri_bytes.max(node_bytes) > max_range {
+            let triangles = gpu.bvh_triangles.len();
+            let lower = format!(
+                "the scene's {triangles} triangles (at most {} in all)",
                 max_range / std::mem::size_of::<Triangle>() as u64
             );
+            return Err(Error::limit("the BVH (bytes in one buffer)", Some(bvh_bytes), max_range, lower));
         }
         // Every buffer within the device's largest binding and all of them within its memory, checked
         // before anything is allocated.
@@ -306,7 +346,7 @@ impl Renderer {
             ("the image", pixels * 16),
         ];
         let advice = format!(
-            "lower the resolution ({}x{}) or the hit points per pixel ({})",
+            "the resolution ({}x{}) or the hit points per pixel ({})",
             gpu.params.width,
             gpu.params.height,
             settings.slots()
@@ -321,22 +361,27 @@ impl Renderer {
             (Mode::Ppm, ProbeMode::Off) => 1,
             _ => gather::GROUP,
         };
-        let kernels = Kernels {
-            ray: traced(&reflected::RAY)?,
-            probe: gather::with_group(ctx, &reflected::PROBE, group)?,
-            photon: traced(&reflected::PHOTON)?,
-            lookup: Lookup::new(ctx)?,
-            gather: gather::with_group(ctx, &reflected::GATHER, group)?,
-            update: pipeline(ctx, &reflected::UPDATE)?,
-            resolve: pipeline(ctx, &reflected::RESOLVE)?,
+        let pipelines = || -> anyhow::Result<Kernels> {
+            Ok(Kernels {
+                ray: traced(&reflected::RAY)?,
+                probe: gather::with_group(ctx, &reflected::PROBE, group)?,
+                photon: traced(&reflected::PHOTON)?,
+                lookup: Lookup::new(ctx)?,
+                gather: gather::with_group(ctx, &reflected::GATHER, group)?,
+                update: pipeline(ctx, &reflected::UPDATE)?,
+                resolve: pipeline(ctx, &reflected::RESOLVE)?,
+            })
         };
+        let kernels = pipelines().device("creating the compute pipelines")?;
         let storage = |name: &str, bytes: u64| Buffer::new(ctx, name, bytes, BufferKind::Storage);
         let r2 = (gpu.initial_radius as f64).powi(2);
         let stats_init = vec![HitStats { r2, ..Default::default() }; slots as usize];
-        let mut r = Renderer {
+        let buffers = || -> anyhow::Result<Renderer> {
+            Ok(Renderer {
             probe_report: None,
             scene_name: scene.name.clone(),
             scene_sha256: scene.content_sha256(),
+            cancel: CancelToken::new(),
             params: ctx.buffer_from("params", &[gpu.params])?,
             spheres: ctx.buffer_from("spheres", &gpu.spheres)?,
             quads: ctx.buffer_from("quads", &gpu.quads)?,
@@ -372,22 +417,24 @@ impl Renderer {
             settings,
             gpu,
             kernels,
+        })
         };
+        let mut r = buffers().device("allocating the render's buffers")?;
         drop(stats_init);
-        r.grid.set_cells(r.gpu.params.grid_mask + 1)?;
+        r.grid.set_cells(r.gpu.params.grid_mask + 1).device("setting up the render")?;
         r.ctx.run(|cmd| {
             r.accum.cmd_fill(cmd, 0);
             r.direct.cmd_fill(cmd, 0);
             r.busy.cmd_fill(cmd, 0);
             Ok(())
-        })?;
+        }).device("setting up the render")?;
         r.ray_ms = r.ray_pass(0, true)?.iter().map(|s| s.duration_ms).sum();
         r.path_counters()?;
         // The gather walks the hit points in Morton order, so neighbouring threads read the same buckets.
         // PPM's hit points never move: order them by position once, on the host. SPPM's move every pass:
         // order the pixels by their screen position, which is nearly as coherent and never changes.
         let order = match r.settings.mode {
-            Mode::Ppm => morton_order(&r.read_hit_points()?),
+            Mode::Ppm => morton_order(&r.download(&r.hit_points, r.gpu.slots(), "reading the hit points")?),
             Mode::Sppm => pixel_order(r.gpu.params.width, r.gpu.params.height),
         };
         r.set_order(order)?;
@@ -397,13 +444,13 @@ impl Renderer {
     /// The hit-point slots the gather and the update visit, in this order.
     fn set_order(&mut self, order: Vec<u32>) -> Result<()> {
         self.active = order.len() as u32;
-        self.ctx.upload(&self.order, bytemuck::cast_slice(&order))
+        self.ctx.upload(&self.order, bytemuck::cast_slice(&order)).device("uploading the hit-point order")
     }
 
     /// The ray kernel's dispatches for eye pass `eye_pass` (the CPU reference, `reference::eye_pass`,
     /// takes the same): the first traces the hit points (with `trace_hits`) and as many emission samples as
     /// the loop budget lets one thread take (`PathLimits::emission_per_dispatch`), the others the rest.
-    pub fn ray_pushes(&self, eye_pass: u32, trace_hits: bool) -> Vec<RayPush> {
+    fn eye_pushes(&self, eye_pass: u32, trace_hits: bool) -> Vec<RayPush> {
         let jitter = match self.settings.mode {
             Mode::Ppm => [0.5, 0.5],
             Mode::Sppm => JITTER_RANDOM,
@@ -448,7 +495,7 @@ impl Renderer {
     /// a random point of each pixel; with `trace_hits` false only the emission samples (PPM's later passes).
     fn ray_pass(&mut self, eye_pass: u32, trace_hits: bool) -> Result<Vec<ScopeTiming>> {
         self.profiler.reset();
-        let pushes = self.ray_pushes(eye_pass, trace_hits);
+        let pushes = self.eye_pushes(eye_pass, trace_hits);
         let pixels = self.gpu.pixels();
         let scene = self.scene_buffers();
         let (profiler, k) = (&self.profiler, &self.kernels);
@@ -463,13 +510,14 @@ impl Renderer {
             })?;
             barrier(&self.ctx, cmd);
             Ok(())
-        })?;
-        self.profiler.read()
+        })
+        .device("the eye pass")?;
+        self.profiler.read().device("the eye pass")
     }
 
     /// Records photon tracing, the grid build and what uses the grid (the gather, or the probe's first
     /// phase) for one batch of photons `first..first+count` (global indices).
-    fn record_batch(&self, cmd: vk::CommandBuffer, first: u64, count: u32, log_index: u32, use_: GridUse) -> Result<()> {
+    fn record_batch(&self, cmd: vk::CommandBuffer, first: u64, count: u32, log_index: u32, use_: GridUse) -> anyhow::Result<()> {
         let ctx = &self.ctx;
         let scene = self.scene_buffers();
         let hits = self.hit_buffers();
@@ -524,7 +572,8 @@ impl Renderer {
         loop {
             let batches = total.div_ceil(self.batch);
             if batches > MAX_BATCHES {
-                bail!("a photon pass needs more than {MAX_BATCHES} batches: the scene leaves too many records per photon");
+                let what = "photon batches in one pass (the scene leaves too many records per photon)";
+                return Err(Error::limit(what, Some(batches as u64), MAX_BATCHES as u64, "the photons per pass"));
             }
             self.profiler.reset();
             let batch = self.batch;
@@ -534,34 +583,32 @@ impl Renderer {
                     self.record_batch(cmd, first + start as u64, batch.min(total - start), b, use_)?;
                 }
                 Ok(())
-            })?;
-            let log: Vec<u32> = self.ctx.download_prefix(&self.batch_log, batches as usize)?;
+            }).device("a photon pass")?;
+            let log: Vec<u32> = self.ctx.download_prefix(&self.batch_log, batches as usize).device("a photon pass")?;
             self.check_lookups()?;
             if log.iter().all(|&n| n as u64 <= capacity) {
-                return Ok((self.profiler.read()?, log.iter().map(|&n| n as u64).sum(), batches));
+                return Ok((self.profiler.read().device("a photon pass")?, log.iter().map(|&n| n as u64).sum(), batches));
             }
             if self.batch == 1 {
-                bail!("one photon left more records than the record buffer holds ({capacity})");
+                return Err(Error::limit("the records one photon left", None, capacity, "the photon depth (max_photon_depth)"));
             }
             self.batch = self.batch.div_ceil(2);
             self.ctx.run(|cmd| {
                 self.accum.cmd_fill(cmd, 0);
                 Ok(())
-            })?;
+            }).device("a photon pass")?;
         }
     }
 
     /// Fails if a gather or probe lookup may have stopped early: lavapipe ends every loop of a SIMD group
     /// after 65535 iterations in all, and a cut lookup would silently lose photons.
     fn check_lookups(&self) -> Result<()> {
-        let status: Vec<u32> = self.ctx.download_prefix(&self.grid.status, 1)?;
+        let status: Vec<u32> = self.ctx.download_prefix(&self.grid.status, 1).device("reading the lookup status")?;
         if status[0] != 0 {
-            bail!(
-                "a photon lookup reached the device's limit on loop iterations (lavapipe: 65535 per SIMD \
-                 group) and may have been cut short: too many photons in the grid cells one subgroup reads; \
-                 lower --photons-per-pass (now {})",
-                self.settings.photons_per_pass
-            );
+            let what = "a photon lookup may have been cut short at the device's limit on loop iterations per SIMD \
+                        group (too many photons in the grid cells one subgroup reads)";
+            let lower = format!("the photons per pass (now {})", self.settings.photons_per_pass);
+            return Err(Error::limit(what, None, self.ctx.info().loop_budget.unwrap_or(0) as u64, lower));
         }
         Ok(())
     }
@@ -574,10 +621,11 @@ impl Renderer {
         let push = self.probe_push(1);
         let hits = self.hit_buffers();
         let (profiler, k, params, grid) = (&self.profiler, &self.kernels, &self.params, &self.grid);
-        self.ctx.run(|cmd| profiler.scope(cmd, "probe", || probe::record(&k.probe, cmd, params, &hits, grid, &push)))?;
-        stages.extend(self.profiler.read()?);
+        self.ctx.run(|cmd| profiler.scope(cmd, "probe", || probe::record(&k.probe, cmd, params, &hits, grid, &push))).device("the probe pass")?;
+        stages.extend(self.profiler.read().device("the probe pass")?);
         let gpu_ms = stages.iter().map(|s| s.duration_ms).sum();
-        let (stats, hits) = (self.read_stats()?, self.read_hit_points()?);
+        let stats: Vec<HitStats> = self.download(&self.stats, self.gpu.slots(), "reading the probe's radii")?;
+        let hits: Vec<HitPoint> = self.download(&self.hit_points, self.gpu.slots(), "reading the hit points")?;
         self.probe_report = Some(ProbeReport::new(&stats, &hits, self.gpu.initial_radius, photons, gpu_ms));
         // The largest radius as the update would report it (as f32, the lookups' precision).
         let radius_max = RadiusMax {
@@ -602,7 +650,8 @@ impl Renderer {
             // A set cell size must keep lookups under 1024 cells a side (grid_key in grid.glsl).
             let widest = 2.0 * max.all.sqrt();
             if widest > 512.0 * c {
-                bail!("grid cell {c} is under 1/512 of twice the largest search radius ({widest})");
+                let message = format!("{c} is under 1/512 of twice the largest search radius ({widest})");
+                return Err(Error::Settings { field: "grid_cell", message });
             }
             return Ok(());
         }
@@ -615,12 +664,16 @@ impl Renderer {
             return Ok(());
         }
         self.gpu.set_grid_cell(cell, self.gpu.params.photon_capacity);
-        self.grid.set_cells(self.gpu.params.grid_mask + 1)?;
-        self.ctx.upload(&self.params, bytemuck::bytes_of(&self.gpu.params))
+        self.grid.set_cells(self.gpu.params.grid_mask + 1).device("resizing the photon grid")?;
+        self.ctx.upload(&self.params, bytemuck::bytes_of(&self.gpu.params)).device("resizing the photon grid")
     }
 
     /// One photon pass: `photons_per_pass` photons traced and gathered, then the progressive update.
+    /// Returns [`Error::Cancelled`] if the renderer's [`CancelToken`] is set before the pass or between
+    /// its submissions (the eye pass, the photon batches, the update); a cancelled pass leaves the
+    /// estimate as the passes before it left it.
     pub fn pass(&mut self) -> Result<PassStats> {
+        self.check_cancel()?;
         let start = Instant::now();
         let total = self.settings.photons_per_pass;
         // SPPM traces new hit points before every photon pass but the first, which uses the eye pass the
@@ -633,12 +686,18 @@ impl Renderer {
             Mode::Ppm if self.settings.emission_samples > 0 => stages = self.ray_pass(self.passes as u32 + 1, false)?,
             _ => {}
         }
+        self.check_cancel()?;
         let (batch_stages, records, batches) = self.run_batches(self.emitted, total, GridUse::Gather)?;
         stages.extend(batch_stages);
+        if self.cancel.is_cancelled() {
+            // The batches' sums wait in the pass accumulators for the update: drop them.
+            self.ctx.run(|cmd| Ok(self.accum.cmd_fill(cmd, 0))).device("cancelling the photon pass")?;
+            return Err(Error::Cancelled);
+        }
         // The update in its own submission, so an overflowed try above never touches the statistics.
         self.profiler.reset();
-        self.ctx.run(|cmd| self.profiler.scope(cmd, "update", || self.record_update(cmd)))?;
-        stages.extend(self.profiler.read()?);
+        self.ctx.run(|cmd| self.profiler.scope(cmd, "update", || self.record_update(cmd))).device("the photon pass")?;
+        stages.extend(self.profiler.read().device("the photon pass")?);
         self.passes += 1;
         self.emitted += total as u64;
         let cut = self.path_counters()?;
@@ -659,6 +718,23 @@ impl Renderer {
         })
     }
 
+    /// Makes `token` the one [`Renderer::pass`] checks (the renderer starts with one of its own).
+    pub fn set_cancel(&mut self, token: CancelToken) {
+        self.cancel = token;
+    }
+
+    /// The token [`Renderer::pass`] checks: cancel a clone of it from another thread.
+    pub fn cancel_token(&self) -> CancelToken {
+        self.cancel.clone()
+    }
+
+    fn check_cancel(&self) -> Result<()> {
+        match self.cancel.is_cancelled() {
+            true => Err(Error::Cancelled),
+            false => Ok(()),
+        }
+    }
+
     /// Resolves the current estimate into an image buffer on the device (eq. 1-2) and returns its GPU time.
     pub fn resolve(&mut self) -> Result<f64> {
         self.profiler.reset();
@@ -670,24 +746,35 @@ impl Renderer {
             profiler.scope(cmd, "resolve", || resolve::record(&k.resolve, cmd, params, stats, direct, image, pixels, &push))?;
             barrier(&self.ctx, cmd);
             Ok(())
-        })?;
-        Ok(self.profiler.read()?.iter().map(|s| s.duration_ms).sum())
+        }).device("the resolve")?;
+        Ok(self.profiler.read().device("the resolve")?.iter().map(|s| s.duration_ms).sum())
     }
 
     /// The current image (resolves, then reads it back).
     pub fn image(&mut self) -> Result<RgbImage> {
         self.resolve()?;
-        let rgba: Vec<[f32; 4]> = self.ctx.download(&self.image).context("reading the image back")?;
+        let rgba: Vec<[f32; 4]> = self.ctx.download(&self.image).device("reading the image back")?;
         RgbImage::from_rgba(self.gpu.params.width, self.gpu.params.height, &rgba[..self.gpu.pixels() as usize])
+            .device("reading the image back")
     }
 
     pub fn settings(&self) -> &Settings {
         &self.settings
     }
 
-    /// The flattened scene and render constants the kernels use.
-    pub fn gpu_scene(&self) -> &GpuScene {
-        &self.gpu
+    /// What the BVH build over the scene's triangles made (all zero without triangles).
+    pub fn bvh_stats(&self) -> &crate::BvhStats {
+        &self.gpu.bvh_stats
+    }
+
+    /// Hit-point slots: pixels times hit points per pixel.
+    pub fn hit_point_slots(&self) -> u32 {
+        self.gpu.slots()
+    }
+
+    /// The starting radius of every hit point before the probe (eq. 8, or `Settings::initial_radius`).
+    pub fn initial_radius(&self) -> f32 {
+        self.gpu.initial_radius
     }
 
     pub fn context(&self) -> &Context {
@@ -728,97 +815,17 @@ impl Renderer {
     /// Fails if a BVH traversal ran out of the device's loop budget: its hit, and so the image, would be
     /// wrong.
     pub fn path_counters(&self) -> Result<PathCounters> {
-        let c: Vec<PathCounters> = self.ctx.download_prefix(&self.cut, 1)?;
+        let c: Vec<PathCounters> = self.ctx.download_prefix(&self.cut, 1).device("reading the path counters")?;
         if c[0].traversal_cut > 0 {
-            bail!(
-                "{} ray(s) through the triangle BVH reached the device's limit on loop iterations (lavapipe: \
-                 65535 per SIMD group; this render leaves photon threads {} and eye threads {} traversal \
-                 steps) and were stopped: the scene's triangles overlap so much that a ray visits most of \
-                 them (degenerate or duplicated geometry?)",
-                c[0].traversal_cut,
-                self.limits.photon_bvh_budget,
-                self.limits.eye_bvh_budget
+            let what = format!(
+                "{} ray(s) through the triangle BVH were stopped at the device's limit on loop iterations per \
+                 SIMD group (this render leaves photon threads {} and eye threads {} traversal steps)",
+                c[0].traversal_cut, self.limits.photon_bvh_budget, self.limits.eye_bvh_budget
             );
+            let lower = "the overlap of the scene's triangles (degenerate or duplicated geometry?)";
+            return Err(Error::limit(what, None, self.ctx.info().loop_budget.unwrap_or(0) as u64, lower));
         }
         Ok(c[0])
-    }
-
-    /// Photons per batch the passes currently use.
-    pub fn batch_size(&self) -> u32 {
-        self.batch
-    }
-
-    // Read-backs of device state, for tests and tools. Each waits for the device.
-
-    pub fn read_hit_points(&self) -> Result<Vec<HitPoint>> {
-        self.ctx.download_prefix(&self.hit_points, self.gpu.slots() as usize)
-    }
-
-    pub fn read_stats(&self) -> Result<Vec<HitStats>> {
-        self.ctx.download_prefix(&self.stats, self.gpu.slots() as usize)
-    }
-
-    pub fn read_accum(&self) -> Result<Vec<PassAccum>> {
-        self.ctx.download_prefix(&self.accum, self.gpu.slots() as usize)
-    }
-
-    /// Per pixel, 1 where the pilot eye pass marked it for all its emission samples.
-    pub fn read_busy(&self) -> Result<Vec<u32>> {
-        self.ctx.download_prefix(&self.busy, self.gpu.pixels() as usize)
-    }
-
-    /// Per pixel: the emission samples' sum (rgb) and count (w).
-    pub fn read_direct(&self) -> Result<Vec<[f64; 4]>> {
-        self.ctx.download_prefix(&self.direct, self.gpu.pixels() as usize)
-    }
-
-    /// Overwrites the per-hit-point statistics (tests start counters near their limits this way).
-    pub fn write_stats(&self, stats: &[HitStats]) -> Result<()> {
-        if stats.len() != self.gpu.slots() as usize {
-            bail!("write_stats: {} entries for {} slots", stats.len(), self.gpu.slots());
-        }
-        self.ctx.upload(&self.stats, bytemuck::cast_slice(stats))
-    }
-
-    /// Overwrites the pass accumulators (tests feed the update chosen inputs this way).
-    pub fn write_accum(&self, accum: &[PassAccum]) -> Result<()> {
-        if accum.len() != self.gpu.slots() as usize {
-            bail!("write_accum: {} entries for {} slots", accum.len(), self.gpu.slots());
-        }
-        self.ctx.upload(&self.accum, bytemuck::cast_slice(accum))
-    }
-
-    /// Traces and gathers one batch of photons with global indices `first..first+count` without the
-    /// update, and returns the batch's records (the pass accumulators keep the gathered sums).
-    pub fn trace_and_gather(&mut self, first: u64, count: u32) -> Result<Vec<Photon>> {
-        self.trace_batch(first, count, GridUse::Gather)
-    }
-
-    /// Traces one batch of probe photons (the probe's random streams) and runs the probe's first phase
-    /// (per hit point N and the sum of d^2 / r^2 into the pass accumulators) without setting radii;
-    /// returns the batch's records. `finish_probe` sets the radii (eq. 9).
-    pub fn trace_and_probe(&mut self, first: u64, count: u32) -> Result<Vec<Photon>> {
-        self.trace_batch(first, count, GridUse::Probe)
-    }
-
-    /// The probe's second phase: lambda (eq. 7) and the starting radii (eq. 9) from the accumulators.
-    pub fn finish_probe(&mut self) -> Result<()> {
-        let push = self.probe_push(1);
-        let hits = self.hit_buffers();
-        let (k, params, grid) = (&self.kernels, &self.params, &self.grid);
-        self.ctx.run(|cmd| probe::record(&k.probe, cmd, params, &hits, grid, &push))
-    }
-
-    fn trace_batch(&mut self, first: u64, count: u32, use_: GridUse) -> Result<Vec<Photon>> {
-        self.profiler.reset();
-        self.ctx.run(|cmd| self.record_batch(cmd, first, count, 0, use_))?;
-        let n: Vec<u32> = self.ctx.download_prefix(&self.counter, 1)?;
-        self.check_lookups()?;
-        self.path_counters()?;
-        if n[0] > self.gpu.params.photon_capacity {
-            bail!("a test batch of {count} photons left {} records, over the capacity {}", n[0], self.gpu.params.photon_capacity);
-        }
-        self.ctx.download_prefix(&self.photons, n[0] as usize)
     }
 
     /// Times the photon kernel as this render uses it against variants of itself with parts removed
@@ -826,9 +833,13 @@ impl Renderer {
     /// photons, and counts the intersections each traces (an untimed run of each). For `ppm-vk bench`:
     /// the trace-only variant is this design's ceiling. The render's state is left as it was.
     pub fn photon_breakdown(&mut self, photons: u32) -> Result<Vec<PhotonVariant>> {
+        self.photon_variants(photons).device("timing the photon kernel's variants")
+    }
+
+    fn photon_variants(&mut self, photons: u32) -> anyhow::Result<Vec<PhotonVariant>> {
         let saved: Vec<PathCounters> = self.ctx.download_prefix(&self.cut, 1)?;
         let photons = photons.min(self.batch); // one batch: the records must fit
-        let run = |r: &Self, defines: &[(&str, &str)], counted: bool| -> Result<(f64, u64)> {
+        let run = |r: &Self, defines: &[(&str, &str)], counted: bool| -> anyhow::Result<(f64, u64)> {
             let defines = [defines, if counted { &[("PHOTON_COUNT_STEPS", "1")][..] } else { &[] }].concat();
             let k = tracing_pipeline(&r.ctx, &r.gpu, &r.settings, &reflected::PHOTON, &defines)?;
             let push = PhotonPush { first: 0, count: photons, salt: SALT_PHOTON, per_thread: r.limits.per_thread, pad0: 0 };
@@ -866,24 +877,120 @@ impl Renderer {
         Ok(out)
     }
 
-    /// Runs the update kernel alone (after `trace_and_gather`).
-    pub fn update_only(&mut self) -> Result<()> {
-        self.ctx.run(|cmd| self.record_update(cmd))
-    }
-
-    /// The largest R^2 the last update saw (see `update.comp`).
+    /// The largest R^2 the last update saw (see `update.comp`), as the lookups read it (f32).
     pub fn radius_max(&self) -> Result<RadiusMax> {
-        let bits: Vec<u32> = self.ctx.download_prefix(&self.r2_max, 2)?;
+        let bits: Vec<u32> = self.download(&self.r2_max, 2, "reading the largest radius")?;
         Ok(RadiusMax::from_bits([bits[0], bits[1]]))
     }
 
     /// Records the update (eq. 3, 6, 14) and the reduction to the largest radius after it.
-    fn record_update(&self, cmd: vk::CommandBuffer) -> Result<()> {
+    fn record_update(&self, cmd: vk::CommandBuffer) -> anyhow::Result<()> {
         self.r2_max.cmd_fill(cmd, 0);
         barrier(&self.ctx, cmd);
-        gather::record_update(&self.kernels.update, cmd, &self.hit_buffers(), &self.r2_max, &self.update_push())?;
+        update::record_update(&self.kernels.update, cmd, &self.hit_buffers(), &self.r2_max, &self.update_push())?;
         barrier(&self.ctx, cmd);
         Ok(())
+    }
+
+    /// A device buffer's first `count` records (waits for the device).
+    fn download<T: bytemuck::Pod>(&self, buffer: &Buffer, count: u32, what: &str) -> Result<Vec<T>> {
+        self.ctx.download_prefix(buffer, count as usize).device(what)
+    }
+}
+
+/// Hooks into device state for the tests (feature `test-hooks`): read-backs, overwrites and single
+/// stages. Each waits for the device.
+#[cfg(feature = "test-hooks")]
+impl Renderer {
+    /// The flattened scene and render constants the kernels use.
+    pub fn gpu_scene(&self) -> &GpuScene {
+        &self.gpu
+    }
+
+    /// Photons per batch the passes currently use.
+    pub fn batch_size(&self) -> u32 {
+        self.batch
+    }
+
+    /// The ray kernel's dispatches for eye pass `eye_pass` (see `eye_pushes`).
+    pub fn ray_pushes(&self, eye_pass: u32, trace_hits: bool) -> Vec<RayPush> {
+        self.eye_pushes(eye_pass, trace_hits)
+    }
+
+    pub fn read_hit_points(&self) -> anyhow::Result<Vec<HitPoint>> {
+        self.ctx.download_prefix(&self.hit_points, self.gpu.slots() as usize)
+    }
+
+    pub fn read_stats(&self) -> anyhow::Result<Vec<HitStats>> {
+        self.ctx.download_prefix(&self.stats, self.gpu.slots() as usize)
+    }
+
+    pub fn read_accum(&self) -> anyhow::Result<Vec<PassAccum>> {
+        self.ctx.download_prefix(&self.accum, self.gpu.slots() as usize)
+    }
+
+    /// Per pixel, 1 where the pilot eye pass marked it for all its emission samples.
+    pub fn read_busy(&self) -> anyhow::Result<Vec<u32>> {
+        self.ctx.download_prefix(&self.busy, self.gpu.pixels() as usize)
+    }
+
+    /// Per pixel: the emission samples' sum (rgb) and count (w).
+    pub fn read_direct(&self) -> anyhow::Result<Vec<[f64; 4]>> {
+        self.ctx.download_prefix(&self.direct, self.gpu.pixels() as usize)
+    }
+
+    /// Overwrites the per-hit-point statistics (tests start counters near their limits this way).
+    pub fn write_stats(&self, stats: &[HitStats]) -> anyhow::Result<()> {
+        if stats.len() != self.gpu.slots() as usize {
+            anyhow::bail!("write_stats: {} entries for {} slots", stats.len(), self.gpu.slots());
+        }
+        self.ctx.upload(&self.stats, bytemuck::cast_slice(stats))
+    }
+
+    /// Overwrites the pass accumulators (tests feed the update chosen inputs this way).
+    pub fn write_accum(&self, accum: &[PassAccum]) -> anyhow::Result<()> {
+        if accum.len() != self.gpu.slots() as usize {
+            anyhow::bail!("write_accum: {} entries for {} slots", accum.len(), self.gpu.slots());
+        }
+        self.ctx.upload(&self.accum, bytemuck::cast_slice(accum))
+    }
+
+    /// Traces and gathers one batch of photons with global indices `first..first+count` without the
+    /// update, and returns the batch's records (the pass accumulators keep the gathered sums).
+    pub fn trace_and_gather(&mut self, first: u64, count: u32) -> anyhow::Result<Vec<Photon>> {
+        self.trace_batch(first, count, GridUse::Gather)
+    }
+
+    /// Traces one batch of probe photons (the probe's random streams) and runs the probe's first phase
+    /// (per hit point N and the sum of d^2 / r^2 into the pass accumulators) without setting radii;
+    /// returns the batch's records. `finish_probe` sets the radii (eq. 9).
+    pub fn trace_and_probe(&mut self, first: u64, count: u32) -> anyhow::Result<Vec<Photon>> {
+        self.trace_batch(first, count, GridUse::Probe)
+    }
+
+    /// The probe's second phase: lambda (eq. 7) and the starting radii (eq. 9) from the accumulators.
+    pub fn finish_probe(&mut self) -> anyhow::Result<()> {
+        let push = self.probe_push(1);
+        let hits = self.hit_buffers();
+        let (k, params, grid) = (&self.kernels, &self.params, &self.grid);
+        self.ctx.run(|cmd| probe::record(&k.probe, cmd, params, &hits, grid, &push))
+    }
+
+    fn trace_batch(&mut self, first: u64, count: u32, use_: GridUse) -> anyhow::Result<Vec<Photon>> {
+        self.profiler.reset();
+        self.ctx.run(|cmd| self.record_batch(cmd, first, count, 0, use_))?;
+        let n: Vec<u32> = self.ctx.download_prefix(&self.counter, 1)?;
+        self.check_lookups()?;
+        self.path_counters()?;
+        if n[0] > self.gpu.params.photon_capacity {
+            anyhow::bail!("a test batch of {count} photons left {} records, over the capacity {}", n[0], self.gpu.params.photon_capacity);
+        }
+        self.ctx.download_prefix(&self.photons, n[0] as usize)
+    }
+
+    /// Runs the update kernel alone (after `trace_and_gather`).
+    pub fn update_only(&mut self) -> anyhow::Result<()> {
+        self.ctx.run(|cmd| self.record_update(cmd))
     }
 
     /// Sets the emitted-photon total the resolve divides by (tests start it near 2^32 this way).
@@ -900,7 +1007,7 @@ fn tracing_pipeline(
     settings: &Settings,
     k: &reflected::KernelInfo,
     defines: &[(&str, &str)],
-) -> Result<ComputePipeline> {
+) -> anyhow::Result<ComputePipeline> {
     let inline = settings.specialize
         && gpu.spheres.len() + gpu.quads.len() <= MAX_INLINE_PRIMITIVES
         && gpu.params.num_triangles == 0;
@@ -920,22 +1027,16 @@ fn tracing_pipeline(
 /// `per_pixel` grow with the image (`advice` says how to shrink them); `others` are checked for the total.
 fn fits_device(per_pixel: &[(&str, u64)], others: &[(&str, u64)], max_range: u64, memory: u64, advice: &str) -> Result<()> {
     if let Some((what, bytes)) = per_pixel.iter().find(|(_, b)| *b > max_range) {
-        bail!("{what} need {} MiB, more than this device's largest buffer ({} MiB): {advice}", bytes >> 20, max_range >> 20);
+        return Err(Error::limit(format!("{what} ({} MiB in one buffer)", bytes >> 20), Some(*bytes), max_range, advice));
     }
     let total: u64 = per_pixel.iter().chain(others).map(|(_, b)| b).sum();
     if memory > 0 && total > memory {
         let list: Vec<String> = per_pixel.iter().chain(others).map(|(w, b)| format!("{w} {} MiB", b >> 20)).collect();
-        bail!(
-            "the render needs {} MiB of device memory, more than this device has ({} MiB: {}): {advice}, or \
-             --photons-per-pass",
-            total >> 20,
-            memory >> 20,
-            list.join(", ")
-        );
+        let what = format!("the render's device memory ({} MiB: {})", total >> 20, list.join(", "));
+        return Err(Error::limit(what, Some(total), memory, format!("{advice}, or --photons-per-pass")));
     }
     Ok(())
 }
-
 /// Every pixel, in Morton order of its (x, y).
 fn pixel_order(width: u32, height: u32) -> Vec<u32> {
     fn spread(v: u32) -> u64 {

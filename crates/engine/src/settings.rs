@@ -1,6 +1,6 @@
 //! Render settings and their defaults.
 
-use anyhow::{bail, Result};
+use crate::error::{Error, Result};
 use ppm_vk_kernels::lookup::SCAN_BLOCK;
 
 /// Most emission samples per pixel and eye pass (`Settings::emission_samples`).
@@ -103,43 +103,48 @@ impl Default for Settings {
     }
 }
 
+fn invalid(field: &'static str, message: String) -> Error {
+    Error::Settings { field, message }
+}
+
 impl Settings {
+    /// Checks every setting's range; the error is [`Error::Settings`] naming the field.
     pub fn validate(&self) -> Result<()> {
         if self.photons_per_pass == 0 {
-            bail!("photons per pass must be at least 1");
+            return Err(invalid("photons_per_pass", "must be at least 1".into()));
         }
         if !(self.alpha > 0.0 && self.alpha < 1.0) {
-            bail!("alpha must be in (0, 1), got {}", self.alpha);
+            return Err(invalid("alpha", format!("must be in (0, 1), got {}", self.alpha)));
         }
         if let Some(k) = self.cone_k {
             if !(k.is_finite() && k >= 1.0) {
-                bail!("cone filter constant k must be >= 1, got {k}");
+                return Err(invalid("cone_k", format!("the cone filter constant k must be >= 1, got {k}")));
             }
         }
         if let Some(r) = self.initial_radius {
             if !(r.is_finite() && r > 0.0) {
-                bail!("initial radius must be positive and finite, got {r}");
+                return Err(invalid("initial_radius", format!("must be positive and finite, got {r}")));
             }
         }
         if !(self.probe_beta.is_finite() && self.probe_beta > 0.0 && self.probe_beta < 1.0) {
-            bail!("probe beta must be a fraction of r in (0, 1), got {}", self.probe_beta);
+            return Err(invalid("probe_beta", format!("must be a fraction of r in (0, 1), got {}", self.probe_beta)));
         }
         if self.probe_photons == Some(0) {
-            bail!("probe photons must be at least 1");
+            return Err(invalid("probe_photons", "must be at least 1".into()));
         }
         if !(1..=8).contains(&self.hit_slots) {
-            bail!("hit slots per pixel must be in 1..=8, got {}", self.hit_slots);
+            return Err(invalid("hit_slots", format!("hit slots per pixel must be in 1..=8, got {}", self.hit_slots)));
         }
         if let Some(b) = self.grid_buckets {
             if !b.is_power_of_two() || !(SCAN_BLOCK..=SCAN_BLOCK * 65536).contains(&b) {
-                bail!("photon grid buckets must be a power of two in [{SCAN_BLOCK}, {}], got {b}", SCAN_BLOCK as u64 * 65536);
+                return Err(invalid("grid_buckets", format!("photon grid buckets must be a power of two in [{SCAN_BLOCK}, {}], got {b}", SCAN_BLOCK as u64 * 65536)));
             }
         }
         if self.max_eye_depth == 0 || self.max_photon_depth == 0 {
-            bail!("path depth limits must be at least 1");
+            return Err(invalid(if self.max_eye_depth == 0 { "max_eye_depth" } else { "max_photon_depth" }, "path depth limits must be at least 1".into()));
         }
         if self.emission_samples > MAX_EMISSION_SAMPLES {
-            bail!("emission samples per pixel and pass must be at most {MAX_EMISSION_SAMPLES}, got {}", self.emission_samples);
+            return Err(invalid("emission_samples", format!("emission samples per pixel and pass must be at most {MAX_EMISSION_SAMPLES}, got {}", self.emission_samples)));
         }
         Ok(())
     }

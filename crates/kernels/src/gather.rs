@@ -1,5 +1,5 @@
-//! Stage 4, `shaders/gather/`: per hit point, this batch's photons within R (gather.comp), then the
-//! progressive radius and flux update (update.comp, eq. 3, 6, 14).
+//! Stage 4, `shaders/gather/`: per hit point, this batch's photons within R (gather.comp); the progressive
+//! update that follows is stage 4b, [`crate::update`].
 
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
@@ -17,17 +17,6 @@ pub struct GatherPush {
     pub cone_k: f32,
 }
 push_struct!(GatherPush, GATHER);
-
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct UpdatePush {
-    pub count: u32,
-    pub alpha: f32,
-    /// `RenderParams::flux_fixed`.
-    pub flux_fixed: f32,
-    pub pad0: u32,
-}
-push_struct!(UpdatePush, UPDATE);
 
 /// Per-hit-point state the gather and update read and write.
 pub struct HitBuffers<'a> {
@@ -72,32 +61,4 @@ pub fn record_gather(
 ) -> Result<()> {
     let threads = push.count.div_ceil(k.group) as u64;
     k.pipeline.dispatch(cmd, &grid_reader_bindings(params, hits, grid), bytemuck::bytes_of(push), threads)
-}
-
-/// The update (eq. 3, 6, 14). `r2_max` (two words, zeroed before) receives the f32 bits of the largest
-/// R^2 after it: over the hit points live this pass, and over all slots (`RadiusMax`).
-pub fn record_update(
-    k: &ComputePipeline,
-    cmd: vk::CommandBuffer,
-    hits: &HitBuffers,
-    r2_max: &Buffer,
-    push: &UpdatePush,
-) -> Result<()> {
-    let buffers = [hits.stats, hits.accum, hits.order, hits.hit_points, r2_max];
-    k.dispatch(cmd, &buffers, bytemuck::bytes_of(push), push.count as u64)
-}
-
-/// The largest R^2 the update saw, from the two words it wrote.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RadiusMax {
-    /// Over the hit points live in the pass (SPPM: whose eye path found a diffuse surface).
-    pub live: f32,
-    /// Over every slot in the order.
-    pub all: f32,
-}
-
-impl RadiusMax {
-    pub fn from_bits(bits: [u32; 2]) -> RadiusMax {
-        RadiusMax { live: f32::from_bits(bits[0]), all: f32::from_bits(bits[1]) }
-    }
 }

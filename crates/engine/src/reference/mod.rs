@@ -344,7 +344,7 @@ pub fn resolve(g: &GpuScene, stats: &[HitStats], direct: &[[f64; 4]], emitted: f
 }
 
 /// Eq. 7 in units of r^2: lambda / r^2 = (1/N) sum |t_p - g|^2 / r^2 over the `d2` (squared distances) of
-/// the photons inside the sphere; 1 (sparse) when there is none (ALGORITHM.md).
+/// the photons inside the sphere; 1 (sparse) when there is none (shared/paper/ALGORITHM.md).
 pub fn lambda_ratio(d2: &[f64], r2: f64) -> f64 {
     if d2.is_empty() {
         return 1.0;

@@ -20,6 +20,7 @@ use glam::{DAffine3, DMat3, DMat4, DVec3, DVec4, Vec3};
 
 use super::obj::{self, RawMesh};
 use super::{Camera, Material, Mesh, ObjImport, Quad, Scene, Sphere, Surface, MAX_TRIANGLES};
+use crate::error::Error;
 
 /// Deepest `<include>` nesting, Mitsuba's own limit (`ParserConfig::max_include_depth`).
 pub const MAX_INCLUDE_DEPTH: usize = 15;
@@ -130,8 +131,11 @@ impl Elem {
         s + ">"
     }
 
+    /// A located [`Error::Scene`] (inside anyhow; `Scene::load_with` takes it out): the element is its
+    /// field.
     fn err(&self, msg: impl fmt::Display) -> anyhow::Error {
-        anyhow!("{}: {}: {msg}", self.loc, self.what())
+        let Loc { file, line, col } = &self.loc;
+        anyhow::Error::from(Error::scene(file.to_string(), *line as usize, *col as usize, self.what(), msg.to_string()))
     }
 
     fn warning(&self, msg: impl fmt::Display) -> String {
@@ -171,8 +175,10 @@ impl Reader {
             None => anyhow!(msg),
         };
         // Bounded and regular files only, as for TOML scenes (a device file would be read forever).
-        let text = super::read_bounded(path, super::MAX_SCENE_BYTES, "scene file")
-            .map_err(|e| at(format!("{shown}: {e:#}")))?;
+        let text = super::read_bounded(path, super::MAX_SCENE_BYTES, "scene file").map_err(|e| match included_at {
+            Some(include) => include.err(e),
+            None => anyhow::Error::from(e),
+        })?;
         let canonical = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
         if let Some(i) = self.open.iter().position(|p| *p == canonical) {
             let chain: Vec<String> = self.open[i..]

@@ -18,6 +18,9 @@ use std::path::Path;
 use glam::{DVec3, Vec3};
 
 pub use mitsuba::{parse_define, DISK_SEGMENTS, MAX_INCLUDE_DEPTH, MAX_NESTING};
+
+use crate::error::{Error, Result};
+
 pub use obj::ObjImport;
 
 /// Largest accepted image side; larger is almost certainly a typo and would
@@ -241,45 +244,48 @@ fn invalid(path: impl Into<String>, message: impl Into<String>) -> Invalid {
 
 impl Scene {
     /// Reads and parses a scene file: Mitsuba 3 XML for a `.xml` file (see `docs/mitsuba.md`), else
-    /// the TOML format. Every error message starts with the path. Mesh files are found relative to
-    /// the scene file's directory.
-    pub fn load(path: &Path) -> anyhow::Result<Scene> {
+    /// the TOML format. A file that cannot be read is [`Error::Io`]; anything wrong in it is
+    /// [`Error::Scene`] with its line, column and field. Mesh files are found relative to the scene
+    /// file's directory.
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene> {
         Scene::load_with(path, &[])
     }
 
     /// [`Scene::load`] with `defines` (`name`, `value`) overriding a Mitsuba scene's `<default>`
     /// parameters, as Mitsuba's `-D name=value` (a name the scene never uses is an error). A TOML
     /// scene has no parameters: `defines` must be empty for it.
-    pub fn load_with(path: &Path, defines: &[(String, String)]) -> anyhow::Result<Scene> {
-        let is_xml = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+    pub fn load_with(path: impl AsRef<Path>, defines: &[(String, String)]) -> Result<Scene> {
+        let path = path.as_ref();
+        let shown = path.display().to_string();
+        let is_xml = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml"));
         if is_xml {
-            return mitsuba::load(path, defines);
+            // The reader's located errors are `Error`s inside anyhow; anything else names the file.
+            return mitsuba::load(path, defines).map_err(|e| match e.downcast::<Error>() {
+                Ok(located) => located,
+                Err(e) => Error::scene(shown, 0, 0, "", format!("{e:#}")),
+            });
         }
         if let Some((name, value)) = defines.first() {
-            anyhow::bail!(
-                "{}: -D {name}={value}: parameters are for Mitsuba scenes (.xml); a TOML scene has none",
-                path.display()
-            );
+            let message = format!("-D {name}={value}: parameters are for Mitsuba scenes (.xml); a TOML scene has none");
+            return Err(Error::scene(shown, 0, 0, "", message));
         }
-        // The io error goes into the message itself (not only an anyhow context) so
-        // that `{}` formatting still says why the file could not be read.
         let text = read_bounded(path, MAX_SCENE_BYTES, "scene file")?;
         Scene::parse(&text, &path.display().to_string())
     }
 
-    /// Parses scene text; `origin` (usually the file name) prefixes every error, and mesh files are
-    /// found relative to its directory.
-    pub fn parse(text: &str, origin: &str) -> anyhow::Result<Scene> {
+    /// Parses scene text; `origin` (usually the file name) is the `file` of every error, and mesh files
+    /// are found relative to its directory.
+    pub fn parse(text: &str, origin: &str) -> Result<Scene> {
         toml::parse(text, origin)
     }
 
     /// Imports an OBJ file (and its MTL unless `import.material` is set) as a new mesh; returns its
     /// index in `meshes`. Its MTL materials are appended to `materials` (named `<path>:<MTL name>`),
-    /// what was approximated to `warnings`. Call [`Scene::validate`] when the scene is complete.
-    pub fn import_obj(&mut self, path: &Path, import: &ObjImport) -> anyhow::Result<usize> {
-        obj::import(self, path, import, MAX_TRIANGLES)
+    /// what was approximated to `warnings`. Call [`Scene::validate`] when the scene is complete. The
+    /// error is [`Error::Scene`] with no file of its own: its message starts with the OBJ or MTL file
+    /// and the line there.
+    pub fn import_obj(&mut self, path: impl AsRef<Path>, import: &ObjImport) -> Result<usize> {
+        obj::import(self, path.as_ref(), import, MAX_TRIANGLES).map_err(|e| Error::scene("", 0, 0, "", format!("{e:#}")))
     }
 
     /// Axis-aligned bounds `(min, max)` of all spheres, quads and mesh vertices; `(0, 0)` for an
@@ -424,10 +430,10 @@ impl Scene {
     /// Checks everything the renderer relies on: finite values, camera, material ranges (emission only
     /// on diffuse surfaces), sphere radii, non-degenerate quads and triangles, indices in range, at
     /// most [`MAX_TRIANGLES`], no emitting sphere, and at least one light (an emitting quad or mesh
-    /// triangle). The error is an [`Invalid`] (field path and message) under the scene's name.
-    pub fn validate(&self) -> anyhow::Result<()> {
-        self.check()
-            .map_err(|e| anyhow::anyhow!("scene {}: {e}", self.name))
+    /// triangle). The error is [`Error::Scene`] with the field's path, the scene's name as its `file`
+    /// and no line (a loader that knows where the field was written locates it instead).
+    pub fn validate(&self) -> Result<()> {
+        self.check().map_err(|e| Error::scene(&self.name, 0, 0, e.path, e.message))
     }
 
     /// [`Scene::validate`] with the field path kept apart, for loaders that can locate it.
@@ -513,16 +519,16 @@ pub const MAX_MESH_BYTES: u64 = 2 << 30;
 
 /// Reads a regular file of at most `max` bytes as text; anything else (a device such as /dev/zero, a
 /// directory, a larger file) is an error naming the path, before reading a byte.
-pub(crate) fn read_bounded(path: &Path, max: u64, what: &str) -> anyhow::Result<String> {
-    let cannot = |e: &dyn fmt::Display| anyhow::anyhow!("{}: cannot read {what}: {e}", path.display());
-    let meta = std::fs::metadata(path).map_err(|e| cannot(&e))?;
+pub(crate) fn read_bounded(path: &Path, max: u64, what: &str) -> Result<String> {
+    let refuse = |kind: std::io::ErrorKind, why: String| Error::io(path, std::io::Error::new(kind, why));
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     if !meta.is_file() {
-        return Err(cannot(&"not a regular file"));
+        return Err(refuse(std::io::ErrorKind::InvalidInput, format!("cannot read {what}: not a regular file")));
     }
     if meta.len() > max {
-        anyhow::bail!("{}: {} bytes, more than a {what} may have ({max})", path.display(), meta.len());
+        return Err(refuse(std::io::ErrorKind::InvalidData, format!("{} bytes, more than a {what} may have ({max})", meta.len())));
     }
-    std::fs::read_to_string(path).map_err(|e| cannot(&e))
+    std::fs::read_to_string(path).map_err(|e| Error::io(path, e))
 }
 
 pub(crate) fn fmt_vec(v: [f32; 3]) -> String {

@@ -2,7 +2,8 @@
 //! and `[[mesh]]` entries that import OBJ files. See `docs/scene-format.md` for the user-facing spec.
 //!
 //! Parsing is two-stage: serde deserialises the file into `Raw*` structs whose leaves are
-//! `toml::Spanned` (so every value keeps its byte range), then `build` makes the [`Scene`] and runs
+//! `toml::Spanned` (so every value keeps its byte range), read through serde_path_to_error (so a type
+//! error knows the field it was reading), then `build` makes the [`Scene`] and runs
 //! [`Scene::check`] on it; the field path of a failed check is mapped back to the span it came from.
 //! What only the file can get wrong (unknown material names, two surface kinds in one material, a mesh
 //! transform) is checked here. Every error is reported as `<origin>:<line>:<col>: <field path>: <what>`.
@@ -13,14 +14,15 @@ use std::ops::Range;
 use std::path::Path;
 
 use ::toml::Spanned;
-use anyhow::anyhow;
 use glam::{DAffine3, DMat3, DVec3, Vec3};
 use serde::Deserialize;
+
+use crate::error::{Error, Result};
 
 use super::{obj, Camera, Material, ObjImport, Quad, Scene, Sphere, Surface, MAX_TRIANGLES};
 
 /// [`Scene::parse`]: mesh files are found relative to the directory of `origin`.
-pub(super) fn parse(text: &str, origin: &str) -> anyhow::Result<Scene> {
+pub(super) fn parse(text: &str, origin: &str) -> Result<Scene> {
     let src = Source { origin, text };
     if is_blank(text) {
         return Err(src.error(
@@ -30,7 +32,8 @@ pub(super) fn parse(text: &str, origin: &str) -> anyhow::Result<Scene> {
              (an emitting quad or mesh)",
         ));
     }
-    let raw: RawScene = ::toml::from_str(text).map_err(|e| src.toml_error(&e))?;
+    let raw: RawScene =
+        serde_path_to_error::deserialize(::toml::Deserializer::new(text)).map_err(|e| src.toml_error(e))?;
     let base = Path::new(origin).parent().unwrap_or(Path::new(""));
     build(&src, raw, base)
 }
@@ -44,7 +47,7 @@ struct RawScene {
     name: Option<Spanned<String>>,
     camera: Spanned<RawCamera>,
     #[serde(default)]
-    materials: BTreeMap<Spanned<String>, Spanned<RawMaterial>>,
+    materials: BTreeMap<String, Spanned<RawMaterial>>,
     #[serde(default)]
     sphere: Vec<Spanned<RawSphere>>,
     #[serde(default)]
@@ -130,32 +133,20 @@ impl Source<'_> {
         (line, col)
     }
 
-    fn error(
-        &self,
-        span: Range<usize>,
-        path: Option<&str>,
-        msg: impl std::fmt::Display,
-    ) -> anyhow::Error {
-        let (line, col) = self.line_col(span.start);
-        let mut s = format!("{}:{line}:{col}: ", self.origin);
-        if let Some(p) = path.filter(|p| !p.is_empty()) {
-            let _ = write!(s, "{p}: ");
-        }
-        let _ = write!(s, "{msg}");
-        anyhow!(s)
+    /// [`Error::Scene`] at the start of `span`, for field `path`.
+    fn error(&self, span: Range<usize>, path: Option<&str>, msg: impl std::fmt::Display) -> Error {
+        let (line, column) = self.line_col(span.start);
+        Error::scene(self.origin, line, column, path.unwrap_or(""), msg.to_string())
     }
 
-    /// Syntax and serde (type / missing / unknown field) errors from toml. toml
-    /// gives a span but not the key path, so the path is recovered from the text.
-    fn toml_error(&self, e: &toml::de::Error) -> anyhow::Error {
-        let span = e.span().unwrap_or(0..0);
-        // A missing field is reported at its table (or at the document root):
-        // the key on that line, if any, is not the culprit.
-        let table_only = e.message().starts_with("missing field");
-        let path = field_path_at(self.text, span.start, table_only);
+    /// Syntax and serde (type / missing / unknown field) errors: toml gives the span, and
+    /// serde_path_to_error the path of the field being read when it failed.
+    fn toml_error(&self, e: serde_path_to_error::Error<::toml::de::Error>) -> Error {
+        let path = field_path(e.path());
+        let e = e.into_inner();
         // toml's messages may be multi-line ("invalid array\nexpected `]`"); keep ours one line.
         let msg = e.message().trim().replace('\n', ": ");
-        self.error(span, path.as_deref(), msg)
+        self.error(e.span().unwrap_or(0..0), Some(&path), msg)
     }
 }
 
@@ -166,80 +157,25 @@ fn is_blank(text: &str) -> bool {
         .all(|l| l.is_empty() || l.starts_with('#'))
 }
 
-/// Best-effort field path (`sphere[1].radius`, `materials.white`, `camera.vfov`)
-/// of the key whose line contains byte `offset`, found by scanning table headers
-/// and `key =` lines. Array-of-table indices are 0-based. Handles the layout
-/// this format is written in (one key per line, arrays possibly multi-line);
-/// for exotic layouts it may return a shorter path or none. With `table_only`
-/// the key is left out (`None` for the document root).
-fn field_path_at(text: &str, offset: usize, table_only: bool) -> Option<String> {
-    let mut table = String::new();
-    let mut key: Option<String> = None;
-    let mut counts: HashMap<String, usize> = HashMap::new();
-    // Open-bracket depth of a value spanning several lines, so that an array
-    // element line such as `[1, 2, 3],` is not taken for a table header.
-    let mut depth: i32 = 0;
-    let mut line_start = 0;
-    for line in text.split_inclusive('\n') {
-        if line_start > offset {
-            break;
-        }
-        line_start += line.len();
-        let code = strip_comment(line).trim();
-        if depth > 0 {
-            depth += bracket_balance(code);
-            continue;
-        }
-        if let Some(rest) = code.strip_prefix("[[") {
-            let name = rest.split("]]").next().unwrap_or("").trim().to_string();
-            let n = counts.entry(name.clone()).or_insert(0);
-            table = format!("{name}[{n}]");
-            *n += 1;
-            key = None;
-        } else if let Some(rest) = code.strip_prefix('[') {
-            table = rest.split(']').next().unwrap_or("").trim().to_string();
-            key = None;
-        } else if let Some((k, v)) = code.split_once('=') {
-            let k = k.trim();
-            if !k.is_empty()
-                && k.chars()
-                    .all(|c| c.is_alphanumeric() || "_-.\"' ".contains(c))
-            {
-                key = Some(k.to_string());
-                depth = bracket_balance(v).max(0);
+/// The field path as the rest of the engine writes it (`sphere[1].radius`, `materials.white.diffuse`,
+/// `mesh[0].matrix[3]`), without the private keys through which `toml::Spanned` reads its value.
+fn field_path(path: &serde_path_to_error::Path) -> String {
+    use serde_path_to_error::Segment;
+    let mut out = String::new();
+    for segment in path {
+        match segment {
+            Segment::Seq { index } => write!(out, "[{index}]").unwrap(),
+            Segment::Map { key } if key.starts_with("$__serde_spanned_private") => {}
+            Segment::Map { key } | Segment::Enum { variant: key } => {
+                if !out.is_empty() {
+                    out.push('.');
+                }
+                out.push_str(key);
             }
+            Segment::Unknown => {}
         }
     }
-    match (table.is_empty(), key.filter(|_| !table_only)) {
-        (true, None) => None,
-        (true, Some(k)) => Some(k),
-        (false, None) => Some(table),
-        (false, Some(k)) => Some(format!("{table}.{k}")),
-    }
-}
-
-/// Drops a trailing `# comment`, ignoring `#` inside quoted strings.
-fn strip_comment(line: &str) -> &str {
-    let mut quote: Option<char> = None;
-    for (i, c) in line.char_indices() {
-        match (quote, c) {
-            (None, '"' | '\'') => quote = Some(c),
-            (Some(q), _) if c == q => quote = None,
-            (None, '#') => return &line[..i],
-            _ => {}
-        }
-    }
-    line
-}
-
-fn bracket_balance(s: &str) -> i32 {
-    s.chars()
-        .map(|c| match c {
-            '[' | '{' => 1,
-            ']' | '}' => -1,
-            _ => 0,
-        })
-        .sum()
+    out
 }
 
 // ---------------------------------------------------------------------------
@@ -274,7 +210,7 @@ fn vec3(v: &Spanned<[f32; 3]>) -> Vec3 {
     Vec3::from_array(*v.get_ref())
 }
 
-fn build(src: &Source, raw: RawScene, base: &Path) -> anyhow::Result<Scene> {
+fn build(src: &Source, raw: RawScene, base: &Path) -> Result<Scene> {
     let mut spans = Spans::default();
     let name = match &raw.name {
         Some(n) => n.get_ref().clone(),
@@ -307,10 +243,10 @@ fn build(src: &Source, raw: RawScene, base: &Path) -> anyhow::Result<Scene> {
 
     // BTreeMap sorts by name; keep file order so material indices follow the file.
     let mut raw_materials: Vec<_> = raw.materials.iter().collect();
-    raw_materials.sort_by_key(|(k, _)| k.span().start);
+    raw_materials.sort_by_key(|(_, m)| m.span().start);
     let mut materials = Vec::with_capacity(raw_materials.len());
     for (key, m) in raw_materials {
-        materials.push(material(src, key.get_ref(), m, &mut spans)?);
+        materials.push(material(src, key, m, &mut spans)?);
     }
 
     let mut spheres = Vec::with_capacity(raw.sphere.len());
@@ -378,7 +314,7 @@ fn lookup(
     materials: &[Material],
     r: &Spanned<String>,
     path: &str,
-) -> anyhow::Result<u32> {
+) -> Result<u32> {
     match materials.iter().position(|m| m.name == *r.get_ref()) {
         Some(i) => {
             u32::try_from(i).map_err(|_| src.error(r.span(), Some(path), "too many materials"))
@@ -409,7 +345,7 @@ fn material(
     name: &str,
     m: &Spanned<RawMaterial>,
     spans: &mut Spans,
-) -> anyhow::Result<Material> {
+) -> Result<Material> {
     let p = format!("materials.{name}");
     let r = m.get_ref();
     spans.insert(p.clone(), m.span());
@@ -487,7 +423,7 @@ fn import_mesh(
     base: &Path,
     toml_materials: usize,
     spans: &mut Spans,
-) -> anyhow::Result<()> {
+) -> Result<()> {
     let p = format!("mesh[{i}]");
     let r = m.get_ref();
     spans.insert(p.clone(), m.span());
@@ -527,7 +463,7 @@ fn import_mesh(
     Ok(())
 }
 
-fn finite_all(src: &Source, values: &[f64], span: Range<usize>, path: &str) -> anyhow::Result<()> {
+fn finite_all(src: &Source, values: &[f64], span: Range<usize>, path: &str) -> Result<()> {
     if values.iter().all(|v| v.is_finite()) {
         Ok(())
     } else {
@@ -541,7 +477,7 @@ fn finite_all(src: &Source, values: &[f64], span: Range<usize>, path: &str) -> a
 }
 
 /// Object to world: `matrix`, or translate * rotate (z * y * x) * scale.
-fn mesh_transform(src: &Source, r: &RawMesh, p: &str) -> anyhow::Result<DAffine3> {
+fn mesh_transform(src: &Source, r: &RawMesh, p: &str) -> Result<DAffine3> {
     if let Some(mx) = &r.matrix {
         let mp = format!("{p}.matrix");
         if r.translate.is_some() || r.rotate.is_some() || r.scale.is_some() {
@@ -958,22 +894,15 @@ material = "light"
 
     #[test]
     fn syntax_error() {
-        // An unclosed array is detected on the next line; the path still names the key.
-        assert_err(
-            &edit(10, "diffuse = [0.5, 0.5"),
-            11,
-            "materials.white.diffuse",
-            "expected `]`",
-        );
+        // An unclosed array is detected on the next line. Text that is not TOML has no field yet: the
+        // error gives the line and column and toml's message.
+        let e = err(&edit(10, "diffuse = [0.5, 0.5"));
+        assert!(e.starts_with("t.toml:11:1: ") && e.contains("expected `]`"), "{e}");
         let e = err(&edit(5, "up = 0.0, 1.0"));
         assert!(e.starts_with("t.toml:5:"), "{e}");
         // Duplicate table is a TOML error, located at the second header.
-        assert_err(
-            &edit(9, "[materials.light]"),
-            11,
-            "materials.light",
-            "duplicate",
-        );
+        let e = err(&edit(9, "[materials.light]"));
+        assert!(e.starts_with("t.toml:11:") && e.contains("duplicate key `light`"), "{e}");
     }
 
     #[test]
@@ -990,12 +919,9 @@ material = "light"
             "sphere[1].radius",
             "invalid type",
         );
-        assert_err(
-            &edit(7, "resolution = [64, -48]"),
-            7,
-            "camera.resolution",
-            "",
-        );
+        // Inside an array: the element, at its column.
+        assert_err(&edit(7, "resolution = [64, -48]"), 7, "camera.resolution[1]", "");
+        assert!(err(&edit(7, "resolution = [64, -48]")).starts_with("t.toml:7:19:"));
         assert_err(&edit(3, "eye = [0.0, 1.0]"), 3, "camera.eye", "length 2");
         // Missing field: located at the table header.
         assert_err(&edit(23, ""), 21, "sphere[1]", "missing field `radius`");
@@ -1304,22 +1230,33 @@ material = "light"
     }
 
     #[test]
-    fn path_scanner() {
-        let t = "a = 1\n[camera] # c\nvfov = [\n [1], # x\n 2]\n\
-                 [[quad]]\nx = 1\n[[quad]]\ny = \"#\" # z\n";
-        let at = |needle: &str| field_path_at(t, t.find(needle).unwrap_or(0), false);
-        assert_eq!(at("a =").as_deref(), Some("a"));
-        assert_eq!(at("[camera]").as_deref(), Some("camera"));
-        assert_eq!(at("[1]").as_deref(), Some("camera.vfov"));
-        assert_eq!(at(" 2]").as_deref(), Some("camera.vfov"));
-        assert_eq!(at("x = 1").as_deref(), Some("quad[0].x"));
-        assert_eq!(at("y =").as_deref(), Some("quad[1].y"));
-        assert_eq!(field_path_at("", 0, false), None);
-        assert_eq!(field_path_at(t, 0, true), None);
-        assert_eq!(
-            field_path_at(t, t.find("x =").unwrap_or(0), true).as_deref(),
-            Some("quad[0]")
-        );
+    fn inline_tables_are_located_exactly() {
+        // A type error inside an inline table: the path and column of the value itself.
+        let text = edit(10, "white = { diffuse = [0.5, \"x\", 0.5] }").replace("[materials.white]\n", "[materials]\n");
+        let e = Scene::parse(&text, "t.toml").expect_err("a string in an albedo");
+        match &e {
+            Error::Scene { line, column, field, .. } => {
+                assert_eq!((*line, field.as_str()), (10, "materials.white.diffuse[1]"), "{e}");
+                assert_eq!(*column, 27, "the column of \"x\": {e}");
+            }
+            other => panic!("expected a scene error, got {other:?}"),
+        }
+        // Spheres as an inline array of inline tables: a missing field names its table.
+        let spheres = "sphere = [{ center = [0.0, 0.5, 0.0], radius = 0.5, material = \"white\" },\n\
+                       { center = [1.0, 0.5, 0.0], material = \"white\" }]\n";
+        let text = BASE.replace("[camera]", &format!("{spheres}[camera]"));
+        let text = text.replace("[[sphere]]", "[[ignored]]");
+        let text: String = text.split("[[ignored]]").next().unwrap().to_string()
+            + &BASE[BASE.find("[[quad]]").unwrap()..];
+        assert_err(&text, 3, "sphere[1]", "missing field `radius`");
+        // A value check after parsing, in an inline table: located at the value.
+        let text = text.replace("radius = 0.5", "radius = -0.5");
+        let text = text.replace("{ center = [1.0, 0.5, 0.0], material", "{ center = [1.0, 0.5, 0.0], radius = 1.0, material");
+        assert_err(&text, 2, "sphere[0].radius", "positive");
+    }
+
+    #[test]
+    fn line_and_column() {
         let src = Source {
             origin: "o",
             text: "ab\ncdé\nf",
@@ -1338,7 +1275,7 @@ material = "light"
 
     /// BASE (36 lines) and a blank line, then `[[mesh]]` on line 38 and `lines` from line 39,
     /// parsed as `<dir>/t.toml`; `a.obj` and `a.mtl` are written into `dir`.
-    fn with_mesh(dir: &TempDir, lines: &str) -> anyhow::Result<Scene> {
+    fn with_mesh(dir: &TempDir, lines: &str) -> Result<Scene> {
         dir.write("a.obj", OBJ);
         dir.write("a.mtl", "newmtl m\nKd 0.5 0.5 0.5\n");
         let text = format!("{BASE}\n[[mesh]]\n{lines}\n");
