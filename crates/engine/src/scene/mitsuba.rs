@@ -29,6 +29,39 @@ pub const MAX_INCLUDE_DEPTH: usize = 15;
 /// bsdf, bsdf, rgb).
 pub const MAX_NESTING: usize = 64;
 
+/// The line where elements first nest deeper than `max`, by a scan of the tags (`<a>` opens unless
+/// it ends `/>`, `</a>` closes; comments, CDATA and `<?...?>` are skipped), if they do.
+fn too_deep(text: &str, max: usize) -> Option<usize> {
+    let b = text.as_bytes();
+    let (mut depth, mut i) = (0usize, 0usize);
+    let skip_past = |from: usize, end: &[u8]| -> usize {
+        b[from..].windows(end.len()).position(|w| w == end).map_or(b.len(), |p| from + p + end.len())
+    };
+    while let Some(p) = b[i..].iter().position(|&c| c == b'<') {
+        let at = i + p;
+        let rest = &b[at..];
+        i = if rest.starts_with(b"<!--") {
+            skip_past(at, b"-->")
+        } else if rest.starts_with(b"<![CDATA[") {
+            skip_past(at, b"]]>")
+        } else if rest.starts_with(b"<?") || rest.starts_with(b"<!") {
+            skip_past(at, b">")
+        } else {
+            let end = skip_past(at, b">");
+            if rest.starts_with(b"</") {
+                depth = depth.saturating_sub(1);
+            } else if !b[..end].ends_with(b"/>") {
+                depth += 1;
+                if depth > max {
+                    return Some(1 + b[..at].iter().filter(|&&c| c == b'\n').count());
+                }
+            }
+            end
+        };
+    }
+    None
+}
+
 /// Triangles in the fan a `disk` becomes. The polygon's radius is enlarged so that its area is the
 /// disk's exactly (an emitting disk keeps its power); its outline then lies between 2.6e-5 of the
 /// radius inside the circle (edge midpoints) and 5.1e-5 outside (corners).
@@ -176,7 +209,7 @@ impl Reader {
         };
         // Bounded and regular files only, as for TOML scenes (a device file would be read forever).
         let text = super::read_bounded(path, super::MAX_SCENE_BYTES, "scene file").map_err(|e| match included_at {
-            Some(include) => include.err(e),
+            Some(include) => include.err(format!("cannot read scene file {e}")),
             None => anyhow::Error::from(e),
         })?;
         let canonical = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
@@ -192,6 +225,14 @@ impl Reader {
             return Err(at(format!(
                 "includes nested deeper than {MAX_INCLUDE_DEPTH} files (Mitsuba's limit)"
             )));
+        }
+        // roxmltree's tokenizer recurses per level: refuse deep nesting before it parses.
+        if let Some(line) = too_deep(&text, MAX_NESTING) {
+            let message = format!("elements nested deeper than {MAX_NESTING} levels");
+            return Err(match included_at {
+                Some(include) => include.err(format!("{shown}:{line}: {message}")),
+                None => Error::scene(shown, line, 1, "", message).into(),
+            });
         }
         let doc = roxmltree::Document::parse(&text).map_err(|e| {
             let p = e.pos();
@@ -2171,8 +2212,8 @@ mod tests {
             load_in(&dir, r#"<include filename="missing.xml"/>"#, &[]).unwrap_err()
         );
         assert!(
-            e.contains("scene.xml:12:1: <include>: ")
-                && e.contains("missing.xml: cannot read scene file"),
+            e.contains("scene.xml:12:1: <include>: cannot read scene file ")
+                && e.contains("missing.xml: "),
             "{e}"
         );
     }
