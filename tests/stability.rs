@@ -287,7 +287,7 @@ fn furnace_far_from_the_origin_loses_no_energy() {
     // Every photon bounce starts on a surface: an offset too small for the coordinates' f32 spacing makes a
     // path hit the wall it left (a lost or extra record), one too large skips past corners. Both move the
     // furnace away from Le / (1 - rho) = 2. 100 m from the origin the offsets are 6 mm against a 2 m box.
-    // (1 km out they are 6 cm and the furnace comes out 3.9% bright: a known limit, README.)
+    // (1 km out they are 6 cm and the furnace comes out 3.9% bright: a known limit, docs/design.md.)
     let scene = translated(&furnace(16, 16), glam::Vec3::splat(100.0));
     let m = render(&scene, small(100_000), 12).mean();
     println!("furnace at (100, 100, 100): mean {m:?}");

@@ -31,7 +31,7 @@ pub enum ProbeMode {
 }
 
 /// How to render. `Settings::default()` is stochastic PPM (at equal time it had the lower whole-image error
-/// on the paper's scene from 10 s on: README, "What the numbers show") with the paper's other settings.
+/// on the paper's scene from 10 s on: docs/accuracy.md, "What the numbers show") with the paper's other settings.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Settings {
     /// PPM or stochastic PPM.
