@@ -1092,15 +1092,17 @@ mod tests {
     fn buffers_are_checked_against_the_device_limits() {
         let (range, memory) = (128 << 20, 512 << 20);
         let others = [("records", 256 << 20)];
-        assert!(fits_device(&[("hits", range)], &others, range, memory, "lower it").is_ok());
-        let e = fits_device(&[("hits", range + 1)], &others, range, memory, "lower it").unwrap_err().to_string();
-        assert!(e.contains("hits need 128 MiB") && e.contains("largest buffer (128 MiB): lower it"), "{e}");
+        assert!(fits_device(&[("hits", range)], &others, range, memory, "it").is_ok());
+        let e = fits_device(&[("hits", range + 1)], &others, range, memory, "it").unwrap_err();
+        assert!(matches!(e, crate::Error::Limit { value: Some(v), limit, .. } if v == range + 1 && limit == range), "{e:?}");
+        let e = e.to_string();
+        assert!(e.contains("hits (128 MiB in one buffer)") && e.contains("limit of 134217728; lower it"), "{e}");
         let full = [("hits", 128 << 20), ("stats", 128 << 20)];
-        assert!(fits_device(&full, &others, range, memory, "lower it").is_ok());
+        assert!(fits_device(&full, &others, range, memory, "it").is_ok());
         let over = [("hits", 128 << 20), ("stats", 128 << 20), ("order", 1)];
-        let e = fits_device(&over, &others, range, memory, "lower it").unwrap_err().to_string();
-        assert!(e.contains("512 MiB of device memory") && e.contains("records 256 MiB") && e.contains("lower it"), "{e}");
+        let e = fits_device(&over, &others, range, memory, "it").unwrap_err().to_string();
+        assert!(e.contains("device memory (512 MiB: ") && e.contains("records 256 MiB") && e.contains("lower it, or --photons-per-pass"), "{e}");
         // Unknown memory (0) is not checked.
-        assert!(fits_device(&over, &others, range, 0, "lower it").is_ok());
+        assert!(fits_device(&over, &others, range, 0, "it").is_ok());
     }
 }

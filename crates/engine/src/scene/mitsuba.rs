@@ -209,7 +209,7 @@ impl Reader {
         };
         // Bounded and regular files only, as for TOML scenes (a device file would be read forever).
         let text = super::read_bounded(path, super::MAX_SCENE_BYTES, "scene file").map_err(|e| match included_at {
-            Some(include) => include.err(format!("cannot read scene file {e}")),
+            Some(include) => include.err(e),
             None => anyhow::Error::from(e),
         })?;
         let canonical = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
@@ -2212,8 +2212,8 @@ mod tests {
             load_in(&dir, r#"<include filename="missing.xml"/>"#, &[]).unwrap_err()
         );
         assert!(
-            e.contains("scene.xml:12:1: <include>: cannot read scene file ")
-                && e.contains("missing.xml: "),
+            e.contains("scene.xml:12:1: <include>: ")
+                && e.contains("missing.xml: cannot read scene file"),
             "{e}"
         );
     }

@@ -521,14 +521,15 @@ pub const MAX_MESH_BYTES: u64 = 2 << 30;
 /// directory, a larger file) is an error naming the path, before reading a byte.
 pub(crate) fn read_bounded(path: &Path, max: u64, what: &str) -> Result<String> {
     let refuse = |kind: std::io::ErrorKind, why: String| Error::io(path, std::io::Error::new(kind, why));
-    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    let cannot = |e: std::io::Error| refuse(e.kind(), format!("cannot read {what}: {e}"));
+    let meta = std::fs::metadata(path).map_err(cannot)?;
     if !meta.is_file() {
         return Err(refuse(std::io::ErrorKind::InvalidInput, format!("cannot read {what}: not a regular file")));
     }
     if meta.len() > max {
         return Err(refuse(std::io::ErrorKind::InvalidData, format!("{} bytes, more than a {what} may have ({max})", meta.len())));
     }
-    std::fs::read_to_string(path).map_err(|e| Error::io(path, e))
+    std::fs::read_to_string(path).map_err(cannot)
 }
 
 pub(crate) fn fmt_vec(v: [f32; 3]) -> String {
