@@ -46,11 +46,42 @@ pub struct DeviceArgs {
     /// Enable the Vulkan validation layer and fail on any message it reports.
     #[arg(long)]
     pub validate: bool,
+    /// Directory of the pipeline cache, which spares a run compiling again the kernels an earlier run
+    /// compiled [default: $XDG_CACHE_HOME/ppm-vk, else ~/.cache/ppm-vk].
+    #[arg(long, value_name = "DIR", env = "PPM_VK_CACHE_DIR")]
+    pub pipeline_cache: Option<PathBuf>,
+    /// Keep no pipeline cache: compile every kernel afresh (wins over --pipeline-cache).
+    #[arg(long)]
+    pub no_pipeline_cache: bool,
 }
 
 impl DeviceArgs {
+    /// Opens the device, with the pipeline cache unless it is off; says so when a cache file was ignored.
     pub fn open(&self) -> Result<Context> {
-        Ok(open_device(&ContextOptions { validation: self.validate, device: self.device.clone() })?)
+        let pipeline_cache = match self.no_pipeline_cache {
+            true => None,
+            false => self.pipeline_cache.clone().or_else(default_cache_dir),
+        };
+        let ctx = open_device(&ContextOptions { validation: self.validate, device: self.device.clone(), pipeline_cache })?;
+        if let Some(note) = ctx.pipeline_cache_note() {
+            eprintln!("note: {note}; it will be rewritten");
+        }
+        Ok(ctx)
+    }
+}
+
+/// `$XDG_CACHE_HOME/ppm-vk`, else `~/.cache/ppm-vk` (the XDG base directory rules); `None` without either.
+fn default_cache_dir() -> Option<PathBuf> {
+    let xdg = std::env::var_os("XDG_CACHE_HOME").map(PathBuf::from).filter(|p| p.is_absolute());
+    let home = || std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")).filter(|p| p.is_absolute());
+    xdg.or_else(home).map(|d| d.join("ppm-vk"))
+}
+
+/// Saves the pipeline cache now (the context saves it when dropped too, but silently): a failure is a
+/// warning, never the run's error.
+pub fn save_pipeline_cache(ctx: &Context) {
+    if let Err(e) = ctx.save_pipeline_cache() {
+        eprintln!("warning: {e:#}");
     }
 }
 
@@ -443,6 +474,8 @@ fn render(args: RenderArgs) -> Result<Ended> {
         None => Renderer::new(&ctx, &scene, settings)?,
     };
     let setup_s = started.elapsed().as_secs_f64();
+    // Every kernel is compiled by now: keep them for the next run even if this one is killed.
+    save_pipeline_cache(&ctx);
     eprintln!(
         "scene {}: {}x{}, {} hit-point slots, initial radius {:.5}, {} photons/pass; ray pass {:.1} ms GPU",
         scene.name,
@@ -554,6 +587,7 @@ fn render(args: RenderArgs) -> Result<Ended> {
         }
     }
     bar.finish_and_clear();
+    save_pipeline_cache(&ctx); // what later passes compiled (none today; cheap when nothing is new)
     if history.is_empty() && matches!(ended, Ended::Signal(_)) && resumed.is_none() {
         eprintln!("interrupted before the first pass ended: nothing written");
         return Ok(ended);

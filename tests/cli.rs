@@ -4,16 +4,9 @@
 mod common;
 
 use std::path::PathBuf;
-use std::process::Command;
 
-use common::{CORNELL, CORNELL_REFERENCE};
+use common::{bin, CORNELL, CORNELL_REFERENCE};
 use ppm_vk_engine::report::{RunReport, SCHEMA};
-
-fn bin() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_ppm-vk"));
-    c.env("XDG_RUNTIME_DIR", std::env::temp_dir());
-    c
-}
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("ppm-vk-cli-{}-{name}", std::process::id()));
@@ -373,4 +366,41 @@ fn render_names_its_output_after_the_scene_and_never_overwrites_silently() {
     // With --force it overwrites.
     let third = run().arg("--force").output().unwrap();
     assert!(third.status.success(), "{}", String::from_utf8_lossy(&third.stderr));
+}
+
+/// `render` saves the pipeline cache where PPM_VK_CACHE_DIR says (the next run reads it without a note),
+/// `--no-pipeline-cache` keeps none, and a damaged cache file is a note, never an error.
+#[test]
+fn render_keeps_the_pipeline_cache_where_asked() {
+    let dir = scratch("pipeline-cache");
+    let cache = dir.join("cache");
+    let render = |extra: &[&str]| {
+        let run = bin()
+            .env("PPM_VK_CACHE_DIR", &cache)
+            .args(["render", CORNELL, "--passes", "1", "--photons-per-pass", "1000", "--resolution", "8x8", "--force"])
+            .arg("--out")
+            .arg(dir.join("img.exr"))
+            .args(extra)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
+        assert!(run.status.success(), "render {extra:?} failed:\n{stderr}");
+        stderr
+    };
+    let files = || std::fs::read_dir(&cache).map(|d| d.map(|e| e.unwrap().path()).collect::<Vec<_>>()).unwrap_or_default();
+
+    render(&["--no-pipeline-cache"]);
+    assert!(files().is_empty(), "--no-pipeline-cache wrote {:?}", files());
+    let first = render(&["--validate"]);
+    assert!(!first.contains("pipeline cache"), "{first}");
+    let written = files();
+    assert_eq!(written.len(), 1, "{written:?}");
+    assert!(std::fs::metadata(&written[0]).unwrap().len() > 28, "an empty cache file");
+    assert!(!render(&[]).contains("pipeline cache"), "the second run did not take the first run's cache");
+
+    std::fs::write(&written[0], b"not a cache").unwrap();
+    let damaged = render(&["--validate"]);
+    assert!(damaged.contains("note: pipeline cache") && damaged.contains("ignored"), "{damaged}");
+    assert!(!render(&[]).contains("pipeline cache"), "the damaged file was not replaced");
+    let _ = std::fs::remove_dir_all(&dir);
 }

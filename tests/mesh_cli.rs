@@ -1,6 +1,6 @@
 //! The `ppm-vk` binary on a scene with a mesh: loading warnings reach stderr, and the mesh renders.
 
-use std::process::Command;
+mod common;
 
 #[test]
 fn render_prints_mesh_warnings_and_renders_the_mesh() {
@@ -26,8 +26,7 @@ fn render_prints_mesh_warnings_and_renders_the_mesh() {
          material = \"light\"\n\n[[mesh]]\nfile = \"cup.obj\"\n",
     )
     .unwrap();
-    let run = Command::new(env!("CARGO_BIN_EXE_ppm-vk"))
-        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+    let run = common::bin()
         .args(["render", "--passes", "1", "--validate", "--out"])
         .arg(dir.join("out.png"))
         .arg(&scene)

@@ -6,9 +6,8 @@
 mod common;
 
 use std::path::Path;
-use std::process::Command;
 
-use common::{load, CORNELL, CORNELL_XML};
+use common::{bin, load, CORNELL, CORNELL_XML};
 use glam::Vec3;
 use ppm_vk_engine::scene::{Material, Quad};
 use ppm_vk_engine::Scene;
@@ -65,12 +64,6 @@ fn reference_xml_is_the_toml_scene() {
     assert!(xml.meshes.is_empty() && toml.meshes.is_empty());
     assert!(close3(power(&xml), power(&toml)), "{} vs {}", power(&xml), power(&toml));
     assert_eq!(xml.lights().len(), 1);
-}
-
-fn bin() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_ppm-vk"));
-    c.env("XDG_RUNTIME_DIR", std::env::temp_dir());
-    c
 }
 
 fn stderr_of(args: &[&str]) -> String {

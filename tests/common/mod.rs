@@ -17,7 +17,7 @@ pub const CORNELL_REFERENCE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../sha
 
 /// A context with the Khronos validation layer on: every test ends with [`assert_clean`].
 pub fn ctx() -> Context {
-    Context::new(&ContextOptions { validation: true, device: None })
+    Context::new(&ContextOptions { validation: true, ..ContextOptions::default() })
         .expect("opening a Vulkan device with VK_LAYER_KHRONOS_validation (is vulkan-validationlayers installed?)")
 }
 
@@ -30,6 +30,20 @@ pub fn assert_clean(ctx: &Context) {
         msgs.len(),
         msgs.join("\n")
     );
+}
+
+/// The `ppm-vk` binary, with its runtime files and pipeline cache in a directory of this test process, so
+/// tests neither read nor leave state in the user's cache.
+pub fn bin() -> std::process::Command {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_ppm-vk"));
+    c.env("XDG_RUNTIME_DIR", std::env::temp_dir());
+    c.env("PPM_VK_CACHE_DIR", pipeline_cache_dir());
+    c
+}
+
+/// Where [`bin`]'s runs keep their pipeline cache.
+pub fn pipeline_cache_dir() -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("ppm-vk-tests-{}", std::process::id())).join("pipeline-cache")
 }
 
 pub fn load(path: &str) -> Scene {

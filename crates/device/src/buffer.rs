@@ -56,6 +56,7 @@ impl Buffer {
         let device = &shared.device;
         let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         let raw = unsafe { device.create_buffer(&info, None) }.with_context(|| format!("creating buffer {name:?}"))?;
+        ctx.name_object(raw, name);
         let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
         let allocation = {
             let mut guard = shared.allocator.lock().map_err(|_| anyhow!("allocator lock poisoned"))?;

@@ -1,11 +1,14 @@
 //! Instance, physical-device choice, logical device, queue, allocator and the validation messenger.
 
-use std::ffi::{c_void, CStr};
+use std::ffi::{c_void, CStr, CString};
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+
+use crate::pipeline_cache::{CacheKey, DiskCache};
 
 /// How to open a device.
 #[derive(Clone, Debug, Default)]
@@ -15,6 +18,9 @@ pub struct ContextOptions {
     /// Choose a device by index (as `ppm-vk devices` lists them) or by a case-insensitive substring of its
     /// name. `None` prefers a discrete GPU, then an integrated one, then any (lavapipe).
     pub device: Option<String>,
+    /// Directory of the pipeline cache kept between runs (one file per device; see
+    /// [`Context::save_pipeline_cache`]). `None`: no cache, every pipeline is compiled from scratch.
+    pub pipeline_cache: Option<PathBuf>,
 }
 
 /// What a physical device is, for listings and run reports.
@@ -71,6 +77,9 @@ struct Inner {
     info: DeviceInfo,
     limits: vk::PhysicalDeviceLimits,
     timestamp_valid_bits: u32,
+    /// Present when VK_EXT_debug_utils is (always with validation; without it when the driver offers it).
+    debug_names: Option<ash::ext::debug_utils::Device>,
+    pipeline_cache: Option<DiskCache>,
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT, Box<Arc<Mutex<Vec<String>>>>)>,
     instance: ash::Instance,
     _entry: ash::Entry,
@@ -187,7 +196,9 @@ fn load_entry() -> Result<ash::Entry> {
     })
 }
 
-fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance> {
+/// An instance, with the validation layer if asked for, and with VK_EXT_debug_utils (object names, the
+/// validation messenger) whenever the layer or the driver offers it. Returns whether debug_utils is on.
+fn create_instance(entry: &ash::Entry, validation: bool) -> Result<(ash::Instance, bool)> {
     let app = vk::ApplicationInfo::default()
         .application_name(c"ppm-vk")
         .engine_name(c"ppm-vk")
@@ -206,20 +217,29 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance
             );
         }
         layers.push(VALIDATION_LAYER.as_ptr());
+    }
+    // The validation layer provides debug_utils itself; the loader lists what the driver and implicit layers
+    // offer (Mesa's drivers, lavapipe included, do).
+    let offered = unsafe { entry.enumerate_instance_extension_properties(None) }.context("listing Vulkan instance extensions")?;
+    let debug_utils = validation
+        || offered.iter().any(|e| e.extension_name_as_c_str().map(|n| n == ash::ext::debug_utils::NAME).unwrap_or(false));
+    if debug_utils {
         exts.push(ash::ext::debug_utils::NAME.as_ptr());
     }
     let info = vk::InstanceCreateInfo::default()
         .application_info(&app)
         .enabled_layer_names(&layers)
         .enabled_extension_names(&exts);
-    unsafe { entry.create_instance(&info, None) }.context("vkCreateInstance failed (is a Vulkan driver installed?)")
+    let instance =
+        unsafe { entry.create_instance(&info, None) }.context("vkCreateInstance failed (is a Vulkan driver installed?)")?;
+    Ok((instance, debug_utils))
 }
 
 impl Context {
     /// Every physical device the loader sees, with what each lacks for ppm-vk.
     pub fn list_devices() -> Result<Vec<DeviceInfo>> {
         let entry = load_entry()?;
-        let instance = create_instance(&entry, false)?;
+        let (instance, _) = create_instance(&entry, false)?;
         let pds = unsafe { instance.enumerate_physical_devices() }.context("enumerating Vulkan devices");
         let out = pds.map(|pds| pds.iter().enumerate().map(|(i, &pd)| describe(&instance, i, pd)).collect());
         unsafe { instance.destroy_instance(None) };
@@ -230,9 +250,9 @@ impl Context {
     /// then integrated, then any (lavapipe).
     pub fn new(options: &ContextOptions) -> Result<Context> {
         let entry = load_entry()?;
-        let instance = create_instance(&entry, options.validation)?;
+        let (instance, debug_utils) = create_instance(&entry, options.validation)?;
         // From here on, failure must destroy the instance: wrap the rest.
-        match Self::open(entry.clone(), instance.clone(), options) {
+        match Self::open(entry.clone(), instance.clone(), debug_utils, options) {
             Ok(ctx) => Ok(ctx),
             Err(e) => {
                 unsafe { instance.destroy_instance(None) };
@@ -241,7 +261,7 @@ impl Context {
         }
     }
 
-    fn open(entry: ash::Entry, instance: ash::Instance, options: &ContextOptions) -> Result<Context> {
+    fn open(entry: ash::Entry, instance: ash::Instance, debug_utils: bool, options: &ContextOptions) -> Result<Context> {
         let sink = Arc::new(Mutex::new(Vec::<String>::new()));
         let debug = if options.validation {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
@@ -325,6 +345,16 @@ impl Context {
         let device = unsafe { instance.create_device(pd, &info, None) }
             .with_context(|| format!("creating a logical device on {}", chosen.name))?;
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        let pipeline_cache = match &options.pipeline_cache {
+            Some(dir) => match DiskCache::open(&device, dir, CacheKey::of(&props)) {
+                Ok(c) => Some(c),
+                Err(e) => {
+                    unsafe { device.destroy_device(None) };
+                    return Err(e);
+                }
+            },
+            None => None,
+        };
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
             device: device.clone(),
@@ -339,6 +369,7 @@ impl Context {
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
         let command_pool = unsafe { device.create_command_pool(&pool_info, None) }.context("creating a command pool")?;
         let push_descriptor = ash::khr::push_descriptor::Device::new(&instance, &device);
+        let debug_names = debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
         let shared = Arc::new(Shared {
             device,
             allocator: Mutex::new(Some(allocator)),
@@ -346,7 +377,7 @@ impl Context {
             push_descriptor,
             validation: options.validation.then(|| sink.clone()),
         });
-        Ok(Context {
+        let ctx = Context {
             inner: Arc::new(Inner {
                 shared,
                 queue,
@@ -355,11 +386,60 @@ impl Context {
                 info: chosen,
                 limits: props.limits,
                 timestamp_valid_bits: qprops.timestamp_valid_bits,
+                debug_names,
+                pipeline_cache,
                 debug,
                 instance,
                 _entry: entry,
             }),
-        })
+        };
+        ctx.name_object(command_pool, "ppm-vk command pool");
+        if let Some(c) = &ctx.inner.pipeline_cache {
+            ctx.name_object(c.raw, "ppm-vk pipeline cache");
+        }
+        Ok(ctx)
+    }
+
+    /// Gives a Vulkan object a name that validation messages and debuggers (RenderDoc, Nsight) show. Does
+    /// nothing when VK_EXT_debug_utils is not on. A NUL inside `name` (which C strings cannot hold) becomes
+    /// U+FFFD. Naming can fail only for want of host memory, and a missing name harms nothing: that is
+    /// ignored.
+    pub fn name_object<H: vk::Handle>(&self, handle: H, name: &str) {
+        let Some(names) = &self.inner.debug_names else { return };
+        let name = debug_name(name);
+        let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
+        let _ = unsafe { names.set_debug_utils_object_name(&info) };
+    }
+
+    /// Whether [`Context::name_object`] reaches Vulkan (VK_EXT_debug_utils is on).
+    pub fn names_objects(&self) -> bool {
+        self.inner.debug_names.is_some()
+    }
+
+    /// The pipeline cache every pipeline of this context is created with (null when the cache is off).
+    pub(crate) fn pipeline_cache(&self) -> vk::PipelineCache {
+        self.inner.pipeline_cache.as_ref().map_or(vk::PipelineCache::null(), |c| c.raw)
+    }
+
+    /// Why the pipeline cache file was not used (damaged, another driver, unreadable), in one line; `None`
+    /// when it was used, was absent, or the cache is off.
+    pub fn pipeline_cache_note(&self) -> Option<&str> {
+        self.inner.pipeline_cache.as_ref().and_then(|c| c.note.as_deref())
+    }
+
+    /// Bytes of pipeline data the cache file gave this context (0 when the cache is off, the file absent or
+    /// not used).
+    pub fn pipeline_cache_loaded_bytes(&self) -> usize {
+        self.inner.pipeline_cache.as_ref().map_or(0, |c| c.loaded)
+    }
+
+    /// Writes the pipeline cache to its file (atomically) if it holds pipelines the file lacks; returns the
+    /// file written. Dropping the context does this too, but ignores a failure; call this to see one.
+    pub fn save_pipeline_cache(&self) -> Result<Option<&Path>> {
+        match &self.inner.pipeline_cache {
+            Some(c) => c.save(self.device()),
+            None => Ok(None),
+        }
     }
 
     pub(crate) fn shared(&self) -> &Arc<Shared> {
@@ -429,6 +509,7 @@ impl Context {
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
         let cmd = unsafe { device.allocate_command_buffers(&alloc) }.context("allocating a command buffer")?[0];
+        self.name_object(cmd, "Context::run");
         let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }.context("creating a fence");
         let result = fence.and_then(|fence| {
             let r = (|| {
@@ -451,6 +532,11 @@ impl Context {
     }
 }
 
+/// `name` as a C string: interior NULs become U+FFFD rather than cut the name short or fail.
+fn debug_name(name: &str) -> CString {
+    CString::new(name.replace('\0', "\u{fffd}")).unwrap_or_default()
+}
+
 fn list_names(infos: &[DeviceInfo]) -> String {
     infos.iter().map(|d| format!("[{}] {}", d.index, d.name)).collect::<Vec<_>>().join(", ")
 }
@@ -460,6 +546,11 @@ impl Drop for Inner {
         unsafe {
             let device = &self.shared.device;
             let _ = device.device_wait_idle();
+            if let Some(cache) = self.pipeline_cache.take() {
+                // Best effort: a run that cannot save its cache has still done its work.
+                let _ = cache.save(device);
+                device.destroy_pipeline_cache(cache.raw, None);
+            }
             if let Ok(pool) = self.command_pool.lock() {
                 device.destroy_command_pool(*pool, None);
             }
@@ -479,5 +570,18 @@ impl Drop for Inner {
                 self.instance.destroy_instance(None);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::debug_name;
+
+    #[test]
+    fn debug_names_keep_interior_nuls_visible() {
+        assert_eq!(debug_name("photon records").as_bytes(), b"photon records");
+        assert_eq!(debug_name("a\0b").to_str(), Ok("a\u{fffd}b"));
+        assert_eq!(debug_name("\0").to_str(), Ok("\u{fffd}"));
+        assert_eq!(debug_name("").as_bytes(), b"");
     }
 }

@@ -2,11 +2,14 @@
 //!
 //! It knows nothing of photons. It owns the Vulkan instance and device ([`Context`]), buffers
 //! ([`Buffer`]), compute pipelines whose bindings are pushed per dispatch ([`ComputePipeline`]),
-//! one-shot submission ([`Context::run`]) and named timestamp scopes ([`Profiler`]).
+//! one-shot submission ([`Context::run`]) and named timestamp scopes ([`Profiler`]). Every Vulkan object it
+//! makes carries a debug name ([`Context::name_object`]), and pipelines come through a pipeline cache kept
+//! on disk between runs ([`ContextOptions::pipeline_cache`]).
 
 mod buffer;
 mod context;
 mod pipeline;
+mod pipeline_cache;
 mod profiler;
 
 pub use buffer::{Buffer, BufferKind};

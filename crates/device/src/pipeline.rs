@@ -52,6 +52,7 @@ impl ComputePipeline {
             .bindings(&binding_infos);
         let set_layout = unsafe { device.create_descriptor_set_layout(&set_info, None) }
             .with_context(|| format!("creating the descriptor set layout of kernel {name}"))?;
+        ctx.name_object(set_layout, &format!("{name} bindings"));
         // Build the rest inside a closure so a failure still destroys what was made.
         let mut out = ComputePipeline {
             shared: shared.clone(),
@@ -74,17 +75,21 @@ impl ComputePipeline {
         }
         out.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }
             .with_context(|| format!("creating the pipeline layout of kernel {name}"))?;
+        ctx.name_object(out.layout, &format!("{name} layout"));
         let module_info = vk::ShaderModuleCreateInfo::default().code(desc.spirv);
         let module = unsafe { device.create_shader_module(&module_info, None) }
             .with_context(|| format!("creating the shader module of kernel {name}"))?;
+        ctx.name_object(module, name);
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main");
         let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(out.layout)];
-        let created = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
+        // Through the context's pipeline cache: a kernel compiled by an earlier run is not compiled again.
+        let created = unsafe { device.create_compute_pipelines(ctx.pipeline_cache(), &info, None) };
         unsafe { device.destroy_shader_module(module, None) };
         out.pipeline = created.map_err(|(_, e)| e).with_context(|| format!("compiling kernel {name}"))?[0];
+        ctx.name_object(out.pipeline, name);
         Ok(out)
     }
 
