@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
-use ppm_vk_engine::metrics::{compare, cornell_regions, ErrorStats, Reference, Region};
+use ppm_vk_engine::metrics::{compare, ErrorStats, Reference};
 use ppm_vk_engine::{Mode, ProbeMode, ProbeReport, Renderer, RgbImage, Settings};
 use serde::Serialize;
 
@@ -60,6 +60,8 @@ pub struct CompareArgs {
     /// docs/peers/mitsuba-path-cornell-spheres.csv.
     #[arg(long, value_name = "FILE")]
     peer: Option<PathBuf>,
+    #[command(flatten)]
+    regions: crate::RegionArgs,
     #[command(flatten)]
     device: DeviceArgs,
 }
@@ -161,7 +163,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
         bail!("--variants names no variant");
     }
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    let regions: Vec<Region> = if scene.name == "cornell-spheres" { cornell_regions() } else { Vec::new() };
+    let regions = args.regions.resolve(&scene, &reference);
     let ctx = args.device.open()?;
     let info = ctx.info().clone();
     eprintln!("device: {} ({}); {} s per variant", info.name, info.driver, args.time);

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use ppm_vk_engine::metrics::{compare, cornell_regions, Reference, Region};
+use ppm_vk_engine::metrics::{compare, Reference, Region};
 use ppm_vk_engine::report::{file_sha256, PassRecord, RunHeader, RunReport, SCHEMA};
 use ppm_vk_engine::{open_device, Checkpoint, Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings};
 
@@ -51,6 +51,27 @@ pub struct DeviceArgs {
 impl DeviceArgs {
     pub fn open(&self) -> Result<Context> {
         Ok(open_device(&ContextOptions { validation: self.validate, device: self.device.clone() })?)
+    }
+}
+
+/// The regions scored on their own against a reference.
+#[derive(Args, Clone)]
+pub struct RegionArgs {
+    /// A region to score on its own against --reference, NAME:X0,Y0,W,H in the reference's pixels
+    /// (origin top left); repeatable. Replaces the scene file's `[[region]]`s (see
+    /// docs/scene-format.md), which are scored when none is given.
+    #[arg(long = "region", value_parser = parse_region)]
+    regions: Vec<Region>,
+}
+
+impl RegionArgs {
+    /// `--region`s if any, else the scene's regions in the reference's pixels.
+    pub fn resolve(&self, scene: &Scene, reference: &Reference) -> Vec<Region> {
+        if !self.regions.is_empty() {
+            return self.regions.clone();
+        }
+        let (w, h) = (reference.image.width, reference.image.height);
+        scene.regions.iter().map(|r| r.pixels(w, h)).collect()
     }
 }
 
@@ -121,10 +142,8 @@ struct RenderArgs {
     /// Reference image (EXR) to measure error against at the end.
     #[arg(long)]
     reference: Option<PathBuf>,
-    /// A region to score separately against --reference, NAME:X0,Y0,W,H in the reference's pixels (origin
-    /// top left); repeatable. cornell-spheres has its own regions by default.
-    #[arg(long = "region", value_parser = parse_region)]
-    regions: Vec<Region>,
+    #[command(flatten)]
+    regions: RegionArgs,
     /// Evaluate the error against --reference after every N passes (it reads the image back; the
     /// overhead is printed).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
@@ -482,12 +501,9 @@ fn render(args: RenderArgs) -> Result<Ended> {
         ray_ms: renderer.ray_ms(),
         probe: renderer.probe_report().cloned(),
     });
-    let regions = if !args.regions.is_empty() {
-        args.regions.clone()
-    } else if scene.name == "cornell-spheres" {
-        cornell_regions()
-    } else {
-        Vec::new()
+    let regions = match &reference {
+        Some(reference) => args.regions.resolve(&scene, reference),
+        None => Vec::new(),
     };
     let (mut gpu_origin, mut eval_s, mut evals) = (None, 0f64, 0u32);
     let budget = args.time.map(Duration::from_secs_f64);

@@ -680,6 +680,7 @@ impl Builder {
                 spheres: Vec::new(),
                 quads: Vec::new(),
                 meshes: Vec::new(),
+                regions: Vec::new(),
                 warnings: Vec::new(),
             },
             root,
