@@ -90,7 +90,9 @@ struct RenderArgs {
     /// counts the passes of its checkpoint.
     #[arg(long, conflicts_with = "time", value_parser = clap::value_parser!(u64).range(1..))]
     passes: Option<u64>,
-    /// Render for this many seconds of wall time instead of a pass count.
+    /// Render for this many seconds instead of a pass count: the passes' wall time, set-up (kernel
+    /// compilation, the BVH, the probe pass) excluded, as for `compare --time`. The last pass started in
+    /// time finishes.
     #[arg(long, value_parser = parse_seconds)]
     time: Option<f64>,
     /// Photons emitted per pass.
@@ -105,7 +107,7 @@ struct RenderArgs {
     /// Starting search radius in scene units (default: the paper's eq. 8).
     #[arg(long, value_parser = parse_positive)]
     radius: Option<f32>,
-    /// Override the scene's resolution, e.g. 256x256.
+    /// Override the scene's resolution, e.g. 256x256 (each side 1..=16384).
     #[arg(long, value_parser = parse_resolution)]
     resolution: Option<(u32, u32)>,
     /// Hit points per pixel (glass splits an eye path into both Fresnel branches up to this many).
@@ -269,12 +271,14 @@ pub(crate) fn parse_cone(s: &str) -> Result<Cone, String> {
     Ok(Cone(Some(k)))
 }
 
+/// `WIDTHxHEIGHT`, each side in 1..=[`MAX_RESOLUTION`](ppm_vk_engine::scene::MAX_RESOLUTION).
 pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;
     let parse = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("{v:?}: {e}"));
     let (w, h) = (parse(w)?, parse(h)?);
-    if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        return Err(format!("resolution {w}x{h} out of range 1..=16384"));
+    let max = ppm_vk_engine::scene::MAX_RESOLUTION;
+    if w == 0 || h == 0 || w > max || h > max {
+        return Err(format!("resolution {w}x{h} out of range: width and height must be in 1..={max}"));
     }
     Ok((w, h))
 }

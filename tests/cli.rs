@@ -424,3 +424,45 @@ fn compare_writes_table_json_and_a_readable_plot() {
     assert_eq!(svg.matches("<polygon").count(), 3, "{svg}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Every subcommand has --version and says what each of its options does; sizes out of range are refused
+/// by the parser, naming the bound.
+#[test]
+fn every_option_has_help_and_sizes_are_checked() {
+    for cmd in ["render", "devices", "bench", "compare"] {
+        let run = bin().args([cmd, "--help"]).output().unwrap();
+        assert!(run.status.success(), "{cmd} --help failed");
+        let help = String::from_utf8_lossy(&run.stdout).to_string();
+        let lines: Vec<&str> = help.lines().collect();
+        let mut options = 0;
+        for (i, line) in lines.iter().enumerate() {
+            let trimmed = line.trim_start();
+            if !trimmed.starts_with('-') {
+                continue;
+            }
+            options += 1;
+            // Help text on the same line (after two spaces) or on the next, indented deeper.
+            let indent = line.len() - trimmed.len();
+            let same_line = trimmed.split_once("  ").is_some_and(|(_, rest)| !rest.trim().is_empty());
+            let next = lines.get(i + 1).copied().unwrap_or("");
+            let next_line = next.len() - next.trim_start().len() > indent && !next.trim().is_empty();
+            assert!(same_line || next_line, "{cmd}: option without help: {line:?}\n{help}");
+        }
+        assert!(options >= 2, "{cmd}: no options found in\n{help}");
+        let version = bin().args([cmd, "--version"]).output().unwrap();
+        assert!(version.status.success() && String::from_utf8_lossy(&version.stdout).starts_with("ppm-vk"), "{cmd} --version");
+    }
+    let e = fails(&["bench", "--cases", "10k@16x16384,10k@16x16385"]);
+    assert!(e.contains("16x16385") && e.contains("1..=16384"), "{e}");
+    let e = fails(&["bench", "--cases", "10k@16"]);
+    assert!(e.contains("WIDTHxHEIGHT"), "{e}");
+    let e = fails(&["compare", CORNELL, "--reference", CORNELL_REFERENCE, "--resolution", "16385x16"]);
+    assert!(e.contains("1..=16384"), "{e}");
+    let e = fails(&["render", CORNELL, "--resolution", "16x0"]);
+    assert!(e.contains("1..=16384"), "{e}");
+    let peer = scratch("bad-peer").join("peer.csv");
+    std::fs::write(&peer, "# s,e\n10,0.1\n30,-2\n").unwrap();
+    let e = fails(&["compare", CORNELL, "--reference", CORNELL_REFERENCE, "--peer", peer.to_str().unwrap()]);
+    assert!(e.contains("peer.csv:3") && e.contains("positive"), "{e}");
+    std::fs::remove_dir_all(peer.parent().unwrap()).ok();
+}
