@@ -19,7 +19,6 @@ DEBIAN_PACKAGES=(
   "spirv-tools:SPIRV-Tools' static libraries"
   "g++:a C++ toolchain (shaderc is C++)"
   "pkg-config:library lookup"
-  "fonts-dejavu-core:the font of the plots ppm-vk compare draws"
 )
 
 if ! command -v cargo >/dev/null 2>&1; then

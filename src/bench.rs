@@ -6,10 +6,12 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
+use std::collections::BTreeMap;
+
+use anyhow::{Context as _, Result};
 use clap::Args;
 use ppm_vk_engine::{Mode, PassStats, ProbeMode, Renderer, Settings};
-use serde_json::json;
+use serde::Serialize;
 
 use crate::{Cone, DeviceArgs, ModeArg, ProbeArg};
 
@@ -25,14 +27,15 @@ pub struct BenchArgs {
     /// Override a Mitsuba scene's parameter: `-D name=value` sets what `$name` stands for (repeatable).
     #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = ppm_vk_engine::scene::parse_define)]
     pub defines: Vec<(String, String)>,
-    /// Cases as PHOTONS@WIDTHxHEIGHT, comma-separated (photon counts accept k and M suffixes).
-    #[arg(long, default_value = DEFAULT_CASES)]
-    cases: String,
+    /// Cases as PHOTONS@WIDTHxHEIGHT, comma-separated (photon counts accept k and M suffixes; width and
+    /// height 1..=16384).
+    #[arg(long, default_value = DEFAULT_CASES, value_parser = parse_cases)]
+    cases: Cases,
     /// Passes run before timing starts.
     #[arg(long, default_value_t = 2)]
     warmup: u32,
     /// Passes timed per case (the median is reported).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
     passes: u32,
     /// `ppm` or `sppm` (SPPM adds an eye pass to every pass).
     #[arg(long, value_enum, default_value_t = ModeArg::Sppm)]
@@ -54,35 +57,118 @@ pub struct BenchArgs {
     device: DeviceArgs,
 }
 
+#[derive(Clone)]
 struct Case {
     photons: u32,
     width: u32,
     height: u32,
 }
 
-fn parse_count(s: &str) -> Result<u32> {
+#[derive(Clone)]
+struct Cases(Vec<Case>);
+
+fn parse_count(s: &str) -> Result<u32, String> {
     let s = s.trim();
     let (num, mul) = match s.chars().last() {
         Some('k') | Some('K') => (&s[..s.len() - 1], 1e3),
         Some('m') | Some('M') => (&s[..s.len() - 1], 1e6),
         _ => (s, 1.0),
     };
-    let v: f64 = num.parse().map_err(|e| anyhow::anyhow!("photon count {s:?}: {e}"))?;
+    let v: f64 = num.parse().map_err(|e| format!("photon count {s:?}: {e}"))?;
     let v = v * mul;
     if !(v >= 1.0 && v <= u32::MAX as f64) {
-        bail!("photon count {s:?} out of range");
+        return Err(format!("photon count {s:?} out of range 1..={}", u32::MAX));
     }
     Ok(v as u32)
 }
 
-fn parse_cases(s: &str) -> Result<Vec<Case>> {
-    s.split(',')
+fn parse_cases(s: &str) -> Result<Cases, String> {
+    let cases = s
+        .split(',')
         .map(|c| {
-            let (p, r) = c.split_once('@').ok_or_else(|| anyhow::anyhow!("case {c:?}: expected PHOTONS@WxH"))?;
-            let (w, h) = r.split_once('x').ok_or_else(|| anyhow::anyhow!("case {c:?}: expected PHOTONS@WxH"))?;
-            Ok(Case { photons: parse_count(p)?, width: w.trim().parse()?, height: h.trim().parse()? })
+            let (p, r) = c.split_once('@').ok_or_else(|| format!("case {c:?}: expected PHOTONS@WIDTHxHEIGHT"))?;
+            let (width, height) = crate::parse_resolution(r).map_err(|e| format!("case {c:?}: {e}"))?;
+            Ok(Case { photons: parse_count(p).map_err(|e| format!("case {c:?}: {e}"))?, width, height })
         })
-        .collect()
+        .collect::<Result<_, String>>()?;
+    Ok(Cases(cases))
+}
+
+/// bench.json (schema ppm-vk-bench/1).
+#[derive(Serialize)]
+struct BenchDoc {
+    schema: &'static str,
+    device: DeviceDoc,
+    git_revision: &'static str,
+    scene: String,
+    mode: Mode,
+    probe: ProbeMode,
+    cone_k: Option<f32>,
+    warmup_passes: u32,
+    measured_passes: u32,
+    cases: Vec<CaseResult>,
+}
+
+#[derive(Serialize)]
+struct DeviceDoc {
+    name: String,
+    kind: String,
+    driver: String,
+    api: String,
+}
+
+#[derive(Serialize)]
+struct CaseResult {
+    photons_per_pass: u32,
+    width: u32,
+    height: u32,
+    hit_points: u32,
+    records_per_pass: f64,
+    batches_per_pass: u32,
+    ray_ms: f64,
+    stage_ms_median: BTreeMap<&'static str, f64>,
+    pass_wall_ms_median: f64,
+    pass_wall_ms_all: Vec<f64>,
+    resolve_ms_median: f64,
+    photons_per_second: f64,
+    photon_stage_ns_per_photon: f64,
+    photon_breakdown: Vec<BreakdownResult>,
+    bvh: BvhResult,
+    device_memory: DeviceMemoryResult,
+    host_rss: HostRssResult,
+}
+
+#[derive(Serialize)]
+struct BreakdownResult {
+    variant: &'static str,
+    photons: u32,
+    gpu_ms: f64,
+    intersections: u64,
+    intersections_per_second: f64,
+}
+
+#[derive(Serialize)]
+struct BvhResult {
+    triangles: usize,
+    nodes: usize,
+    depth: u32,
+    build_seconds: f64,
+    bytes: usize,
+}
+
+#[derive(Serialize)]
+struct DeviceMemoryResult {
+    peak_reserved_bytes: u64,
+    in_use_bytes_after_warmup: u64,
+    in_use_bytes_after_measured: u64,
+}
+
+/// Linux only: `None` (null) elsewhere.
+#[derive(Serialize)]
+struct HostRssResult {
+    peak_bytes: Option<u64>,
+    bytes_after_warmup: Option<u64>,
+    bytes_after_measured: Option<u64>,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -139,10 +225,7 @@ fn print_breakdown(variants: &[ppm_vk_engine::PhotonVariant]) {
 }
 
 pub fn run(args: BenchArgs) -> Result<()> {
-    if args.passes == 0 {
-        bail!("--passes must be at least 1");
-    }
-    let cases = parse_cases(&args.cases)?;
+    let cases = &args.cases.0;
     let mode = Mode::from(args.mode);
     let loading = std::time::Instant::now();
     let base = crate::load_scene(&args.scene, &args.defines)?;
@@ -175,7 +258,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         "RSS MiB"
     );
     let mut results = Vec::new();
-    for case in &cases {
+    for case in cases {
         let scene = base.with_resolution(case.width, case.height);
         let settings = Settings {
             photons_per_pass: case.photons,
@@ -235,61 +318,63 @@ pub fn run(args: BenchArgs) -> Result<()> {
             rss_peak.map_or("-".to_string(), |b| format!("{:.0}", mib(b)))
         );
         print_breakdown(&breakdown);
-        results.push(json!({
-            "photons_per_pass": case.photons,
-            "width": case.width,
-            "height": case.height,
-            "hit_points": renderer.active_hit_points(),
-            "records_per_pass": records,
-            "batches_per_pass": measured.last().map(|p| p.batches).unwrap_or(0),
-            "ray_ms": renderer.ray_ms(),
-            "stage_ms_median": STAGES.iter().zip(&stage).map(|(k, v)| (k.to_string(), json!(v))).collect::<serde_json::Map<_, _>>(),
-            "pass_wall_ms_median": wall,
-            "pass_wall_ms_all": measured.iter().map(|p| p.wall_ms).collect::<Vec<_>>(),
-            "resolve_ms_median": resolve_ms,
-            "photons_per_second": rate * 1e6,
-            "photon_stage_ns_per_photon": stage[1] * 1e6 / case.photons as f64,
-            "photon_breakdown": breakdown.iter().map(|v| json!({
-                "variant": v.name,
-                "photons": v.photons,
-                "gpu_ms": v.gpu_ms,
-                "intersections": v.steps,
-                "intersections_per_second": v.steps_per_second(),
-            })).collect::<Vec<_>>(),
-            "bvh": {
-                "triangles": bvh.triangles,
-                "nodes": bvh.nodes,
-                "depth": bvh.depth,
-                "build_seconds": bvh.build_seconds,
-                "bytes": bvh.nodes * 32 + bvh.triangles * 48,
+        results.push(CaseResult {
+            photons_per_pass: case.photons,
+            width: case.width,
+            height: case.height,
+            hit_points: renderer.active_hit_points(),
+            records_per_pass: records,
+            batches_per_pass: measured.last().map_or(0, |p| p.batches),
+            ray_ms: renderer.ray_ms(),
+            stage_ms_median: STAGES.iter().copied().zip(stage.iter().copied()).collect(),
+            pass_wall_ms_median: wall,
+            pass_wall_ms_all: measured.iter().map(|p| p.wall_ms).collect(),
+            resolve_ms_median: resolve_ms,
+            photons_per_second: rate * 1e6,
+            photon_stage_ns_per_photon: stage[1] * 1e6 / case.photons as f64,
+            photon_breakdown: breakdown
+                .iter()
+                .map(|v| BreakdownResult {
+                    variant: v.name,
+                    photons: v.photons,
+                    gpu_ms: v.gpu_ms,
+                    intersections: v.steps,
+                    intersections_per_second: v.steps_per_second(),
+                })
+                .collect(),
+            bvh: BvhResult {
+                triangles: bvh.triangles,
+                nodes: bvh.nodes,
+                depth: bvh.depth,
+                build_seconds: bvh.build_seconds,
+                bytes: bvh.nodes * 32 + bvh.triangles * 48,
             },
-            "device_memory": {
-                "peak_reserved_bytes": dev_after.peak_reserved_bytes,
-                "in_use_bytes_after_warmup": dev_before.in_use_bytes,
-                "in_use_bytes_after_measured": dev_after.in_use_bytes,
+            device_memory: DeviceMemoryResult {
+                peak_reserved_bytes: dev_after.peak_reserved_bytes,
+                in_use_bytes_after_warmup: dev_before.in_use_bytes,
+                in_use_bytes_after_measured: dev_after.in_use_bytes,
             },
-            "host_rss": {
-                "peak_bytes": rss_peak,
-                "bytes_after_warmup": rss_before.map(|r| r.0),
-                "bytes_after_measured": rss_after.map(|r| r.0),
+            host_rss: HostRssResult {
+                peak_bytes: rss_peak,
+                bytes_after_warmup: rss_before.map(|r| r.0),
+                bytes_after_measured: rss_after.map(|r| r.0),
             },
-        }));
+        });
         crate::check_validation(&ctx)?;
     }
-    let doc = json!({
-        "schema": "ppm-vk-bench/1",
-        "device": { "name": info.name, "kind": info.kind, "driver": info.driver, "api": info.api_version },
-        "git_revision": env!("PPM_VK_GIT_REV"),
-        "scene": args.scene.display().to_string(),
-        "mode": mode,
-        "probe": ProbeMode::from(args.probe),
-        "cone_k": args.cone.0,
-        "warmup_passes": args.warmup,
-        "measured_passes": args.passes,
-        "cases": results,
-    });
-    std::fs::write(&args.json, serde_json::to_string_pretty(&doc)?)
-        .map_err(|e| anyhow::anyhow!("writing {}: {e}", args.json.display()))?;
+    let doc = BenchDoc {
+        schema: "ppm-vk-bench/1",
+        device: DeviceDoc { name: info.name, kind: info.kind, driver: info.driver, api: info.api_version },
+        git_revision: env!("PPM_VK_GIT_REV"),
+        scene: args.scene.display().to_string(),
+        mode,
+        probe: args.probe.into(),
+        cone_k: args.cone.0,
+        warmup_passes: args.warmup,
+        measured_passes: args.passes,
+        cases: results,
+    };
+    std::fs::write(&args.json, serde_json::to_string_pretty(&doc)?).with_context(|| format!("writing {}", args.json.display()))?;
     println!("wrote {}", args.json.display());
     Ok(())
 }

@@ -3,19 +3,21 @@
 //! side-by-side crops of the regions that tell the variants apart.
 //!
 //! A variant is `+`-joined words: `ppm` (plain) or `sppm` (stochastic), `probe` (eq. 9 as printed), `probe-sf` (scale-free),
-//! `cone` (k = 1.1) or `cone=K`, `beta=F` (fraction of r), `alpha=A`. The clock of a variant starts before
-//! its renderer is made, so the probe pass and kernel compilation count against it. The error is also
+//! `cone` (k = 1.1) or `cone=K`, `beta=F` (fraction of r), `alpha=A`. `--time` means what it means for
+//! `render`: the passes' wall time, set-up excluded (kernel compilation, the BVH and the probe pass,
+//! reported apart as `setup_s`), so each variant gets the same time to render in. The error is also
 //! sampled at roughly logarithmic times for the error-against-time plot; those evaluations (an image
 //! read back and compared) are timed and left out of the variant's clock.
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
-use ppm_vk_engine::metrics::{compare, cornell_regions, ErrorStats, Reference, Region};
-use ppm_vk_engine::{Mode, ProbeMode, Renderer, RgbImage, Settings};
-use serde_json::json;
+use ppm_vk_engine::metrics::{compare, ErrorStats, Reference};
+use ppm_vk_engine::{Mode, ProbeMode, ProbeReport, Renderer, RgbImage, Settings};
+use serde::Serialize;
 
 use crate::DeviceArgs;
 
@@ -29,24 +31,37 @@ pub struct CompareArgs {
     /// Reference image (EXR, full resolution; a `_var.exr` beside it is used to remove its noise).
     #[arg(long)]
     reference: PathBuf,
-    /// Wall-clock seconds per variant, setup included.
-    #[arg(long, default_value_t = 10.0)]
+    /// Seconds each variant renders for: the passes' wall time, as for `render --time` (set-up, i.e.
+    /// kernel compilation, the BVH and the probe pass, is excluded and reported apart; the error
+    /// evaluations for the plot are excluded too). The last pass started in time finishes.
+    #[arg(long, default_value_t = 10.0, value_parser = crate::parse_seconds)]
     time: f64,
     /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone". Words joined by
     /// `+`: ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass).
     #[arg(long, default_value = "ppm; ppm+probe; ppm+probe-sf; ppm+cone; ppm+probe+cone; ppm+probe-sf+cone")]
     variants: String,
     /// Photons per pass.
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u32).range(1..))]
     photons_per_pass: u32,
-    /// Override the scene's resolution, e.g. 256x256.
+    /// Override the scene's resolution, e.g. 256x256 (each side 1..=16384; the reference's must be a
+    /// whole multiple of it).
     #[arg(long, value_parser = crate::parse_resolution)]
     resolution: Option<(u32, u32)>,
+    /// Seed of all random streams (the same for every variant).
     #[arg(long, default_value_t = 0)]
     seed: u32,
-    /// Folder for the table, JSON, images and crops.
+    /// Folder for the table (compare.md), JSON (compare.json), images, crops and the plot
+    /// (error-vs-time.svg).
     #[arg(long, default_value = "compare-out")]
     out: PathBuf,
+    /// Another renderer's errors, drawn as points on the plot for scale: a CSV file with one
+    /// `seconds,rel_mse[,label]` line per point (relMSE against the same reference, its noise removed;
+    /// the label, default "peer", names it in the legend). Lines starting with `#` are comments. Example:
+    /// docs/peers/mitsuba-path-cornell-spheres.csv.
+    #[arg(long, value_name = "FILE")]
+    peer: Option<PathBuf>,
+    #[command(flatten)]
+    regions: crate::RegionArgs,
     #[command(flatten)]
     device: DeviceArgs,
 }
@@ -98,10 +113,44 @@ fn file_name(variant: &str) -> String {
     variant.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '_' }).collect()
 }
 
+/// One variant's result, as compare.json writes it (schema ppm-vk-compare/1).
+#[derive(Serialize)]
+struct VariantResult {
+    variant: String,
+    settings: Settings,
+    /// Seconds of passes (the variant's clock), and of set-up before them.
+    wall_s: f64,
+    setup_s: f64,
+    passes: u64,
+    photons: u64,
+    whole: ErrorStats,
+    regions: BTreeMap<String, ErrorStats>,
+    probe: Option<ProbeReport>,
+    /// (seconds, relMSE) along the way.
+    rel_mse_curve: Vec<(f64, f64)>,
+}
+
+#[derive(Serialize)]
+struct DeviceName {
+    name: String,
+    driver: String,
+}
+
+/// compare.json.
+#[derive(Serialize)]
+struct CompareDoc {
+    schema: &'static str,
+    scene: String,
+    device: DeviceName,
+    git_revision: &'static str,
+    time_s: f64,
+    photons_per_pass: u32,
+    variants: Vec<VariantResult>,
+}
+
 pub fn run(args: CompareArgs) -> Result<()> {
-    if !(args.time.is_finite() && args.time > 0.0) {
-        bail!("--time must be a positive number of seconds");
-    }
+    // A bad peer file is refused before any rendering.
+    let peer = args.peer.as_deref().map(crate::plot::read_peer).transpose()?;
     let mut scene = crate::load_scene(&args.scene, &args.defines)?;
     if let Some((w, h)) = args.resolution {
         scene = scene.with_resolution(w, h);
@@ -114,7 +163,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
         bail!("--variants names no variant");
     }
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    let regions: Vec<Region> = if scene.name == "cornell-spheres" { cornell_regions() } else { Vec::new() };
+    let regions = args.regions.resolve(&scene, &reference);
     let ctx = args.device.open()?;
     let info = ctx.info().clone();
     eprintln!("device: {} ({}); {} s per variant", info.name, info.driver, args.time);
@@ -124,9 +173,10 @@ pub fn run(args: CompareArgs) -> Result<()> {
     let mut images: Vec<(String, RgbImage)> = Vec::new();
     let mut curves = Vec::new();
     for v in &variants {
-        let start = Instant::now();
+        let setup = Instant::now();
         let mut renderer = Renderer::new(&ctx, &scene, v.settings.clone())?;
-        let setup_s = start.elapsed().as_secs_f64();
+        let setup_s = setup.elapsed().as_secs_f64();
+        let start = Instant::now();
         // The variant's clock: wall time less the time spent measuring its error along the way.
         let mut excluded = Duration::ZERO;
         let clock = |excluded: Duration| start.elapsed().saturating_sub(excluded);
@@ -152,26 +202,26 @@ pub fn run(args: CompareArgs) -> Result<()> {
         let per_region: Vec<(String, ErrorStats)> =
             regions.iter().map(|r| Ok((r.name.clone(), compare(&image, &reference, Some(r), true)?))).collect::<Result<_>>()?;
         eprintln!("{:<24} {:>4} passes, RMSE {:.4}, relMSE {:.5}", v.name, renderer.passes(), whole.rmse, whole.rel_mse);
-        rows.push(json!({
-            "variant": v.name,
-            "settings": v.settings,
-            "wall_s": wall,
-            "setup_s": setup_s,
-            "passes": renderer.passes(),
-            "photons": renderer.emitted(),
-            "whole": whole,
-            "regions": per_region.iter().map(|(n, e)| (n.clone(), json!(e))).collect::<serde_json::Map<_, _>>(),
-            "probe": renderer.probe_report(),
-            "rel_mse_curve": curve,
-        }));
-        curves.push(crate::plot::Series { name: v.name.clone(), points: curve });
+        curves.push(crate::plot::Series { name: v.name.clone(), points: curve.clone() });
+        rows.push(VariantResult {
+            variant: v.name.clone(),
+            settings: v.settings.clone(),
+            wall_s: wall,
+            setup_s,
+            passes: renderer.passes(),
+            photons: renderer.emitted(),
+            whole,
+            regions: per_region.into_iter().collect(),
+            probe: renderer.probe_report().cloned(),
+            rel_mse_curve: curve,
+        });
         images.push((v.name.clone(), image));
         crate::check_validation(&ctx)?;
     }
 
     // The table: whole image and each region, RMSE / relMSE.
     let mut md = format!(
-        "{} at {}x{}, {} s per variant (setup included), {} photons/pass, on {}; error against {} with its own noise removed.\n\n",
+        "{} at {}x{}, {} s of passes per variant (set-up excluded), {} photons/pass, on {}; error against {} with its own noise removed.\n\n",
         scene.name,
         scene.camera.width,
         scene.camera.height,
@@ -180,40 +230,35 @@ pub fn run(args: CompareArgs) -> Result<()> {
         info.name,
         args.reference.display()
     );
-    md += "| variant | passes | RMSE | relMSE |";
+    md += "| variant | set-up s | passes | RMSE | relMSE |";
     for r in &regions {
         md += &format!(" {} RMSE | {} relMSE |", r.name, r.name);
     }
-    md += "\n|---|---|---|---|";
+    md += "\n|---|---|---|---|---|";
     md += &"---|---|".repeat(regions.len());
     md += "\n";
     for row in &rows {
-        md += &format!(
-            "| {} | {} | {:.4} | {:.5} |",
-            row["variant"].as_str().unwrap_or(""),
-            row["passes"],
-            row["whole"]["rmse"].as_f64().unwrap_or(f64::NAN),
-            row["whole"]["rel_mse"].as_f64().unwrap_or(f64::NAN)
-        );
-        for r in &regions {
-            let e = &row["regions"][&r.name];
-            md += &format!(" {:.4} | {:.5} |", e["rmse"].as_f64().unwrap_or(f64::NAN), e["rel_mse"].as_f64().unwrap_or(f64::NAN));
+        md += &format!("| {} | {:.2} | {} | {:.4} | {:.5} |", row.variant, row.setup_s, row.passes, row.whole.rmse, row.whole.rel_mse);
+        for e in regions.iter().filter_map(|r| row.regions.get(&r.name)) {
+            md += &format!(" {:.4} | {:.5} |", e.rmse, e.rel_mse);
         }
         md += "\n";
     }
-    std::fs::write(args.out.join("compare.md"), &md)?;
-    std::fs::write(
-        args.out.join("compare.json"),
-        serde_json::to_string_pretty(&json!({
-            "schema": "ppm-vk-compare/1",
-            "scene": args.scene.display().to_string(),
-            "device": { "name": info.name, "driver": info.driver },
-            "git_revision": env!("PPM_VK_GIT_REV"),
-            "time_s": args.time,
-            "photons_per_pass": args.photons_per_pass,
-            "variants": rows,
-        }))?,
-    )?;
+    let write = |name: &str, text: &str| {
+        let path = args.out.join(name);
+        std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))
+    };
+    write("compare.md", &md)?;
+    let doc = CompareDoc {
+        schema: "ppm-vk-compare/1",
+        scene: args.scene.display().to_string(),
+        device: DeviceName { name: info.name.clone(), driver: info.driver.clone() },
+        git_revision: env!("PPM_VK_GIT_REV"),
+        time_s: args.time,
+        photons_per_pass: args.photons_per_pass,
+        variants: rows,
+    };
+    write("compare.json", &serde_json::to_string_pretty(&doc)?)?;
     // Crops: each region of each variant side by side, the reference last (at the image's resolution).
     let (w, h) = (images[0].1.width, images[0].1.height);
     let reference_image = reference.at_resolution(w, h)?.image;
@@ -227,10 +272,8 @@ pub fn run(args: CompareArgs) -> Result<()> {
         RgbImage::hstack(&refs)?.upscale(4)?.save_png(&args.out.join(format!("crops-{}.png", r.name)), -2.0)?;
     }
     let title = format!("{} {}x{}, {} photons/pass, {}", scene.name, scene.camera.width, scene.camera.height, args.photons_per_pass, info.name);
-    match crate::plot::error_plot(&args.out.join("error-vs-time.png"), &title, "relMSE vs reference", &curves) {
-        Ok(()) => {}
-        Err(e) => eprintln!("warning: no plot: {e:#} (the table, JSON and images are written)"),
-    }
+    let plot = args.out.join("error-vs-time.svg");
+    crate::plot::error_plot(&plot, &title, "relMSE vs reference", &curves, peer.as_deref().unwrap_or_default())?;
     println!("{md}");
     println!(
         "crops (left to right: {}, reference) and images in {}",

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use ppm_vk_engine::metrics::{compare, cornell_regions, Reference, Region};
+use ppm_vk_engine::metrics::{compare, Reference, Region};
 use ppm_vk_engine::report::{file_sha256, PassRecord, RunHeader, RunReport, SCHEMA};
 use ppm_vk_engine::{open_device, Checkpoint, Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings};
 
@@ -85,6 +85,27 @@ pub fn save_pipeline_cache(ctx: &Context) {
     }
 }
 
+/// The regions scored on their own against a reference.
+#[derive(Args, Clone)]
+pub struct RegionArgs {
+    /// A region to score on its own against --reference, NAME:X0,Y0,W,H in the reference's pixels
+    /// (origin top left); repeatable. Replaces the scene file's `[[region]]`s (see
+    /// docs/scene-format.md), which are scored when none is given.
+    #[arg(long = "region", value_parser = parse_region)]
+    regions: Vec<Region>,
+}
+
+impl RegionArgs {
+    /// `--region`s if any, else the scene's regions in the reference's pixels.
+    pub fn resolve(&self, scene: &Scene, reference: &Reference) -> Vec<Region> {
+        if !self.regions.is_empty() {
+            return self.regions.clone();
+        }
+        let (w, h) = (reference.image.width, reference.image.height);
+        scene.regions.iter().map(|r| r.pixels(w, h)).collect()
+    }
+}
+
 #[derive(Args)]
 struct RenderArgs {
     /// Scene file: TOML (see docs/scene-format.md) or Mitsuba 3 XML (.xml, see docs/mitsuba.md).
@@ -100,7 +121,9 @@ struct RenderArgs {
     /// counts the passes of its checkpoint.
     #[arg(long, conflicts_with = "time", value_parser = clap::value_parser!(u64).range(1..))]
     passes: Option<u64>,
-    /// Render for this many seconds of wall time instead of a pass count.
+    /// Render for this many seconds instead of a pass count: the passes' wall time, set-up (kernel
+    /// compilation, the BVH, the probe pass) excluded, as for `compare --time`. The last pass started in
+    /// time finishes.
     #[arg(long, value_parser = parse_seconds)]
     time: Option<f64>,
     /// Photons emitted per pass.
@@ -115,7 +138,7 @@ struct RenderArgs {
     /// Starting search radius in scene units (default: the paper's eq. 8).
     #[arg(long, value_parser = parse_positive)]
     radius: Option<f32>,
-    /// Override the scene's resolution, e.g. 256x256.
+    /// Override the scene's resolution, e.g. 256x256 (each side 1..=16384).
     #[arg(long, value_parser = parse_resolution)]
     resolution: Option<(u32, u32)>,
     /// Hit points per pixel (glass splits an eye path into both Fresnel branches up to this many).
@@ -152,10 +175,8 @@ struct RenderArgs {
     /// Reference image (EXR) to measure error against at the end.
     #[arg(long)]
     reference: Option<PathBuf>,
-    /// A region to score separately against --reference, NAME:X0,Y0,W,H in the reference's pixels (origin
-    /// top left); repeatable. cornell-spheres has its own regions by default.
-    #[arg(long = "region", value_parser = parse_region)]
-    regions: Vec<Region>,
+    #[command(flatten)]
+    regions: RegionArgs,
     /// Evaluate the error against --reference after every N passes (it reads the image back; the
     /// overhead is printed).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
@@ -281,12 +302,14 @@ pub(crate) fn parse_cone(s: &str) -> Result<Cone, String> {
     Ok(Cone(Some(k)))
 }
 
+/// `WIDTHxHEIGHT`, each side in 1..=[`MAX_RESOLUTION`](ppm_vk_engine::scene::MAX_RESOLUTION).
 pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;
     let parse = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("{v:?}: {e}"));
     let (w, h) = (parse(w)?, parse(h)?);
-    if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        return Err(format!("resolution {w}x{h} out of range 1..=16384"));
+    let max = ppm_vk_engine::scene::MAX_RESOLUTION;
+    if w == 0 || h == 0 || w > max || h > max {
+        return Err(format!("resolution {w}x{h} out of range: width and height must be in 1..={max}"));
     }
     Ok((w, h))
 }
@@ -515,12 +538,9 @@ fn render(args: RenderArgs) -> Result<Ended> {
         ray_ms: renderer.ray_ms(),
         probe: renderer.probe_report().cloned(),
     });
-    let regions = if !args.regions.is_empty() {
-        args.regions.clone()
-    } else if scene.name == "cornell-spheres" {
-        cornell_regions()
-    } else {
-        Vec::new()
+    let regions = match &reference {
+        Some(reference) => args.regions.resolve(&scene, reference),
+        None => Vec::new(),
     };
     let (mut gpu_origin, mut eval_s, mut evals) = (None, 0f64, 0u32);
     let budget = args.time.map(Duration::from_secs_f64);

@@ -404,3 +404,95 @@ fn render_keeps_the_pipeline_cache_where_asked() {
     assert!(!render(&[]).contains("pipeline cache"), "the damaged file was not replaced");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `compare` end to end on a tiny render: the table, the JSON (typed, schema ppm-vk-compare/1) and the
+/// plot, an SVG with log-scale tick labels, one line per variant and the peer's points.
+#[test]
+fn compare_writes_table_json_and_a_readable_plot() {
+    let dir = scratch("compare");
+    let peer = dir.join("peer.csv");
+    std::fs::write(&peer, "# seconds,rel_mse,label\n0.5,0.2,other\n2,0.05,other\n").unwrap();
+    let run = bin()
+        .args(["compare", CORNELL, "--reference", CORNELL_REFERENCE, "--time", "0.5", "--resolution", "16x16"])
+        .args(["--photons-per-pass", "5000", "--variants", "ppm; sppm", "--validate", "--peer"])
+        .arg(&peer)
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "compare failed:\n{stderr}");
+    let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("compare.json")).unwrap()).unwrap();
+    assert_eq!(doc["schema"], "ppm-vk-compare/1");
+    let variants = doc["variants"].as_array().unwrap();
+    assert_eq!(variants.iter().map(|v| v["variant"].as_str().unwrap()).collect::<Vec<_>>(), ["ppm", "sppm"]);
+    for v in variants {
+        // Equal time: each variant's clock (set-up excluded) reaches --time and stops after one more pass.
+        let (wall, setup) = (v["wall_s"].as_f64().unwrap(), v["setup_s"].as_f64().unwrap());
+        assert!(wall >= 0.5 && setup > 0.0, "{v}");
+        assert!(v["passes"].as_u64().unwrap() >= 1 && v["whole"]["rel_mse"].as_f64().unwrap() > 0.0, "{v}");
+        // The scene file's regions are scored.
+        assert!(v["regions"]["caustic"]["pixels"].as_u64().unwrap() > 0, "{v}");
+        assert!(!v["rel_mse_curve"].as_array().unwrap().is_empty(), "{v}");
+    }
+    let table = std::fs::read_to_string(dir.join("compare.md")).unwrap();
+    assert!(table.contains("| ppm |") && table.contains("| sppm |") && table.contains("caustic relMSE"), "{table}");
+
+    let svg = std::fs::read_to_string(dir.join("error-vs-time.svg")).unwrap();
+    let texts: Vec<&str> = svg.split("<text").skip(1).map(|t| t.split_once('>').unwrap().1.split("</text>").next().unwrap().trim()).collect();
+    // Tick labels on the log time axis (0.5 s to 2 s: 0.5, 1, 2) and on the error axis (from the peer's 0.2).
+    for label in ["0.5", "1", "2", "0.2"] {
+        assert!(texts.contains(&label), "no tick label {label} in {texts:?}");
+    }
+    for label in ["ppm", "sppm", "other"] {
+        assert!(texts.contains(&label), "no legend entry {label} in {texts:?}");
+    }
+    // One polyline per variant (the axes and ticks are 1 px wide, the variants' lines 2 px).
+    let lines = svg.split("<polyline").skip(1).filter(|p| p.split_once("/>").unwrap().0.contains("stroke-width=\"2\"")).count();
+    assert_eq!(lines, 2, "{svg}");
+    // The peer's two points and its legend marker are triangles.
+    assert_eq!(svg.matches("<polygon").count(), 3, "{svg}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Every subcommand has --version and says what each of its options does; sizes out of range are refused
+/// by the parser, naming the bound.
+#[test]
+fn every_option_has_help_and_sizes_are_checked() {
+    for cmd in ["render", "devices", "bench", "compare"] {
+        let run = bin().args([cmd, "--help"]).output().unwrap();
+        assert!(run.status.success(), "{cmd} --help failed");
+        let help = String::from_utf8_lossy(&run.stdout).to_string();
+        let lines: Vec<&str> = help.lines().collect();
+        let mut options = 0;
+        for (i, line) in lines.iter().enumerate() {
+            let trimmed = line.trim_start();
+            if !trimmed.starts_with('-') {
+                continue;
+            }
+            options += 1;
+            // Help text on the same line (after two spaces) or on the next, indented deeper.
+            let indent = line.len() - trimmed.len();
+            let same_line = trimmed.split_once("  ").is_some_and(|(_, rest)| !rest.trim().is_empty());
+            let next = lines.get(i + 1).copied().unwrap_or("");
+            let next_line = next.len() - next.trim_start().len() > indent && !next.trim().is_empty();
+            assert!(same_line || next_line, "{cmd}: option without help: {line:?}\n{help}");
+        }
+        assert!(options >= 2, "{cmd}: no options found in\n{help}");
+        let version = bin().args([cmd, "--version"]).output().unwrap();
+        assert!(version.status.success() && String::from_utf8_lossy(&version.stdout).starts_with("ppm-vk"), "{cmd} --version");
+    }
+    let e = fails(&["bench", "--cases", "10k@16x16384,10k@16x16385"]);
+    assert!(e.contains("16x16385") && e.contains("1..=16384"), "{e}");
+    let e = fails(&["bench", "--cases", "10k@16"]);
+    assert!(e.contains("WIDTHxHEIGHT"), "{e}");
+    let e = fails(&["compare", CORNELL, "--reference", CORNELL_REFERENCE, "--resolution", "16385x16"]);
+    assert!(e.contains("1..=16384"), "{e}");
+    let e = fails(&["render", CORNELL, "--resolution", "16x0"]);
+    assert!(e.contains("1..=16384"), "{e}");
+    let peer = scratch("bad-peer").join("peer.csv");
+    std::fs::write(&peer, "# s,e\n10,0.1\n30,-2\n").unwrap();
+    let e = fails(&["compare", CORNELL, "--reference", CORNELL_REFERENCE, "--peer", peer.to_str().unwrap()]);
+    assert!(e.contains("peer.csv:3") && e.contains("positive"), "{e}");
+    std::fs::remove_dir_all(peer.parent().unwrap()).ok();
+}

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use common::*;
 use glam::Vec3;
-use ppm_vk_engine::metrics::{compare, cornell_regions, Reference};
+use ppm_vk_engine::metrics::{compare, Reference};
 use ppm_vk_engine::scene::{demo, Mesh, Surface};
 use ppm_vk_engine::{Mode, Renderer, RgbImage, Scene, Settings};
 

@@ -53,7 +53,7 @@ fn score(image: &RgbImage) -> Result<Scores, String> {
     if image.count_non_finite() != 0 {
         return Err(format!("{} non-finite pixel components", image.count_non_finite()));
     }
-    let regions = metrics::cornell_regions();
+    let regions = cornell_regions();
     let region = |name: &str| regions.iter().find(|r| r.name == name).cloned().ok_or(format!("no region {name}"));
     let cmp = |name: &str| -> Result<metrics::ErrorStats, String> {
         metrics::compare(image, refr, Some(&region(name)?), true).map_err(|e| format!("{e:#}"))

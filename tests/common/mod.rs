@@ -8,6 +8,11 @@ use ppm_vk_engine::{Context, ContextOptions, Scene};
 
 /// The test scene of the paper.
 pub const CORNELL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell-spheres.toml");
+/// The regions of the test scene's file, in the pixels of its 512 x 512 reference.
+pub fn cornell_regions() -> Vec<ppm_vk_engine::metrics::Region> {
+    load(CORNELL).regions.iter().map(|r| r.pixels(512, 512)).collect()
+}
+
 /// The white-furnace scene: a closed box of uniform albedo 0.5 and emission 1.
 pub const FURNACE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/furnace.toml");
 /// The Mitsuba 3 scene the reference was rendered from: cornell-spheres as Mitsuba XML.

@@ -29,7 +29,7 @@ pub struct Region {
 }
 
 impl Region {
-    fn new(name: &str, x0: u32, y0: u32, w: u32, h: u32) -> Self {
+    pub fn new(name: &str, x0: u32, y0: u32, w: u32, h: u32) -> Self {
         Self {
             name: name.to_owned(),
             x0,
@@ -239,25 +239,6 @@ pub fn compare(
         mean_bias: bias / n,
         pixels,
     })
-}
-
-/// Regions of the paper's test scene, cornell-spheres, in its 512 x 512 coordinates (origin top left).
-/// Boxes were picked on the reference image; bounds below are inclusive.
-pub fn cornell_regions() -> Vec<Region> {
-    vec![
-        // The floor around the glass sphere's caustic: x 250-319, y 436-475 inclusive (the box the
-        // reference README's peer table is scored on).
-        Region::new("caustic", 250, 436, 70, 40),
-        // x 364-403, y 384-407: the floor in front of the diffuse (blue) sphere, straddling its shadow's
-        // front edge (umbra to lit floor between y 389 and 396). Clear of the blue sphere's silhouette
-        // (lowest at y ~379), the glass sphere's right edge (x <= 357) and the green wall (x >= 413).
-        Region::new("shadow_edge", 364, 384, 40, 24),
-        // x 296-359, y 152-215: flat back wall between the light's bright spot and the green wall, a smooth
-        // gradient at least 35 pixels from any edge (right wall at x ~397, sphere tops at y >= 255).
-        Region::new("back_wall", 296, 152, 64, 64),
-        // The whole image minus a 16-pixel border.
-        Region::new("interior", 16, 16, 480, 480),
-    ]
 }
 
 #[cfg(test)]
@@ -474,23 +455,26 @@ mod tests {
         );
     }
 
+    /// The regions of scenes/cornell-spheres.toml (fractions of the image) in the 512 x 512 reference's
+    /// pixels.
+    fn cornell_regions() -> Vec<Region> {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/cornell-spheres.toml");
+        let scene = crate::Scene::load(path).unwrap();
+        scene.regions.iter().map(|r| r.pixels(512, 512)).collect()
+    }
+
+    /// The scene file's regions are the boxes picked on the reference (x0, y0, w, h in its pixels).
     #[test]
-    fn cornell_regions_fit_512() {
-        let regions = cornell_regions();
-        let caustic = regions
-            .iter()
-            .find(|r| r.name == "caustic")
-            .expect("caustic region");
-        assert_eq!(
-            (caustic.x0, caustic.y0, caustic.w, caustic.h),
-            (250, 436, 70, 40)
-        );
-        for r in &regions {
-            assert!(
-                r.w > 0 && r.h > 0 && r.x0 + r.w <= 512 && r.y0 + r.h <= 512,
-                "{r:?}"
-            );
-        }
+    fn cornell_regions_are_the_picked_boxes() {
+        let boxes: Vec<(String, u32, u32, u32, u32)> =
+            cornell_regions().into_iter().map(|r| (r.name, r.x0, r.y0, r.w, r.h)).collect();
+        let picked = [
+            ("caustic", 250, 436, 70, 40),
+            ("shadow_edge", 364, 384, 40, 24),
+            ("back_wall", 296, 152, 64, 64),
+            ("interior", 16, 16, 480, 480),
+        ];
+        assert_eq!(boxes, picked.map(|(n, x, y, w, h)| (n.to_string(), x, y, w, h)));
     }
 
     /// The shared reference is a required fixture: this fails (not skips) when it is missing.

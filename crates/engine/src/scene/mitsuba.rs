@@ -721,6 +721,7 @@ impl Builder {
                 spheres: Vec::new(),
                 quads: Vec::new(),
                 meshes: Vec::new(),
+                regions: Vec::new(),
                 warnings: Vec::new(),
             },
             root,

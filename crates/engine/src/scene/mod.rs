@@ -209,10 +209,56 @@ pub struct Scene {
     pub quads: Vec<Quad>,
     /// Triangle meshes, in world space.
     pub meshes: Vec<Mesh>,
+    /// Parts of the image scored on their own against a reference (`[[region]]` in a TOML scene); a
+    /// Mitsuba scene has none.
+    pub regions: Vec<ImageRegion>,
     /// What loading approximated or dropped, one line each (an MTL feature the engine does not model,
     /// once per material; degenerate triangles dropped, with their count). The library never prints
     /// them: the CLI writes them to stderr.
     pub warnings: Vec<String>,
+}
+
+/// A named part of the image, scored on its own against a reference image: its edges as fractions of
+/// the image's width and height (origin top left; x0 < x1, y0 < y1, all in [0, 1]), so it names the
+/// same part of the picture at any resolution.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageRegion {
+    pub name: String,
+    pub x0: f64,
+    pub y0: f64,
+    pub x1: f64,
+    pub y1: f64,
+}
+
+impl ImageRegion {
+    /// The pixels it covers in a `width` x `height` image (a reference's), its edges rounded outward to
+    /// whole pixels: exactly its edges where they fall on pixel edges (k / 512 at 512 x 512).
+    pub fn pixels(&self, width: u32, height: u32) -> crate::metrics::Region {
+        // A millionth of a pixel of slack, so that a fraction such as 1/3 at 300 pixels, not exactly
+        // 100 in floating point, is not widened by one.
+        let low = |f: f64, n: u32| ((f * f64::from(n) + 1e-6).floor().max(0.0) as u32).min(n);
+        let high = |f: f64, n: u32| ((f * f64::from(n) - 1e-6).ceil().max(0.0) as u32).min(n);
+        let (x0, y0) = (low(self.x0, width), low(self.y0, height));
+        let (x1, y1) = (high(self.x1, width).max(x0 + 1), high(self.y1, height).max(y0 + 1));
+        crate::metrics::Region::new(&self.name, x0, y0, x1 - x0, y1 - y0)
+    }
+
+    fn check(&self, path: &str) -> Result<(), Invalid> {
+        if self.name.is_empty() {
+            return Err(invalid(format!("{path}.name"), "must not be empty"));
+        }
+        for (lo, hi, a, b) in [(self.x0, self.x1, "x0", "x1"), (self.y0, self.y1, "y0", "y1")] {
+            if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo < hi && hi <= 1.0) {
+                return Err(invalid(
+                    format!("{path}.{a}"),
+                    format!(
+                        "{a} and {b} are fractions of the image with 0 <= {a} < {b} <= 1, got {a} = {lo}, {b} = {hi}"
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A failed check of [`Scene::validate`]: the field it concerns, as a path (`sphere[1].radius`,
@@ -481,6 +527,12 @@ impl Scene {
         }
         for (i, m) in self.meshes.iter().enumerate() {
             check_mesh(m, &format!("mesh[{i}]"), self.materials.len())?;
+        }
+        for (i, r) in self.regions.iter().enumerate() {
+            r.check(&format!("region[{i}]"))?;
+            if self.regions[..i].iter().any(|other| other.name == r.name) {
+                return Err(invalid(format!("region[{i}].name"), format!("region {:?} is named twice", r.name)));
+            }
         }
         let shapes = self.spheres.len() + self.quads.len();
         if shapes > MAX_SHAPES {
@@ -813,6 +865,7 @@ mod tests {
                 vec![[0, 1, 2], [0, 2, 3]],
                 1,
             )],
+            regions: vec![],
             warnings: vec![],
         }
     }

@@ -762,6 +762,7 @@ mod tests {
             spheres: vec![],
             quads: vec![],
             meshes: vec![],
+            regions: vec![],
             warnings: vec![],
         }
     }

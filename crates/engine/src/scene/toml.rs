@@ -19,7 +19,7 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 
-use super::{obj, Camera, Material, ObjImport, Quad, Scene, Sphere, Surface, MAX_TRIANGLES};
+use super::{obj, Camera, ImageRegion, Material, ObjImport, Quad, Scene, Sphere, Surface, MAX_TRIANGLES};
 
 /// [`Scene::parse`]: mesh files are found relative to the directory of `origin`.
 pub(super) fn parse(text: &str, origin: &str) -> Result<Scene> {
@@ -54,6 +54,18 @@ struct RawScene {
     quad: Vec<Spanned<RawQuad>>,
     #[serde(default)]
     mesh: Vec<Spanned<RawMesh>>,
+    #[serde(default)]
+    region: Vec<Spanned<RawRegion>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRegion {
+    name: Spanned<String>,
+    x0: Spanned<f64>,
+    y0: Spanned<f64>,
+    x1: Spanned<f64>,
+    y1: Spanned<f64>,
 }
 
 #[derive(Deserialize)]
@@ -281,6 +293,23 @@ fn build(src: &Source, raw: RawScene, base: &Path) -> Result<Scene> {
         });
     }
 
+    let mut regions = Vec::with_capacity(raw.region.len());
+    for (i, g) in raw.region.iter().enumerate() {
+        let p = format!("region[{i}]");
+        let r = g.get_ref();
+        spans.insert(p.clone(), g.span());
+        for (field, span) in [("name", r.name.span()), ("x0", r.x0.span()), ("y0", r.y0.span()), ("x1", r.x1.span()), ("y1", r.y1.span())] {
+            spans.insert(format!("{p}.{field}"), span);
+        }
+        regions.push(ImageRegion {
+            name: r.name.get_ref().clone(),
+            x0: *r.x0.get_ref(),
+            y0: *r.y0.get_ref(),
+            x1: *r.x1.get_ref(),
+            y1: *r.y1.get_ref(),
+        });
+    }
+
     let toml_materials = materials.len();
     let mut scene = Scene {
         name,
@@ -289,6 +318,7 @@ fn build(src: &Source, raw: RawScene, base: &Path) -> Result<Scene> {
         spheres,
         quads,
         meshes: Vec::new(),
+        regions,
         warnings: Vec::new(),
     };
     for (i, m) in raw.mesh.iter().enumerate() {
@@ -660,6 +690,26 @@ material = "light"
         assert_eq!(s.spheres[0].material, 2);
         assert_eq!(s.spheres[1].material, 0);
         assert_eq!(s.quads[1].material, 1);
+    }
+
+    #[test]
+    fn regions_are_fractions_of_the_image() {
+        let region = |x0: &str, name: &str| {
+            format!("{BASE}\n[[region]]\nname = \"{name}\"\nx0 = {x0}\ny0 = 0\nx1 = 0.5\ny1 = 1\n")
+        };
+        let s = Scene::parse(&region("0.25", "left"), "t.toml").expect("valid");
+        assert_eq!(s.regions, [ImageRegion { name: "left".into(), x0: 0.25, y0: 0.0, x1: 0.5, y1: 1.0 }]);
+        // 64 x 48 pixels: x 16-31, all rows; at 6 x 4 the edge at 1.5 pixels rounds outward.
+        assert_eq!(s.regions[0].pixels(64, 48), crate::metrics::Region::new("left", 16, 0, 16, 48));
+        assert_eq!(s.regions[0].pixels(6, 4), crate::metrics::Region::new("left", 1, 0, 2, 4));
+        // The region's table starts on line 38 (BASE has 36 lines and a blank one follows): x0 is line 40.
+        assert_err(&region("0.5", "left"), 40, "region[0].x0", "0 <= x0 < x1 <= 1");
+        assert_err(&region("-0.1", "left"), 40, "region[0].x0", "got x0 = -0.1");
+        assert_err(&region("0.1", ""), 39, "region[0].name", "must not be empty");
+        let twice = format!("{}[[region]]\nname = \"left\"\nx0 = 0\ny0 = 0\nx1 = 1\ny1 = 1\n", region("0.1", "left"));
+        assert_err(&twice, 45, "region[1].name", "named twice");
+        let e = err(&format!("{BASE}\n[[region]]\nname = \"a\"\nx0 = 0\ny0 = 0\nx1 = 1\n"));
+        assert!(e.contains("y1"), "{e}");
     }
 
     #[test]
