@@ -9,7 +9,7 @@ use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_vk_engine::metrics::{compare, Reference, Region};
-use ppm_vk_engine::report::{file_sha256, PassRecord, RunHeader, RunReport, SCHEMA};
+use ppm_vk_engine::report::{PassRecord, RunHeader, RunReport, SCHEMA};
 use ppm_vk_engine::{open_device, Checkpoint, Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings};
 
 mod bench;
@@ -531,7 +531,7 @@ fn render(args: RenderArgs) -> Result<Ended> {
         driver: info.driver.clone(),
         scene_path: args.scene.display().to_string(),
         scene_name: scene.name.clone(),
-        scene_sha256: file_sha256(&args.scene)?,
+        scene_sha256: scene.content_sha256(),
         width: scene.camera.width,
         height: scene.camera.height,
         settings: renderer.settings().clone(),

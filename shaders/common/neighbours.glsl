@@ -59,7 +59,7 @@ void visit_cell(uint key, uint select) {
         if (!any_inside) continue;
         // Another cell's photon in a shared bucket: it is counted when its own cell is visited.
         if (sorted[k].cell != key) continue;
-        // The BRDF is zero for light arriving from behind the surface (ALGORITHM.md); only the sign of
+        // The BRDF is zero for light arriving from behind the surface (../shared/paper/ALGORITHM.md); only the sign of
         // the dot product matters, so the direction needs no normalising.
         vec3 dir = oct_decode_unnormalized(sorted[k].dir);
         vec3 flux = sorted[k].flux;

@@ -46,7 +46,7 @@ void set_radius(uint i) {
     if (hit_points[i].pixel == 0xffffffffu) return;
     HitStats s = stats[i];
     PassAccum a = accum[i];
-    // eq. 7, in units of r^2; a hit point no probe photon reached is sparse (ALGORITHM.md)
+    // eq. 7, in units of r^2; a hit point no probe photon reached is sparse (../shared/paper/ALGORITHM.md)
     double ratio = a.m > 0u ? double(a.flux_r) / double(PROBE_FIXED) / double(a.m) : 1.0;
     double r = sqrt(s.r2);
     double grow = 1.0;

@@ -1,6 +1,6 @@
 // Pass 1, the ray (eye) pass: one camera ray per pixel, followed through mirrors and glass to the first
 // diffuse surface, where it leaves a hit point. Glass splits the path into both Fresnel branches while the
-// pixel has hit-point slots left; beyond that one branch is chosen at random (ALGORITHM.md, "Glass in the
+// pixel has hit-point slots left; beyond that one branch is chosen at random (../shared/paper/ALGORITHM.md, "Glass in the
 // ray pass"). PPM runs the hit-point path once, at pixel centres; SPPM once per pass, at a random point of
 // each pixel, with one slot (one branch at glass).
 //
