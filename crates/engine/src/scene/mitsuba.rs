@@ -29,6 +29,21 @@ pub const MAX_INCLUDE_DEPTH: usize = 15;
 /// bsdf, bsdf, rgb).
 pub const MAX_NESTING: usize = 64;
 
+/// Just past the `>` that ends the tag starting at `at`: the first outside quotes (an attribute value
+/// may hold `>` or `/>`), or the end of the text.
+fn tag_end(b: &[u8], at: usize) -> usize {
+    let mut quote = None;
+    for (i, &c) in b.iter().enumerate().skip(at) {
+        match (quote, c) {
+            (None, b'"' | b'\'') => quote = Some(c),
+            (Some(q), _) if c == q => quote = None,
+            (None, b'>') => return i + 1,
+            _ => {}
+        }
+    }
+    b.len()
+}
+
 /// The line where elements first nest deeper than `max`, by a scan of the tags (`<a>` opens unless
 /// it ends `/>`, `</a>` closes; comments, CDATA and `<?...?>` are skipped), if they do.
 fn too_deep(text: &str, max: usize) -> Option<usize> {
@@ -47,7 +62,7 @@ fn too_deep(text: &str, max: usize) -> Option<usize> {
         } else if rest.starts_with(b"<?") || rest.starts_with(b"<!") {
             skip_past(at, b">")
         } else {
-            let end = skip_past(at, b">");
+            let end = tag_end(b, at);
             if rest.starts_with(b"</") {
                 depth = depth.saturating_sub(1);
             } else if !b[..end].ends_with(b"/>") {
@@ -2153,6 +2168,10 @@ mod tests {
         // Nesting past the bound is refused, not a stack overflow (found by tests/hostile_input.rs).
         let deep = format!("{}{}", "<bsdf type=\"twosided\">".repeat(1000), "</bsdf>".repeat(1000));
         let e = error(&deep);
+        assert!(e.contains(&format!("nested deeper than {MAX_NESTING} levels")), "{e}");
+        // Attribute values may hold "/>": they hide no level from the scan (roxmltree would overflow).
+        let hidden = format!("{}{}", "<bsdf type=\"twosided\" id=\"a/>\">".repeat(20000), "</bsdf>".repeat(20000));
+        let e = error(&hidden);
         assert!(e.contains(&format!("nested deeper than {MAX_NESTING} levels")), "{e}");
     }
 
