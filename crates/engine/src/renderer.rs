@@ -321,7 +321,7 @@ impl Renderer {
         gpu.params.max_eye_depth = limits.eye_depth;
         gpu.params.photon_bvh_budget = limits.photon_bvh_budget;
         gpu.params.eye_bvh_budget = limits.eye_bvh_budget;
-        gpu.params.lookup_limit = ppm_vk_kernels::lookup::lookup_limit(ctx.info().loop_budget);
+        gpu.params.lookup_limit = ppm_vk_kernels::lookup::lookup_limit(budget);
         let slots = gpu.slots() as u64;
         let pixels = gpu.pixels() as u64;
         let tri_bytes = gpu.bvh_triangles.len() as u64 * std::mem::size_of::<Triangle>() as u64;
@@ -839,27 +839,32 @@ impl Renderer {
     fn photon_variants(&mut self, photons: u32) -> anyhow::Result<Vec<PhotonVariant>> {
         let saved: Vec<PathCounters> = self.ctx.download_prefix(&self.cut, 1)?;
         let photons = photons.min(self.batch); // one batch: the records must fit
-        let run = |r: &Self, defines: &[(&str, &str)], counted: bool| -> anyhow::Result<(f64, u64)> {
-            let defines = [defines, if counted { &[("PHOTON_COUNT_STEPS", "1")][..] } else { &[] }].concat();
-            let k = tracing_pipeline(&r.ctx, &r.gpu, &r.settings, &reflected::PHOTON, &defines)?;
-            let push = PhotonPush { first: 0, count: photons, salt: SALT_PHOTON, per_thread: r.limits.per_thread, pad0: 0 };
-            // Twice, timing the second: lavapipe compiles a pipeline at its first dispatch.
-            let mut ms = 0.0;
-            for _ in 0..2 {
-                r.ctx.upload(&r.cut, bytemuck::bytes_of(&PathCounters::default()))?;
-                r.profiler.reset();
-                r.ctx.run(|cmd| {
-                    r.counter.cmd_fill(cmd, 0);
-                    barrier(&r.ctx, cmd);
-                    let scene = r.scene_buffers();
-                    r.profiler.scope(cmd, "photon", || photon::record(&k, cmd, &scene, &r.lights, &r.photons, &r.counter, &r.cut, &push))
-                })?;
-                ms = r.profiler.read()?.iter().map(|s| s.duration_ms).sum();
-            }
-            let steps = r.ctx.download_prefix::<PathCounters>(&r.cut, 1)?[0].pad0 as u64;
-            Ok((ms, steps))
+        let push = PhotonPush { first: 0, count: photons, salt: SALT_PHOTON, per_thread: self.limits.per_thread, pad0: 0 };
+        let variant = |r: &Self, defines: &[(&str, &str)]| tracing_pipeline(&r.ctx, &r.gpu, &r.settings, &reflected::PHOTON, defines);
+        // One dispatch over the counters cleared; its GPU milliseconds.
+        let dispatch = |r: &Self, k: &ComputePipeline| -> anyhow::Result<f64> {
+            r.ctx.upload(&r.cut, bytemuck::bytes_of(&PathCounters::default()))?;
+            r.profiler.reset();
+            r.ctx.run(|cmd| {
+                r.counter.cmd_fill(cmd, 0);
+                barrier(&r.ctx, cmd);
+                let scene = r.scene_buffers();
+                r.profiler.scope(cmd, "photon", || photon::record(k, cmd, &scene, &r.lights, &r.photons, &r.counter, &r.cut, &push))
+            })?;
+            Ok(r.profiler.read()?.iter().map(|s| s.duration_ms).sum())
         };
-        let (_, full_steps) = run(self, &[], true)?;
+        // Twice, timing the second: lavapipe compiles a pipeline at its first dispatch.
+        let time = |r: &Self, defines: &[(&str, &str)]| -> anyhow::Result<f64> {
+            let k = variant(r, defines)?;
+            dispatch(r, &k)?;
+            dispatch(r, &k)
+        };
+        // The intersections the variant traces, from a build of it that counts them (untimed).
+        let count = |r: &Self, defines: &[(&str, &str)]| -> anyhow::Result<u64> {
+            dispatch(r, &variant(r, &[defines, &[("PHOTON_COUNT_STEPS", "1")]].concat())?)?;
+            Ok(r.ctx.download_prefix::<PathCounters>(&r.cut, 1)?[0].pad0 as u64)
+        };
+        let full_steps = count(self, &[])?;
         // Trace-only paths as long as the real ones on average, so both amortise a path's start alike.
         let segments = ((full_steps as f64 / photons as f64).round() as u32).clamp(1, self.limits.photon_depth).to_string();
         let mut out = Vec::new();
@@ -869,8 +874,8 @@ impl Renderer {
             ("no append", vec![("PHOTON_NO_APPEND", "1")]),
             ("trace only", vec![("PHOTON_TRACE_ONLY", segments.as_str())]),
         ] {
-            let (gpu_ms, _) = run(self, &defines, false)?;
-            let (_, steps) = run(self, &defines, true)?;
+            let gpu_ms = time(self, &defines)?;
+            let steps = if defines.is_empty() { full_steps } else { count(self, &defines)? };
             out.push(PhotonVariant { name, photons, gpu_ms, steps });
         }
         self.ctx.upload(&self.cut, bytemuck::cast_slice(&saved))?;
