@@ -464,7 +464,8 @@ fn shrinking_cells_leave_the_image_unchanged() {
         let mut cells = Vec::new();
         for _ in 0..6 {
             let stats = adaptive.pass().unwrap();
-            assert!(stats.cell_size >= 2.0 * stats.radius_max, "{mode:?}: cell {} under twice the radius {}", stats.cell_size, stats.radius_max);
+            let per_radius = ppm_vk_engine::gpu_scene::CELL_PER_RADIUS;
+            assert!(stats.cell_size >= per_radius * stats.radius_max, "{mode:?}: cell {} under {per_radius} radii {}", stats.cell_size, stats.radius_max);
             cells.push(stats.cell_size / start);
             assert_eq!(fixed.pass().unwrap().cell_size, start);
         }

@@ -3,7 +3,7 @@
 // photon it reads against all of them: on lavapipe every read from a storage buffer is a gather per lane,
 // and the group shares its reads. Calls the including kernel's `visit(j, flux, d2)` for each photon within
 // sqrt(q_r2[j]) of hit point j that arrives from the side it is seen from. Needs `sorted` (records grouped
-// by bucket), `cell_start` and `params` declared before it.
+// by bucket, as photon_words), `cell_start` and `params` declared before it.
 #ifndef NEIGHBOURS_GLSL
 #define NEIGHBOURS_GLSL
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -46,7 +46,9 @@ void visit_cell(uint key, uint select) {
     uint k = cell_start[h];
     count_steps(subgroupMax(end - k) + 1u);
     for (; k < end; k++) {
-        vec3 p = sorted[k].pos;
+        u64vec4 w = sorted[k]; // one load of the whole record (types.glsl: photon_words)
+        uint cell;
+        vec3 p = words_pos(w, cell);
         float d2[GROUP];
         bool inside[GROUP];
         bool any_inside = false;
@@ -58,11 +60,12 @@ void visit_cell(uint key, uint select) {
         }
         if (!any_inside) continue;
         // Another cell's photon in a shared bucket: it is counted when its own cell is visited.
-        if (sorted[k].cell != key) continue;
+        if (cell != key) continue;
         // The BRDF is zero for light arriving from behind the surface (../shared/paper/ALGORITHM.md); only the sign of
         // the dot product matters, so the direction needs no normalising.
-        vec3 dir = oct_decode_unnormalized(sorted[k].dir);
-        vec3 flux = sorted[k].flux;
+        uint packed_dir;
+        vec3 flux = words_flux(w, packed_dir);
+        vec3 dir = oct_decode_unnormalized(packed_dir);
         [[unroll]] for (uint j = 0u; j < GROUP; j++) {
             if (inside[j] && dot(dir, q_normal[j]) < 0.0) visit(j, flux, d2[j]);
         }
@@ -101,8 +104,8 @@ void visit_window(ivec3 lo, ivec3 hi, uint select) {
     }
 }
 
-// Each member's window is the cells its sphere's bounding box overlaps (2x2x2 at most: cells are at least
-// twice the largest radius wide). Members close together share one window, the union of theirs; where the
+// Each member's window is the cells its sphere's bounding box overlaps (3x3x3 at most: cells are 1.5
+// times the largest radius wide, gpu_scene.rs: CELL_PER_RADIUS). Members close together share one window, the union of theirs; where the
 // union is larger than their windows together (members on different surfaces), each gets its own.
 void for_each_photon_near_group() {
     ivec3 lo[GROUP], hi[GROUP];

@@ -135,13 +135,28 @@ struct Photon {
 };
 
 // A Photon as the four 64-bit words of its std430 layout (layout.rs asserts the offsets), low half first.
-// lavapipe stores a vector one component per lane: four words are half the scattered stores of eight
-// fields (photon.comp's append, grid_scatter.comp's copy).
+// lavapipe loads and stores a vector one component per lane: four words are half the scattered stores
+// and gathered loads of eight fields (photon.comp's append, grid_scatter.comp's copy, the lookups'
+// reads in neighbours.glsl: 25-30% of the gather's time, measured in docs/performance.md).
 u64vec4 photon_words(Photon p) {
     return u64vec4(packUint2x32(uvec2(floatBitsToUint(p.pos.x), floatBitsToUint(p.pos.y))),
                    packUint2x32(uvec2(floatBitsToUint(p.pos.z), p.cell)),
                    packUint2x32(uvec2(floatBitsToUint(p.flux.r), floatBitsToUint(p.flux.g))),
                    packUint2x32(uvec2(floatBitsToUint(p.flux.b), p.dir)));
+}
+
+// The first two words: position and cell key.
+vec3 words_pos(u64vec4 w, out uint cell) {
+    uvec2 a = unpackUint2x32(w.x), b = unpackUint2x32(w.y);
+    cell = b.y;
+    return uintBitsToFloat(uvec3(a, b.x));
+}
+
+// The last two: flux and the octahedral direction.
+vec3 words_flux(u64vec4 w, out uint dir) {
+    uvec2 c = unpackUint2x32(w.z), d = unpackUint2x32(w.w);
+    dir = d.y;
+    return uintBitsToFloat(uvec3(c, d.x));
 }
 
 // Paths the tracing kernels ended at their depth backstop (RenderParams.max_photon_depth, max_eye_depth)

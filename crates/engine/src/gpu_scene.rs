@@ -162,13 +162,13 @@ impl GpuScene {
         if !(initial_radius.is_finite() && initial_radius > 0.0) {
             return Err(Error::Settings { field: "initial_radius", message: format!("must be positive and finite, got {initial_radius}") });
         }
-        // Cells twice the starting radius: 2x2x2 cells per lookup. The probe may enlarge radii; the
-        // renderer then widens the cells to twice the largest (GpuScene::set_grid_cell).
-        let cell_size = 2.0 * initial_radius;
+        // Cells of CELL_PER_RADIUS starting radii. The probe may enlarge radii; the renderer then sizes
+        // the cells for the largest (Renderer::fit_grid).
+        let cell_size = CELL_PER_RADIUS * initial_radius;
         // A lookup window must stay under 1024 cells a side (grid_key in grid.glsl).
         let cell_size = match settings.grid_cell {
             Some(c) if !(c.is_finite() && c > 0.0 && c * 256.0 >= cell_size) => {
-                return Err(Error::Settings { field: "grid_cell", message: format!("{c} must be positive and at least 1/256 of {cell_size} (twice the starting radius)") })
+                return Err(Error::Settings { field: "grid_cell", message: format!("{c} must be positive and at least 1/256 of {cell_size} (the starting cell)") })
             }
             Some(c) => c,
             None => cell_size,
@@ -229,8 +229,8 @@ impl GpuScene {
     }
 
     /// Sets the photon grid's cell size (and with it the grid's origin and the hash
-    /// table's buckets, `params.grid_mask + 1`). Lookups read at most 2x2x2 cells where the cells are at
-    /// least twice the largest search radius; any size gives the same photons.
+    /// table's buckets, `params.grid_mask + 1`). Lookups read at most 3x3x3 cells where the cells are
+    /// [`CELL_PER_RADIUS`] times the largest search radius; any size gives the same photons.
     pub fn set_grid_cell(&mut self, cell_size: f32, photon_capacity: u32) {
         self.params.cell_size = cell_size;
         self.params.grid_min = arr(Vec3::from(self.lo) - Vec3::splat(cell_size));
@@ -263,6 +263,13 @@ fn scene_surface_area(scene: &Scene) -> f64 {
 /// are about (surface area / cell^2) times a small factor for cells a surface cuts at a slant; two
 /// buckets per such cell keeps collisions rare while the table stays small enough to be cached (a table
 /// sized by the photon count was 40x larger and its scan and atomics cost more than its collisions saved).
+/// A photon-grid cell's edge in search radii (of the largest radius live in the pass). The trade: smaller
+/// cells read fewer photons outside each sphere (a lookup spans 2-3 cells a side, against 2 at twice the
+/// radius) but want a larger hash table, which the grid build's scattered writes pay for. Measured on
+/// lavapipe (docs/performance.md, "Issue 14, second session"): 1.4-1.7 fastest per pass; 2 and 1.2 about
+/// 5-10% slower, 0.7 about 20%.
+pub const CELL_PER_RADIUS: f32 = 1.5;
+
 pub fn grid_buckets(surface_area: f64, cell_size: f32, photon_capacity: u32) -> u32 {
     let cells = 1.5 * surface_area / (cell_size as f64).powi(2);
     let wanted = (2.0 * cells).min(2.0 * photon_capacity as f64).max(1.0);

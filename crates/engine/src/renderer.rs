@@ -20,7 +20,7 @@ use ppm_vk_kernels::{pipeline, pipeline_from, reflected};
 
 use crate::checkpoint::{self, Checkpoint};
 use crate::error::{DeviceContext as _, Error, Result};
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::{GpuScene, CELL_PER_RADIUS};
 use crate::image_io::RgbImage;
 use crate::scene::Scene;
 use crate::settings::{Mode, ProbeMode, Settings};
@@ -70,7 +70,7 @@ pub struct PassStats {
     pub eye_paths_cut: u64,
     /// The largest search radius after this pass's update, over the hit points live in it.
     pub radius_max: f32,
-    /// The photon grid's cell size for the next pass (twice `radius_max`, see `Renderer::fit_grid`).
+    /// The photon grid's cell size for the next pass (1.5 `radius_max`, see `Renderer::fit_grid`).
     pub cell_size: f32,
     /// Host wall time of the pass, submission to completion.
     pub wall_ms: f64,
@@ -351,7 +351,10 @@ impl Renderer {
             gpu.params.height,
             settings.slots()
         );
-        let others = [("the photon records and their sorted copy", 2 * capacity as u64 * record_size), ("the BVH", bvh_bytes)];
+        let others = [
+            ("the photon records, their sorted copy and their ranks", capacity as u64 * (2 * record_size + 4)),
+            ("the BVH", bvh_bytes),
+        ];
         fits_device(&per_pixel, &others, max_range, ctx.info().memory_bytes, &advice)?;
 
         let traced = |k: &reflected::KernelInfo| tracing_pipeline(ctx, &gpu, &settings, k, &[]);
@@ -637,15 +640,16 @@ impl Renderer {
 
     /// Sizes the photon grid's cells for the next pass from the largest radii after this one. Which
     /// photons a lookup finds does not depend on the cell size (the image is the same bit for bit); its
-    /// cost does. Cells twice the largest live radius keep every live hit point's lookup within 2x2x2
-    /// cells, and follow the radii as they shrink (eq. 3), so a lookup reads ever fewer photons outside
-    /// its sphere. An SPPM slot not live this pass may be larger when it next is: its window is then
-    /// wider, but covers the area a window sized for it would ((r + r_live)^2 against (2r)^2), so it reads
-    /// no more photons; cells at least 1/8 of twice the largest radius of any slot bound its window to
-    /// 17 cells a side, within the loop budget and the 1024-cell range of a cell key (grid.glsl).
+    /// cost does. Cells of [`CELL_PER_RADIUS`] times the largest live radius keep every live hit point's
+    /// lookup within 3x3x3 cells, and follow the radii as they shrink (eq. 3), so a lookup reads ever
+    /// fewer photons outside its sphere. An SPPM slot not live this pass may be larger when it next is:
+    /// its window is then wider, but covers the area a window sized for it would, so it reads no more
+    /// photons; cells sized for at least 1/8 of the largest radius of any slot bound its window to
+    /// 2 * 8 / 1.5 + 1 < 12 cells a side, within the loop budget and the 1024-cell range of a cell key
+    /// (grid.glsl).
     fn fit_grid(&mut self, max: RadiusMax) -> Result<()> {
         let r2 = max.live.max(max.all / 64.0);
-        let cell = 2.0 * r2.sqrt() * (1.0 + f32::EPSILON * 4.0);
+        let cell = CELL_PER_RADIUS * r2.sqrt() * (1.0 + f32::EPSILON * 4.0);
         if let Some(c) = self.settings.grid_cell {
             // A set cell size must keep lookups under 1024 cells a side (grid_key in grid.glsl).
             let widest = 2.0 * max.all.sqrt();

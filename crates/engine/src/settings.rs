@@ -74,9 +74,9 @@ pub struct Settings {
     /// scene's surface area. Results do not depend on it; a small table makes grid cells share buckets,
     /// which the tests use to exercise that case.
     pub grid_buckets: Option<u32>,
-    /// Edge of a photon-grid cell in scene units; `None`: twice the starting radius, widened after the
-    /// probe to twice the largest radius it left, so a lookup spans at most 2x2x2 cells. Smaller cells
-    /// mean wider lookups (tests use them for that).
+    /// Edge of a photon-grid cell in scene units; `None`: `CELL_PER_RADIUS` (1.5) times the starting
+    /// radius, then after each pass 1.5 times the largest radius left, so a lookup spans at most 3x3x3
+    /// cells. Smaller cells mean wider lookups (tests use them for that).
     pub grid_cell: Option<f32>,
 }
 

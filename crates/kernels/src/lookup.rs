@@ -34,8 +34,10 @@ pub struct Grid {
     /// Buckets in use (the hash's mask + 1).
     pub cells: u32,
     pub allocated: u32,
-    /// Per bucket: records in it while building; zero between batches.
+    /// Per bucket: records in it while building; zero between batches (the scan zeroes what it reads).
     pub cell_count: Buffer,
+    /// Per record: its rank among its bucket's records, from the count, for the scatter.
+    pub rank: Buffer,
     /// Per bucket: index of its first record in `sorted`; `cells + 1` entries.
     pub cell_start: Buffer,
     pub block_sums: Buffer,
@@ -64,6 +66,7 @@ impl Grid {
             allocated: cells,
             cell_count,
             cell_start: Buffer::new(ctx, "grid cell_start", (cells as u64 + 1) * 4, BufferKind::Storage)?,
+            rank: Buffer::new(ctx, "grid record ranks", capacity as u64 * 4, BufferKind::Storage)?,
             block_sums: Buffer::new(ctx, "grid block_sums", (cells / SCAN_BLOCK) as u64 * 4, BufferKind::Storage)?,
             sorted: Buffer::new(
                 ctx,
@@ -122,7 +125,7 @@ impl Lookup {
         capacity: u32,
     ) -> Result<()> {
         profiler.scope(cmd, "lookup/count", || {
-            self.count.dispatch(cmd, &[params, photons, counter, &grid.cell_count], &[], capacity as u64)
+            self.count.dispatch(cmd, &[params, photons, counter, &grid.cell_count, &grid.rank], &[], capacity as u64)
         })?;
         barrier(ctx, cmd);
         let blocks = grid.cells / SCAN_BLOCK;
@@ -138,7 +141,7 @@ impl Lookup {
         profiler.scope(cmd, "lookup/scatter", || {
             self.scatter.dispatch(
                 cmd,
-                &[params, photons, counter, &grid.cell_count, &grid.cell_start, &grid.sorted],
+                &[params, photons, counter, &grid.rank, &grid.cell_start, &grid.sorted],
                 &[],
                 capacity as u64,
             )
