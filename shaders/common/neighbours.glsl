@@ -12,11 +12,13 @@
 #include "grid.glsl"
 #include "sampling.glsl"
 
-// Hit points per thread: 4 as built (gather::GROUP), 1 where the renderer compiles it so. Measured per
-// 1M-photon pass at 512^2, four against one: SPPM 305 against 338 ms, PPM with the scale-free probe 647
-// against 820 ms, but PPM without the probe 457 against 395-415 ms (Renderer::new picks by that).
+// Hit points per thread: 2 as built (gather::GROUP), 1 where the renderer compiles it so. Measured per
+// 1M-photon pass at 512^2 with the scale-free probe and the cone filter, since records are read as
+// whole 64-bit words: SPPM 282-320 ms with two, 339-357 with four, 331-342 with one; PPM 395-421 with
+// two, 454-457 with four. PPM without the probe gathered fastest one at a time (457 against 395-415 ms
+// with four, before; Renderer::new picks by that).
 #ifndef GROUP_SIZE
-#define GROUP_SIZE 4
+#define GROUP_SIZE 2
 #endif
 const uint GROUP = GROUP_SIZE;
 

@@ -358,7 +358,7 @@ impl Renderer {
         fits_device(&per_pixel, &others, max_range, ctx.info().memory_bytes, &advice)?;
 
         let traced = |k: &reflected::KernelInfo| tracing_pipeline(ctx, &gpu, &settings, k, &[]);
-        // Hit points per gather thread (measured, shaders/common/neighbours.glsl): four share their photon
+        // Hit points per gather thread (measured, shaders/common/neighbours.glsl): two share their photon
         // reads, except PPM's without the probe, which gather fastest one at a time.
         let group = match (settings.mode, settings.probe) {
             (Mode::Ppm, ProbeMode::Off) => 1,

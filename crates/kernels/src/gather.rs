@@ -34,7 +34,7 @@ pub fn grid_reader_bindings<'a>(params: &'a Buffer, hits: &HitBuffers<'a>, grid:
 
 /// Hit points one gather or probe thread takes together in the kernels as built (`GROUP` in
 /// shaders/common/neighbours.glsl); [`with_group`] compiles a variant with another count.
-pub const GROUP: u32 = 4;
+pub const GROUP: u32 = 2;
 
 /// A kernel that reads the photon grid (gather or probe) compiled to take `group` hit points per thread.
 pub fn with_group(ctx: &ppm_vk_device::Context, k: &crate::reflected::KernelInfo, group: u32) -> Result<GridReader> {
