@@ -21,3 +21,11 @@ for round in 1 2; do
   $NEW bench --probe scale-free --cone 1.1 --cases 1M@512x512 --warmup 2 --passes 5 --breakdown --json $OUT/bench-new-$round.json > $OUT/bench-new-$round.txt 2>&1
 done
 date > $OUT/done
+# C. 300 passes of this build: gather ms per pass against the largest radius (98b7bf6's run: ../issue14/p300-98b.json)
+$NEW render $S --passes 300 --probe scale-free --cone 1.1 --force -o $OUT/p300-new.exr --report $OUT/p300-new.json > $OUT/p300-new.txt 2>&1
+# D. the equal-time table (10/30/60 s per variant)
+V="ppm; ppm+probe-sf; sppm; sppm+probe-sf; sppm+cone; sppm+probe-sf+cone"
+for t in 10 30 60; do
+  $NEW compare $S --reference $REF --time $t --variants "$V" --out $OUT/equal-time-${t}s > $OUT/equal-time-${t}s.txt 2>&1
+done
+date > $OUT/done-all
