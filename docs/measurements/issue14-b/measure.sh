@@ -11,12 +11,12 @@ REF=../shared/reference/cornell-spheres.exr
 S=scenes/cornell-spheres.toml
 date > $OUT/started
 # A. 60 s SPPM renders with the probe and the cone filter, error against the reference every 10 passes
-for round in 1 2; do
+for round in ${ROUNDS:-1 2 3}; do
   $OLD render $OLD_SCENE --time 60 --probe scale-free --cone 1.1 --reference $REF --error-every 10 -o $OUT/r60-98b-$round.exr --report $OUT/r60-98b-$round.json > $OUT/r60-98b-$round.txt 2>&1
   $NEW render $S --time 60 --probe scale-free --cone 1.1 --reference $REF --error-every 10 --force -o $OUT/r60-new-$round.exr --report $OUT/r60-new-$round.json > $OUT/r60-new-$round.txt 2>&1
 done
 # B. bench, 1M photons at 512^2, SPPM + probe + cone
-for round in 1 2; do
+for round in ${BENCH_ROUNDS:-1 2}; do
   $OLD bench --scene $OLD_SCENE --probe scale-free --cone 1.1 --cases 1M@512x512 --warmup 2 --passes 5 --json $OUT/bench-98b-$round.json > $OUT/bench-98b-$round.txt 2>&1
   $NEW bench --probe scale-free --cone 1.1 --cases 1M@512x512 --warmup 2 --passes 5 --breakdown --json $OUT/bench-new-$round.json > $OUT/bench-new-$round.txt 2>&1
 done
