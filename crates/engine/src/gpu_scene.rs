@@ -259,10 +259,6 @@ fn scene_surface_area(scene: &Scene) -> f64 {
         + scene.meshes.iter().flat_map(|m| m.triangles()).map(|t| t.area() as f64).sum::<f64>()
 }
 
-/// Buckets of the photon grid's hash table. Photons lie on surfaces, so the cells that ever hold one
-/// are about (surface area / cell^2) times a small factor for cells a surface cuts at a slant; two
-/// buckets per such cell keeps collisions rare while the table stays small enough to be cached (a table
-/// sized by the photon count was 40x larger and its scan and atomics cost more than its collisions saved).
 /// A photon-grid cell's edge in search radii (of the largest radius live in the pass). The trade: smaller
 /// cells read fewer photons outside each sphere (a lookup spans 2-3 cells a side, against 2 at twice the
 /// radius) but want a larger hash table, which the grid build's scattered writes pay for. Measured on
@@ -270,6 +266,10 @@ fn scene_surface_area(scene: &Scene) -> f64 {
 /// 5-10% slower, 0.7 about 20%.
 pub const CELL_PER_RADIUS: f32 = 1.5;
 
+/// Buckets of the photon grid's hash table. Photons lie on surfaces, so the cells that ever hold one
+/// are about (surface area / cell^2) times a small factor for cells a surface cuts at a slant; two
+/// buckets per such cell keeps collisions rare while the table stays small enough to be cached (a table
+/// sized by the photon count was 40x larger and its scan and atomics cost more than its collisions saved).
 pub fn grid_buckets(surface_area: f64, cell_size: f32, photon_capacity: u32) -> u32 {
     let cells = 1.5 * surface_area / (cell_size as f64).powi(2);
     let wanted = (2.0 * cells).min(2.0 * photon_capacity as f64).max(1.0);
