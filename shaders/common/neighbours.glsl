@@ -15,8 +15,8 @@
 // Hit points per thread: 2 as built (gather::GROUP), 1 where the renderer compiles it so. Measured per
 // 1M-photon pass at 512^2 with the scale-free probe and the cone filter, since records are read as
 // whole 64-bit words: SPPM 282-320 ms with two, 339-357 with four, 331-342 with one; PPM 395-421 with
-// two, 454-457 with four. PPM without the probe gathered fastest one at a time (457 against 395-415 ms
-// with four, before; Renderer::new picks by that).
+// two, 454-457 with four. Without the probe (smaller radii, fewer photons per lookup) one is fastest:
+// PPM 221-230 ms against 303-307 with two, SPPM 170-179 against 187-213 (Renderer::new picks by that).
 #ifndef GROUP_SIZE
 #define GROUP_SIZE 2
 #endif

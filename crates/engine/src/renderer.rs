@@ -359,9 +359,9 @@ impl Renderer {
 
         let traced = |k: &reflected::KernelInfo| tracing_pipeline(ctx, &gpu, &settings, k, &[]);
         // Hit points per gather thread (measured, shaders/common/neighbours.glsl): two share their photon
-        // reads, except PPM's without the probe, which gather fastest one at a time.
-        let group = match (settings.mode, settings.probe) {
-            (Mode::Ppm, ProbeMode::Off) => 1,
+        // reads where the probe enlarged the radii; without it, each gathers fastest on its own.
+        let group = match settings.probe {
+            ProbeMode::Off => 1,
             _ => gather::GROUP,
         };
         let pipelines = || -> anyhow::Result<Kernels> {
