@@ -702,11 +702,11 @@ fn print_stage_summary(history: &[PassStats], full: bool) {
     let parts: Vec<String> = names.iter().map(|k| format!("{k} {:.2}", mean(k))).collect();
     println!("mean GPU ms per pass: {} | wall {:.2}", parts.join(", "), wall);
     if full {
-        let cols = ["photon", "lookup/count", "lookup/scan", "lookup/scatter", "gather", "update"];
-        let head: Vec<String> = cols.iter().map(|c| format!("{:>14}", c)).collect();
+        let cols = ["ray", "photon", "lookup/count", "lookup/scan", "lookup/split", "lookup/scatter", "gather", "update"];
+        let head: Vec<String> = cols.iter().map(|c| format!("{:>15}", c)).collect();
         println!("{:>6} {:>10} {} {:>9}", "pass", "records", head.join(""), "wall");
         for s in history {
-            let row: Vec<String> = cols.iter().map(|c| format!("{:>14.2}", s.stage_ms(c))).collect();
+            let row: Vec<String> = cols.iter().map(|c| format!("{:>15.2}", s.stage_ms(c))).collect();
             println!("{:>6} {:>10} {} {:>9.2}", s.index, s.records, row.join(""), s.wall_ms);
         }
     }

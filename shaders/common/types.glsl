@@ -136,7 +136,7 @@ struct Photon {
 
 // A Photon as the four 64-bit words of its std430 layout (layout.rs asserts the offsets), low half first.
 // lavapipe loads and stores a vector one component per lane: four words are half the scattered stores
-// and gathered loads of eight fields (photon.comp's append, grid_scatter.comp's copy, the lookups'
+// and gathered loads of eight fields (photon.comp's append, the grid build's copies, the lookups'
 // reads in neighbours.glsl: 25-30% of the gather's time, measured in docs/performance.md).
 u64vec4 photon_words(Photon p) {
     return u64vec4(packUint2x32(uvec2(floatBitsToUint(p.pos.x), floatBitsToUint(p.pos.y))),

@@ -1,5 +1,5 @@
-// Photon grid, step 1 of 3: count the photon records in each hash bucket, and keep each record's rank
-// among its bucket's records (the count before it), so the scatter needs no atomic of its own.
+// Photon grid, step 1 of 5: count the photon records in each hash bucket, and, per chunk of CHUNK records
+// (one workgroup), how many fall in each partition (partition.glsl) for the split.
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 256) in;
@@ -8,13 +8,27 @@ layout(local_size_x = 256) in;
 layout(std430, binding = 1) readonly buffer Photons { Photon photons[]; };
 layout(std430, binding = 2) readonly buffer Counter { uint photon_count; };
 layout(std430, binding = 3) buffer CellCount { uint cell_count[]; };
-layout(std430, binding = 4) writeonly buffer Rank { uint rank[]; };
+layout(std430, binding = 4) writeonly buffer PartCount { uint part_count[]; }; // [chunk][partition]
 #include "grid.glsl"
-#include "invocation.glsl"
+#include "partition.glsl"
+
+shared uint hist[MAX_PARTS];
 
 void main() {
     load_params();
-    uint i = invocation_index();
-    if (i >= min(photon_count, params.photon_capacity)) return;
-    rank[i] = atomicAdd(cell_count[grid_bucket(photons[i].cell)], 1u);
+    uint t = gl_LocalInvocationIndex;
+    uint n = min(photon_count, params.photon_capacity);
+    uint first = chunk_index() * CHUNK;
+    if (first >= n) return; // the whole workgroup: grid_offsets reads only the chunks that hold records
+    for (uint p = t; p < pc.parts; p += 256u) hist[p] = 0u;
+    barrier();
+    uint end = min(first + CHUNK, n);
+    for (uint i = first + t; i < end; i += 256u) {
+        uint h = grid_bucket(photons[i].cell);
+        atomicAdd(cell_count[h], 1u);
+        atomicAdd(hist[h >> pc.shift], 1u);
+    }
+    barrier();
+    uint row = chunk_index() * pc.parts;
+    for (uint p = t; p < pc.parts; p += 256u) part_count[row + p] = hist[p];
 }

@@ -1,13 +1,13 @@
-// Photon grid, step 2 of 3: exclusive prefix sum of the bucket counts into bucket starts, in three phases
+// Photon grid, step 2 of 5: exclusive prefix sum of the bucket counts into bucket starts, in three phases
 // chosen by push constant (one kernel, so the three share their declarations):
-//   0: each workgroup scans its block of BLOCK counts into `cell_start` and writes the block's total (and
-//      zeroes the counts it read, ready for the next batch's grid_count);
+//   0: each workgroup scans its block of BLOCK counts into `cell_start` and writes the block's total (the
+//      counts stay: grid_scatter counts them down to zero);
 //   1: one workgroup scans the block totals (at most 65536 of them) and writes the grand total last;
 //   2: each block adds its scanned total to its entries.
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 256) in;
-layout(std430, binding = 0) buffer CellCount { uint cell_count[]; };     // zeroed once read, for the next batch
+layout(std430, binding = 0) readonly buffer CellCount { uint cell_count[]; };
 layout(std430, binding = 1) buffer CellStart { uint cell_start[]; };   // cells + 1 entries
 layout(std430, binding = 2) buffer BlockSums { uint block_sums[]; };
 layout(push_constant) uniform ScanPush {
@@ -43,7 +43,7 @@ void main() {
         uint base = block * BLOCK + t * PER_THREAD;
         uint v[PER_THREAD];
         uint sum = 0u;
-        for (uint k = 0u; k < PER_THREAD; k++) { v[k] = cell_count[base + k]; cell_count[base + k] = 0u; sum += v[k]; }
+        for (uint k = 0u; k < PER_THREAD; k++) { v[k] = cell_count[base + k]; sum += v[k]; }
         uint total;
         uint run = workgroup_exclusive_scan(sum, total);
         for (uint k = 0u; k < PER_THREAD; k++) { cell_start[base + k] = run; run += v[k]; }

@@ -1,18 +1,18 @@
-// Photon grid, step 3 of 3: copy each record into its bucket's range of `sorted`, at the rank the count
-// gave it, so the gather reads a bucket's photons contiguously. No atomic: on lavapipe each is a locked
-// instruction per lane on a table that outgrows the cache as the cells shrink.
+// Photon grid, step 5 of 5: place each record of `staging` in its bucket's range of the record buffer, so
+// the lookups read a bucket's photons contiguously. `staging` holds the records partition by partition,
+// so the threads working at one time write within one partition's range, which stays in cache. A
+// bucket's count, left by grid_count, counts down to the record's place and ends at zero, ready for the
+// next batch. The order within a bucket varies from run to run; the lookups' sums do not depend on it.
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 256) in;
 #include "types.glsl"
 #include "params.glsl"
-// The records as 64-bit words (photon_words in types.glsl): lavapipe stores a vector one component per
-// lane, so half as many components is half the scattered stores.
-layout(std430, binding = 1) readonly buffer Photons { u64vec4 photons[]; };
+layout(std430, binding = 1) readonly buffer Staging { u64vec4 staging[]; };
 layout(std430, binding = 2) readonly buffer Counter { uint photon_count; };
-layout(std430, binding = 3) readonly buffer Rank { uint rank[]; };
+layout(std430, binding = 3) buffer CellCount { uint cell_count[]; };
 layout(std430, binding = 4) readonly buffer CellStart { uint cell_start[]; };
-layout(std430, binding = 5) writeonly buffer Sorted { u64vec4 sorted[]; };
+layout(std430, binding = 5) writeonly buffer Photons { u64vec4 photons[]; }; // grouped by bucket
 #include "grid.glsl"
 #include "invocation.glsl"
 
@@ -20,7 +20,8 @@ void main() {
     load_params();
     uint i = invocation_index();
     if (i >= min(photon_count, params.photon_capacity)) return;
-    u64vec4 p = photons[i];
-    uint h = grid_bucket(uint(p.y >> 32)); // Photon.cell: the high half of the second word
-    sorted[cell_start[h] + rank[i]] = p;
+    u64vec4 w = staging[i];
+    uint h = grid_bucket(uint(w.y >> 32)); // Photon.cell: the high half of the second word
+    uint left = atomicAdd(cell_count[h], 0xffffffffu); // records of the bucket not yet placed, this one included
+    photons[cell_start[h] + left - 1u] = w;
 }

@@ -138,7 +138,6 @@ pub struct Renderer {
     /// Per pixel, 1 where the pilot eye pass met mirror, glass or emission (ray.comp).
     busy: Buffer,
     image: Buffer,
-    photons: Buffer,
     counter: Buffer,
     /// Each batch's record count, copied from `counter`, to detect overflow after the pass.
     batch_log: Buffer,
@@ -352,7 +351,7 @@ impl Renderer {
             settings.slots()
         );
         let others = [
-            ("the photon records, their sorted copy and their ranks", capacity as u64 * (2 * record_size + 4)),
+            ("the photon records and their staging copy", capacity as u64 * Grid::bytes_per_record()),
             ("the BVH", bvh_bytes),
         ];
         fits_device(&per_pixel, &others, max_range, ctx.info().memory_bytes, &advice)?;
@@ -406,7 +405,6 @@ impl Renderer {
             direct: storage("direct emission", pixels * 32)?,
             busy: storage("emission-sampled pixels", pixels * 4)?,
             image: storage("image", pixels * 16)?,
-            photons: storage("photon records", capacity as u64 * record_size)?,
             counter: storage("photon counter", 4)?,
             batch_log: storage("batch log", MAX_BATCHES as u64 * 4)?,
             grid: Grid::new(ctx, gpu.max_buckets(), capacity)?,
@@ -534,11 +532,11 @@ impl Renderer {
         };
         let push = PhotonPush { first, count, salt, per_thread: self.limits.per_thread, pad0: 0 };
         self.profiler.scope(cmd, "photon", || {
-            photon::record(&k.photon, cmd, &scene, &self.lights, &self.photons, &self.counter, &self.cut, &push)
+            photon::record(&k.photon, cmd, &scene, &self.lights, &self.grid.records, &self.counter, &self.cut, &push)
         })?;
         barrier(ctx, cmd);
         self.counter.cmd_copy(cmd, &self.batch_log, 0, log_index as u64 * 4, 4);
-        k.lookup.record(ctx, cmd, &self.profiler, &self.params, &self.photons, &self.counter, &self.grid, capacity)?;
+        k.lookup.record(ctx, cmd, &self.profiler, &self.params, &self.counter, &self.grid, capacity)?;
         barrier(ctx, cmd);
         match use_ {
             GridUse::Gather => {
@@ -853,7 +851,7 @@ impl Renderer {
                 r.counter.cmd_fill(cmd, 0);
                 barrier(&r.ctx, cmd);
                 let scene = r.scene_buffers();
-                r.profiler.scope(cmd, "photon", || photon::record(k, cmd, &scene, &r.lights, &r.photons, &r.counter, &r.cut, &push))
+                r.profiler.scope(cmd, "photon", || photon::record(k, cmd, &scene, &r.lights, &r.grid.records, &r.counter, &r.cut, &push))
             })?;
             Ok(r.profiler.read()?.iter().map(|s| s.duration_ms).sum())
         };
@@ -994,7 +992,7 @@ impl Renderer {
         if n[0] > self.gpu.params.photon_capacity {
             anyhow::bail!("a test batch of {count} photons left {} records, over the capacity {}", n[0], self.gpu.params.photon_capacity);
         }
-        self.ctx.download_prefix(&self.photons, n[0] as usize)
+        self.ctx.download_prefix(&self.grid.records, n[0] as usize)
     }
 
     /// Runs the update kernel alone (after `trace_and_gather`).

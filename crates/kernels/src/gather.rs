@@ -29,7 +29,7 @@ pub struct HitBuffers<'a> {
 
 /// The bindings of the kernels that read the photon grid per hit point (gather.comp and probe.comp).
 pub fn grid_reader_bindings<'a>(params: &'a Buffer, hits: &HitBuffers<'a>, grid: &'a Grid) -> [&'a Buffer; 8] {
-    [params, hits.hit_points, hits.stats, hits.accum, &grid.sorted, &grid.cell_start, hits.order, &grid.status]
+    [params, hits.hit_points, hits.stats, hits.accum, &grid.records, &grid.cell_start, hits.order, &grid.status]
 }
 
 /// Hit points one gather or probe thread takes together in the kernels as built (`GROUP` in

@@ -30,7 +30,7 @@ pub mod reflected {
 
     /// Every kernel, in pipeline order, then the test kernel of the BVH traversal.
     pub const ALL: &[KernelInfo] =
-        &[RAY, PROBE, PHOTON, GRID_COUNT, GRID_SCAN, GRID_SCATTER, GATHER, UPDATE, RESOLVE, BVH_TRACE];
+        &[RAY, PROBE, PHOTON, GRID_COUNT, GRID_SCAN, GRID_OFFSETS, GRID_PARTITION, GRID_SCATTER, GATHER, UPDATE, RESOLVE, BVH_TRACE];
 }
 
 pub mod bvh_trace;

@@ -1,5 +1,7 @@
 //! Stage 3b, `shaders/lookup/`: the photon grid, a hashed uniform grid rebuilt per batch by a counting
-//! sort (count, exclusive scan, scatter). Hit points then read the buckets their sphere overlaps.
+//! sort in two levels: count (per bucket, and per chunk of records per partition of the buckets), scan,
+//! partition offsets, split by partition, then place within the partition. Hit points then read the
+//! buckets their sphere overlaps.
 
 use anyhow::{bail, Result};
 use bytemuck::{Pod, Zeroable};
@@ -20,6 +22,14 @@ pub fn lookup_limit(budget: Option<u32>) -> u32 {
 
 /// Buckets scanned per workgroup in `grid_scan.comp` (256 threads x 4).
 pub const SCAN_BLOCK: u32 = 1024;
+/// Records per workgroup of the count and the split (`CHUNK` in shaders/lookup/partition.glsl).
+pub const CHUNK: u32 = 8192;
+/// Most partitions of the buckets (`MAX_PARTS` in partition.glsl).
+pub const MAX_PARTS: u32 = 512;
+/// Most chunks a batch may have: `grid_offsets.comp` runs one loop step per chunk, and this keeps it far
+/// inside lavapipe's 65535 steps per SIMD group (and the dispatch within 65535 workgroups). 60000 chunks
+/// are 491M records, beyond the largest buffer a device binds (the renderer checks that first).
+pub const MAX_CHUNKS: u32 = 60000;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -29,31 +39,67 @@ pub struct ScanPush {
 }
 push_struct!(ScanPush, GRID_SCAN);
 
-/// The grid's buffers for a table of up to `allocated` buckets, `cells` of them in use.
+/// The partitions of the count, the offsets and the split (partition.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GridPush {
+    /// Partitions in use, a power of two.
+    pub parts: u32,
+    /// A bucket's partition is `bucket >> shift`.
+    pub shift: u32,
+}
+push_struct!(GridPush, GRID_COUNT);
+push_struct!(GridPush, GRID_OFFSETS);
+push_struct!(GridPush, GRID_PARTITION);
+
+impl GridPush {
+    /// One partition per scan block of `cells` buckets, at most [`MAX_PARTS`]: a partition's records
+    /// (the batch over the partitions) stay in cache while they are placed.
+    pub fn for_cells(cells: u32) -> GridPush {
+        let parts = (cells / SCAN_BLOCK).clamp(1, MAX_PARTS);
+        GridPush { parts, shift: (cells / parts).trailing_zeros() }
+    }
+}
+
+/// The photon records and the grid's buffers for a table of up to `allocated` buckets, `cells` of them in
+/// use.
 pub struct Grid {
     /// Buckets in use (the hash's mask + 1).
     pub cells: u32,
     pub allocated: u32,
-    /// Per bucket: records in it while building; zero between batches (the scan zeroes what it reads).
+    /// The records: the photon kernel appends them, the build groups them by bucket in place.
+    pub records: Buffer,
+    /// The records split by partition, between the build's split and its placing.
+    pub staging: Buffer,
+    /// Per bucket: records in it while building; zero between batches (the placing counts them down).
     pub cell_count: Buffer,
-    /// Per record: its rank among its bucket's records, from the count, for the scatter.
-    pub rank: Buffer,
-    /// Per bucket: index of its first record in `sorted`; `cells + 1` entries.
+    /// Per chunk and partition: the chunk's records in the partition, then where they go in `staging`.
+    pub part_count: Buffer,
+    /// Per bucket: index of its first record in `records`; `cells + 1` entries.
     pub cell_start: Buffer,
     pub block_sums: Buffer,
-    /// The records, grouped by bucket.
-    pub sorted: Buffer,
     /// One word the kernels that read the grid set to 1 when a lookup loop stopped early (lavapipe's
     /// limit on loop iterations); zero otherwise.
     pub status: Buffer,
 }
 
 impl Grid {
-    /// `cells` must be a power of two, at least [`SCAN_BLOCK`] and at most 65536 blocks.
+    /// Bytes of the grid's buffers that grow with the record capacity, for the renderer's memory check.
+    pub fn bytes_per_record() -> u64 {
+        2 * std::mem::size_of::<crate::layout::Photon>() as u64
+    }
+
+    /// `cells` must be a power of two, at least [`SCAN_BLOCK`] and at most 65536 blocks; `capacity` (records)
+    /// at most [`MAX_CHUNKS`] chunks.
     pub fn new(ctx: &Context, cells: u32, capacity: u32) -> Result<Grid> {
         if !cells.is_power_of_two() || cells < SCAN_BLOCK || cells / SCAN_BLOCK > 65536 {
             bail!("photon grid: {cells} buckets is not a power of two in [{SCAN_BLOCK}, {}]", SCAN_BLOCK as u64 * 65536);
         }
+        let chunks = capacity.div_ceil(CHUNK);
+        if chunks > MAX_CHUNKS {
+            bail!("photon grid: {capacity} records are more than the build takes ({} at most)", MAX_CHUNKS as u64 * CHUNK as u64);
+        }
+        let record = std::mem::size_of::<crate::layout::Photon>() as u64;
         let cell_count = Buffer::new(ctx, "grid cell_count", cells as u64 * 4, BufferKind::Storage)?;
         let status = Buffer::new(ctx, "grid lookup status", 4, BufferKind::Storage)?;
         ctx.run(|cmd| {
@@ -64,16 +110,12 @@ impl Grid {
         Ok(Grid {
             cells,
             allocated: cells,
+            records: Buffer::new(ctx, "photon records", capacity as u64 * record, BufferKind::Storage)?,
+            staging: Buffer::new(ctx, "grid staging records", capacity as u64 * record, BufferKind::Storage)?,
             cell_count,
+            part_count: Buffer::new(ctx, "grid part_count", chunks.max(1) as u64 * MAX_PARTS as u64 * 4, BufferKind::Storage)?,
             cell_start: Buffer::new(ctx, "grid cell_start", (cells as u64 + 1) * 4, BufferKind::Storage)?,
-            rank: Buffer::new(ctx, "grid record ranks", capacity as u64 * 4, BufferKind::Storage)?,
             block_sums: Buffer::new(ctx, "grid block_sums", (cells / SCAN_BLOCK) as u64 * 4, BufferKind::Storage)?,
-            sorted: Buffer::new(
-                ctx,
-                "grid sorted records",
-                capacity as u64 * std::mem::size_of::<crate::layout::Photon>() as u64,
-                BufferKind::Storage,
-            )?,
             status,
         })
     }
@@ -90,10 +132,12 @@ impl Grid {
     }
 }
 
-/// The three grid kernels.
+/// The five grid kernels.
 pub struct Lookup {
     pub count: ComputePipeline,
     pub scan: ComputePipeline,
+    pub offsets: ComputePipeline,
+    pub partition: ComputePipeline,
     pub scatter: ComputePipeline,
 }
 
@@ -103,15 +147,18 @@ impl Lookup {
         Ok(Lookup {
             count: crate::pipeline(ctx, &GRID_COUNT)?,
             scan: crate::pipeline(ctx, &GRID_SCAN)?,
+            offsets: crate::pipeline(ctx, &GRID_OFFSETS)?,
+            partition: crate::pipeline(ctx, &GRID_PARTITION)?,
             scatter: crate::pipeline(ctx, &GRID_SCATTER)?,
         })
     }
 
-    /// Records the grid build over the records in `photons` (their number is in `counter`); dispatches
-    /// cover `capacity` records and the kernels stop at the count. Each step is a `profiler` scope named
-    /// `lookup/count`, `lookup/scan` and `lookup/scatter` (which copies whole records: scattering 4-byte
-    /// indices and then permuting the records measured no faster on lavapipe, 180 ms against 183 ms for
-    /// 2.8M records).
+    /// Records the grid build over the records in `grid.records` (their number is in `counter`), which
+    /// it leaves grouped by bucket; dispatches cover `capacity` records and the kernels stop at the count.
+    /// Profiler scopes: `lookup/count`, `lookup/scan` (with the partition offsets), `lookup/split` and
+    /// `lookup/scatter`. Placing each record straight at its bucket's place, the way this build did before
+    /// the split, took 130-260 ms for 2.8M records, and 41-48 ms with the same writes in order: the
+    /// writes' cache misses were the cost (docs/performance.md).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -119,13 +166,16 @@ impl Lookup {
         cmd: vk::CommandBuffer,
         profiler: &Profiler,
         params: &Buffer,
-        photons: &Buffer,
         counter: &Buffer,
         grid: &Grid,
         capacity: u32,
     ) -> Result<()> {
+        let parts = GridPush::for_cells(grid.cells);
+        let chunks = capacity.div_ceil(CHUNK);
+        let push = bytemuck::bytes_of(&parts);
         profiler.scope(cmd, "lookup/count", || {
-            self.count.dispatch(cmd, &[params, photons, counter, &grid.cell_count, &grid.rank], &[], capacity as u64)
+            let buffers = [params, &grid.records, counter, &grid.cell_count, &grid.part_count];
+            self.count.dispatch_groups(cmd, &buffers, push, [chunks, 1, 1])
         })?;
         barrier(ctx, cmd);
         let blocks = grid.cells / SCAN_BLOCK;
@@ -136,15 +186,17 @@ impl Lookup {
                 self.scan.dispatch_groups(cmd, &scan_buffers, bytemuck::bytes_of(&push), [groups, 1, 1])?;
                 barrier(ctx, cmd);
             }
-            Ok(())
+            self.offsets.dispatch(cmd, &[params, counter, &grid.cell_start, &grid.part_count], push, parts.parts as u64)
         })?;
+        barrier(ctx, cmd);
+        profiler.scope(cmd, "lookup/split", || {
+            let buffers = [params, &grid.records, counter, &grid.part_count, &grid.staging];
+            self.partition.dispatch_groups(cmd, &buffers, push, [chunks, 1, 1])
+        })?;
+        barrier(ctx, cmd);
         profiler.scope(cmd, "lookup/scatter", || {
-            self.scatter.dispatch(
-                cmd,
-                &[params, photons, counter, &grid.rank, &grid.cell_start, &grid.sorted],
-                &[],
-                capacity as u64,
-            )
+            let buffers = [params, &grid.staging, counter, &grid.cell_count, &grid.cell_start, &grid.records];
+            self.scatter.dispatch(cmd, &buffers, &[], capacity as u64)
         })
     }
 }
@@ -160,5 +212,16 @@ mod tests {
         // No budget: no subgroup's step count (a u32) ever reaches the limit.
         assert_eq!(lookup_limit(None), u32::MAX);
         assert_eq!(lookup_limit(Some(100)), 0);
+    }
+
+    #[test]
+    fn partitions_cover_the_table_in_whole_scan_blocks() {
+        for cells in (SCAN_BLOCK.trailing_zeros()..=SCAN_BLOCK.trailing_zeros() + 16).map(|b| 1u32 << b) {
+            let p = GridPush::for_cells(cells);
+            assert!(p.parts.is_power_of_two() && p.parts <= MAX_PARTS, "{cells}: {p:?}");
+            // Every bucket falls in a partition, and every partition starts on a scan block.
+            assert_eq!((cells - 1) >> p.shift, p.parts - 1, "{cells}: {p:?}");
+            assert!(1u32 << p.shift >= SCAN_BLOCK, "{cells}: {p:?}");
+        }
     }
 }

@@ -1,0 +1,33 @@
+// Photon grid, step 4 of 5: split the records by partition into `staging`. Each workgroup takes the chunk
+// the count took and writes its records of a partition one after another from that chunk's offset, so
+// the writes stream through one open run per partition instead of landing at random.
+#version 460
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+layout(local_size_x = 256) in;
+#include "types.glsl"
+#include "params.glsl"
+layout(std430, binding = 1) readonly buffer Photons { u64vec4 photons[]; }; // Photon records (photon_words)
+layout(std430, binding = 2) readonly buffer Counter { uint photon_count; };
+layout(std430, binding = 3) readonly buffer PartStart { uint part_start[]; }; // [chunk][partition]
+layout(std430, binding = 4) writeonly buffer Staging { u64vec4 staging[]; };
+#include "grid.glsl"
+#include "partition.glsl"
+
+shared uint cursor[MAX_PARTS];
+
+void main() {
+    load_params();
+    uint t = gl_LocalInvocationIndex;
+    uint n = min(photon_count, params.photon_capacity);
+    uint first = chunk_index() * CHUNK;
+    if (first >= n) return;
+    uint row = chunk_index() * pc.parts;
+    for (uint p = t; p < pc.parts; p += 256u) cursor[p] = part_start[row + p];
+    barrier();
+    uint end = min(first + CHUNK, n);
+    for (uint i = first + t; i < end; i += 256u) {
+        u64vec4 w = photons[i];
+        uint h = grid_bucket(uint(w.y >> 32)); // Photon.cell: the high half of the second word
+        staging[atomicAdd(cursor[h >> pc.shift], 1u)] = w;
+    }
+}
