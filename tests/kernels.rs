@@ -109,6 +109,7 @@ fn emission_passes_match_reference(r: &mut Renderer) {
     let pixels = g.pixels() as usize;
     let mut busy = vec![0u32; pixels];
     reference::eye_pass(&g, &r.ray_pushes(0, true), &mut busy);
+    ppm_vk_engine::spread_marks(&mut busy, g.params.width, g.params.height);
     let gpu_busy = r.read_busy().unwrap();
     let same = busy.iter().zip(&gpu_busy).filter(|(a, b)| a == b).count();
     let marked = busy.iter().filter(|&&b| b != 0).count();

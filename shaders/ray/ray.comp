@@ -14,9 +14,13 @@
 // eye passes (rgb) with their count (w); the resolve divides. The hit-point path's own emission is one
 // more such sample when its position is random (SPPM), or the only one when there are no others.
 //
-// Most pixels see only diffuse, non-emitting surfaces, where (a) is 0 and samples are wasted. Eye pass 0
-// is a pilot: its emission samples only mark (in `busy`) the pixels where one met a mirror, glass or an
-// emitter, and are not added. Later passes take all their samples in marked pixels and one in the others.
+// Most pixels see no emitter through any point of them, where (a) is 0 and samples are wasted. Eye pass 0
+// is a pilot: its emission samples only mark (in `busy`) the pixels where one met the front of an emitter,
+// and are not added; the renderer then marks their neighbours too (spread_marks), which catches the pixels
+// an edge of the light or of its image only clips. Later passes take all their samples in marked pixels and
+// one in the others. (Marking every pixel that sees a mirror or glass, as before, took the samples in the
+// mirror and glass spheres too, mostly where they show the walls: the eye pass cost 80-95 ms per pass at
+// 512^2 against 40-49 ms marking only the light, docs/performance.md.)
 // The pooled mean stays unbiased because every count is fixed before the samples it counts are drawn:
 // the marks depend on the pilot's samples only, which are not in the sum (pooling samples that had
 // chosen their own count would bias it).
@@ -29,7 +33,7 @@ layout(local_size_x = 64) in;
 layout(std430, binding = 6) writeonly buffer HitPoints { HitPoint hit_points[]; };
 layout(std430, binding = 7) buffer Direct { dvec4 direct[]; };
 layout(std430, binding = 8) buffer Cut { PathCounters cut; };
-layout(std430, binding = 9) buffer Busy { uint busy[]; }; // 1: the pilot saw mirror, glass or emission here
+layout(std430, binding = 9) buffer Busy { uint busy[]; }; // 1: the pilot saw emission here (or beside it)
 layout(push_constant) uniform RayPush {
     vec2 jitter;     // sample position inside the pixel, in [0,1)^2 (0.5, 0.5: the centre); negative:
                      // a random position per pixel (box filter)
@@ -58,7 +62,7 @@ vec3 camera_ray(uint px, uint py, vec2 jitter) {
 }
 
 // One emission sample: the emission met along the specular chain from the eye through `jitter`.
-// `seen`: set if the path met a mirror, glass or the front of an emitter.
+// `seen`: set if the path met the front of an emitter.
 vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen) {
     vec2 jitter = vec2(rng_float(rng), rng_float(rng));
     vec3 o = params.eye;
@@ -81,7 +85,6 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen) {
             if (max(e.r, max(e.g, e.b)) > 0.0) seen = true;
             return e;
         }
-        seen = true;
         if (m.surface == SURFACE_MIRROR) {
             thr *= m.color;
             d = reflect(d, nf);

@@ -57,7 +57,7 @@ pub use image_io::RgbImage;
 pub use ppm_vk_device::{Context, ContextOptions, DeviceInfo, ScopeTiming};
 pub use ppm_vk_kernels::layout::PathCounters;
 pub use ppm_vk_kernels::photon::PathLimits;
-pub use renderer::{CancelToken, PassStats, PhotonVariant, ProbeReport, Renderer};
+pub use renderer::{spread_marks, CancelToken, PassStats, PhotonVariant, ProbeReport, Renderer};
 pub use scene::Scene;
 pub use settings::{Mode, ProbeMode, Settings};
 

@@ -135,7 +135,7 @@ pub struct Renderer {
     order: Buffer,
     active: u32,
     direct: Buffer,
-    /// Per pixel, 1 where the pilot eye pass met mirror, glass or emission (ray.comp).
+    /// Per pixel, 1 where the pilot eye pass saw emission, or beside such a pixel (ray.comp).
     busy: Buffer,
     image: Buffer,
     counter: Buffer,
@@ -431,6 +431,10 @@ impl Renderer {
         }).device("setting up the render")?;
         r.ray_ms = r.ray_pass(0, true)?.iter().map(|s| s.duration_ms).sum();
         r.path_counters()?;
+        let (width, height) = (r.gpu.params.width, r.gpu.params.height);
+        let mut busy: Vec<u32> = r.download(&r.busy, r.gpu.pixels(), "reading the pilot's marks")?;
+        spread_marks(&mut busy, width, height);
+        r.ctx.upload(&r.busy, bytemuck::cast_slice(&busy)).device("writing the pilot's marks")?;
         // The gather walks the hit points in Morton order, so neighbouring threads read the same buckets.
         // PPM's hit points never move: order them by position once, on the host. SPPM's move every pass:
         // order the pixels by their screen position, which is nearly as coherent and never changes.
@@ -1006,6 +1010,27 @@ impl Renderer {
     }
 }
 
+/// Marks the 8 neighbours of every marked pixel of a `width` x `height` image (row-major, nonzero:
+/// marked). The pilot eye pass marks the pixels where one of its emission samples met an emitter; a pixel
+/// an edge of the light (or of its image in a mirror or glass) only clips may have had none, and its
+/// neighbour inside the edge did. The marks choose sample counts before those samples are drawn, so the
+/// estimate stays unbiased whatever they are (ray.comp); they only move where the samples go.
+pub fn spread_marks(marks: &mut [u32], width: u32, height: u32) {
+    let (w, h) = (width as usize, height as usize);
+    let seeds: Vec<bool> = marks.iter().map(|&m| m != 0).collect();
+    for y in 0..h {
+        for x in 0..w {
+            let near = |dy: usize, dx: usize| {
+                let (yy, xx) = ((y + dy).checked_sub(1), (x + dx).checked_sub(1));
+                matches!((yy, xx), (Some(yy), Some(xx)) if yy < h && xx < w && seeds[yy * w + xx])
+            };
+            if (0..3).any(|dy| (0..3).any(|dx| near(dy, dx))) {
+                marks[y * w + x] = 1;
+            }
+        }
+    }
+}
+
 /// A tracing kernel (ray or photon) for this scene, with `defines` added to its source: compiled with the
 /// scene as constants where it is small enough (see specialize.rs), else with the scene in buffers.
 fn tracing_pipeline(
@@ -1091,7 +1116,28 @@ fn morton_order(hits: &[HitPoint]) -> Vec<u32> {
 
 #[cfg(test)]
 mod tests {
-    use super::fits_device;
+    use super::{fits_device, spread_marks};
+
+    #[test]
+    fn marks_spread_to_the_eight_neighbours_only() {
+        // 5x4 image, marks at (1, 1) and at the corner (4, 3).
+        let mut m = vec![0u32; 20];
+        m[5 + 1] = 1;
+        m[15 + 4] = 7;
+        spread_marks(&mut m, 5, 4);
+        let want = [
+            1, 1, 1, 0, 0, //
+            1, 1, 1, 0, 0, //
+            1, 1, 1, 1, 1, //
+            0, 0, 0, 1, 1,
+        ];
+        let got: Vec<u32> = m.iter().map(|&x| (x != 0) as u32).collect();
+        assert_eq!(got, want);
+        // Nothing marked stays nothing; the spread does not chain.
+        let mut none = vec![0u32; 12];
+        spread_marks(&mut none, 4, 3);
+        assert!(none.iter().all(|&x| x == 0));
+    }
 
     /// Each limit at its bound: a buffer of exactly the largest binding and a total of exactly the
     /// device's memory fit; a byte more is an error naming the buffer and what to lower.

@@ -26,7 +26,7 @@ fn camera_ray(g: &GpuScene, px: u32, py: u32, j: [f32; 2]) -> Vec3 {
 
 /// One emission-only eye sample of ray.comp's `emission_sample`: the emission met along the specular chain
 /// through a random point of the pixel, one Fresnel branch chosen with probability f. `cut` counts a path
-/// ended at the depth backstop; `seen` is set if the path met a mirror, glass or an emitter's front.
+/// ended at the depth backstop; `seen` is set if the path met an emitter's front.
 fn emission_sample(g: &GpuScene, px: u32, py: u32, rng: &mut Rng, cut: &mut u32, seen: &mut bool) -> Vec3 {
     let j = [rng.float(), rng.float()];
     let mut o = v3(g.params.eye);
@@ -42,7 +42,6 @@ fn emission_sample(g: &GpuScene, px: u32, py: u32, rng: &mut Rng, cut: &mut u32,
             *seen |= e.max_element() > 0.0;
             return e;
         }
-        *seen = true;
         if m.surface == SURFACE_MIRROR {
             thr *= v3(m.color);
             d = reflect(d, nf);
