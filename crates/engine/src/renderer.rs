@@ -351,7 +351,7 @@ impl Renderer {
             settings.slots()
         );
         let others = [
-            ("the photon records and their staging copy", capacity as u64 * Grid::bytes_per_record()),
+            ("the photon records, their staging copy and the grid build's counts", capacity as u64 * Grid::bytes_per_record()),
             ("the BVH", bvh_bytes),
         ];
         fits_device(&per_pixel, &others, max_range, ctx.info().memory_bytes, &advice)?;
@@ -967,7 +967,8 @@ impl Renderer {
     }
 
     /// Traces and gathers one batch of photons with global indices `first..first+count` without the
-    /// update, and returns the batch's records (the pass accumulators keep the gathered sums).
+    /// update, and returns the batch's records, grouped by grid bucket (the pass accumulators keep the
+    /// gathered sums).
     pub fn trace_and_gather(&mut self, first: u64, count: u32) -> anyhow::Result<Vec<Photon>> {
         self.trace_batch(first, count, GridUse::Gather)
     }

@@ -84,9 +84,10 @@ pub struct Grid {
 }
 
 impl Grid {
-    /// Bytes of the grid's buffers that grow with the record capacity, for the renderer's memory check.
+    /// Bytes of the grid's buffers that grow with the record capacity, for the renderer's memory check:
+    /// the records, their staging copy and the per-chunk partition counts (rounded up).
     pub fn bytes_per_record() -> u64 {
-        2 * std::mem::size_of::<crate::layout::Photon>() as u64
+        2 * std::mem::size_of::<crate::layout::Photon>() as u64 + (MAX_PARTS as u64 * 4).div_ceil(CHUNK as u64)
     }
 
     /// `cells` must be a power of two, at least [`SCAN_BLOCK`] and at most 65536 blocks; `capacity` (records)
