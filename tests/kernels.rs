@@ -426,6 +426,16 @@ fn gather_with_wide_windows_and_shared_buckets_matches_brute_force() {
     }
 }
 
+/// A table of 2^20 buckets splits the grid build into its most partitions (512, of 2048 buckets each;
+/// lookup.rs: GridPush::for_cells): the records are split and placed through all of them, and each must
+/// still land in its bucket exactly once.
+#[test]
+fn gather_through_the_most_partitions_matches_brute_force() {
+    let buckets = ppm_vk_kernels::lookup::SCAN_BLOCK << 10;
+    assert_eq!(ppm_vk_kernels::lookup::GridPush::for_cells(buckets).parts, ppm_vk_kernels::lookup::MAX_PARTS);
+    gather_case(None, GridShape { buckets: Some(buckets), cell_of_radius: Some(1.5), ..GridShape::default() });
+}
+
 /// A quarter-radius cell in the smallest table with 100k photons puts tens of thousands of photons in
 /// one SIMD group's lookups, past lavapipe's 65535 loop iterations: the renderer must refuse, not return a darker image.
 /// (On a device without such a limit the lookup completes and matches the brute force.)

@@ -96,10 +96,7 @@ impl Grid {
         if !cells.is_power_of_two() || cells < SCAN_BLOCK || cells / SCAN_BLOCK > 65536 {
             bail!("photon grid: {cells} buckets is not a power of two in [{SCAN_BLOCK}, {}]", SCAN_BLOCK as u64 * 65536);
         }
-        let chunks = capacity.div_ceil(CHUNK);
-        if chunks > MAX_CHUNKS {
-            bail!("photon grid: {capacity} records are more than the build takes ({} at most)", MAX_CHUNKS as u64 * CHUNK as u64);
-        }
+        let chunks = chunks_for(capacity)?;
         let record = std::mem::size_of::<crate::layout::Photon>() as u64;
         let cell_count = Buffer::new(ctx, "grid cell_count", cells as u64 * 4, BufferKind::Storage)?;
         let status = Buffer::new(ctx, "grid lookup status", 4, BufferKind::Storage)?;
@@ -131,6 +128,15 @@ impl Grid {
         self.cells = cells;
         Ok(())
     }
+}
+
+/// The chunks of the count and the split for `capacity` records; an error past [`MAX_CHUNKS`].
+pub fn chunks_for(capacity: u32) -> Result<u32> {
+    let chunks = capacity.div_ceil(CHUNK);
+    if chunks > MAX_CHUNKS {
+        bail!("photon grid: {capacity} records are more than the build takes ({} at most)", MAX_CHUNKS as u64 * CHUNK as u64);
+    }
+    Ok(chunks)
 }
 
 /// The five grid kernels.
@@ -172,7 +178,7 @@ impl Lookup {
         capacity: u32,
     ) -> Result<()> {
         let parts = GridPush::for_cells(grid.cells);
-        let chunks = capacity.div_ceil(CHUNK);
+        let chunks = chunks_for(capacity)?;
         let push = bytemuck::bytes_of(&parts);
         profiler.scope(cmd, "lookup/count", || {
             let buffers = [params, &grid.records, counter, &grid.cell_count, &grid.part_count];
@@ -213,6 +219,27 @@ mod tests {
         // No budget: no subgroup's step count (a u32) ever reaches the limit.
         assert_eq!(lookup_limit(None), u32::MAX);
         assert_eq!(lookup_limit(Some(100)), 0);
+    }
+
+    #[test]
+    fn the_build_takes_records_up_to_its_chunk_bound() {
+        assert_eq!(chunks_for(0).unwrap(), 0);
+        assert_eq!(chunks_for(CHUNK + 1).unwrap(), 2);
+        assert_eq!(chunks_for(MAX_CHUNKS * CHUNK).unwrap(), MAX_CHUNKS);
+        let e = chunks_for(MAX_CHUNKS * CHUNK + 1).unwrap_err().to_string();
+        assert!(e.contains("more than the build takes (491520000 at most)"), "{e}");
+    }
+
+    /// The chunk and partition bounds stated here are the ones the kernels use.
+    #[test]
+    fn constants_match_the_glsl() {
+        let glsl = crate::reflected::SOURCES.iter().find(|(p, _)| *p == "lookup/partition.glsl").unwrap().1;
+        for line in [format!("const uint CHUNK = {CHUNK}u;"), format!("const uint MAX_PARTS = {MAX_PARTS}u;")] {
+            assert!(glsl.lines().any(|l| l.starts_with(&line)), "partition.glsl lacks `{line}`");
+        }
+        let scan = crate::reflected::SOURCES.iter().find(|(p, _)| *p == "lookup/grid_scan.comp").unwrap().1;
+        assert!(scan.contains("const uint BLOCK = 256u * PER_THREAD;") && scan.contains("const uint PER_THREAD = 4u;"));
+        assert_eq!(SCAN_BLOCK, 256 * 4);
     }
 
     #[test]
