@@ -17,12 +17,10 @@ shared uint hist[MAX_PARTS];
 void main() {
     load_params();
     uint t = gl_LocalInvocationIndex;
-    uint n = min(photon_count, params.photon_capacity);
-    uint first = chunk_index() * CHUNK;
-    if (first >= n) return; // the whole workgroup: grid_offsets reads only the chunks that hold records
+    uint first, end;
+    if (!chunk_range(first, end)) return;
     for (uint p = t; p < pc.parts; p += 256u) hist[p] = 0u;
     barrier();
-    uint end = min(first + CHUNK, n);
     for (uint i = first + t; i < end; i += 256u) {
         uint h = grid_bucket(photons[i].cell);
         atomicAdd(cell_count[h], 1u);

@@ -15,8 +15,7 @@ void main() {
     load_params();
     uint p = gl_GlobalInvocationID.x;
     if (p >= pc.parts) return;
-    uint n = min(photon_count, params.photon_capacity);
-    uint chunks = (n + CHUNK - 1u) / CHUNK;
+    uint chunks = batch_chunks();
     uint run = cell_start[p << pc.shift];
     for (uint c = 0u; c < chunks; c++) {
         uint k = c * pc.parts + p;

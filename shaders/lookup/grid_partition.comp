@@ -18,13 +18,11 @@ shared uint cursor[MAX_PARTS];
 void main() {
     load_params();
     uint t = gl_LocalInvocationIndex;
-    uint n = min(photon_count, params.photon_capacity);
-    uint first = chunk_index() * CHUNK;
-    if (first >= n) return;
+    uint first, end;
+    if (!chunk_range(first, end)) return;
     uint row = chunk_index() * pc.parts;
     for (uint p = t; p < pc.parts; p += 256u) cursor[p] = part_start[row + p];
     barrier();
-    uint end = min(first + CHUNK, n);
     for (uint i = first + t; i < end; i += 256u) {
         u64vec4 w = photons[i];
         uint h = grid_bucket(uint(w.y >> 32)); // Photon.cell: the high half of the second word

@@ -22,4 +22,24 @@ layout(push_constant) uniform GridPush {
 uint chunk_index() {
     return gl_WorkGroupID.x;
 }
+
+// The records of this batch: the counter, capped at the buffer (an overflowed batch is run again).
+// Needs `photon_count` and `params` declared before this file.
+uint batch_records() {
+    return min(photon_count, params.photon_capacity);
+}
+
+uint batch_chunks() {
+    return (batch_records() + CHUNK - 1u) / CHUNK;
+}
+
+// Records first .. end - 1 are this workgroup's chunk, the same in the count and the split. False for a
+// chunk past the batch's records: the whole workgroup has nothing to do, and grid_offsets reads only the
+// chunks that hold records.
+bool chunk_range(out uint first, out uint end) {
+    uint n = batch_records();
+    first = chunk_index() * CHUNK;
+    end = min(first + CHUNK, n);
+    return first < n;
+}
 #endif

@@ -1018,15 +1018,13 @@ impl Renderer {
 /// estimate stays unbiased whatever they are (ray.comp); they only move where the samples go.
 pub fn spread_marks(marks: &mut [u32], width: u32, height: u32) {
     let (w, h) = (width as usize, height as usize);
-    let seeds: Vec<bool> = marks.iter().map(|&m| m != 0).collect();
-    for y in 0..h {
-        for x in 0..w {
-            let near = |dy: usize, dx: usize| {
-                let (yy, xx) = ((y + dy).checked_sub(1), (x + dx).checked_sub(1));
-                matches!((yy, xx), (Some(yy), Some(xx)) if yy < h && xx < w && seeds[yy * w + xx])
-            };
-            if (0..3).any(|dy| (0..3).any(|dx| near(dy, dx))) {
-                marks[y * w + x] = 1;
+    // The pilot's own marks, taken before any is added: the spread does not chain.
+    let seeds: Vec<usize> = (0..marks.len()).filter(|&i| marks[i] != 0).collect();
+    for i in seeds {
+        let (x, y) = (i % w, i / w);
+        for yy in y.saturating_sub(1)..=(y + 1).min(h - 1) {
+            for xx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
+                marks[yy * w + xx] = 1;
             }
         }
     }
