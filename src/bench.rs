@@ -86,9 +86,15 @@ fn parse_cases(s: &str) -> Result<Cases, String> {
     let cases = s
         .split(',')
         .map(|c| {
-            let (p, r) = c.split_once('@').ok_or_else(|| format!("case {c:?}: expected PHOTONS@WIDTHxHEIGHT"))?;
+            let (p, r) = c
+                .split_once('@')
+                .ok_or_else(|| format!("case {c:?}: expected PHOTONS@WIDTHxHEIGHT"))?;
             let (width, height) = crate::parse_resolution(r).map_err(|e| format!("case {c:?}: {e}"))?;
-            Ok(Case { photons: parse_count(p).map_err(|e| format!("case {c:?}: {e}"))?, width, height })
+            Ok(Case {
+                photons: parse_count(p).map_err(|e| format!("case {c:?}: {e}"))?,
+                width,
+                height,
+            })
         })
         .collect::<Result<_, String>>()?;
     Ok(Cases(cases))
@@ -192,7 +198,15 @@ fn host_rss() -> Option<(u64, u64)> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let field = |name: &str| -> Option<u64> {
         let line = status.lines().find(|l| l.starts_with(name))?;
-        Some(line[name.len()..].trim().trim_end_matches("kB").trim().parse::<u64>().ok()? * 1024)
+        Some(
+            line[name.len()..]
+                .trim()
+                .trim_end_matches("kB")
+                .trim()
+                .parse::<u64>()
+                .ok()?
+                * 1024,
+        )
     };
     Some((field("VmRSS:")?, field("VmHWM:")?))
 }
@@ -208,7 +222,11 @@ fn mib(bytes: u64) -> f64 {
 
 /// The photon kernel's variants, each as a fraction of the trace-only ceiling (intersections per second).
 fn print_breakdown(variants: &[ppm_vk_engine::PhotonVariant]) {
-    let Some(ceiling) = variants.iter().find(|v| v.name == "trace only").map(|v| v.steps_per_second()) else {
+    let Some(ceiling) = variants
+        .iter()
+        .find(|v| v.name == "trace only")
+        .map(|v| v.steps_per_second())
+    else {
         return;
     };
     for v in variants {
@@ -296,7 +314,10 @@ pub fn run(args: BenchArgs) -> Result<()> {
             true => renderer.photon_breakdown(case.photons)?,
             false => Vec::new(),
         };
-        let stage: Vec<f64> = STAGES.iter().map(|s| median(measured.iter().map(|p| p.stage_ms(s)).collect())).collect();
+        let stage: Vec<f64> = STAGES
+            .iter()
+            .map(|s| median(measured.iter().map(|p| p.stage_ms(s)).collect()))
+            .collect();
         let wall = median(measured.iter().map(|p| p.wall_ms).collect());
         let rate = case.photons as f64 / (wall * 1e-3) / 1e6;
         let records = median(measured.iter().map(|p| p.records as f64).collect());
@@ -364,7 +385,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
     }
     let doc = BenchDoc {
         schema: "ppm-vk-bench/1",
-        device: DeviceDoc { name: info.name, kind: info.kind, driver: info.driver, api: info.api_version },
+        device: DeviceDoc {
+            name: info.name,
+            kind: info.kind,
+            driver: info.driver,
+            api: info.api_version,
+        },
         git_revision: env!("PPM_VK_GIT_REV"),
         scene: args.scene.display().to_string(),
         mode,
@@ -374,7 +400,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
         measured_passes: args.passes,
         cases: results,
     };
-    std::fs::write(&args.json, serde_json::to_string_pretty(&doc)?).with_context(|| format!("writing {}", args.json.display()))?;
+    std::fs::write(&args.json, serde_json::to_string_pretty(&doc)?)
+        .with_context(|| format!("writing {}", args.json.display()))?;
     println!("wrote {}", args.json.display());
     Ok(())
 }

@@ -38,7 +38,10 @@ pub struct CompareArgs {
     time: f64,
     /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone". Words joined by
     /// `+`: ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass).
-    #[arg(long, default_value = "ppm; ppm+probe; ppm+probe-sf; ppm+cone; ppm+probe+cone; ppm+probe-sf+cone")]
+    #[arg(
+        long,
+        default_value = "ppm; ppm+probe; ppm+probe-sf; ppm+cone; ppm+probe+cone; ppm+probe-sf+cone"
+    )]
     variants: String,
     /// Photons per pass.
     #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u32).range(1..))]
@@ -110,7 +113,16 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
 }
 
 fn file_name(variant: &str) -> String {
-    variant.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '_' }).collect()
+    variant
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 /// One variant's result, as compare.json writes it (schema ppm-vk-compare/1).
@@ -156,9 +168,17 @@ pub fn run(args: CompareArgs) -> Result<()> {
         scene = scene.with_resolution(w, h);
     }
     let reference = Reference::load(&args.reference)?;
-    let base = Settings { photons_per_pass: args.photons_per_pass, seed: args.seed, ..Settings::default() };
-    let variants: Vec<Variant> =
-        args.variants.split([';', ',']).filter(|v| !v.trim().is_empty()).map(|v| parse_variant(v, &base)).collect::<Result<_>>()?;
+    let base = Settings {
+        photons_per_pass: args.photons_per_pass,
+        seed: args.seed,
+        ..Settings::default()
+    };
+    let variants: Vec<Variant> = args
+        .variants
+        .split([';', ','])
+        .filter(|v| !v.trim().is_empty())
+        .map(|v| parse_variant(v, &base))
+        .collect::<Result<_>>()?;
     if variants.is_empty() {
         bail!("--variants names no variant");
     }
@@ -199,10 +219,21 @@ pub fn run(args: CompareArgs) -> Result<()> {
         image.save(&stem.with_extension("exr"))?;
         image.save(&stem.with_extension("png"))?;
         let whole = compare(&image, &reference, None, true)?;
-        let per_region: Vec<(String, ErrorStats)> =
-            regions.iter().map(|r| Ok((r.name.clone(), compare(&image, &reference, Some(r), true)?))).collect::<Result<_>>()?;
-        eprintln!("{:<24} {:>4} passes, RMSE {:.4}, relMSE {:.5}", v.name, renderer.passes(), whole.rmse, whole.rel_mse);
-        curves.push(crate::plot::Series { name: v.name.clone(), points: curve.clone() });
+        let per_region: Vec<(String, ErrorStats)> = regions
+            .iter()
+            .map(|r| Ok((r.name.clone(), compare(&image, &reference, Some(r), true)?)))
+            .collect::<Result<_>>()?;
+        eprintln!(
+            "{:<24} {:>4} passes, RMSE {:.4}, relMSE {:.5}",
+            v.name,
+            renderer.passes(),
+            whole.rmse,
+            whole.rel_mse
+        );
+        curves.push(crate::plot::Series {
+            name: v.name.clone(),
+            points: curve.clone(),
+        });
         rows.push(VariantResult {
             variant: v.name.clone(),
             settings: v.settings.clone(),
@@ -238,7 +269,10 @@ pub fn run(args: CompareArgs) -> Result<()> {
     md += &"---|---|".repeat(regions.len());
     md += "\n";
     for row in &rows {
-        md += &format!("| {} | {:.2} | {} | {:.4} | {:.5} |", row.variant, row.setup_s, row.passes, row.whole.rmse, row.whole.rel_mse);
+        md += &format!(
+            "| {} | {:.2} | {} | {:.4} | {:.5} |",
+            row.variant, row.setup_s, row.passes, row.whole.rmse, row.whole.rel_mse
+        );
         for e in regions.iter().filter_map(|r| row.regions.get(&r.name)) {
             md += &format!(" {:.4} | {:.5} |", e.rmse, e.rel_mse);
         }
@@ -252,7 +286,10 @@ pub fn run(args: CompareArgs) -> Result<()> {
     let doc = CompareDoc {
         schema: "ppm-vk-compare/1",
         scene: args.scene.display().to_string(),
-        device: DeviceName { name: info.name.clone(), driver: info.driver.clone() },
+        device: DeviceName {
+            name: info.name.clone(),
+            driver: info.driver.clone(),
+        },
         git_revision: env!("PPM_VK_GIT_REV"),
         time_s: args.time,
         photons_per_pass: args.photons_per_pass,
@@ -263,17 +300,34 @@ pub fn run(args: CompareArgs) -> Result<()> {
     let (w, h) = (images[0].1.width, images[0].1.height);
     let reference_image = reference.at_resolution(w, h)?.image;
     let scale = reference.image.width / w.max(1);
-    for r in regions.iter().filter(|r| r.name == "caustic" || r.name == "shadow_edge") {
+    for r in regions
+        .iter()
+        .filter(|r| r.name == "caustic" || r.name == "shadow_edge")
+    {
         let (x0, y0, cw, ch) = (r.x0 / scale, r.y0 / scale, (r.w / scale).max(1), (r.h / scale).max(1));
-        let mut crops: Vec<RgbImage> = images.iter().map(|(_, im)| im.crop(x0, y0, cw, ch)).collect::<Result<_>>()?;
+        let mut crops: Vec<RgbImage> = images
+            .iter()
+            .map(|(_, im)| im.crop(x0, y0, cw, ch))
+            .collect::<Result<_>>()?;
         crops.push(reference_image.crop(x0, y0, cw, ch)?);
         let refs: Vec<&RgbImage> = crops.iter().collect();
         // Enlarged 4x and 2 stops darker, so the caustic's structure is not clipped away.
-        RgbImage::hstack(&refs)?.upscale(4)?.save_png(&args.out.join(format!("crops-{}.png", r.name)), -2.0)?;
+        RgbImage::hstack(&refs)?
+            .upscale(4)?
+            .save_png(&args.out.join(format!("crops-{}.png", r.name)), -2.0)?;
     }
-    let title = format!("{} {}x{}, {} photons/pass, {}", scene.name, scene.camera.width, scene.camera.height, args.photons_per_pass, info.name);
+    let title = format!(
+        "{} {}x{}, {} photons/pass, {}",
+        scene.name, scene.camera.width, scene.camera.height, args.photons_per_pass, info.name
+    );
     let plot = args.out.join("error-vs-time.svg");
-    crate::plot::error_plot(&plot, &title, "relMSE vs reference", &curves, peer.as_deref().unwrap_or_default())?;
+    crate::plot::error_plot(
+        &plot,
+        &title,
+        "relMSE vs reference",
+        &curves,
+        peer.as_deref().unwrap_or_default(),
+    )?;
     println!("{md}");
     println!(
         "crops (left to right: {}, reference) and images in {}",

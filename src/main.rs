@@ -10,7 +10,9 @@ use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_vk_engine::metrics::{compare, Reference, Region};
 use ppm_vk_engine::report::{PassRecord, RunHeader, RunReport, SCHEMA};
-use ppm_vk_engine::{open_device, Checkpoint, Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings};
+use ppm_vk_engine::{
+    open_device, Checkpoint, Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings,
+};
 
 mod bench;
 mod compare;
@@ -62,7 +64,11 @@ impl DeviceArgs {
             true => None,
             false => self.pipeline_cache.clone().or_else(default_cache_dir),
         };
-        let ctx = open_device(&ContextOptions { validation: self.validate, device: self.device.clone(), pipeline_cache })?;
+        let ctx = open_device(&ContextOptions {
+            validation: self.validate,
+            device: self.device.clone(),
+            pipeline_cache,
+        })?;
         if let Some(note) = ctx.pipeline_cache_note() {
             eprintln!("note: {note}; it will be rewritten");
         }
@@ -72,8 +78,14 @@ impl DeviceArgs {
 
 /// `$XDG_CACHE_HOME/ppm-vk`, else `~/.cache/ppm-vk` (the XDG base directory rules); `None` without either.
 fn default_cache_dir() -> Option<PathBuf> {
-    let xdg = std::env::var_os("XDG_CACHE_HOME").map(PathBuf::from).filter(|p| p.is_absolute());
-    let home = || std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")).filter(|p| p.is_absolute());
+    let xdg = std::env::var_os("XDG_CACHE_HOME")
+        .map(PathBuf::from)
+        .filter(|p| p.is_absolute());
+    let home = || {
+        std::env::var_os("HOME")
+            .map(|h| PathBuf::from(h).join(".cache"))
+            .filter(|p| p.is_absolute())
+    };
     xdg.or_else(home).map(|d| d.join("ppm-vk"))
 }
 
@@ -211,7 +223,8 @@ pub(crate) enum ModeArg {
 
 /// A value's name on the command line (kebab-case, as serde writes the engine's enums in JSON).
 pub(crate) fn cli_name(v: impl clap::ValueEnum) -> String {
-    v.to_possible_value().map_or_else(String::new, |p| p.get_name().to_string())
+    v.to_possible_value()
+        .map_or_else(String::new, |p| p.get_name().to_string())
 }
 
 impl From<ModeArg> for Mode {
@@ -241,7 +254,11 @@ impl From<ProbeArg> for ProbeMode {
 }
 
 /// A number that `ok` accepts; `range` says which in the error.
-fn parse_in<T: std::str::FromStr + std::fmt::Display + Copy>(s: &str, ok: fn(T) -> bool, range: &str) -> Result<T, String>
+fn parse_in<T: std::str::FromStr + std::fmt::Display + Copy>(
+    s: &str,
+    ok: fn(T) -> bool,
+    range: &str,
+) -> Result<T, String>
 where
     T::Err: std::fmt::Display,
 {
@@ -276,13 +293,21 @@ fn parse_checkpoint_path(s: &str) -> Result<PathBuf, String> {
 }
 
 fn parse_region(s: &str) -> Result<Region, String> {
-    let (name, rect) = s.split_once(':').ok_or_else(|| format!("{s:?}: expected NAME:X0,Y0,W,H"))?;
+    let (name, rect) = s
+        .split_once(':')
+        .ok_or_else(|| format!("{s:?}: expected NAME:X0,Y0,W,H"))?;
     let v: Vec<u32> = rect
         .split(',')
         .map(|x| x.trim().parse::<u32>().map_err(|e| format!("{s:?}: {x:?}: {e}")))
         .collect::<Result<_, _>>()?;
     match v[..] {
-        [x0, y0, w, h] if w > 0 && h > 0 && !name.is_empty() => Ok(Region { name: name.to_string(), x0, y0, w, h }),
+        [x0, y0, w, h] if w > 0 && h > 0 && !name.is_empty() => Ok(Region {
+            name: name.to_string(),
+            x0,
+            y0,
+            w,
+            h,
+        }),
         _ => Err(format!("{s:?}: expected NAME:X0,Y0,W,H with W, H > 0")),
     }
 }
@@ -295,7 +320,9 @@ pub(crate) fn parse_cone(s: &str) -> Result<Cone, String> {
     if s.eq_ignore_ascii_case("off") {
         return Ok(Cone(None));
     }
-    let k: f32 = s.parse().map_err(|e| format!("{s:?}: {e} (expected a number k >= 1, or `off`)"))?;
+    let k: f32 = s
+        .parse()
+        .map_err(|e| format!("{s:?}: {e} (expected a number k >= 1, or `off`)"))?;
     if !(k.is_finite() && k >= 1.0) {
         return Err(format!("the cone filter constant must be >= 1, got {s}"));
     }
@@ -304,12 +331,16 @@ pub(crate) fn parse_cone(s: &str) -> Result<Cone, String> {
 
 /// `WIDTHxHEIGHT`, each side in 1..=[`MAX_RESOLUTION`](ppm_vk_engine::scene::MAX_RESOLUTION).
 pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;
     let parse = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("{v:?}: {e}"));
     let (w, h) = (parse(w)?, parse(h)?);
     let max = ppm_vk_engine::scene::MAX_RESOLUTION;
     if w == 0 || h == 0 || w > max || h > max {
-        return Err(format!("resolution {w}x{h} out of range: width and height must be in 1..={max}"));
+        return Err(format!(
+            "resolution {w}x{h} out of range: width and height must be in 1..={max}"
+        ));
     }
     Ok((w, h))
 }
@@ -337,7 +368,11 @@ fn devices() -> Result<()> {
         println!("no Vulkan devices found");
     }
     for d in list {
-        let status = if d.missing.is_empty() { "usable".to_string() } else { format!("lacks {}", d.missing.join(", ")) };
+        let status = if d.missing.is_empty() {
+            "usable".to_string()
+        } else {
+            format!("lacks {}", d.missing.join(", "))
+        };
         println!(
             "[{}] {} ({}, Vulkan {}, {}, {} MiB): {}",
             d.index,
@@ -366,7 +401,11 @@ pub fn load_scene(path: &std::path::Path, defines: &[(String, String)]) -> Resul
 pub fn check_validation(ctx: &Context) -> Result<()> {
     let msgs = ctx.validation_messages();
     if !msgs.is_empty() {
-        bail!("the validation layer reported {} message(s):\n{}", msgs.len(), msgs.join("\n"));
+        bail!(
+            "the validation layer reported {} message(s):\n{}",
+            msgs.len(),
+            msgs.join("\n")
+        );
     }
     Ok(())
 }
@@ -395,9 +434,11 @@ fn watch_signals() -> Result<Arc<AtomicUsize>> {
         // compare_exchange keeps the first signal's number (a plain store would keep the last).
         let first = first.clone();
         // SAFETY: the action only does an atomic compare-exchange, which is async-signal-safe.
-        unsafe { signal_hook::low_level::register(sig, move || {
-            let _ = first.compare_exchange(0, sig as usize, Ordering::SeqCst, Ordering::SeqCst);
-        }) }
+        unsafe {
+            signal_hook::low_level::register(sig, move || {
+                let _ = first.compare_exchange(0, sig as usize, Ordering::SeqCst, Ordering::SeqCst);
+            })
+        }
         .context("installing the signal handlers")?;
     }
     Ok(first)
@@ -414,11 +455,17 @@ fn outputs(out: &Option<PathBuf>, scene_name: &str, force: bool) -> Result<Vec<P
             }
             vec![out.clone()]
         }
-        None => vec![PathBuf::from(format!("{scene_name}.exr")), PathBuf::from(format!("{scene_name}.png"))],
+        None => vec![
+            PathBuf::from(format!("{scene_name}.exr")),
+            PathBuf::from(format!("{scene_name}.png")),
+        ],
     };
     if !force {
         if let Some(p) = paths.iter().find(|p| p.exists()) {
-            bail!("{} exists: not overwritten (pass --force to overwrite, or --out to choose another file)", p.display());
+            bail!(
+                "{} exists: not overwritten (pass --force to overwrite, or --out to choose another file)",
+                p.display()
+            );
         }
     }
     Ok(paths)
@@ -441,7 +488,10 @@ fn render(args: RenderArgs) -> Result<Ended> {
         outputs(&Some(out.clone()), "", true)?; // the extension, before the scene is read
     }
     if let Some(report) = &args.report {
-        let ext = report.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+        let ext = report
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase());
         if !matches!(ext.as_deref(), Some("json") | Some("csv")) {
             bail!("--report {}: the extension must be .json or .csv", report.display());
         }
@@ -475,7 +525,8 @@ fn render(args: RenderArgs) -> Result<Ended> {
     let resumed = match &args.resume {
         Some(path) => {
             let c = Checkpoint::load(path)?;
-            c.check(&scene, &settings, BUILD).with_context(|| format!("cannot resume from {}", path.display()))?;
+            c.check(&scene, &settings, BUILD)
+                .with_context(|| format!("cannot resume from {}", path.display()))?;
             Some(c)
         }
         None => None,
@@ -510,7 +561,11 @@ fn render(args: RenderArgs) -> Result<Ended> {
         renderer.ray_ms()
     );
     if resumed.is_some() {
-        eprintln!("resumed after pass {} ({} photons)", renderer.passes(), renderer.emitted());
+        eprintln!(
+            "resumed after pass {} ({} photons)",
+            renderer.passes(),
+            renderer.emitted()
+        );
     }
 
     if let Some(p) = renderer.probe_report() {
@@ -545,7 +600,11 @@ fn render(args: RenderArgs) -> Result<Ended> {
     let (mut gpu_origin, mut eval_s, mut evals) = (None, 0f64, 0u32);
     let budget = args.time.map(Duration::from_secs_f64);
     let passes = args.passes.unwrap_or(if budget.is_some() { u64::MAX } else { 100 });
-    let bar = if budget.is_some() { ProgressBar::new(1000) } else { ProgressBar::new(passes) };
+    let bar = if budget.is_some() {
+        ProgressBar::new(1000)
+    } else {
+        ProgressBar::new(passes)
+    };
     bar.set_style(
         ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {msg} (eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -584,7 +643,10 @@ fn render(args: RenderArgs) -> Result<Ended> {
             Some(b) => bar.set_position((elapsed / b.as_secs_f64() * 1000.0).min(1000.0) as u64),
             None => bar.set_position(s.index),
         }
-        bar.set_message(format!("pass {} | {:.2} M photons/s | {:.1} ms/pass", s.index, rate, s.wall_ms));
+        bar.set_message(format!(
+            "pass {} | {:.2} M photons/s | {:.1} ms/pass",
+            s.index, rate, s.wall_ms
+        ));
         let origin = *gpu_origin.get_or_insert(s.stages.first().map(|t| t.start_ms).unwrap_or(0.0));
         let mut record = PassRecord::new(&s, started.elapsed().as_secs_f64(), origin);
         if let Some(reference) = &reference {
@@ -593,7 +655,9 @@ fn render(args: RenderArgs) -> Result<Ended> {
                 let image = renderer.image()?;
                 record.error = Some(compare(&image, reference, None, true)?);
                 for r in &regions {
-                    record.region_errors.insert(r.name.clone(), compare(&image, reference, Some(r), true)?);
+                    record
+                        .region_errors
+                        .insert(r.name.clone(), compare(&image, reference, Some(r), true)?);
                 }
                 eval_s += t.elapsed().as_secs_f64();
                 evals += 1;
@@ -629,7 +693,10 @@ fn render(args: RenderArgs) -> Result<Ended> {
         loop_s,
         history.iter().map(|s| s.photons).sum::<u64>() as f64 / loop_s.max(1e-9) / 1e6,
         setup_s,
-        out.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
+        out.iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     if let Some(path) = &args.checkpoint {
         println!("checkpoint after pass {}: {}", renderer.passes(), path.display());
@@ -639,7 +706,9 @@ fn render(args: RenderArgs) -> Result<Ended> {
     // is worth a warning (a glass sphere strands about 2e-5 of them by rounding, which is not).
     if let Some(last) = history.last() {
         let pixels = scene.camera.width as f64 * scene.camera.height as f64;
-        let eye_paths = pixels * (renderer.settings().slots() + renderer.settings().emission_samples).max(1) as f64 * (renderer.passes() as f64 + 1.0);
+        let eye_paths = pixels
+            * (renderer.settings().slots() + renderer.settings().emission_samples).max(1) as f64
+            * (renderer.passes() as f64 + 1.0);
         let photon_share = last.photon_paths_cut as f64 / last.emitted_total.max(1) as f64;
         let eye_share = last.eye_paths_cut as f64 / eye_paths;
         if photon_share > 1e-4 || eye_share > 1e-4 {
@@ -671,7 +740,10 @@ fn render(args: RenderArgs) -> Result<Ended> {
         println!("trace: {}", path.display());
     }
     if let Ended::Signal(sig) = ended {
-        eprintln!("interrupted by signal {sig} after pass {}: image, report and checkpoint written", renderer.passes());
+        eprintln!(
+            "interrupted by signal {sig} after pass {}: image, report and checkpoint written",
+            renderer.passes()
+        );
     }
     Ok(ended)
 }
@@ -681,13 +753,22 @@ fn render(args: RenderArgs) -> Result<Ended> {
 /// failed pass may have left part of its work in the state; the last one saved stays valid.
 fn save_after_failure(renderer: &mut Renderer, out: &[PathBuf], error: anyhow::Error) -> anyhow::Error {
     let pass = renderer.passes() + 1;
-    let saved = renderer.image().map_err(anyhow::Error::from).and_then(|image| save_all(&image, out));
+    let saved = renderer
+        .image()
+        .map_err(anyhow::Error::from)
+        .and_then(|image| save_all(&image, out));
     match saved {
         Ok(()) => {
             let files: Vec<String> = out.iter().map(|p| p.display().to_string()).collect();
-            error.context(format!("pass {pass} failed; the image of the {} passes before it is in {}", pass - 1, files.join(", ")))
+            error.context(format!(
+                "pass {pass} failed; the image of the {} passes before it is in {}",
+                pass - 1,
+                files.join(", ")
+            ))
         }
-        Err(e) => error.context(format!("pass {pass} failed, and the image could not be saved either ({e:#})")),
+        Err(e) => error.context(format!(
+            "pass {pass} failed, and the image could not be saved either ({e:#})"
+        )),
     }
 }
 
@@ -702,7 +783,16 @@ fn print_stage_summary(history: &[PassStats], full: bool) {
     let parts: Vec<String> = names.iter().map(|k| format!("{k} {:.2}", mean(k))).collect();
     println!("mean GPU ms per pass: {} | wall {:.2}", parts.join(", "), wall);
     if full {
-        let cols = ["ray", "photon", "lookup/count", "lookup/scan", "lookup/split", "lookup/scatter", "gather", "update"];
+        let cols = [
+            "ray",
+            "photon",
+            "lookup/count",
+            "lookup/scan",
+            "lookup/split",
+            "lookup/scatter",
+            "gather",
+            "update",
+        ];
         let head: Vec<String> = cols.iter().map(|c| format!("{:>15}", c)).collect();
         println!("{:>6} {:>10} {} {:>9}", "pass", "records", head.join(""), "wall");
         for s in history {
@@ -714,10 +804,16 @@ fn print_stage_summary(history: &[PassStats], full: bool) {
 
 fn report_error(image: &ppm_vk_engine::RgbImage, reference: &Reference, regions: &[Region]) -> Result<()> {
     let whole = compare(image, reference, None, true)?;
-    println!("error vs reference (its own noise removed): RMSE {:.4}, relMSE {:.5}, bias {:+.4}", whole.rmse, whole.rel_mse, whole.mean_bias);
+    println!(
+        "error vs reference (its own noise removed): RMSE {:.4}, relMSE {:.5}, bias {:+.4}",
+        whole.rmse, whole.rel_mse, whole.mean_bias
+    );
     for r in regions {
         let e = compare(image, reference, Some(r), true)?;
-        println!("  {:<12} RMSE {:.4}, relMSE {:.5}, bias {:+.4}", r.name, e.rmse, e.rel_mse, e.mean_bias);
+        println!(
+            "  {:<12} RMSE {:.4}, relMSE {:.5}, bias {:+.4}",
+            r.name, e.rmse, e.rel_mse, e.mean_bias
+        );
     }
     Ok(())
 }

@@ -53,8 +53,16 @@ pub fn read_peer(path: &Path) -> Result<Vec<PeerPoint>> {
                 _ => bail!("{}: {what} must be a positive number (log axes), got {s:?}", at()),
             }
         };
-        let label = fields.get(2).filter(|l| !l.is_empty()).map_or("peer", |l| l).to_string();
-        points.push(PeerPoint { seconds: number(fields[0], "seconds")?, error: number(fields[1], "the error")?, label });
+        let label = fields
+            .get(2)
+            .filter(|l| !l.is_empty())
+            .map_or("peer", |l| l)
+            .to_string();
+        points.push(PeerPoint {
+            seconds: number(fields[0], "seconds")?,
+            error: number(fields[1], "the error")?,
+            label,
+        });
     }
     if points.is_empty() {
         bail!("{}: no points (one `seconds,error[,label]` line each)", path.display());
@@ -80,7 +88,10 @@ fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
     let decimal = |m: u32, k: i32| format!("{m}e{k}").parse::<f64>().unwrap_or(f64::NAN);
     let candidates = |mantissas: &[u32]| -> Vec<f64> {
         let (k0, k1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
-        (k0..=k1).flat_map(|k| mantissas.iter().map(move |&m| decimal(m, k))).filter(|v| (lo..=hi).contains(v)).collect()
+        (k0..=k1)
+            .flat_map(|k| mantissas.iter().map(move |&m| decimal(m, k)))
+            .filter(|v| (lo..=hi).contains(v))
+            .collect()
     };
     let ticks = candidates(&[1, 2, 5]);
     if ticks.len() > 12 {
@@ -114,8 +125,12 @@ pub fn error_plot(path: &Path, title: &str, y_label: &str, series: &[Series], pe
     if all.is_empty() {
         bail!("nothing to plot: no positive times and errors");
     }
-    let (t0, t1) = all.iter().fold((f64::MAX, f64::MIN), |(a, b), (t, _)| (a.min(*t), b.max(*t)));
-    let (e0, e1) = all.iter().fold((f64::MAX, f64::MIN), |(a, b), (_, e)| (a.min(*e), b.max(*e)));
+    let (t0, t1) = all
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), (t, _)| (a.min(*t), b.max(*t)));
+    let (e0, e1) = all
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), (_, e)| (a.min(*e), b.max(*e)));
     let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
     let mut chart = ChartBuilder::on(&root)
@@ -124,8 +139,12 @@ pub fn error_plot(path: &Path, title: &str, y_label: &str, series: &[Series], pe
         .x_label_area_size(50)
         .y_label_area_size(80)
         .build_cartesian_2d(
-            (t0 * 0.8..t1 * 1.25).log_scale().with_key_points(log_ticks(t0 * 0.8, t1 * 1.25)),
-            (e0 * 0.7..e1 * 1.4).log_scale().with_key_points(log_ticks(e0 * 0.7, e1 * 1.4)),
+            (t0 * 0.8..t1 * 1.25)
+                .log_scale()
+                .with_key_points(log_ticks(t0 * 0.8, t1 * 1.25)),
+            (e0 * 0.7..e1 * 1.4)
+                .log_scale()
+                .with_key_points(log_ticks(e0 * 0.7, e1 * 1.4)),
         )
         .map_err(err)?;
     chart
@@ -149,7 +168,9 @@ pub fn error_plot(path: &Path, title: &str, y_label: &str, series: &[Series], pe
             .label(s.name.clone())
             // A filled box, not a line: each variant is one polyline in the SVG.
             .legend(move |(x, y)| Rectangle::new([(x, y - 3), (x + 20, y + 3)], colour.filled()));
-        chart.draw_series(pts.iter().map(|p| Circle::new(*p, 3, colour.filled()))).map_err(err)?;
+        chart
+            .draw_series(pts.iter().map(|p| Circle::new(*p, 3, colour.filled())))
+            .map_err(err)?;
     }
     let mut labels: Vec<&str> = Vec::new();
     for p in peer {
@@ -161,7 +182,9 @@ pub fn error_plot(path: &Path, title: &str, y_label: &str, series: &[Series], pe
         let shade = if i == 0 { BLACK.to_rgba() } else { BLACK.mix(0.5) };
         chart
             .draw_series(
-                peer.iter().filter(|p| p.label == *label).map(|p| TriangleMarker::new((p.seconds, p.error), 7, shade.filled())),
+                peer.iter()
+                    .filter(|p| p.label == *label)
+                    .map(|p| TriangleMarker::new((p.seconds, p.error), 7, shade.filled())),
             )
             .map_err(err)?
             .label(label.to_string())
@@ -175,7 +198,9 @@ pub fn error_plot(path: &Path, title: &str, y_label: &str, series: &[Series], pe
         .label_font(("sans-serif", 15))
         .draw()
         .map_err(err)?;
-    root.present().map_err(err).with_context(|| format!("writing {}", path.display()))
+    root.present()
+        .map_err(err)
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 #[cfg(test)]

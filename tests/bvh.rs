@@ -13,11 +13,24 @@ use ppm_vk_engine::reference::rng::Rng;
 use ppm_vk_kernels::bvh_trace::{TraceHit, TraceRay, MAX_BUDGET, NO_HIT};
 
 fn ray(o: Vec3, d: Vec3) -> TraceRay {
-    TraceRay { origin: o.to_array(), tmin: 0.0, dir: d.to_array(), tmax: f32::INFINITY }
+    TraceRay {
+        origin: o.to_array(),
+        tmin: 0.0,
+        dir: d.to_array(),
+        tmax: f32::INFINITY,
+    }
 }
 
 fn cpu(b: &Bvh, r: &TraceRay, budget: u32) -> Traversal {
-    intersect(&b.nodes, &b.triangles, Vec3::from(r.origin), Vec3::from(r.dir), r.tmin, r.tmax, budget)
+    intersect(
+        &b.nodes,
+        &b.triangles,
+        Vec3::from(r.origin),
+        Vec3::from(r.dir),
+        r.tmin,
+        r.tmax,
+        budget,
+    )
 }
 
 fn built(input: &[TriangleInput]) -> Bvh {
@@ -41,7 +54,10 @@ fn assert_gpu_matches_cpu(b: &Bvh, rays: &[TraceRay], gpu: &[TraceHit], budget: 
             Some(h) => {
                 assert_eq!(g.triangle, h.triangle, "{ctx}");
                 assert!((g.t - h.t).abs() <= 1e-6 * h.t.abs(), "{ctx}");
-                assert!((Vec3::from(g.normal) - normal(&b.triangles[h.triangle as usize])).length() <= 1e-6, "{ctx}");
+                assert!(
+                    (Vec3::from(g.normal) - normal(&b.triangles[h.triangle as usize])).length() <= 1e-6,
+                    "{ctx}"
+                );
                 assert!((glam::Vec2::from(g.bary) - h.bary).abs().max_element() <= 1e-5, "{ctx}");
                 hits += 1;
                 identical += (g.t == h.t) as usize;
@@ -58,7 +74,10 @@ fn assert_subgroup_cost(gpu: &[TraceHit], what: &str) {
     assert!(size > 0 && gpu.iter().all(|h| h.subgroup_size as usize == size));
     for (k, group) in gpu.chunks(size).enumerate() {
         let most = group.iter().map(|h| h.steps).max().unwrap();
-        assert!(group.iter().all(|h| h.subgroup_cost == most + 1), "{what}: subgroup {k}: {group:?}");
+        assert!(
+            group.iter().all(|h| h.subgroup_cost == most + 1),
+            "{what}: subgroup {k}: {group:?}"
+        );
     }
 }
 
@@ -78,7 +97,13 @@ fn rays_at(mesh: &[TriangleInput], origins: &[Vec3], random: usize, seed: u64) -
     let mut rays = Vec::new();
     for &o in origins {
         for t in mesh {
-            for target in [t.v[0], t.v[1], t.v[2], (t.v[0] + t.v[1]) * 0.5, t.v[1].lerp(t.v[2], rng.float())] {
+            for target in [
+                t.v[0],
+                t.v[1],
+                t.v[2],
+                (t.v[0] + t.v[1]) * 0.5,
+                t.v[1].lerp(t.v[2], rng.float()),
+            ] {
                 rays.push(ray(o, target - o));
             }
         }
@@ -105,10 +130,30 @@ fn bvh_gpu_traversal_matches_cpu_reference() {
     let box_origins = [Vec3::ZERO, Vec3::new(0.25, -0.125, 0.5)];
     let soup_origins = [Vec3::splat(0.5), Vec3::new(-0.5, 0.2, 0.4), Vec3::new(1.5, 1.5, 1.5)];
     let cases: [(&str, Vec<TriangleInput>, &[Vec3], bool); 4] = [
-        ("sphere", meshes::uv_sphere(Vec3::ZERO, 1.0, 24, 32, 0), &sphere_origins, true),
-        ("box", meshes::box_grid(Vec3::splat(-1.0), Vec3::splat(1.0), 8, 0), &box_origins, true),
-        ("sparse soup", meshes::random_soup(21, 300, 1.0, 0.05), &soup_origins, false),
-        ("dense soup", meshes::random_soup(22, 3000, 1.0, 0.3), &soup_origins, false),
+        (
+            "sphere",
+            meshes::uv_sphere(Vec3::ZERO, 1.0, 24, 32, 0),
+            &sphere_origins,
+            true,
+        ),
+        (
+            "box",
+            meshes::box_grid(Vec3::splat(-1.0), Vec3::splat(1.0), 8, 0),
+            &box_origins,
+            true,
+        ),
+        (
+            "sparse soup",
+            meshes::random_soup(21, 300, 1.0, 0.05),
+            &soup_origins,
+            false,
+        ),
+        (
+            "dense soup",
+            meshes::random_soup(22, 3000, 1.0, 0.3),
+            &soup_origins,
+            false,
+        ),
     ];
     for (name, mesh, origins, closed) in cases {
         let b = built(&mesh);
@@ -116,13 +161,25 @@ fn bvh_gpu_traversal_matches_cpu_reference() {
         let rays = rays_at(&mesh, origins, 4000, 5);
         let gpu = tracer.trace(&ctx, &dev, &rays, MAX_BUDGET).unwrap();
         let (hits, identical) = assert_gpu_matches_cpu(&b, &rays, &gpu, MAX_BUDGET, name);
-        println!("{name}: {} triangles, {} rays, {hits} hits, {identical} with a bit-identical t", mesh.len(), rays.len());
+        println!(
+            "{name}: {} triangles, {} rays, {hits} hits, {identical} with a bit-identical t",
+            mesh.len(),
+            rays.len()
+        );
         assert!(hits * 4 >= rays.len(), "{name}: only {hits} of {} rays hit", rays.len());
         assert_subgroup_cost(&gpu, name);
         if closed {
             // Every origin is inside: watertight on the GPU too.
-            let missed: Vec<_> = rays.iter().zip(&gpu).filter(|(_, h)| h.triangle == NO_HIT).map(|(r, _)| *r).collect();
-            assert!(missed.is_empty(), "{name}: rays left the closed mesh on the GPU: {missed:?}");
+            let missed: Vec<_> = rays
+                .iter()
+                .zip(&gpu)
+                .filter(|(_, h)| h.triangle == NO_HIT)
+                .map(|(r, _)| *r)
+                .collect();
+            assert!(
+                missed.is_empty(),
+                "{name}: rays left the closed mesh on the GPU: {missed:?}"
+            );
         }
     }
     assert_clean(&ctx);
@@ -132,7 +189,12 @@ fn bvh_gpu_traversal_matches_cpu_reference() {
 fn stack(n: usize, jitter: f32) -> (Vec<TriangleInput>, Vec<TraceRay>) {
     let mut rng = Rng::new(n as u64, 9);
     let mut j = || (Vec3::new(rng.float(), rng.float(), rng.float()) - 0.5) * jitter;
-    let mesh = (0..n).map(|_| TriangleInput { v: [Vec3::ZERO + j(), Vec3::X + j(), Vec3::Y + j()], material: 0 }).collect();
+    let mesh = (0..n)
+        .map(|_| TriangleInput {
+            v: [Vec3::ZERO + j(), Vec3::X + j(), Vec3::Y + j()],
+            material: 0,
+        })
+        .collect();
     let rays = (0..64)
         .map(|k| {
             let p = Vec3::new(0.1 + 0.3 * (k % 8) as f32 / 8.0, 0.1 + 0.3 * (k / 8) as f32 / 8.0, 1.0);
@@ -150,7 +212,14 @@ fn bvh_gpu_overlapping_triangles_hit_exactly_or_fail() {
     let ctx = ctx();
     let tracer = BvhTracer::new(&ctx).unwrap();
     let (mut exact, mut failed) = (0, 0);
-    for (n, jitter) in [(1000, 0.0), (10_000, 0.0), (10_000, 1e-3), (30_000, 1e-4), (60_000, 0.0), (60_000, 1e-3)] {
+    for (n, jitter) in [
+        (1000, 0.0),
+        (10_000, 0.0),
+        (10_000, 1e-3),
+        (30_000, 1e-4),
+        (60_000, 0.0),
+        (60_000, 1e-3),
+    ] {
         let (mesh, rays) = stack(n, jitter);
         let b = built(&mesh);
         let dev = DeviceBvh::new(&ctx, &b).unwrap();
@@ -159,7 +228,14 @@ fn bvh_gpu_overlapping_triangles_hit_exactly_or_fail() {
             Ok(hits) => {
                 assert!(need <= MAX_BUDGET, "{n}: {need} steps needed, yet not cut");
                 for (r, h) in rays.iter().zip(&hits) {
-                    let want = brute_force(&b.triangles, Vec3::from(r.origin), Vec3::from(r.dir), 0.0, f32::INFINITY).unwrap();
+                    let want = brute_force(
+                        &b.triangles,
+                        Vec3::from(r.origin),
+                        Vec3::from(r.dir),
+                        0.0,
+                        f32::INFINITY,
+                    )
+                    .unwrap();
                     assert_eq!(h.t, want.t, "{n} triangles: ray {r:?}");
                 }
                 assert_gpu_matches_cpu(&b, &rays, &hits, MAX_BUDGET, "stack");
@@ -174,9 +250,15 @@ fn bvh_gpu_overlapping_triangles_hit_exactly_or_fail() {
                 failed += 1;
             }
         }
-        println!("{n} overlapping triangles (jitter {jitter}): depth {}, up to {need} steps per ray", b.stats.depth);
+        println!(
+            "{n} overlapping triangles (jitter {jitter}): depth {}, up to {need} steps per ray",
+            b.stats.depth
+        );
     }
-    assert!(exact > 0 && failed > 0, "both outcomes should occur: {exact} exact, {failed} failed");
+    assert!(
+        exact > 0 && failed > 0,
+        "both outcomes should occur: {exact} exact, {failed} failed"
+    );
     assert_clean(&ctx);
 }
 
@@ -204,7 +286,11 @@ fn bvh_gpu_loop_budget_at_the_bound() {
         }
     }
     let (b, rays, s) = steps_for(lo);
-    println!("{lo} identical triangles: {s} steps per ray (budget {MAX_BUDGET}); {} triangles: {}", hi, steps_for(hi).2);
+    println!(
+        "{lo} identical triangles: {s} steps per ray (budget {MAX_BUDGET}); {} triangles: {}",
+        hi,
+        steps_for(hi).2
+    );
     assert!(s + 3 > MAX_BUDGET, "{s} steps: not at the bound");
     let dev = DeviceBvh::new(&ctx, &b).unwrap();
     let hits = tracer.trace(&ctx, &dev, &rays, MAX_BUDGET).unwrap();
@@ -230,7 +316,13 @@ fn spine(depth: u32) -> Bvh {
     // Triangle k across the x axis at x = 2k + 0.5; the ray runs along +x through all of them.
     let tri = |k: u32| {
         let x = 2.0 * k as f32 + 0.5;
-        Triangle { v0: [x, -1.0, -1.0], v1: [x, 2.0, -1.0], v2: [x, -1.0, 2.0], source: k, ..Default::default() }
+        Triangle {
+            v0: [x, -1.0, -1.0],
+            v1: [x, 2.0, -1.0],
+            v2: [x, -1.0, 2.0],
+            source: k,
+            ..Default::default()
+        }
     };
     let bounds = |from: u32, to: u32| ([2.0 * from as f32 + 0.5, -1.0, -1.0], [2.0 * to as f32 + 0.5, 2.0, 2.0]);
     // Depth first: the spine's interior nodes 0..depth, its last leaf (triangle depth), then the leaves of
@@ -238,15 +330,29 @@ fn spine(depth: u32) -> Bvh {
     let mut nodes = Vec::new();
     for k in 0..depth {
         let (lo, hi) = bounds(k, depth);
-        nodes.push(BvhNode { lo, offset: 2 * depth - k, hi, count_axis: 0 });
+        nodes.push(BvhNode {
+            lo,
+            offset: 2 * depth - k,
+            hi,
+            count_axis: 0,
+        });
     }
     let mut triangles = Vec::new();
     for k in (0..=depth).rev() {
         let (lo, hi) = bounds(k, k);
-        nodes.push(BvhNode { lo, offset: triangles.len() as u32, hi, count_axis: 1 << 2 | BVH_LEAF });
+        nodes.push(BvhNode {
+            lo,
+            offset: triangles.len() as u32,
+            hi,
+            count_axis: 1 << 2 | BVH_LEAF,
+        });
         triangles.push(tri(k));
     }
-    Bvh { nodes, triangles, ..Bvh::default() }
+    Bvh {
+        nodes,
+        triangles,
+        ..Bvh::default()
+    }
 }
 
 #[test]
@@ -255,19 +361,30 @@ fn bvh_gpu_stack_at_max_depth() {
     let tracer = BvhTracer::new(&ctx).unwrap();
     let b = spine(MAX_DEPTH);
     b.validate(bvh::MAX_LEAF, MAX_DEPTH).unwrap();
-    assert!(b.validate(bvh::MAX_LEAF, MAX_DEPTH - 1).is_err(), "the spine should be exactly MAX_DEPTH deep");
+    assert!(
+        b.validate(bvh::MAX_LEAF, MAX_DEPTH - 1).is_err(),
+        "the spine should be exactly MAX_DEPTH deep"
+    );
     let dev = DeviceBvh::new(&ctx, &b).unwrap();
     // Along +x every interior node pushes its leaf and descends the spine: MAX_DEPTH entries at the bottom.
-    let rays = vec![ray(Vec3::new(-1.0, 0.25, 0.25), Vec3::X), ray(Vec3::new(200.0, 0.5, 0.1), -Vec3::X)];
+    let rays = vec![
+        ray(Vec3::new(-1.0, 0.25, 0.25), Vec3::X),
+        ray(Vec3::new(200.0, 0.5, 0.1), -Vec3::X),
+    ];
     let hits = tracer.trace(&ctx, &dev, &rays, MAX_BUDGET).unwrap();
     assert_gpu_matches_cpu(&b, &rays, &hits, MAX_BUDGET, "spine");
-    assert_eq!(b.triangles[hits[0].triangle as usize].source, 0, "the nearest triangle along +x is the first");
+    assert_eq!(
+        b.triangles[hits[0].triangle as usize].source, 0,
+        "the nearest triangle along +x is the first"
+    );
     assert_eq!(b.triangles[hits[1].triangle as usize].source, MAX_DEPTH);
     // Every node visited and every triangle tested on the way down and back, the stack full at the bottom.
     assert_eq!(hits[0].steps as usize, b.nodes.len() + b.triangles.len());
     assert_eq!(cpu(&b, &rays[0], MAX_BUDGET).stack_peak, MAX_DEPTH);
     // One level more than the stack holds is refused before it reaches the GPU.
-    let err = DeviceBvh::new(&ctx, &spine(MAX_DEPTH + 1)).err().expect("a tree deeper than the stack");
+    let err = DeviceBvh::new(&ctx, &spine(MAX_DEPTH + 1))
+        .err()
+        .expect("a tree deeper than the stack");
     assert!(format!("{err:#}").contains("depth"), "{err:#}");
     assert_clean(&ctx);
 }

@@ -19,8 +19,27 @@ fn render_writes_image_report_and_trace() {
     let dir = scratch("render");
     let (out, report, trace) = (dir.join("img.exr"), dir.join("run.json"), dir.join("run.trace.json"));
     let run = bin()
-        .args(["render", CORNELL, "--passes", "3", "--photons-per-pass", "20000", "--resolution", "32x32", "--validate"])
-        .args(["--reference", CORNELL_REFERENCE, "--probe", "scale-free", "--cone", "1.1", "--region", "mine:0,0,256,256"])
+        .args([
+            "render",
+            CORNELL,
+            "--passes",
+            "3",
+            "--photons-per-pass",
+            "20000",
+            "--resolution",
+            "32x32",
+            "--validate",
+        ])
+        .args([
+            "--reference",
+            CORNELL_REFERENCE,
+            "--probe",
+            "scale-free",
+            "--cone",
+            "1.1",
+            "--region",
+            "mine:0,0,256,256",
+        ])
         .arg("--out")
         .arg(&out)
         .arg("--report")
@@ -34,7 +53,10 @@ fn render_writes_image_report_and_trace() {
     assert!(run.status.success(), "render failed:\n{stdout}\n{stderr}");
     assert!(out.exists() && std::fs::metadata(&out).unwrap().len() > 0);
     assert!(stderr.contains("probe:"), "no probe summary in:\n{stderr}");
-    assert!(stdout.contains("error evaluated after 3 passes"), "no overhead line in:\n{stdout}");
+    assert!(
+        stdout.contains("error evaluated after 3 passes"),
+        "no overhead line in:\n{stdout}"
+    );
 
     let r = RunReport::load_json(&report).unwrap();
     assert_eq!(r.header.schema, SCHEMA);
@@ -52,26 +74,57 @@ fn render_writes_image_report_and_trace() {
         let e = p.error.expect("an error per pass");
         assert!(e.rmse.is_finite() && e.rmse > 0.0 && e.rel_mse > 0.0);
         // A --region replaces the scene's own regions.
-        assert!(p.region_errors.contains_key("mine") && !p.region_errors.contains_key("caustic"), "{:?}", p.region_errors.keys());
+        assert!(
+            p.region_errors.contains_key("mine") && !p.region_errors.contains_key("caustic"),
+            "{:?}",
+            p.region_errors.keys()
+        );
         // Timings: every stage positive; stages in pipeline order on the GPU clock; passes in order on the
         // wall clock; and the GPU time of a pass fits inside its wall time. 1 ms of slack: the GPU and host
         // clocks agree within ~0.3 ms on lavapipe (../shared/notes/TOOLCHAIN.md), and a pass has three
         // submissions.
         for stage in ["photon", "lookup", "gather", "update"] {
-            assert!(p.stage_ms[stage] > 0.0, "pass {}: {stage} took {} ms", p.pass, p.stage_ms[stage]);
+            assert!(
+                p.stage_ms[stage] > 0.0,
+                "pass {}: {stage} took {} ms",
+                p.pass,
+                p.stage_ms[stage]
+            );
         }
         let order = ["photon", "lookup", "gather", "update"].map(|s| p.stage_start_ms[s]);
-        assert!(order.windows(2).all(|w| w[0] <= w[1]), "pass {}: stage starts out of order {order:?}", p.pass);
-        assert!(order[0] >= last_gpu_start, "pass {} starts before the previous one on the GPU", p.pass);
+        assert!(
+            order.windows(2).all(|w| w[0] <= w[1]),
+            "pass {}: stage starts out of order {order:?}",
+            p.pass
+        );
+        assert!(
+            order[0] >= last_gpu_start,
+            "pass {} starts before the previous one on the GPU",
+            p.pass
+        );
         last_gpu_start = order[0];
         let gpu: f64 = p.stage_ms.values().sum();
-        assert!(gpu <= p.wall_ms + 1.0, "pass {}: {gpu} ms of GPU stages in {} ms of wall time", p.pass, p.wall_ms);
-        assert!(p.elapsed_s > last_elapsed, "pass {} ends before the previous one", p.pass);
+        assert!(
+            gpu <= p.wall_ms + 1.0,
+            "pass {}: {gpu} ms of GPU stages in {} ms of wall time",
+            p.pass,
+            p.wall_ms
+        );
+        assert!(
+            p.elapsed_s > last_elapsed,
+            "pass {} ends before the previous one",
+            p.pass
+        );
         last_elapsed = p.elapsed_s;
     }
 
     let t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&trace).unwrap()).unwrap();
-    let spans = t["traceEvents"].as_array().unwrap().iter().filter(|e| e["ph"] == "X").count();
+    let spans = t["traceEvents"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["ph"] == "X")
+        .count();
     assert!(spans >= 3 * 5, "trace has {spans} spans");
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -81,7 +134,18 @@ fn csv_report_has_a_row_per_pass() {
     let dir = scratch("csv");
     let report = dir.join("run.csv");
     let run = bin()
-        .args(["render", CORNELL, "--passes", "2", "--photons-per-pass", "10000", "--resolution", "16x16", "--mode", "sppm"])
+        .args([
+            "render",
+            CORNELL,
+            "--passes",
+            "2",
+            "--photons-per-pass",
+            "10000",
+            "--resolution",
+            "16x16",
+            "--mode",
+            "sppm",
+        ])
         .arg("--out")
         .arg(dir.join("img.png"))
         .arg("--report")
@@ -92,7 +156,10 @@ fn csv_report_has_a_row_per_pass() {
     let csv = std::fs::read_to_string(&report).unwrap();
     assert_eq!(csv.lines().count(), 3, "{csv}");
     assert!(csv.starts_with("pass,elapsed_s,wall_ms,photons_total,records,"));
-    assert!(csv.lines().next().unwrap().contains("ray_ms"), "SPPM passes time their eye pass: {csv}");
+    assert!(
+        csv.lines().next().unwrap().contains("ray_ms"),
+        "SPPM passes time their eye pass: {csv}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -101,17 +168,45 @@ fn bench_writes_cases_with_stages_and_memory() {
     let dir = scratch("bench");
     let json_path = dir.join("bench.json");
     let run = bin()
-        .args(["bench", "--cases", "10k@16x16,20k@32x32", "--warmup", "1", "--passes", "3", "--mode", "ppm"])
-        .args(["--probe", "scale-free", "--cone", "1.1", "--validate", "--breakdown", "--json"])
+        .args([
+            "bench",
+            "--cases",
+            "10k@16x16,20k@32x32",
+            "--warmup",
+            "1",
+            "--passes",
+            "3",
+            "--mode",
+            "ppm",
+        ])
+        .args([
+            "--probe",
+            "scale-free",
+            "--cone",
+            "1.1",
+            "--validate",
+            "--breakdown",
+            "--json",
+        ])
         .arg(&json_path)
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&run.stdout);
-    assert!(run.status.success(), "bench failed:\n{stdout}\n{}", String::from_utf8_lossy(&run.stderr));
-    assert!(stdout.contains("probe scale-free, cone 1.1"), "settings line missing:\n{stdout}");
+    assert!(
+        run.status.success(),
+        "bench failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(
+        stdout.contains("probe scale-free, cone 1.1"),
+        "settings line missing:\n{stdout}"
+    );
     let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
     // The JSON names enums as the command line does.
-    assert_eq!((doc["mode"].as_str(), doc["probe"].as_str()), (Some("ppm"), Some("scale-free")));
+    assert_eq!(
+        (doc["mode"].as_str(), doc["probe"].as_str()),
+        (Some("ppm"), Some("scale-free"))
+    );
     assert_eq!(doc["schema"], "ppm-vk-bench/1");
     let cases = doc["cases"].as_array().unwrap();
     assert_eq!(cases.len(), 2);
@@ -129,18 +224,34 @@ fn bench_writes_cases_with_stages_and_memory() {
         assert_eq!(names, ["as rendered", "no record stores", "no append", "trace only"]);
         let steps = |i: usize| variants[i]["intersections"].as_u64().unwrap();
         let photons = c["photons_per_pass"].as_u64().unwrap();
-        assert!(steps(0) >= photons && steps(0) as f64 >= c["records_per_pass"].as_f64().unwrap(), "{variants:?}");
-        assert_eq!((steps(1), steps(2)), (steps(0), steps(0)), "removing the append changed the paths: {variants:?}");
+        assert!(
+            steps(0) >= photons && steps(0) as f64 >= c["records_per_pass"].as_f64().unwrap(),
+            "{variants:?}"
+        );
+        assert_eq!(
+            (steps(1), steps(2)),
+            (steps(0), steps(0)),
+            "removing the append changed the paths: {variants:?}"
+        );
         assert!(steps(3) >= photons, "{variants:?}");
         // Memory is bounded: the passes allocate nothing that outlives them.
         let dev = &c["device_memory"];
         assert!(dev["peak_reserved_bytes"].as_u64().unwrap() >= dev["in_use_bytes_after_measured"].as_u64().unwrap());
-        assert_eq!(dev["in_use_bytes_after_warmup"], dev["in_use_bytes_after_measured"], "device memory grew: {dev}");
+        assert_eq!(
+            dev["in_use_bytes_after_warmup"], dev["in_use_bytes_after_measured"],
+            "device memory grew: {dev}"
+        );
         if cfg!(target_os = "linux") {
             let rss = &c["host_rss"];
-            let (before, after) = (rss["bytes_after_warmup"].as_u64().unwrap(), rss["bytes_after_measured"].as_u64().unwrap());
+            let (before, after) = (
+                rss["bytes_after_warmup"].as_u64().unwrap(),
+                rss["bytes_after_measured"].as_u64().unwrap(),
+            );
             // Resident memory may move by allocator noise (a few pages), not by a pass's buffers.
-            assert!(after <= before + (8 << 20), "host RSS grew from {before} to {after} over 3 passes");
+            assert!(
+                after <= before + (8 << 20),
+                "host RSS grew from {before} to {after} over 3 passes"
+            );
         }
     }
     std::fs::remove_dir_all(&dir).ok();
@@ -171,7 +282,20 @@ fn bad_input_is_a_clear_error() {
     assert!(e.contains("NAME:X0,Y0,W,H"), "{e}");
     let e = fails(&["render", CORNELL, "--resolution", "0x10"]);
     assert!(e.contains("resolution"), "{e}");
-    let e = fails(&["render", CORNELL, "--report", "/tmp/r.txt", "--passes", "1", "--photons-per-pass", "1000", "--resolution", "8x8", "--out", "/tmp/ppm-vk-never.png"]);
+    let e = fails(&[
+        "render",
+        CORNELL,
+        "--report",
+        "/tmp/r.txt",
+        "--passes",
+        "1",
+        "--photons-per-pass",
+        "1000",
+        "--resolution",
+        "8x8",
+        "--out",
+        "/tmp/ppm-vk-never.png",
+    ]);
     assert!(e.contains(".json or .csv"), "{e}");
 }
 
@@ -193,7 +317,18 @@ fn render_warns_when_light_is_trapped() {
     .unwrap();
     let report = dir.join("run.json");
     let run = bin()
-        .args(["render", "--passes", "1", "--photons-per-pass", "10000", "--mode", "ppm", "--emission-samples", "0", "--out"])
+        .args([
+            "render",
+            "--passes",
+            "1",
+            "--photons-per-pass",
+            "10000",
+            "--mode",
+            "ppm",
+            "--emission-samples",
+            "0",
+            "--out",
+        ])
         .arg(dir.join("img.exr"))
         .arg("--report")
         .arg(&report)
@@ -202,11 +337,24 @@ fn render_warns_when_light_is_trapped() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{stderr}");
-    assert!(stderr.contains("warning:") && stderr.contains("specular bounces"), "{stderr}");
+    assert!(
+        stderr.contains("warning:") && stderr.contains("specular bounces"),
+        "{stderr}"
+    );
     let report: RunReport = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     assert!(report.passes[0].eye_paths_cut >= 1);
     let quiet = bin()
-        .args(["render", CORNELL, "--passes", "2", "--photons-per-pass", "20000", "--resolution", "32x32", "--out"])
+        .args([
+            "render",
+            CORNELL,
+            "--passes",
+            "2",
+            "--photons-per-pass",
+            "20000",
+            "--resolution",
+            "32x32",
+            "--out",
+        ])
         .arg(dir.join("cornell.png"))
         .output()
         .unwrap();
@@ -224,8 +372,24 @@ fn resume_continues_a_render_from_its_checkpoint() {
     let (whole, resumed, ckpt) = (dir.join("whole.exr"), dir.join("resumed.exr"), dir.join("state.ckpt"));
     let render = |passes: &str, out: &PathBuf, extra: &[&std::ffi::OsStr]| {
         let run = bin()
-            .args(["render", CORNELL, "--mode", "ppm", "--probe", "scale-free", "--passes", passes])
-            .args(["--photons-per-pass", "10000", "--resolution", "32x32", "--validate", "--out"])
+            .args([
+                "render",
+                CORNELL,
+                "--mode",
+                "ppm",
+                "--probe",
+                "scale-free",
+                "--passes",
+                passes,
+            ])
+            .args([
+                "--photons-per-pass",
+                "10000",
+                "--resolution",
+                "32x32",
+                "--validate",
+                "--out",
+            ])
             .arg(out)
             .args(extra)
             .output()
@@ -238,18 +402,44 @@ fn resume_continues_a_render_from_its_checkpoint() {
     assert!(ok && ckpt.exists(), "{e}");
     let (ok, e) = render("4", &resumed, &["--resume".as_ref(), ckpt.as_os_str()]);
     assert!(ok && e.contains("resumed after pass 2"), "{e}");
-    assert!(std::fs::read(&whole).unwrap() == std::fs::read(&resumed).unwrap(), "the resumed image differs");
-    let (ok, e) = render("4", &resumed, &["--resume".as_ref(), ckpt.as_os_str(), "--alpha".as_ref(), "0.5".as_ref()]);
-    assert!(!ok && e.contains("other settings") && e.contains("alpha: 0.7 in the checkpoint, 0.5 now"), "{e}");
+    assert!(
+        std::fs::read(&whole).unwrap() == std::fs::read(&resumed).unwrap(),
+        "the resumed image differs"
+    );
+    let (ok, e) = render(
+        "4",
+        &resumed,
+        &[
+            "--resume".as_ref(),
+            ckpt.as_os_str(),
+            "--alpha".as_ref(),
+            "0.5".as_ref(),
+        ],
+    );
+    assert!(
+        !ok && e.contains("other settings") && e.contains("alpha: 0.7 in the checkpoint, 0.5 now"),
+        "{e}"
+    );
     let e = fails(&["render", CORNELL, "--checkpoint", "60"]);
     assert!(e.contains("--checkpoint-every 60"), "{e}");
 }
 
 /// Starts a render and returns it with its stderr, line by line, once a line contains `ready`.
-fn spawn_until(args: &[&str], dir: &std::path::Path, ready: &str) -> (std::process::Child, std::sync::mpsc::Receiver<String>) {
+fn spawn_until(
+    args: &[&str],
+    dir: &std::path::Path,
+    ready: &str,
+) -> (std::process::Child, std::sync::mpsc::Receiver<String>) {
     use std::io::BufRead;
     let mut child = bin()
-        .args(["render", CORNELL, "--photons-per-pass", "10000", "--passes", "100000000"])
+        .args([
+            "render",
+            CORNELL,
+            "--photons-per-pass",
+            "10000",
+            "--passes",
+            "100000000",
+        ])
         .args(args)
         .current_dir(dir)
         .stdout(std::process::Stdio::null())
@@ -285,8 +475,21 @@ fn rest(lines: std::sync::mpsc::Receiver<String>) -> String {
 #[test]
 fn sigterm_finishes_the_pass_and_writes_everything() {
     let dir = scratch("sigterm");
-    let args = ["--resolution", "32x32", "--out", "img.exr", "--report", "run.json", "--checkpoint", "state.ckpt"];
-    let (mut child, lines) = spawn_until(&[&args[..], &["--checkpoint-every", "0.001"]].concat(), &dir, "scene cornell-spheres");
+    let args = [
+        "--resolution",
+        "32x32",
+        "--out",
+        "img.exr",
+        "--report",
+        "run.json",
+        "--checkpoint",
+        "state.ckpt",
+    ];
+    let (mut child, lines) = spawn_until(
+        &[&args[..], &["--checkpoint-every", "0.001"]].concat(),
+        &dir,
+        "scene cornell-spheres",
+    );
     // The checkpoint appears after the first pass: the render is under way.
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
     while !dir.join("state.ckpt").exists() {
@@ -301,7 +504,10 @@ fn sigterm_finishes_the_pass_and_writes_everything() {
     let report = RunReport::load_json(&dir.join("run.json")).unwrap();
     let passes = report.passes.last().expect("a pass in the report").pass;
     let checkpoint = ppm_vk_engine::Checkpoint::load(&dir.join("state.ckpt")).unwrap();
-    assert_eq!(checkpoint.header.passes, passes, "the checkpoint and the report tell different passes");
+    assert_eq!(
+        checkpoint.header.passes, passes,
+        "the checkpoint and the report tell different passes"
+    );
     assert!(dir.join("img.exr").exists());
 }
 
@@ -312,7 +518,16 @@ fn sigterm_finishes_the_pass_and_writes_everything() {
 fn signals_during_set_up_write_nothing() {
     for second in [false, true] {
         let dir = scratch(&format!("sigint-{second}"));
-        let args = ["--resolution", "512x512", "--probe", "scale-free", "--out", "img.exr", "--report", "run.json"];
+        let args = [
+            "--resolution",
+            "512x512",
+            "--probe",
+            "scale-free",
+            "--out",
+            "img.exr",
+            "--report",
+            "run.json",
+        ];
         let (mut child, lines) = spawn_until(&args, &dir, "device:");
         signal(&child, libc::SIGINT);
         if second {
@@ -322,9 +537,16 @@ fn signals_during_set_up_write_nothing() {
         let status = child.wait().unwrap();
         let stderr = rest(lines);
         assert_eq!(status.code(), Some(130), "{stderr}");
-        assert!(!dir.join("img.exr").exists() && !dir.join("run.json").exists(), "wrote output:\n{stderr}");
+        assert!(
+            !dir.join("img.exr").exists() && !dir.join("run.json").exists(),
+            "wrote output:\n{stderr}"
+        );
         // The first signal alone waits for the set-up and says so; the second does not wait.
-        assert_eq!(stderr.contains("interrupted during set-up"), !second, "second signal: {second}\n{stderr}");
+        assert_eq!(
+            stderr.contains("interrupted during set-up"),
+            !second,
+            "second signal: {second}\n{stderr}"
+        );
     }
 }
 
@@ -336,8 +558,20 @@ fn device_limits_are_checked_before_work() {
     let dir = scratch("limits");
     let out = dir.join("never.exr");
     let out = out.to_str().unwrap();
-    let e = fails(&["render", CORNELL, "--resolution", "4096x4096", "--passes", "1", "--out", out]);
-    assert!(e.contains("the hit points (768 MiB in one buffer)") && e.contains("lower the resolution (4096x4096)"), "{e}");
+    let e = fails(&[
+        "render",
+        CORNELL,
+        "--resolution",
+        "4096x4096",
+        "--passes",
+        "1",
+        "--out",
+        out,
+    ]);
+    assert!(
+        e.contains("the hit points (768 MiB in one buffer)") && e.contains("lower the resolution (4096x4096)"),
+        "{e}"
+    );
     assert!(!dir.join("never.exr").exists());
     let e = fails(&["render", CORNELL, "--device", "nosuch", "--out", out]);
     assert!(e.contains("no Vulkan device matches \"nosuch\"; devices:"), "{e}");
@@ -352,18 +586,33 @@ fn render_names_its_output_after_the_scene_and_never_overwrites_silently() {
     let dir = scratch("default-out");
     let run = || {
         let mut c = bin();
-        c.current_dir(&dir).args(["render", CORNELL, "--passes", "1", "--photons-per-pass", "2000", "--resolution", "8x8"]);
+        c.current_dir(&dir).args([
+            "render",
+            CORNELL,
+            "--passes",
+            "1",
+            "--photons-per-pass",
+            "2000",
+            "--resolution",
+            "8x8",
+        ]);
         c
     };
     let first = run().output().unwrap();
     assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
     let (exr, png) = (dir.join("cornell-spheres.exr"), dir.join("cornell-spheres.png"));
-    assert!(exr.exists() && png.exists(), "the scene's name, .exr and a .png preview");
+    assert!(
+        exr.exists() && png.exists(),
+        "the scene's name, .exr and a .png preview"
+    );
     let written = std::fs::read(&exr).unwrap();
     // Again: refused before rendering, the file untouched.
     let second = run().output().unwrap();
     let stderr = String::from_utf8_lossy(&second.stderr);
-    assert!(!second.status.success() && stderr.contains("exists") && stderr.contains("--force"), "{stderr}");
+    assert!(
+        !second.status.success() && stderr.contains("exists") && stderr.contains("--force"),
+        "{stderr}"
+    );
     assert_eq!(std::fs::read(&exr).unwrap(), written);
     // With --force it overwrites.
     let third = run().arg("--force").output().unwrap();
@@ -379,7 +628,17 @@ fn render_keeps_the_pipeline_cache_where_asked() {
     let render = |extra: &[&str]| {
         let run = bin()
             .env("PPM_VK_CACHE_DIR", &cache)
-            .args(["render", CORNELL, "--passes", "1", "--photons-per-pass", "1000", "--resolution", "8x8", "--force"])
+            .args([
+                "render",
+                CORNELL,
+                "--passes",
+                "1",
+                "--photons-per-pass",
+                "1000",
+                "--resolution",
+                "8x8",
+                "--force",
+            ])
             .arg("--out")
             .arg(dir.join("img.exr"))
             .args(extra)
@@ -389,7 +648,11 @@ fn render_keeps_the_pipeline_cache_where_asked() {
         assert!(run.status.success(), "render {extra:?} failed:\n{stderr}");
         stderr
     };
-    let files = || std::fs::read_dir(&cache).map(|d| d.map(|e| e.unwrap().path()).collect::<Vec<_>>()).unwrap_or_default();
+    let files = || {
+        std::fs::read_dir(&cache)
+            .map(|d| d.map(|e| e.unwrap().path()).collect::<Vec<_>>())
+            .unwrap_or_default()
+    };
 
     render(&["--no-pipeline-cache"]);
     assert!(files().is_empty(), "--no-pipeline-cache wrote {:?}", files());
@@ -397,13 +660,25 @@ fn render_keeps_the_pipeline_cache_where_asked() {
     assert!(!first.contains("pipeline cache"), "{first}");
     let written = files();
     assert_eq!(written.len(), 1, "{written:?}");
-    assert!(std::fs::metadata(&written[0]).unwrap().len() > 28, "an empty cache file");
-    assert!(!render(&[]).contains("pipeline cache"), "the second run did not take the first run's cache");
+    assert!(
+        std::fs::metadata(&written[0]).unwrap().len() > 28,
+        "an empty cache file"
+    );
+    assert!(
+        !render(&[]).contains("pipeline cache"),
+        "the second run did not take the first run's cache"
+    );
 
     std::fs::write(&written[0], b"not a cache").unwrap();
     let damaged = render(&["--validate"]);
-    assert!(damaged.contains("note: pipeline cache") && damaged.contains("ignored"), "{damaged}");
-    assert!(!render(&[]).contains("pipeline cache"), "the damaged file was not replaced");
+    assert!(
+        damaged.contains("note: pipeline cache") && damaged.contains("ignored"),
+        "{damaged}"
+    );
+    assert!(
+        !render(&[]).contains("pipeline cache"),
+        "the damaged file was not replaced"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -415,8 +690,24 @@ fn compare_writes_table_json_and_a_readable_plot() {
     let peer = dir.join("peer.csv");
     std::fs::write(&peer, "# seconds,rel_mse,label\n0.5,0.2,other\n2,0.05,other\n").unwrap();
     let run = bin()
-        .args(["compare", CORNELL, "--reference", CORNELL_REFERENCE, "--time", "0.5", "--resolution", "16x16"])
-        .args(["--photons-per-pass", "5000", "--variants", "ppm; sppm", "--validate", "--peer"])
+        .args([
+            "compare",
+            CORNELL,
+            "--reference",
+            CORNELL_REFERENCE,
+            "--time",
+            "0.5",
+            "--resolution",
+            "16x16",
+        ])
+        .args([
+            "--photons-per-pass",
+            "5000",
+            "--variants",
+            "ppm; sppm",
+            "--validate",
+            "--peer",
+        ])
         .arg(&peer)
         .arg("--out")
         .arg(&dir)
@@ -424,24 +715,41 @@ fn compare_writes_table_json_and_a_readable_plot() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "compare failed:\n{stderr}");
-    let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("compare.json")).unwrap()).unwrap();
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("compare.json")).unwrap()).unwrap();
     assert_eq!(doc["schema"], "ppm-vk-compare/1");
     let variants = doc["variants"].as_array().unwrap();
-    assert_eq!(variants.iter().map(|v| v["variant"].as_str().unwrap()).collect::<Vec<_>>(), ["ppm", "sppm"]);
+    assert_eq!(
+        variants
+            .iter()
+            .map(|v| v["variant"].as_str().unwrap())
+            .collect::<Vec<_>>(),
+        ["ppm", "sppm"]
+    );
     for v in variants {
         // Equal time: each variant's clock (set-up excluded) reaches --time and stops after one more pass.
         let (wall, setup) = (v["wall_s"].as_f64().unwrap(), v["setup_s"].as_f64().unwrap());
         assert!(wall >= 0.5 && setup > 0.0, "{v}");
-        assert!(v["passes"].as_u64().unwrap() >= 1 && v["whole"]["rel_mse"].as_f64().unwrap() > 0.0, "{v}");
+        assert!(
+            v["passes"].as_u64().unwrap() >= 1 && v["whole"]["rel_mse"].as_f64().unwrap() > 0.0,
+            "{v}"
+        );
         // The scene file's regions are scored.
         assert!(v["regions"]["caustic"]["pixels"].as_u64().unwrap() > 0, "{v}");
         assert!(!v["rel_mse_curve"].as_array().unwrap().is_empty(), "{v}");
     }
     let table = std::fs::read_to_string(dir.join("compare.md")).unwrap();
-    assert!(table.contains("| ppm |") && table.contains("| sppm |") && table.contains("caustic relMSE"), "{table}");
+    assert!(
+        table.contains("| ppm |") && table.contains("| sppm |") && table.contains("caustic relMSE"),
+        "{table}"
+    );
 
     let svg = std::fs::read_to_string(dir.join("error-vs-time.svg")).unwrap();
-    let texts: Vec<&str> = svg.split("<text").skip(1).map(|t| t.split_once('>').unwrap().1.split("</text>").next().unwrap().trim()).collect();
+    let texts: Vec<&str> = svg
+        .split("<text")
+        .skip(1)
+        .map(|t| t.split_once('>').unwrap().1.split("</text>").next().unwrap().trim())
+        .collect();
     // Tick labels on the log time axis (0.5 s to 2 s: 0.5, 1, 2) and on the error axis (from the peer's 0.2).
     for label in ["0.5", "1", "2", "0.2"] {
         assert!(texts.contains(&label), "no tick label {label} in {texts:?}");
@@ -450,7 +758,11 @@ fn compare_writes_table_json_and_a_readable_plot() {
         assert!(texts.contains(&label), "no legend entry {label} in {texts:?}");
     }
     // One polyline per variant (the axes and ticks are 1 px wide, the variants' lines 2 px).
-    let lines = svg.split("<polyline").skip(1).filter(|p| p.split_once("/>").unwrap().0.contains("stroke-width=\"2\"")).count();
+    let lines = svg
+        .split("<polyline")
+        .skip(1)
+        .filter(|p| p.split_once("/>").unwrap().0.contains("stroke-width=\"2\""))
+        .count();
     assert_eq!(lines, 2, "{svg}");
     // The peer's two points and its legend marker are triangles.
     assert_eq!(svg.matches("<polygon").count(), 3, "{svg}");
@@ -475,26 +787,45 @@ fn every_option_has_help_and_sizes_are_checked() {
             options += 1;
             // Help text on the same line (after two spaces) or on the next, indented deeper.
             let indent = line.len() - trimmed.len();
-            let same_line = trimmed.split_once("  ").is_some_and(|(_, rest)| !rest.trim().is_empty());
+            let same_line = trimmed
+                .split_once("  ")
+                .is_some_and(|(_, rest)| !rest.trim().is_empty());
             let next = lines.get(i + 1).copied().unwrap_or("");
             let next_line = next.len() - next.trim_start().len() > indent && !next.trim().is_empty();
             assert!(same_line || next_line, "{cmd}: option without help: {line:?}\n{help}");
         }
         assert!(options >= 2, "{cmd}: no options found in\n{help}");
         let version = bin().args([cmd, "--version"]).output().unwrap();
-        assert!(version.status.success() && String::from_utf8_lossy(&version.stdout).starts_with("ppm-vk"), "{cmd} --version");
+        assert!(
+            version.status.success() && String::from_utf8_lossy(&version.stdout).starts_with("ppm-vk"),
+            "{cmd} --version"
+        );
     }
     let e = fails(&["bench", "--cases", "10k@16x16384,10k@16x16385"]);
     assert!(e.contains("16x16385") && e.contains("1..=16384"), "{e}");
     let e = fails(&["bench", "--cases", "10k@16"]);
     assert!(e.contains("WIDTHxHEIGHT"), "{e}");
-    let e = fails(&["compare", CORNELL, "--reference", CORNELL_REFERENCE, "--resolution", "16385x16"]);
+    let e = fails(&[
+        "compare",
+        CORNELL,
+        "--reference",
+        CORNELL_REFERENCE,
+        "--resolution",
+        "16385x16",
+    ]);
     assert!(e.contains("1..=16384"), "{e}");
     let e = fails(&["render", CORNELL, "--resolution", "16x0"]);
     assert!(e.contains("1..=16384"), "{e}");
     let peer = scratch("bad-peer").join("peer.csv");
     std::fs::write(&peer, "# s,e\n10,0.1\n30,-2\n").unwrap();
-    let e = fails(&["compare", CORNELL, "--reference", CORNELL_REFERENCE, "--peer", peer.to_str().unwrap()]);
+    let e = fails(&[
+        "compare",
+        CORNELL,
+        "--reference",
+        CORNELL_REFERENCE,
+        "--peer",
+        peer.to_str().unwrap(),
+    ]);
     assert!(e.contains("peer.csv:3") && e.contains("positive"), "{e}");
     std::fs::remove_dir_all(peer.parent().unwrap()).ok();
 }

@@ -18,14 +18,26 @@ const EXPECTED: f64 = 2.0;
 fn white_furnace_converges_to_le_over_one_minus_rho() {
     let ctx = ctx();
     let scene = furnace(RES, RES);
-    let mut r = Renderer::new(&ctx, &scene, Settings { mode: ppm_vk_engine::Mode::Ppm, photons_per_pass: PHOTONS, ..Settings::default() }).unwrap();
+    let mut r = Renderer::new(
+        &ctx,
+        &scene,
+        Settings {
+            mode: ppm_vk_engine::Mode::Ppm,
+            photons_per_pass: PHOTONS,
+            ..Settings::default()
+        },
+    )
+    .unwrap();
 
     for _ in 0..PASSES {
         r.pass().unwrap();
     }
     // The directly seen emission alone is exactly Le = 1 at every pixel (every pixel sees a wall).
     let direct = r.read_direct().unwrap();
-    assert!(direct.iter().all(|d| d[3] > 0.0 && d[..3].iter().all(|&c| c == d[3])), "direct emission is not 1 everywhere");
+    assert!(
+        direct.iter().all(|d| d[3] > 0.0 && d[..3].iter().all(|&c| c == d[3])),
+        "direct emission is not 1 everywhere"
+    );
     let image = r.image().unwrap();
     assert_eq!(image.count_non_finite(), 0, "non-finite pixels");
     let mean = image.mean();
@@ -33,8 +45,13 @@ fn white_furnace_converges_to_le_over_one_minus_rho() {
     let n = values.len() as f64;
     let all_mean = values.iter().sum::<f64>() / n;
     let sd = (values.iter().map(|x| (x - all_mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-    let (lo, hi) = values.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &x| (lo.min(x), hi.max(x)));
-    let worst = values.iter().map(|x| (x - EXPECTED).abs() / EXPECTED).fold(0.0, f64::max);
+    let (lo, hi) = values
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(lo, hi), &x| (lo.min(x), hi.max(x)));
+    let worst = values
+        .iter()
+        .map(|x| (x - EXPECTED).abs() / EXPECTED)
+        .fold(0.0, f64::max);
     println!(
         "furnace {RES}x{RES}, {PASSES} passes of {PHOTONS}: mean {mean:?}, pixel sd {sd:.4}, range [{lo:.4}, {hi:.4}], worst relative error {:.2}%",
         100.0 * worst
@@ -44,7 +61,11 @@ fn white_furnace_converges_to_le_over_one_minus_rho() {
     // ~0.001, and the photon estimate has no radius bias here (uniform irradiance), so 2% is a wide margin
     // that still rejects any energy error of a few percent of the indirect half.
     for c in 0..3 {
-        assert!((mean[c] - EXPECTED).abs() <= 0.02 * EXPECTED, "channel {c}: mean {} not within 2% of {EXPECTED}", mean[c]);
+        assert!(
+            (mean[c] - EXPECTED).abs() <= 0.02 * EXPECTED,
+            "channel {c}: mean {} not within 2% of {EXPECTED}",
+            mean[c]
+        );
     }
     // Every pixel: each hit point's estimate has relative noise ~1/sqrt(photons gathered). Measured: pixel
     // sd 0.020 (1% of 2), worst pixel 3.1% off, as expected for the extreme of 1024 samples (~3.3 sd).
@@ -99,8 +120,8 @@ const BRIGHT_PASSES: u32 = 8;
 #[test]
 fn bright_furnaces_converge_in_every_configuration() {
     let cases = [
-        ([0.9, 0.9, 0.9], [0.1, 0.2, 0.3]),    // the issue's: (1, 2, 3)
-        ([0.9, 0.6, 0.3], [0.1, 0.2, 0.3]),    // coloured: only red is long-lived
+        ([0.9, 0.9, 0.9], [0.1, 0.2, 0.3]), // the issue's: (1, 2, 3)
+        ([0.9, 0.6, 0.3], [0.1, 0.2, 0.3]), // coloured: only red is long-lived
         ([0.95, 0.95, 0.95], [0.05, 0.05, 0.05]),
         ([0.95, 0.5, 0.2], [0.05, 0.25, 0.4]),
     ];
@@ -121,7 +142,14 @@ fn bright_furnaces_converge_in_every_configuration() {
             if ci != 2 && k % 3 != 0 {
                 continue;
             }
-            let settings = Settings { mode, probe, cone_k, photons_per_pass: BRIGHT_PHOTONS, seed: k as u32, ..Settings::default() };
+            let settings = Settings {
+                mode,
+                probe,
+                cone_k,
+                photons_per_pass: BRIGHT_PHOTONS,
+                seed: k as u32,
+                ..Settings::default()
+            };
             let (image, stats) = render_furnace(&scene, settings, BRIGHT_PASSES);
             let err = mean_error(&image, want);
             worst = worst.max(err);
@@ -132,8 +160,16 @@ fn bright_furnaces_converge_in_every_configuration() {
                 stats.photon_paths_cut
             );
             assert_eq!(image.count_non_finite(), 0);
-            assert_eq!(stats.photon_paths_cut + stats.eye_paths_cut, 0, "a path reached the depth backstop");
-            assert!(err < 0.01, "rho {rho:?} {mode:?} probe {probe:?} cone {cone_k:?}: mean {:?} vs {want:?}", image.mean());
+            assert_eq!(
+                stats.photon_paths_cut + stats.eye_paths_cut,
+                0,
+                "a path reached the depth backstop"
+            );
+            assert!(
+                err < 0.01,
+                "rho {rho:?} {mode:?} probe {probe:?} cone {cone_k:?}: mean {:?} vs {want:?}",
+                image.mean()
+            );
         }
     }
     println!("worst mean error {:.3}%", 100.0 * worst);
@@ -145,19 +181,48 @@ fn bright_furnaces_converge_in_every_configuration() {
 #[test]
 fn a_path_cap_shows_as_a_loss_and_is_counted() {
     let (scene, want) = bright_furnace([0.95; 3], [0.05; 3], 16);
-    let base = Settings { mode: Mode::Sppm, photons_per_pass: BRIGHT_PHOTONS, ..Settings::default() };
-    let (image, stats) = render_furnace(&scene, Settings { max_photon_depth: 12, ..base.clone() }, 4);
+    let base = Settings {
+        mode: Mode::Sppm,
+        photons_per_pass: BRIGHT_PHOTONS,
+        ..Settings::default()
+    };
+    let (image, stats) = render_furnace(
+        &scene,
+        Settings {
+            max_photon_depth: 12,
+            ..base.clone()
+        },
+        4,
+    );
     let m = image.mean()[0];
     // Direct 0.05 plus the indirect sum over k = 1..12 of 0.05 * 0.95^k.
     let capped = 0.05 * (1.0 - 0.95f64.powi(13)) / 0.05;
-    println!("cap 12: mean {m}, expected {capped} (uncapped {}), {} photon paths cut", want[0], stats.photon_paths_cut);
+    println!(
+        "cap 12: mean {m}, expected {capped} (uncapped {}), {} photon paths cut",
+        want[0], stats.photon_paths_cut
+    );
     assert!((m / capped - 1.0).abs() < 0.01, "capped furnace {m} vs {capped}");
     assert!(stats.photon_paths_cut > 0);
     let min = ppm_vk_kernels::photon::MIN_DEPTH;
-    let (image, stats) = render_furnace(&scene, Settings { max_photon_depth: min, ..base }, 4);
+    let (image, stats) = render_furnace(
+        &scene,
+        Settings {
+            max_photon_depth: min,
+            ..base
+        },
+        4,
+    );
     let err = mean_error(&image, want);
-    println!("cap {min}: error {:.3}%, {} paths cut", 100.0 * err, stats.photon_paths_cut);
+    println!(
+        "cap {min}: error {:.3}%, {} paths cut",
+        100.0 * err,
+        stats.photon_paths_cut
+    );
     assert!(err < 0.01);
     // Paths cut at MIN_DEPTH: a share 0.95^135 ~ 1e-3 of the 200k paths at most, by roulette's odds.
-    assert!((stats.photon_paths_cut as f64) < 4.0 * 200_000.0 * 0.95f64.powi(min as i32) + 10.0, "{} cut", stats.photon_paths_cut);
+    assert!(
+        (stats.photon_paths_cut as f64) < 4.0 * 200_000.0 * 0.95f64.powi(min as i32) + 10.0,
+        "{} cut",
+        stats.photon_paths_cut
+    );
 }

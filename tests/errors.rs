@@ -13,11 +13,24 @@ use ppm_vk_engine::{CancelToken, Error, Renderer, Scene, Settings};
 fn a_bad_scene_is_a_scene_error_with_its_line_and_field() {
     let text = std::fs::read_to_string(CORNELL).unwrap();
     // The first sphere's radius, made negative where the file writes it.
-    let (line, at) = text.lines().enumerate().find(|(_, l)| l.trim_start().starts_with("radius")).unwrap();
+    let (line, at) = text
+        .lines()
+        .enumerate()
+        .find(|(_, l)| l.trim_start().starts_with("radius"))
+        .unwrap();
     let bad = text.replacen(at, "radius = -1.0", 1);
     match Scene::parse(&bad, "cornell.toml") {
-        Err(Error::Scene { file, line: l, column, field, message }) => {
-            assert_eq!((file.as_str(), l, field.as_str()), ("cornell.toml", line + 1, "sphere[0].radius"));
+        Err(Error::Scene {
+            file,
+            line: l,
+            column,
+            field,
+            message,
+        }) => {
+            assert_eq!(
+                (file.as_str(), l, field.as_str()),
+                ("cornell.toml", line + 1, "sphere[0].radius")
+            );
             assert_eq!(column, "radius = ".len() + 1, "the column of the value");
             assert!(message.contains("positive"), "{message}");
         }
@@ -27,7 +40,9 @@ fn a_bad_scene_is_a_scene_error_with_its_line_and_field() {
     let mut scene = cornell(8, 8);
     scene.spheres[1].radius = f32::NAN;
     match scene.validate() {
-        Err(Error::Scene { file, line: 0, field, .. }) => {
+        Err(Error::Scene {
+            file, line: 0, field, ..
+        }) => {
             assert_eq!((file.as_str(), field.as_str()), ("cornell-spheres", "sphere[1].radius"));
         }
         other => panic!("expected Error::Scene, got {other:?}"),
@@ -49,17 +64,28 @@ fn a_missing_file_is_an_io_error_with_its_path() {
 #[test]
 fn settings_out_of_range_and_device_limits_are_told_apart() {
     let ctx = ctx();
-    let settings = Settings { alpha: 1.5, ..Settings::default() };
+    let settings = Settings {
+        alpha: 1.5,
+        ..Settings::default()
+    };
     match Renderer::new(&ctx, &cornell(8, 8), settings) {
         Err(Error::Settings { field: "alpha", .. }) => {}
         other => panic!("expected Error::Settings for alpha, got {:?}", other.err()),
     }
     // 4096 x 4096 pixels with 8 hit points each: 2^27 hit points, far past any device's largest storage
     // buffer (lavapipe: 128 MiB; the Vulkan maximum range is 4 GiB).
-    let settings = Settings { hit_slots: 8, ..Settings::default() };
+    let settings = Settings {
+        hit_slots: 8,
+        ..Settings::default()
+    };
     let limit = ctx.limits().max_storage_buffer_range as u64;
     match Renderer::new(&ctx, &cornell(4096, 4096), settings) {
-        Err(Error::Limit { what, value: Some(v), limit: l, lower }) => {
+        Err(Error::Limit {
+            what,
+            value: Some(v),
+            limit: l,
+            lower,
+        }) => {
             assert_eq!(l, limit);
             assert!(v > l, "{what}: {v} should exceed {l}");
             assert!(lower.contains("resolution"), "{lower}");
@@ -72,7 +98,10 @@ fn settings_out_of_range_and_device_limits_are_told_apart() {
 #[test]
 fn a_pass_can_be_cancelled_from_another_thread() {
     let ctx = ctx();
-    let settings = Settings { photons_per_pass: 20_000, ..Settings::default() };
+    let settings = Settings {
+        photons_per_pass: 20_000,
+        ..Settings::default()
+    };
     let mut renderer = Renderer::new(&ctx, &cornell(32, 32), settings).unwrap();
     renderer.pass().unwrap();
     let token = CancelToken::new();
@@ -94,7 +123,10 @@ fn a_pass_can_be_cancelled_from_another_thread() {
     assert!(matches!(outcome, Error::Cancelled), "{outcome:?}");
     // The passes before the cancel stay: the count and the image are theirs.
     assert_eq!(renderer.passes(), 1 + done);
-    assert!(matches!(renderer.pass(), Err(Error::Cancelled)), "stays cancelled until reset");
+    assert!(
+        matches!(renderer.pass(), Err(Error::Cancelled)),
+        "stays cancelled until reset"
+    );
     renderer.cancel_token().reset();
     renderer.pass().unwrap();
     assert_eq!(renderer.passes(), 2 + done);

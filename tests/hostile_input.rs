@@ -52,8 +52,21 @@ type Load = fn(&str) -> anyhow::Result<Scene>;
 /// Each format, its loader and the files its mutations start from.
 fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
     vec![
-        ("toml", load_toml, vec!["scenes/cornell-spheres.toml", "scenes/cornell-mesh.toml", "scenes/glass-on-table.toml", "scenes/furnace.toml"]),
-        ("obj", load_obj, vec!["scenes/meshes/cornell-box.obj", "scenes/meshes/furnace-sphere.obj"]),
+        (
+            "toml",
+            load_toml,
+            vec![
+                "scenes/cornell-spheres.toml",
+                "scenes/cornell-mesh.toml",
+                "scenes/glass-on-table.toml",
+                "scenes/furnace.toml",
+            ],
+        ),
+        (
+            "obj",
+            load_obj,
+            vec!["scenes/meshes/cornell-box.obj", "scenes/meshes/furnace-sphere.obj"],
+        ),
         ("xml", load_xml, vec!["../shared/reference/cornell-spheres.xml"]),
     ]
 }
@@ -74,8 +87,14 @@ fn load_toml(text: &str) -> anyhow::Result<Scene> {
 fn load_obj(text: &str) -> anyhow::Result<Scene> {
     let dir = scratch("obj");
     std::fs::write(dir.join("m.obj"), text)?;
-    std::fs::copy(format!("{ROOT}/scenes/meshes/cornell-box.mtl"), dir.join("cornell-box.mtl"))?;
-    std::fs::copy(format!("{ROOT}/scenes/meshes/furnace-sphere.mtl"), dir.join("furnace-sphere.mtl"))?;
+    std::fs::copy(
+        format!("{ROOT}/scenes/meshes/cornell-box.mtl"),
+        dir.join("cornell-box.mtl"),
+    )?;
+    std::fs::copy(
+        format!("{ROOT}/scenes/meshes/furnace-sphere.mtl"),
+        dir.join("furnace-sphere.mtl"),
+    )?;
     let scene = "[camera]\neye = [0.0, 1.0, 3.0]\nlook_at = [0.0, 1.0, 0.0]\nup = [0.0, 1.0, 0.0]\nvfov = 40.0\n\
                  resolution = [8, 8]\n\n[[mesh]]\nfile = \"m.obj\"\n";
     Ok(Scene::parse(scene, &dir.join("s.toml").display().to_string())?)
@@ -91,8 +110,25 @@ fn scratch(tag: &str) -> PathBuf {
 
 /// Numbers a mutation puts in place of one in the file.
 const EXTREME: &[&str] = &[
-    "0", "-0", "-1", "1e9", "1000000000", "4294967295", "4294967296", "18446744073709551616", "-2147483649",
-    "1e39", "-1e39", "1e-45", "nan", "inf", "-inf", "0x10", "1e", ".", "99999999999999999999999999999999",
+    "0",
+    "-0",
+    "-1",
+    "1e9",
+    "1000000000",
+    "4294967295",
+    "4294967296",
+    "18446744073709551616",
+    "-2147483649",
+    "1e39",
+    "-1e39",
+    "1e-45",
+    "nan",
+    "inf",
+    "-inf",
+    "0x10",
+    "1e",
+    ".",
+    "99999999999999999999999999999999",
 ];
 
 #[derive(Clone, Debug)]
@@ -201,8 +237,15 @@ fn load_bounded(load: Load, text: &[u8], outcomes: &Cell<(u32, u32)>) -> Result<
 /// `load` on mutations of `seeds` (and on random text) returns, in bounded time and memory, for
 /// `CASES` cases; a panic fails the case like an assertion (proptest catches it and shrinks).
 fn never_panics(name: &str, load: Load, seeds: &[&str]) {
-    let seeds: Vec<Vec<u8>> = seeds.iter().map(|s| std::fs::read(Path::new(ROOT).join(s)).unwrap()).collect();
-    let mut runner = TestRunner::new(Config { cases: CASES, failure_persistence: None, ..Config::default() });
+    let seeds: Vec<Vec<u8>> = seeds
+        .iter()
+        .map(|s| std::fs::read(Path::new(ROOT).join(s)).unwrap())
+        .collect();
+    let mut runner = TestRunner::new(Config {
+        cases: CASES,
+        failure_persistence: None,
+        ..Config::default()
+    });
     let strategy = (0..seeds.len(), prop::collection::vec(mutation(), 1..6));
     let outcomes = Cell::new((0, 0));
     runner
@@ -214,10 +257,19 @@ fn never_panics(name: &str, load: Load, seeds: &[&str]) {
     // The mutations reach both sides: some files still load, others are refused.
     let (scenes, errors) = outcomes.get();
     println!("{name}: {scenes} mutated files loaded, {errors} refused");
-    assert!(scenes > CASES / 20 && errors > CASES / 20, "{name}: {scenes} loaded, {errors} refused");
-    let mut runner = TestRunner::new(Config { cases: CASES / 4, failure_persistence: None, ..Config::default() });
+    assert!(
+        scenes > CASES / 20 && errors > CASES / 20,
+        "{name}: {scenes} loaded, {errors} refused"
+    );
+    let mut runner = TestRunner::new(Config {
+        cases: CASES / 4,
+        failure_persistence: None,
+        ..Config::default()
+    });
     runner
-        .run(&prop::collection::vec(any::<u8>(), 0..512), |bytes| load_bounded(load, &bytes, &Cell::new((0, 0))))
+        .run(&prop::collection::vec(any::<u8>(), 0..512), |bytes| {
+            load_bounded(load, &bytes, &Cell::new((0, 0)))
+        })
         .unwrap_or_else(|e| panic!("{name}, random bytes: {e}"));
 }
 
@@ -227,7 +279,8 @@ fn every_format_survives_mutated_files() {
         // The unmutated seeds load: the mutations start from real scenes.
         if name == "toml" {
             for s in &seeds {
-                load(&std::fs::read_to_string(Path::new(ROOT).join(s)).unwrap()).unwrap_or_else(|e| panic!("{s}: {e:#}"));
+                load(&std::fs::read_to_string(Path::new(ROOT).join(s)).unwrap())
+                    .unwrap_or_else(|e| panic!("{s}: {e:#}"));
             }
         }
         never_panics(name, load, &seeds);
@@ -239,7 +292,10 @@ fn every_format_survives_mutated_files() {
 fn scene_limits_hold_at_their_bounds() {
     let base = std::fs::read_to_string(format!("{ROOT}/scenes/cornell-spheres.toml")).unwrap();
     let with_resolution = |w: u32, h: u32| {
-        let line = base.lines().find(|l| l.trim_start().starts_with("resolution")).expect("a resolution line");
+        let line = base
+            .lines()
+            .find(|l| l.trim_start().starts_with("resolution"))
+            .expect("a resolution line");
         load_toml(&base.replace(line, &format!("resolution = [{w}, {h}]")))
     };
     assert!(with_resolution(MAX_RESOLUTION, MAX_RESOLUTION).is_ok());
@@ -261,14 +317,26 @@ fn scene_limits_hold_at_their_bounds() {
     // so is a device file that would never end.
     let dir = scratch("bounds");
     let big = dir.join("big.toml");
-    std::fs::File::create(&big).unwrap().set_len(MAX_SCENE_BYTES + 1).unwrap();
+    std::fs::File::create(&big)
+        .unwrap()
+        .set_len(MAX_SCENE_BYTES + 1)
+        .unwrap();
     let e = format!("{:#}", Scene::load(&big).unwrap_err());
-    assert!(e.contains("big.toml") && e.contains("more than a scene file may have"), "{e}");
+    assert!(
+        e.contains("big.toml") && e.contains("more than a scene file may have"),
+        "{e}"
+    );
     std::fs::File::create(&big).unwrap().set_len(MAX_SCENE_BYTES).unwrap();
     let e = format!("{:#}", Scene::load(&big).unwrap_err());
-    assert!(!e.contains("may have"), "at the bound the file is read (and is no scene): {e}");
+    assert!(
+        !e.contains("may have"),
+        "at the bound the file is read (and is no scene): {e}"
+    );
     let e = format!("{:#}", Scene::load(Path::new("/dev/zero")).unwrap_err());
     assert!(e.contains("not a regular file"), "{e}");
-    let e = format!("{:#}", load_toml(&base.replace("[[sphere]]", "[[mesh]]\nfile = \"/dev/zero\"\n\n[[sphere]]")).unwrap_err());
+    let e = format!(
+        "{:#}",
+        load_toml(&base.replace("[[sphere]]", "[[mesh]]\nfile = \"/dev/zero\"\n\n[[sphere]]")).unwrap_err()
+    );
     assert!(e.contains("/dev/zero") && e.contains("not a regular file"), "{e}");
 }

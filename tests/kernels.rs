@@ -22,7 +22,11 @@ const RES: u32 = 32;
 const PHOTONS: u32 = 20_000;
 
 fn settings() -> Settings {
-    Settings { mode: Mode::Ppm, photons_per_pass: PHOTONS, ..Settings::default() }
+    Settings {
+        mode: Mode::Ppm,
+        photons_per_pass: PHOTONS,
+        ..Settings::default()
+    }
 }
 
 fn scene_extent(s: &ppm_vk_engine::Scene) -> f32 {
@@ -51,7 +55,15 @@ fn hit_points_agree(a: &HitPoint, b: &HitPoint, pos_tol: f32, weight_tol: f32) -
 fn ray_pass_matches_reference_case(specialize: bool) {
     let ctx = ctx();
     let scene = cornell(RES, RES);
-    let mut r = Renderer::new(&ctx, &scene, Settings { specialize, ..settings() }).unwrap();
+    let mut r = Renderer::new(
+        &ctx,
+        &scene,
+        Settings {
+            specialize,
+            ..settings()
+        },
+    )
+    .unwrap();
     let g = r.gpu_scene().clone();
     let g = &g;
     let gpu_hits = r.read_hit_points().unwrap();
@@ -65,8 +77,16 @@ fn ray_pass_matches_reference_case(specialize: bool) {
     // difference in t moves a hit by ~1e-7 * distance, far less.
     let pos_tol = 1e-4 * scene_extent(&scene);
     let slots = gpu_hits.len();
-    let same_pattern = gpu_hits.iter().zip(&cpu_hits).filter(|(a, b)| a.is_empty() == b.is_empty()).count();
-    let agree = gpu_hits.iter().zip(&cpu_hits).filter(|(a, b)| hit_points_agree(a, b, pos_tol, 1e-4)).count();
+    let same_pattern = gpu_hits
+        .iter()
+        .zip(&cpu_hits)
+        .filter(|(a, b)| a.is_empty() == b.is_empty())
+        .count();
+    let agree = gpu_hits
+        .iter()
+        .zip(&cpu_hits)
+        .filter(|(a, b)| hit_points_agree(a, b, pos_tol, 1e-4))
+        .count();
     let agree_loose = gpu_hits
         .iter()
         .zip(&cpu_hits)
@@ -81,17 +101,27 @@ fn ray_pass_matches_reference_case(specialize: bool) {
         }
     }
     // A sane scene: most pixels see a diffuse surface.
-    assert!(non_empty >= (RES * RES) as usize * 9 / 10, "only {non_empty} hit points");
+    assert!(
+        non_empty >= (RES * RES) as usize * 9 / 10,
+        "only {non_empty} hit points"
+    );
     // 99.5%: only a path that diverges at a threshold (a pixel-centre ray grazing a silhouette, a glass
     // path's Russian-roulette split) may differ; at 32x32x4 that is at most 20 of 4096 slots.
     let min = slots * 995 / 1000;
-    assert!(same_pattern >= min, "empty/non-empty pattern agrees on {same_pattern} of {slots} slots");
+    assert!(
+        same_pattern >= min,
+        "empty/non-empty pattern agrees on {same_pattern} of {slots} slots"
+    );
     assert!(agree >= min, "hit points agree on {agree} of {slots} slots");
     // Paths through several specular bounces (the glass sphere seen in the mirror) accumulate f32 rounding:
     // measured up to 1.5e-4 of 4 m in position and 1.9e-4 relative in weight on 5 of 4096 slots. A slot
     // beyond 10x those is a path that took another branch (a Fresnel or roulette threshold met within an
     // ulp) and still found a diffuse surface: measured 0-1 of 4096; at most 0.1% allowed.
-    assert!(agree_loose * 1000 >= slots * 999, "{} of {slots} hit points differ by more than 10x the tolerances", slots - agree_loose);
+    assert!(
+        agree_loose * 1000 >= slots * 999,
+        "{} of {slots} hit points differ by more than 10x the tolerances",
+        slots - agree_loose
+    );
 
     // PPM's pass 0 adds no emission: its samples are the pilot's, and its centre sample would bias the
     // box filter.
@@ -120,17 +150,32 @@ fn emission_passes_match_reference(r: &mut Renderer) {
     r.pass().unwrap(); // eye pass 1, then photons
     let after = r.read_direct().unwrap();
     let cpu = reference::eye_pass(&g, &r.ray_pushes(1, r.settings().mode == Mode::Sppm), &mut busy.clone()).direct;
-    let gpu: Vec<[f64; 4]> = after.iter().zip(&before).map(|(a, b)| [0, 1, 2, 3].map(|c| a[c] - b[c])).collect();
+    let gpu: Vec<[f64; 4]> = after
+        .iter()
+        .zip(&before)
+        .map(|(a, b)| [0, 1, 2, 3].map(|c| a[c] - b[c]))
+        .collect();
     let e = r.settings().emission_samples as f64;
     let hit = (r.settings().mode == Mode::Sppm) as u32 as f64; // SPPM's jittered hit path is a sample too
     for (i, d) in cpu.iter().enumerate() {
-        assert_eq!(d[3], if busy[i] != 0 { e } else { 1.0 } + hit, "pixel {i}: CPU sample count");
+        assert_eq!(
+            d[3],
+            if busy[i] != 0 { e } else { 1.0 } + hit,
+            "pixel {i}: CPU sample count"
+        );
     }
-    let ok = gpu.iter().zip(&cpu).filter(|(a, b)| (0..4).all(|c| close(a[c], b[c], 1e-4, 1e-4))).count();
+    let ok = gpu
+        .iter()
+        .zip(&cpu)
+        .filter(|(a, b)| (0..4).all(|c| close(a[c], b[c], 1e-4, 1e-4)))
+        .count();
     let lit = gpu.iter().filter(|d| d[0] > 0.0).count();
     println!("direct: {ok} of {pixels} pixels agree, {lit} see the light");
     assert!(lit > 0, "no pixel sees the light directly");
-    assert!(ok * 1000 >= pixels * 995, "direct emission agrees on {ok} of {pixels} pixels");
+    assert!(
+        ok * 1000 >= pixels * 995,
+        "direct emission agrees on {ok} of {pixels} pixels"
+    );
 }
 
 /// With the scene compiled into the tracing kernels (the default).
@@ -169,7 +214,11 @@ struct HistogramDiff {
     l1_flux: f64,
 }
 
-fn compare_histograms(label: &str, hg: &HashMap<u32, (u64, [f64; 3])>, hc: &HashMap<u32, (u64, [f64; 3])>) -> HistogramDiff {
+fn compare_histograms(
+    label: &str,
+    hg: &HashMap<u32, (u64, [f64; 3])>,
+    hc: &HashMap<u32, (u64, [f64; 3])>,
+) -> HistogramDiff {
     let mut keys: Vec<u32> = hg.keys().chain(hc.keys()).copied().collect();
     keys.sort_unstable();
     keys.dedup();
@@ -185,7 +234,12 @@ fn compare_histograms(label: &str, hg: &HashMap<u32, (u64, [f64; 3])>, hc: &Hash
             flux_total += b.1[c];
         }
     }
-    let d = HistogramDiff { buckets: keys.len(), identical, l1_count: l1_count as f64 / count_total as f64, l1_flux: l1_flux / flux_total };
+    let d = HistogramDiff {
+        buckets: keys.len(),
+        identical,
+        l1_count: l1_count as f64 / count_total as f64,
+        l1_flux: l1_flux / flux_total,
+    };
     println!(
         "{label}: {} non-empty buckets, {} with identical counts; L1 distance {:.3}% of the records, {:.3}% of the flux",
         d.buckets,
@@ -206,8 +260,10 @@ fn match_records(gpu: &[Photon], cpu: &[Photon], pos_tol: f32) -> usize {
     }
     let mut used = vec![false; gpu.len()];
     let twins = |a: &Photon, b: &Photon| {
-        let dir_close = |x: u32, y: u32| ((x & 0xffff) as i16 as i32 - (y & 0xffff) as i16 as i32).abs() <= 4
-            && ((x >> 16) as i16 as i32 - (y >> 16) as i16 as i32).abs() <= 4;
+        let dir_close = |x: u32, y: u32| {
+            ((x & 0xffff) as i16 as i32 - (y & 0xffff) as i16 as i32).abs() <= 4
+                && ((x >> 16) as i16 as i32 - (y >> 16) as i16 as i32).abs() <= 4
+        };
         (v(a.pos) - v(b.pos)).abs().max_element() <= pos_tol
             && (0..3).all(|c| close(a.flux[c] as f64, b.flux[c] as f64, 1e-5, 0.0))
             && dir_close(a.dir, b.dir)
@@ -247,15 +303,32 @@ fn total_flux(records: &[Photon]) -> [f64; 3] {
 fn photon_records_match_reference_case(specialize: bool) {
     let ctx = ctx();
     let scene = cornell(RES, RES);
-    let mut r = Renderer::new(&ctx, &scene, Settings { specialize, ..settings() }).unwrap();
+    let mut r = Renderer::new(
+        &ctx,
+        &scene,
+        Settings {
+            specialize,
+            ..settings()
+        },
+    )
+    .unwrap();
     let gpu = r.trace_and_gather(0, PHOTONS).unwrap();
     let g = r.gpu_scene().clone();
     let cpu = reference::photon_pass(&g, 0, PHOTONS, SALT_PHOTON);
     println!("photon records: GPU {}, CPU {}", gpu.len(), cpu.len());
-    assert!(cpu.len() > PHOTONS as usize, "fewer records than photons: {}", cpu.len());
+    assert!(
+        cpu.len() > PHOTONS as usize,
+        "fewer records than photons: {}",
+        cpu.len()
+    );
     // 0.5%: a path diverging at a roulette or Fresnel threshold changes its record count by a few; at
     // most a fraction of a percent of 20k paths do.
-    assert!(close(gpu.len() as f64, cpu.len() as f64, 5e-3, 0.0), "record counts GPU {} CPU {}", gpu.len(), cpu.len());
+    assert!(
+        close(gpu.len() as f64, cpu.len() as f64, 5e-3, 0.0),
+        "record counts GPU {} CPU {}",
+        gpu.len(),
+        cpu.len()
+    );
 
     // Every GPU record is plausible: finite, positive flux no larger than a photon starts with (roulette
     // divides by the largest albedo, so no channel grows), inside the scene, hashed into its own bucket.
@@ -266,16 +339,26 @@ fn photon_records_match_reference_case(specialize: bool) {
     let mut cell_ok = 0usize;
     for (i, p) in gpu.iter().enumerate() {
         for c in 0..3 {
-            assert!(p.flux[c].is_finite() && p.flux[c] > 0.0 && p.flux[c] <= start[c] * (1.0 + 1e-6), "record {i}: {p:?}");
+            assert!(
+                p.flux[c].is_finite() && p.flux[c] > 0.0 && p.flux[c] <= start[c] * (1.0 + 1e-6),
+                "record {i}: {p:?}"
+            );
         }
         let pos = v(p.pos);
-        assert!(pos.cmpge(lo - Vec3::splat(eps)).all() && pos.cmple(hi + Vec3::splat(eps)).all(), "record {i} outside: {p:?}");
+        assert!(
+            pos.cmpge(lo - Vec3::splat(eps)).all() && pos.cmple(hi + Vec3::splat(eps)).all(),
+            "record {i} outside: {p:?}"
+        );
         assert!(p.cell < 1 << 30, "record {i}: cell key {:#x} over 30 bits", p.cell);
         cell_ok += (p.cell == trace::grid_key(&g, pos)) as usize;
     }
     // The hash recomputed on the CPU from the GPU's position: only a position within an ulp of a cell
     // boundary (division rounding) may land in the neighbouring cell.
-    assert!(cell_ok >= gpu.len() * 999 / 1000, "cell hash agrees for {cell_ok} of {} records", gpu.len());
+    assert!(
+        cell_ok >= gpu.len() * 999 / 1000,
+        "cell hash agrees for {cell_ok} of {} records",
+        gpu.len()
+    );
 
     // Per-bucket histograms. The grid's origin is the scene's lower corner minus one cell and the box is a
     // whole number of cells wide, so every wall lies exactly on a cell boundary: a record on a wall falls
@@ -287,11 +370,20 @@ fn photon_records_match_reference_case(specialize: bool) {
     let raw = compare_histograms("raw cell", &histogram(&gpu, bucket), &histogram(&cpu, bucket));
     let snap = |p: &Photon| trace::grid_bucket(&g, trace::grid_key(&g, v(p.pos.map(|x| (x * 1e4).round() / 1e4))));
     let snapped = compare_histograms("snapped cell", &histogram(&gpu, snap), &histogram(&cpu, snap));
-    assert!(raw.l1_count <= 0.05 && raw.l1_flux <= 0.05, "raw bucket histograms: {raw:?}");
+    assert!(
+        raw.l1_count <= 0.05 && raw.l1_flux <= 0.05,
+        "raw bucket histograms: {raw:?}"
+    );
     // Snapped: a diverging path moves its few records to other buckets; ~0.1% of paths diverge, so
     // 1% of the records (or flux) displaced is ~5x the measured value, and 90% of buckets identical.
-    assert!(snapped.identical * 10 >= snapped.buckets * 9, "snapped bucket histograms: {snapped:?}");
-    assert!(snapped.l1_count <= 0.01 && snapped.l1_flux <= 0.01, "snapped bucket histograms: {snapped:?}");
+    assert!(
+        snapped.identical * 10 >= snapped.buckets * 9,
+        "snapped bucket histograms: {snapped:?}"
+    );
+    assert!(
+        snapped.l1_count <= 0.01 && snapped.l1_flux <= 0.01,
+        "snapped bucket histograms: {snapped:?}"
+    );
 
     // Records matched one to one (a multiset match): the same position within 1e-4 of the scene extent,
     // the same flux within 1e-5 relative (a few f32 multiplications) and the same encoded direction within
@@ -300,14 +392,23 @@ fn photon_records_match_reference_case(specialize: bool) {
     // through glass moves a hit by more than 4e-4 (99.95% match within 4e-3).
     let matched = match_records(&gpu, &cpu, 1e-4 * scene_extent(&scene));
     println!("records matched one to one: {matched} of {}", cpu.len());
-    assert!(matched * 1000 >= cpu.len() * 995, "only {matched} of {} CPU records have a GPU twin", cpu.len());
+    assert!(
+        matched * 1000 >= cpu.len() * 995,
+        "only {matched} of {} CPU records have a GPU twin",
+        cpu.len()
+    );
 
     // Total flux per channel within 0.5% (as the record count).
     let tg = total_flux(&gpu);
     let tc = total_flux(&cpu);
     println!("total flux GPU {tg:?} CPU {tc:?}");
     for c in 0..3 {
-        assert!(close(tg[c], tc[c], 5e-3, 0.0), "channel {c}: total flux GPU {} CPU {}", tg[c], tc[c]);
+        assert!(
+            close(tg[c], tc[c], 5e-3, 0.0),
+            "channel {c}: total flux GPU {} CPU {}",
+            tg[c],
+            tc[c]
+        );
     }
     assert_clean(&ctx);
 }
@@ -325,7 +426,15 @@ fn photon_records_match_reference_unspecialized() {
 }
 
 /// Compares the GPU's pass accumulators with a brute-force gather over the GPU's own records.
-fn check_gather(label: &str, accum: &[PassAccum], hits: &[HitPoint], stats: &[HitStats], records: &[Photon], cone_k: f32, flux_fixed: f32) {
+fn check_gather(
+    label: &str,
+    accum: &[PassAccum],
+    hits: &[HitPoint],
+    stats: &[HitStats],
+    records: &[Photon],
+    cone_k: f32,
+    flux_fixed: f32,
+) {
     let cpu = reference::gather(hits, stats, records, cone_k);
     assert_eq!(cpu.len(), accum.len());
     let slots = accum.len();
@@ -345,18 +454,31 @@ fn check_gather(label: &str, accum: &[PassAccum], hits: &[HitPoint], stats: &[Hi
         let g = [a.flux_r, a.flux_g, a.flux_b].map(|f| f as f64 / flux_fixed as f64);
         let c = sum.to_array();
         for ch in 0..3 {
-            assert!(close(g[ch], c[ch], 1e-5, 1e-6), "{label} slot {i} channel {ch}: GPU {} CPU {} (M {})", g[ch], c[ch], a.m);
+            assert!(
+                close(g[ch], c[ch], 1e-5, 1e-6),
+                "{label} slot {i} channel {ch}: GPU {} CPU {} (M {})",
+                g[ch],
+                c[ch],
+                a.m
+            );
         }
         flux_checked += 1;
     }
     println!("{label}: {slots} slots ({non_empty} hit points), {gathered} gathered something, M equal on {m_equal}, worst |dM| {worst_m}, flux checked on {flux_checked}");
     // Nearly every hit point receives photons (so this really tests the sums): the walls and spheres are
     // lit, only spots in deep shadow of a 20k-photon batch may stay empty.
-    assert!(gathered * 10 >= non_empty * 9, "{label}: only {gathered} of {non_empty} hit points gathered anything");
+    assert!(
+        gathered * 10 >= non_empty * 9,
+        "{label}: only {gathered} of {non_empty} hit points gathered anything"
+    );
     // M: the same photons and hit points; only a photon within an ulp of the sphere's surface (d2 vs r2,
     // or the direction test at grazing angle) can be counted differently: 99.9% equal, off by one at most.
     // (Empty slots trivially agree: count the mismatches against the hit points.)
-    assert!((slots - m_equal) * 1000 <= non_empty, "{label}: M differs on {} of {non_empty} hit points", slots - m_equal);
+    assert!(
+        (slots - m_equal) * 1000 <= non_empty,
+        "{label}: M differs on {} of {non_empty} hit points",
+        slots - m_equal
+    );
     assert!(worst_m <= 1, "{label}: M differs by {worst_m}");
 }
 
@@ -378,7 +500,14 @@ fn gather_case(cone_k: Option<f32>, grid: GridShape) {
     let grid_cell = grid.cell_of_radius.map(|f| f * r0);
     let photons_per_pass = grid.photons.unwrap_or(PHOTONS);
     let mode = if grid.sppm { Mode::Sppm } else { Mode::Ppm };
-    let settings = Settings { cone_k, grid_buckets: grid.buckets, grid_cell, photons_per_pass, mode, ..settings() };
+    let settings = Settings {
+        cone_k,
+        grid_buckets: grid.buckets,
+        grid_cell,
+        photons_per_pass,
+        mode,
+        ..settings()
+    };
     let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
     // Two full passes first, so radii differ between hit points (the update has shrunk them unevenly).
     r.pass().unwrap();
@@ -393,7 +522,10 @@ fn gather_case(cone_k: Option<f32>, grid: GridShape) {
         v.dedup();
         v.len()
     };
-    assert!(distinct_r2 > 100, "radii did not diverge after two passes ({distinct_r2} distinct)");
+    assert!(
+        distinct_r2 > 100,
+        "radii did not diverge after two passes ({distinct_r2} distinct)"
+    );
     let mut label = match cone_k {
         Some(k) => format!("gather, cone k = {k}"),
         None => "gather".to_string(),
@@ -404,14 +536,28 @@ fn gather_case(cone_k: Option<f32>, grid: GridShape) {
     if grid.sppm {
         label += ", SPPM";
     }
-    check_gather(&label, &accum, &hits, &stats, &records, cone_k.unwrap_or(0.0), r.gpu_scene().params.flux_fixed);
+    check_gather(
+        &label,
+        &accum,
+        &hits,
+        &stats,
+        &records,
+        cone_k.unwrap_or(0.0),
+        r.gpu_scene().params.flux_fixed,
+    );
     assert_clean(&ctx);
 }
 
 #[test]
 fn gather_matches_brute_force() {
     gather_case(None, GridShape::default());
-    gather_case(None, GridShape { sppm: true, ..GridShape::default() });
+    gather_case(
+        None,
+        GridShape {
+            sppm: true,
+            ..GridShape::default()
+        },
+    );
 }
 
 /// Cells half the radius wide in the smallest hash table: a lookup spans about 5x5 cells (the general
@@ -421,7 +567,12 @@ fn gather_matches_brute_force() {
 #[test]
 fn gather_with_wide_windows_and_shared_buckets_matches_brute_force() {
     for sppm in [false, true] {
-        let shape = GridShape { buckets: Some(ppm_vk_kernels::lookup::SCAN_BLOCK), cell_of_radius: Some(0.5), photons: Some(5000), sppm };
+        let shape = GridShape {
+            buckets: Some(ppm_vk_kernels::lookup::SCAN_BLOCK),
+            cell_of_radius: Some(0.5),
+            photons: Some(5000),
+            sppm,
+        };
         gather_case(None, shape);
     }
 }
@@ -432,8 +583,18 @@ fn gather_with_wide_windows_and_shared_buckets_matches_brute_force() {
 #[test]
 fn gather_through_the_most_partitions_matches_brute_force() {
     let buckets = ppm_vk_kernels::lookup::SCAN_BLOCK << 10;
-    assert_eq!(ppm_vk_kernels::lookup::GridPush::for_cells(buckets).parts, ppm_vk_kernels::lookup::MAX_PARTS);
-    gather_case(None, GridShape { buckets: Some(buckets), cell_of_radius: Some(1.5), ..GridShape::default() });
+    assert_eq!(
+        ppm_vk_kernels::lookup::GridPush::for_cells(buckets).parts,
+        ppm_vk_kernels::lookup::MAX_PARTS
+    );
+    gather_case(
+        None,
+        GridShape {
+            buckets: Some(buckets),
+            cell_of_radius: Some(1.5),
+            ..GridShape::default()
+        },
+    );
 }
 
 /// A quarter-radius cell in the smallest table with 100k photons puts tens of thousands of photons in
@@ -452,7 +613,10 @@ fn lookup_cut_short_is_an_error() {
     };
     let result = Renderer::new(&ctx, &scene, grid).and_then(|mut r| r.pass());
     if ctx.info().name.contains("llvmpipe") {
-        let err = format!("{:#}", result.expect_err("lavapipe cut the lookups short, and the pass did not say so"));
+        let err = format!(
+            "{:#}",
+            result.expect_err("lavapipe cut the lookups short, and the pass did not say so")
+        );
         assert!(err.contains("cut short"), "unexpected error: {err}");
     } else {
         result.unwrap();
@@ -468,21 +632,45 @@ fn shrinking_cells_leave_the_image_unchanged() {
     let ctx = ctx();
     let scene = cornell(2 * RES, 2 * RES);
     for mode in [Mode::Sppm, Mode::Ppm] {
-        let base = Settings { mode, probe: ProbeMode::ScaleFree, cone_k: Some(1.1), ..settings() };
+        let base = Settings {
+            mode,
+            probe: ProbeMode::ScaleFree,
+            cone_k: Some(1.1),
+            ..settings()
+        };
         let mut adaptive = Renderer::new(&ctx, &scene, base.clone()).unwrap();
         let start = adaptive.gpu_scene().params.cell_size;
-        let mut fixed = Renderer::new(&ctx, &scene, Settings { grid_cell: Some(start), ..base }).unwrap();
+        let mut fixed = Renderer::new(
+            &ctx,
+            &scene,
+            Settings {
+                grid_cell: Some(start),
+                ..base
+            },
+        )
+        .unwrap();
         let mut cells = Vec::new();
         for _ in 0..6 {
             let stats = adaptive.pass().unwrap();
             let per_radius = ppm_vk_engine::gpu_scene::CELL_PER_RADIUS;
-            assert!(stats.cell_size >= per_radius * stats.radius_max, "{mode:?}: cell {} under {per_radius} radii {}", stats.cell_size, stats.radius_max);
+            assert!(
+                stats.cell_size >= per_radius * stats.radius_max,
+                "{mode:?}: cell {} under {per_radius} radii {}",
+                stats.cell_size,
+                stats.radius_max
+            );
             cells.push(stats.cell_size / start);
             assert_eq!(fixed.pass().unwrap().cell_size, start);
         }
         println!("{mode:?}: cell / starting cell after each pass {cells:?}");
-        assert!(cells[5] < 0.8, "{mode:?}: the cells did not follow the radii: {cells:?}");
-        assert!(adaptive.image().unwrap().pixels == fixed.image().unwrap().pixels, "{mode:?}: the image depends on the cell size");
+        assert!(
+            cells[5] < 0.8,
+            "{mode:?}: the cells did not follow the radii: {cells:?}"
+        );
+        assert!(
+            adaptive.image().unwrap().pixels == fixed.image().unwrap().pixels,
+            "{mode:?}: the image depends on the cell size"
+        );
     }
     assert_clean(&ctx);
 }
@@ -492,15 +680,32 @@ fn gather_with_cone_filter_matches_brute_force() {
     gather_case(Some(1.1), GridShape::default());
 }
 
-fn check_update(label: &str, hits: &[HitPoint], before: &[HitStats], accum: &[PassAccum], after: &[HitStats], alpha: f32, flux_fixed: f32) {
+fn check_update(
+    label: &str,
+    hits: &[HitPoint],
+    before: &[HitStats],
+    accum: &[PassAccum],
+    after: &[HitStats],
+    alpha: f32,
+    flux_fixed: f32,
+) {
     let mut updated = 0;
     for (i, (((s, a), g), h)) in before.iter().zip(accum).zip(after).zip(hits).enumerate() {
         let c = reference::update(s, a, h.weight, alpha, flux_fixed);
         updated += (a.m > 0) as usize;
         // Both in f64 with the same operations: 1e-12 relative leaves room only for a differently
         // rounded division; exact zeros must stay exact.
-        for (name, x, y) in [("n", g.n, c.n), ("r2", g.r2, c.r2), ("tau_r", g.tau_r, c.tau_r), ("tau_g", g.tau_g, c.tau_g), ("tau_b", g.tau_b, c.tau_b)] {
-            assert!(close(x, y, 1e-12, 0.0), "{label} slot {i} {name}: GPU {x} CPU {y} (before {s:?}, accum {a:?})");
+        for (name, x, y) in [
+            ("n", g.n, c.n),
+            ("r2", g.r2, c.r2),
+            ("tau_r", g.tau_r, c.tau_r),
+            ("tau_g", g.tau_g, c.tau_g),
+            ("tau_b", g.tau_b, c.tau_b),
+        ] {
+            assert!(
+                close(x, y, 1e-12, 0.0),
+                "{label} slot {i} {name}: GPU {x} CPU {y} (before {s:?}, accum {a:?})"
+            );
         }
     }
     println!("{label}: {updated} of {} slots updated", before.len());
@@ -521,16 +726,32 @@ fn update_matches_reference() {
         r.update_only().unwrap();
         let after = r.read_stats().unwrap();
         let hits = r.read_hit_points().unwrap();
-        check_update(&format!("update round {round}"), &hits, &before, &accum, &after, alpha, r.gpu_scene().params.flux_fixed);
+        check_update(
+            &format!("update round {round}"),
+            &hits,
+            &before,
+            &accum,
+            &after,
+            alpha,
+            r.gpu_scene().params.flux_fixed,
+        );
         // The largest radius it reports, as the f32 the lookups read: over the live hit points (all of
         // PPM's non-empty slots) and over every slot it visited.
         let max = r.radius_max().unwrap();
-        let live = after.iter().zip(&hits).filter(|(_, h)| !h.is_empty()).map(|(s, _)| s.r2 as f32).fold(0.0, f32::max);
+        let live = after
+            .iter()
+            .zip(&hits)
+            .filter(|(_, h)| !h.is_empty())
+            .map(|(s, _)| s.r2 as f32)
+            .fold(0.0, f32::max);
         assert!(live > 0.0);
         assert_eq!((max.live, max.all), (live, live), "round {round}: largest R^2");
         // The update clears the accumulators for the next pass.
         let cleared = r.read_accum().unwrap();
-        assert!(cleared.iter().all(|a| *a == PassAccum::default()), "round {round}: accumulators not cleared");
+        assert!(
+            cleared.iter().all(|a| *a == PassAccum::default()),
+            "round {round}: accumulators not cleared"
+        );
         r.set_emitted(r.emitted() + PHOTONS as u64);
     }
     assert_clean(&ctx);
@@ -585,11 +806,24 @@ fn photon_power() {
     for scene in [cornell(RES, RES), furnace(RES, RES)] {
         let g = ppm_vk_engine::gpu_scene::GpuScene::new(&scene, &settings(), 1024).unwrap();
         let prob: f64 = g.lights.iter().map(|l| l.prob as f64).sum();
-        assert!(close(prob, 1.0, 1e-6, 0.0), "{}: light probabilities sum to {prob}", scene.name);
+        assert!(
+            close(prob, 1.0, 1e-6, 0.0),
+            "{}: light probabilities sum to {prob}",
+            scene.name
+        );
         for c in 0..3 {
-            let sum: f64 = g.lights.iter().map(|l| l.prob as f64 * (l.power[c] / l.prob) as f64).sum();
+            let sum: f64 = g
+                .lights
+                .iter()
+                .map(|l| l.prob as f64 * (l.power[c] / l.prob) as f64)
+                .sum();
             // f32 division and multiplication: a few ulps, 1e-6 relative.
-            assert!(close(sum, g.total_power[c], 1e-6, 0.0), "{} channel {c}: {sum} vs {:?}", scene.name, g.total_power);
+            assert!(
+                close(sum, g.total_power[c], 1e-6, 0.0),
+                "{} channel {c}: {sum} vs {:?}",
+                scene.name,
+                g.total_power
+            );
         }
     }
 
@@ -597,26 +831,49 @@ fn photon_power() {
     // carries exactly the total power. With max_photon_depth 1 a path ends at its first surface, so the
     // records are exactly those first-hit-diffuse records.
     let scene = cornell(RES, RES);
-    let mut r = Renderer::new(&ctx, &scene, Settings { max_photon_depth: 1, ..settings() }).unwrap();
+    let mut r = Renderer::new(
+        &ctx,
+        &scene,
+        Settings {
+            max_photon_depth: 1,
+            ..settings()
+        },
+    )
+    .unwrap();
     let g = r.gpu_scene().clone();
     assert_eq!(g.lights.len(), 1);
     assert_eq!(g.lights[0].prob, 1.0);
     let power = g.total_power;
     let gpu = r.trace_and_gather(0, PHOTONS).unwrap();
     let cpu = reference::photon_pass(&g, 0, PHOTONS, SALT_PHOTON);
-    println!("first-hit-diffuse records: GPU {}, CPU {} of {PHOTONS} photons", gpu.len(), cpu.len());
+    println!(
+        "first-hit-diffuse records: GPU {}, CPU {} of {PHOTONS} photons",
+        gpu.len(),
+        cpu.len()
+    );
     for (who, recs) in [("GPU", &gpu), ("CPU", &cpu)] {
-        assert!(recs.len() > PHOTONS as usize / 2 && recs.len() <= PHOTONS as usize, "{who}: {} records", recs.len());
+        assert!(
+            recs.len() > PHOTONS as usize / 2 && recs.len() <= PHOTONS as usize,
+            "{who}: {} records",
+            recs.len()
+        );
         let mut mean = [0f64; 3];
         for p in recs.iter() {
             for c in 0..3 {
                 // Exact in principle (flux = power / 1.0); 1e-6 relative.
-                assert!(close(p.flux[c] as f64, power[c], 1e-6, 0.0), "{who}: first record flux {:?} != power {power:?}", p.flux);
+                assert!(
+                    close(p.flux[c] as f64, power[c], 1e-6, 0.0),
+                    "{who}: first record flux {:?} != power {power:?}",
+                    p.flux
+                );
                 mean[c] += p.flux[c] as f64 / recs.len() as f64;
             }
         }
         for c in 0..3 {
-            assert!(close(mean[c], power[c], 1e-6, 0.0), "{who}: mean first-record flux {mean:?} vs {power:?}");
+            assert!(
+                close(mean[c], power[c], 1e-6, 0.0),
+                "{who}: mean first-record flux {mean:?} vs {power:?}"
+            );
         }
     }
     // The same photons reach a diffuse surface first: counts within 0.5% (threshold divergence only).
@@ -624,7 +881,13 @@ fn photon_power() {
 
     // With full-depth paths each first-hit-diffuse photon's first record is that same record (the CPU
     // reference per photon): the longer path does not change where and with what it starts.
-    let full = ppm_vk_engine::gpu_scene::GpuScene { params: ppm_vk_engine::layout::RenderParams { max_photon_depth: 64, ..g.params }, ..g.clone() };
+    let full = ppm_vk_engine::gpu_scene::GpuScene {
+        params: ppm_vk_engine::layout::RenderParams {
+            max_photon_depth: 64,
+            ..g.params
+        },
+        ..g.clone()
+    };
     let (mut first_diffuse, mut buf1, mut buf) = (0usize, Vec::new(), Vec::new());
     for i in 0..2000u64 {
         buf1.clear();
@@ -648,7 +911,10 @@ fn pass_equals_trace_gather_update() {
     let ctx = ctx();
     let scene = cornell(RES, RES);
     // No emission samples: PPM's later passes would add eye passes to `a` that the hooks do not run.
-    let settings = Settings { emission_samples: 0, ..settings() };
+    let settings = Settings {
+        emission_samples: 0,
+        ..settings()
+    };
     let mut a = Renderer::new(&ctx, &scene, settings.clone()).unwrap();
     let mut b = Renderer::new(&ctx, &scene, settings).unwrap();
     for round in 0..2u64 {
@@ -659,7 +925,10 @@ fn pass_equals_trace_gather_update() {
         assert_eq!(stats.records, records.len() as u64, "round {round}: record counts");
         let (sa, sb) = (a.read_stats().unwrap(), b.read_stats().unwrap());
         let differ = sa.iter().zip(&sb).filter(|(x, y)| x != y).count();
-        assert_eq!(differ, 0, "round {round}: {differ} slots' statistics differ between pass() and the hooks");
+        assert_eq!(
+            differ, 0,
+            "round {round}: {differ} slots' statistics differ between pass() and the hooks"
+        );
     }
     assert_eq!(a.emitted(), b.emitted());
     let (ia, ib) = (a.image().unwrap(), b.image().unwrap());
@@ -677,28 +946,47 @@ fn a_pass_split_into_batches_loses_and_repeats_no_photon() {
     let ctx = ctx();
     let mut scene = load(FURNACE).with_resolution(16, 16);
     for m in &mut scene.materials {
-        m.surface = ppm_vk_engine::scene::Surface::Diffuse { albedo: glam::Vec3::splat(0.95) };
+        m.surface = ppm_vk_engine::scene::Surface::Diffuse {
+            albedo: glam::Vec3::splat(0.95),
+        };
     }
-    let settings = Settings { photons_per_pass: 4_000, emission_samples: 0, ..settings() };
+    let settings = Settings {
+        photons_per_pass: 4_000,
+        emission_samples: 0,
+        ..settings()
+    };
     let mut a = Renderer::new(&ctx, &scene, settings.clone()).unwrap();
     let stats = a.pass().unwrap();
     let batch = a.batch_size();
-    println!("{} records in {} batches of {batch} photons", stats.records, stats.batches);
+    println!(
+        "{} records in {} batches of {batch} photons",
+        stats.records, stats.batches
+    );
     assert!(stats.batches >= 3, "the pass was not split ({} batches)", stats.batches);
     assert_eq!(stats.batches, 4_000u32.div_ceil(batch));
 
     let mut b = Renderer::new(&ctx, &scene, settings).unwrap();
     let mut records = 0u64;
     for first in (0..4_000u32).step_by(batch as usize) {
-        records += b.trace_and_gather(first as u64, batch.min(4_000 - first)).unwrap().len() as u64;
+        records += b
+            .trace_and_gather(first as u64, batch.min(4_000 - first))
+            .unwrap()
+            .len() as u64;
     }
     b.update_only().unwrap();
     assert_eq!(stats.records, records, "records of the batched pass vs chunk by chunk");
     let (sa, sb) = (a.read_stats().unwrap(), b.read_stats().unwrap());
-    assert_eq!(sa.iter().zip(&sb).filter(|(x, y)| x != y).count(), 0, "statistics differ");
+    assert_eq!(
+        sa.iter().zip(&sb).filter(|(x, y)| x != y).count(),
+        0,
+        "statistics differ"
+    );
     // Independent of the batching: the CPU traces the same 4000 photons (threshold divergence aside).
     let cpu = reference::photon_pass(a.gpu_scene(), 0, 4_000, SALT_PHOTON).len() as f64;
-    assert!(close(records as f64, cpu, 5e-3, 0.0), "GPU {records} records, CPU {cpu}");
+    assert!(
+        close(records as f64, cpu, 5e-3, 0.0),
+        "GPU {records} records, CPU {cpu}"
+    );
     drop((a, b));
     assert_clean(&ctx);
 }
@@ -713,13 +1001,20 @@ fn photon_records_match_reference_with_one_photon_per_thread() {
     let white = scene.spheres[0].material;
     for i in 0..60 {
         let (x, z) = ((i % 10) as f32 * 0.18 - 0.85, (i / 10) as f32 * 0.3 + 1.2);
-        scene.spheres.push(ppm_vk_engine::scene::Sphere { center: Vec3::new(x, 0.06, z), radius: 0.05, material: white });
+        scene.spheres.push(ppm_vk_engine::scene::Sphere {
+            center: Vec3::new(x, 0.06, z),
+            radius: 0.05,
+            material: white,
+        });
     }
     let mut r = Renderer::new(&ctx, &scene, settings()).unwrap();
     let limits = r.path_limits();
     println!("{limits:?}");
     if ctx.info().loop_budget.is_some() {
-        assert_eq!(limits.per_thread, 1, "70 primitives should leave one photon per thread on lavapipe");
+        assert_eq!(
+            limits.per_thread, 1,
+            "70 primitives should leave one photon per thread on lavapipe"
+        );
         assert!(limits.photon_depth >= ppm_vk_kernels::photon::MIN_DEPTH);
     }
     // The eye pass: 70 primitives leave an eye thread room for fewer paths than 4 slots and 16 emission
@@ -735,13 +1030,21 @@ fn photon_records_match_reference_with_one_photon_per_thread() {
     let cpu = reference::photon_pass(r.gpu_scene(), 0, PHOTONS, SALT_PHOTON);
     let matched = match_records(&gpu, &cpu, 1e-4 * scene_extent(&scene));
     let loose = match_records(&gpu, &cpu, 4e-3 * scene_extent(&scene));
-    println!("records: GPU {}, CPU {}, matched {matched} (within 4e-3: {loose})", gpu.len(), cpu.len());
+    println!(
+        "records: GPU {}, CPU {}, matched {matched} (within 4e-3: {loose})",
+        gpu.len(),
+        cpu.len()
+    );
     assert!(close(gpu.len() as f64, cpu.len() as f64, 5e-3, 0.0));
     // Small spheres seen from afar lose digits in the discriminant near their silhouettes, so more paths
     // diverge than in cornell-spheres (99.8%): measured 98.8% matched (99.3% within 4e-3), and 98.9% for
     // 50 spheres through the specialised kernels at 2 photons per thread, so the divergence is the scene's,
     // not the thread count's. A photon lost or repeated per thread would cost far more.
-    assert!(matched * 1000 >= cpu.len() * 985, "only {matched} of {} CPU records have a GPU twin", cpu.len());
+    assert!(
+        matched * 1000 >= cpu.len() * 985,
+        "only {matched} of {} CPU records have a GPU twin",
+        cpu.len()
+    );
     drop(r);
     assert_clean(&ctx);
 }

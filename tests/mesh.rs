@@ -18,7 +18,8 @@ fn scene(name: &str) -> Scene {
 
 fn render(scene: &Scene, settings: Settings, passes: u32) -> RgbImage {
     let ctx = ctx();
-    let eye_paths_per_pass = scene.camera.width as u64 * scene.camera.height as u64 * (settings.slots() + settings.emission_samples) as u64;
+    let eye_paths_per_pass =
+        scene.camera.width as u64 * scene.camera.height as u64 * (settings.slots() + settings.emission_samples) as u64;
     let mut r = Renderer::new(&ctx, scene, settings).unwrap();
     let mut last = None;
     for _ in 0..passes {
@@ -30,8 +31,16 @@ fn render(scene: &Scene, settings: Settings, passes: u32) -> RgbImage {
     // photon and eye paths in cornell-spheres, 7e-5 with its glass sphere in 20480 facets.
     let s = last.unwrap();
     let paths = s.emitted_total + eye_paths_per_pass * passes as u64;
-    println!("paths cut: {} photon, {} eye, of {paths}", s.photon_paths_cut, s.eye_paths_cut);
-    assert!((s.photon_paths_cut + s.eye_paths_cut) * 5_000 <= paths, "{} photon and {} eye paths cut", s.photon_paths_cut, s.eye_paths_cut);
+    println!(
+        "paths cut: {} photon, {} eye, of {paths}",
+        s.photon_paths_cut, s.eye_paths_cut
+    );
+    assert!(
+        (s.photon_paths_cut + s.eye_paths_cut) * 5_000 <= paths,
+        "{} photon and {} eye paths cut",
+        s.photon_paths_cut,
+        s.eye_paths_cut
+    );
     let image = r.image().unwrap();
     assert_eq!(image.count_non_finite(), 0);
     drop(r);
@@ -40,7 +49,11 @@ fn render(scene: &Scene, settings: Settings, passes: u32) -> RgbImage {
 }
 
 fn sppm(photons: u32) -> Settings {
-    Settings { mode: Mode::Sppm, photons_per_pass: photons, ..Settings::default() }
+    Settings {
+        mode: Mode::Sppm,
+        photons_per_pass: photons,
+        ..Settings::default()
+    }
 }
 
 /// The furnace on a tessellated sphere (1280 triangles facing in, albedo 0.5, Le 1): L = 2 everywhere,
@@ -51,7 +64,9 @@ fn mesh_furnace_converges_to_le_over_one_minus_rho() {
     let mut s = scene("furnace-mesh.toml").with_resolution(24, 24);
     for (rho, le) in [(0.5f32, 1.0f32), (0.95, 0.05)] {
         for m in &mut s.materials {
-            m.surface = Surface::Diffuse { albedo: Vec3::splat(rho) };
+            m.surface = Surface::Diffuse {
+                albedo: Vec3::splat(rho),
+            };
             m.emission = Vec3::splat(le);
         }
         let want = le as f64 / (1.0 - rho as f64);
@@ -80,10 +95,19 @@ fn cornell_in_triangles_renders_the_analytic_image() {
     for region in cornell_regions() {
         let ea = compare(&analytic, &reference, Some(&region), true).unwrap();
         let em = compare(&mesh, &reference, Some(&region), true).unwrap();
-        println!("{}: relMSE analytic {:.5}, mesh {:.5}; bias {:+.4} / {:+.4}", region.name, ea.rel_mse, em.rel_mse, ea.mean_bias, em.mean_bias);
+        println!(
+            "{}: relMSE analytic {:.5}, mesh {:.5}; bias {:+.4} / {:+.4}",
+            region.name, ea.rel_mse, em.rel_mse, ea.mean_bias, em.mean_bias
+        );
         // Independent noise of equal variance: the ratio of two such errors stays within 1.5x at these
         // pixel counts (measured 0.8-1.2); a missing wall, a flipped light or leaking edges is far more.
-        assert!(em.rel_mse < 1.5 * ea.rel_mse + 1e-4, "{}: mesh relMSE {} vs analytic {}", region.name, em.rel_mse, ea.rel_mse);
+        assert!(
+            em.rel_mse < 1.5 * ea.rel_mse + 1e-4,
+            "{}: mesh relMSE {} vs analytic {}",
+            region.name,
+            em.rel_mse,
+            ea.rel_mse
+        );
     }
 }
 
@@ -93,14 +117,29 @@ fn cornell_in_triangles_renders_the_analytic_image() {
 #[test]
 fn a_tessellated_glass_sphere_casts_the_analytic_caustic() {
     let reference = Reference::load(Path::new(CORNELL_REFERENCE)).unwrap();
-    let settings = Settings { mode: Mode::Ppm, ..sppm(200_000) };
+    let settings = Settings {
+        mode: Mode::Ppm,
+        ..sppm(200_000)
+    };
     let analytic = render(&cornell(128, 128), settings.clone(), 12);
-    let mesh = render(&scene("cornell-glass-mesh.toml").with_resolution(128, 128), settings, 12);
+    let mesh = render(
+        &scene("cornell-glass-mesh.toml").with_resolution(128, 128),
+        settings,
+        12,
+    );
     let caustic = cornell_regions().into_iter().find(|r| r.name == "caustic").unwrap();
     let ea = compare(&analytic, &reference, Some(&caustic), true).unwrap();
     let em = compare(&mesh, &reference, Some(&caustic), true).unwrap();
-    println!("caustic relMSE: analytic {:.5}, mesh {:.5}; mean bias {:+.4} / {:+.4}", ea.rel_mse, em.rel_mse, ea.mean_bias, em.mean_bias);
-    assert!(em.rel_mse < 1.5 * ea.rel_mse + 1e-4, "mesh caustic relMSE {} vs analytic {}", em.rel_mse, ea.rel_mse);
+    println!(
+        "caustic relMSE: analytic {:.5}, mesh {:.5}; mean bias {:+.4} / {:+.4}",
+        ea.rel_mse, em.rel_mse, ea.mean_bias, em.mean_bias
+    );
+    assert!(
+        em.rel_mse < 1.5 * ea.rel_mse + 1e-4,
+        "mesh caustic relMSE {} vs analytic {}",
+        em.rel_mse,
+        ea.rel_mse
+    );
 }
 
 /// A square light tiled into 100k emitting triangles lights the scene as the one quad it replaces:
@@ -112,10 +151,17 @@ fn a_hundred_thousand_emitting_triangles_light_like_their_quad() {
     let li = tri_lit.lights()[0] as usize;
     let light = tri_lit.quads.remove(li);
     let n = 224u32; // 224 x 224 cells, two triangles each: 100352 triangles
-    let mut mesh = Mesh { name: "tiled light".into(), positions: Vec::new(), normals: None, indices: Vec::new(), materials: Vec::new() };
+    let mut mesh = Mesh {
+        name: "tiled light".into(),
+        positions: Vec::new(),
+        normals: None,
+        indices: Vec::new(),
+        materials: Vec::new(),
+    };
     for j in 0..=n {
         for i in 0..=n {
-            mesh.positions.push(light.origin + light.edge_u * (i as f32 / n as f32) + light.edge_v * (j as f32 / n as f32));
+            mesh.positions
+                .push(light.origin + light.edge_u * (i as f32 / n as f32) + light.edge_v * (j as f32 / n as f32));
         }
     }
     let at = |i: u32, j: u32| j * (n + 1) + i;
@@ -132,7 +178,10 @@ fn a_hundred_thousand_emitting_triangles_light_like_their_quad() {
     assert!(tri_lit.emitting_triangles().len() >= 100_000);
     // 20k photons a pass: at 32 x 32 eq. 8's radius is 17 cm, and more photons crowd a lookup past
     // lavapipe's loop budget (the gather says so).
-    let settings = Settings { seed: 3, ..sppm(20_000) };
+    let settings = Settings {
+        seed: 3,
+        ..sppm(20_000)
+    };
     let (a, b) = (render(&quad_lit, settings.clone(), 30), render(&tri_lit, settings, 30));
     let (ma, mb) = (a.mean(), b.mean());
     println!("mean: quad light {ma:?}, 100k triangles {mb:?}");
@@ -149,11 +198,18 @@ fn a_degenerate_bvh_stops_the_render_instead_of_losing_hits() {
     let mut s = cornell(16, 16);
     let floor = s.quads.iter().position(|q| q.normal().y > 0.9).unwrap();
     let q = s.quads[floor];
-    let mut mesh = Mesh { name: "stack".into(), positions: Vec::new(), normals: None, indices: Vec::new(), materials: Vec::new() };
+    let mut mesh = Mesh {
+        name: "stack".into(),
+        positions: Vec::new(),
+        normals: None,
+        indices: Vec::new(),
+        materials: Vec::new(),
+    };
     let lift = Vec3::Y * 1e-3;
     for _ in 0..70_000u32 {
         let base = mesh.positions.len() as u32;
-        mesh.positions.extend([q.origin + lift, q.origin + q.edge_u + lift, q.origin + q.edge_v + lift]);
+        mesh.positions
+            .extend([q.origin + lift, q.origin + q.edge_u + lift, q.origin + q.edge_v + lift]);
         mesh.indices.push([base, base + 1, base + 2]);
         mesh.materials.push(q.material);
     }
@@ -164,9 +220,14 @@ fn a_degenerate_bvh_stops_the_render_instead_of_losing_hits() {
         (Some(_), Err(e)) => {
             let msg = format!("{e:#}");
             println!("{msg}");
-            assert!(msg.contains("BVH") && msg.contains("loop iterations"), "unexpected error: {msg}");
+            assert!(
+                msg.contains("BVH") && msg.contains("loop iterations"),
+                "unexpected error: {msg}"
+            );
         }
-        (Some(_), Ok(())) => panic!("70000 stacked triangles traced within the loop budget: the test needs a harder case"),
+        (Some(_), Ok(())) => {
+            panic!("70000 stacked triangles traced within the loop budget: the test needs a harder case")
+        }
         (None, r) => r.unwrap(), // no loop budget: the traversal simply finishes
     }
     assert_clean(&ctx);

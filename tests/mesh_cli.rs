@@ -46,6 +46,8 @@ fn render_prints_mesh_warnings_and_renders_the_mesh() {
             && warnings[0].contains("map_Kd cup.png ignored"),
         "{stderr}"
     );
-    assert_eq!(warnings[1], format!("warning: {obj}: 1 degenerate triangles dropped (zero area or a repeated vertex)"));
-
+    assert_eq!(
+        warnings[1],
+        format!("warning: {obj}: 1 degenerate triangles dropped (zero area or a repeated vertex)")
+    );
 }

@@ -18,7 +18,14 @@ fn close3(a: Vec3, b: Vec3) -> bool {
 
 /// What a quad is to the renderer: its corner set (any order), front normal and area.
 fn same_quad(a: &Quad, b: &Quad) -> bool {
-    let corners = |q: &Quad| [q.origin, q.origin + q.edge_u, q.origin + q.edge_v, q.origin + q.edge_u + q.edge_v];
+    let corners = |q: &Quad| {
+        [
+            q.origin,
+            q.origin + q.edge_u,
+            q.origin + q.edge_v,
+            q.origin + q.edge_u + q.edge_v,
+        ]
+    };
     corners(a).iter().all(|p| corners(b).iter().any(|r| close3(*p, *r)))
         && close3(a.normal(), b.normal())
         && (a.area() - b.area()).abs() < 1e-5 * a.area()
@@ -31,10 +38,13 @@ fn same_material(a: &Material, b: &Material) -> bool {
 
 /// Emitted power per channel: pi * area * radiance summed over the emitting quads.
 fn power(s: &Scene) -> Vec3 {
-    s.lights().iter().map(|&i| {
-        let q = &s.quads[i as usize];
-        std::f32::consts::PI * q.area() * s.materials[q.material as usize].emission
-    }).sum()
+    s.lights()
+        .iter()
+        .map(|&i| {
+            let q = &s.quads[i as usize];
+            std::f32::consts::PI * q.area() * s.materials[q.material as usize].emission
+        })
+        .sum()
 }
 
 #[test]
@@ -43,7 +53,10 @@ fn reference_xml_is_the_toml_scene() {
     assert!(xml.warnings.is_empty(), "{:?}", xml.warnings);
     assert_eq!(xml.name, toml.name, "the name selects the cornell regions in `render`");
     let (a, b) = (xml.camera, toml.camera);
-    assert!(close3(a.eye, b.eye) && (a.vfov_deg - b.vfov_deg).abs() < 1e-4, "{a:?} vs {b:?}");
+    assert!(
+        close3(a.eye, b.eye) && (a.vfov_deg - b.vfov_deg).abs() < 1e-4,
+        "{a:?} vs {b:?}"
+    );
     assert_eq!((a.width, a.height), (b.width, b.height));
     let dir = |c: &ppm_vk_engine::scene::Camera| (c.look_at - c.eye).normalize();
     assert!(close3(dir(&a), dir(&b)));
@@ -53,13 +66,23 @@ fn reference_xml_is_the_toml_scene() {
     assert_eq!(xml.quads.len(), toml.quads.len());
     for q in &toml.quads {
         let m = &toml.materials[q.material as usize];
-        let found = xml.quads.iter().filter(|x| same_quad(x, q) && same_material(&xml.materials[x.material as usize], m)).count();
+        let found = xml
+            .quads
+            .iter()
+            .filter(|x| same_quad(x, q) && same_material(&xml.materials[x.material as usize], m))
+            .count();
         assert_eq!(found, 1, "quad {q:?} ({m:?}) in the XML scene: {:?}", xml.quads);
     }
     assert_eq!(xml.spheres.len(), toml.spheres.len());
     for (x, t) in xml.spheres.iter().zip(&toml.spheres) {
-        assert!(close3(x.center, t.center) && (x.radius - t.radius).abs() < 1e-6, "{x:?} vs {t:?}");
-        assert!(same_material(&xml.materials[x.material as usize], &toml.materials[t.material as usize]));
+        assert!(
+            close3(x.center, t.center) && (x.radius - t.radius).abs() < 1e-6,
+            "{x:?} vs {t:?}"
+        );
+        assert!(same_material(
+            &xml.materials[x.material as usize],
+            &toml.materials[t.material as usize]
+        ));
     }
     assert!(xml.meshes.is_empty() && toml.meshes.is_empty());
     assert!(close3(power(&xml), power(&toml)), "{} vs {}", power(&xml), power(&toml));
@@ -76,7 +99,20 @@ fn stderr_of(args: &[&str]) -> String {
 fn cli_defines_reach_the_scene_or_are_refused() {
     let out = std::env::temp_dir().join(format!("ppm-vk-mitsuba-cli-{}.png", std::process::id()));
     let run = bin()
-        .args(["render", CORNELL_XML, "-D", "res=16", "--define", "spp=4", "--passes", "1", "--photons-per-pass", "1000", "--validate", "--out"])
+        .args([
+            "render",
+            CORNELL_XML,
+            "-D",
+            "res=16",
+            "--define",
+            "spp=4",
+            "--passes",
+            "1",
+            "--photons-per-pass",
+            "1000",
+            "--validate",
+            "--out",
+        ])
         .arg(&out)
         .output()
         .unwrap();
@@ -87,13 +123,21 @@ fn cli_defines_reach_the_scene_or_are_refused() {
     let _ = std::fs::remove_file(&out);
 
     let e = stderr_of(&["render", CORNELL, "-D", "res=16"]);
-    assert!(e.contains("cornell-spheres.toml: -D res=16: parameters are for Mitsuba scenes (.xml)"), "{e}");
+    assert!(
+        e.contains("cornell-spheres.toml: -D res=16: parameters are for Mitsuba scenes (.xml)"),
+        "{e}"
+    );
     let e = stderr_of(&["render", CORNELL_XML, "-D", "resolution=16"]);
     assert!(e.contains("-D resolution=16: the scene never uses $resolution"), "{e}");
     let e = stderr_of(&["render", CORNELL_XML, "-D", "res"]);
     assert!(e.contains("expected NAME=VALUE"), "{e}");
     // A value that is not a number is refused where it is used.
     let e = stderr_of(&["render", CORNELL_XML, "-D", "res=big"]);
-    assert!(e.contains("cornell-spheres.xml:") && e.contains("<integer name=\"width\">") && e.contains("\"big\" is not a number"), "{e}");
+    assert!(
+        e.contains("cornell-spheres.xml:")
+            && e.contains("<integer name=\"width\">")
+            && e.contains("\"big\" is not a number"),
+        "{e}"
+    );
     assert!(Path::new(CORNELL_XML).exists());
 }

@@ -13,7 +13,13 @@ const RES: u32 = 32;
 const PROBE_PHOTONS: u32 = 20_000;
 
 fn settings(probe: ProbeMode) -> Settings {
-    Settings { mode: ppm_vk_engine::Mode::Ppm, photons_per_pass: 20_000, probe, probe_photons: Some(PROBE_PHOTONS), ..Settings::default() }
+    Settings {
+        mode: ppm_vk_engine::Mode::Ppm,
+        photons_per_pass: 20_000,
+        probe,
+        probe_photons: Some(PROBE_PHOTONS),
+        ..Settings::default()
+    }
 }
 
 /// The renderer's hit points and probed statistics, the CPU probe of the same hit points, and eq. 8's r:
@@ -24,7 +30,13 @@ fn gpu_and_cpu_probe(r: &Renderer) -> (Vec<HitPoint>, Vec<HitStats>, Vec<(f64, f
     let gpu = r.read_stats().unwrap();
     let photons = reference::photon_pass(g, 0, PROBE_PHOTONS, SALT_PROBE);
     let r0 = g.initial_radius as f64;
-    let start = vec![HitStats { r2: r0 * r0, ..Default::default() }; hits.len()];
+    let start = vec![
+        HitStats {
+            r2: r0 * r0,
+            ..Default::default()
+        };
+        hits.len()
+    ];
     let cpu = reference::probe(&hits, &start, &photons, r.settings().probe, r.settings().probe_beta);
     (hits, gpu, cpu, r0)
 }
@@ -53,11 +65,18 @@ fn probe_case(mode: ProbeMode) {
         let same = (s.probe - ratio).abs() <= 1e-4 && (s.r2 - r2).abs() <= 2e-4 * r2;
         agree += same as usize;
         worst = worst.max((s.probe - ratio).abs());
-        assert!(s.probe.is_finite() && (0.0..=1.0).contains(&s.probe), "slot {i}: lambda/r^2 {}", s.probe);
+        assert!(
+            s.probe.is_finite() && (0.0..=1.0).contains(&s.probe),
+            "slot {i}: lambda/r^2 {}",
+            s.probe
+        );
         assert!(s.r2 >= r0 * r0 * (1.0 - 1e-12), "slot {i}: the probe shrank a radius");
     }
     println!("{mode:?}: {agree} of {live} hit points agree with the CPU probe (worst |d lambda/r^2| {worst:.2e}), {enlarged} enlarged");
-    assert!(agree * 100 >= live * 90, "{mode:?}: only {agree} of {live} hit points agree");
+    assert!(
+        agree * 100 >= live * 90,
+        "{mode:?}: only {agree} of {live} hit points agree"
+    );
     // A diverged record moves one mean by at most 1/N with N in the hundreds: never by 0.02.
     assert!(worst < 0.02, "{mode:?}: a hit point's lambda/r^2 differs by {worst}");
     assert!(enlarged > 0, "{mode:?}: the probe enlarged nothing");
@@ -79,7 +98,13 @@ fn probe_identical_photons(mode: ProbeMode) {
     let mut r = Renderer::new(&ctx, &cornell(RES, RES), settings(mode)).unwrap();
     let g = r.gpu_scene().clone();
     let r0 = g.initial_radius as f64;
-    let start = vec![ppm_vk_engine::layout::HitStats { r2: r0 * r0, ..Default::default() }; g.slots() as usize];
+    let start = vec![
+        ppm_vk_engine::layout::HitStats {
+            r2: r0 * r0,
+            ..Default::default()
+        };
+        g.slots() as usize
+    ];
     r.write_stats(&start).unwrap(); // undo the probe Renderer::new ran
     let records = r.trace_and_probe(0, PROBE_PHOTONS).unwrap();
     let accum = r.read_accum().unwrap();
@@ -98,8 +123,16 @@ fn probe_identical_photons(mode: ProbeMode) {
         assert_eq!(accum[i].m, m, "{mode:?} slot {i}: M");
         // d^2 / r^2 per photon in f32 rounded to 2.30 fixed point against f64: 1e-6 covers both.
         let (ratio, r2) = cpu[i];
-        assert!((after[i].probe - ratio).abs() <= 1e-6, "{mode:?} slot {i}: lambda/r^2 GPU {} CPU {ratio}", after[i].probe);
-        assert!((after[i].r2 - r2).abs() <= 2e-6 * r2, "{mode:?} slot {i}: r'^2 GPU {} CPU {r2}", after[i].r2);
+        assert!(
+            (after[i].probe - ratio).abs() <= 1e-6,
+            "{mode:?} slot {i}: lambda/r^2 GPU {} CPU {ratio}",
+            after[i].probe
+        );
+        assert!(
+            (after[i].r2 - r2).abs() <= 2e-6 * r2,
+            "{mode:?} slot {i}: r'^2 GPU {} CPU {r2}",
+            after[i].r2
+        );
     }
     assert!(live > 1000, "only {live} hit points");
     assert_clean(&ctx);
@@ -127,7 +160,15 @@ fn probe_scale_free_matches_reference() {
 fn render_scaled(s: f32, probe: ProbeMode, passes: u32) -> ([f64; 3], f64) {
     let ctx = ctx();
     let scene = cornell(RES, RES).scaled(s);
-    let mut r = Renderer::new(&ctx, &scene, Settings { photons_per_pass: 20_000, ..settings(probe) }).unwrap();
+    let mut r = Renderer::new(
+        &ctx,
+        &scene,
+        Settings {
+            photons_per_pass: 20_000,
+            ..settings(probe)
+        },
+    )
+    .unwrap();
     for _ in 0..passes {
         r.pass().unwrap();
     }
@@ -163,8 +204,14 @@ fn paper_probe_depends_on_the_scene_units() {
     let (_, g1) = render_scaled(1.0, ProbeMode::Paper, 0);
     let (_, g1000) = render_scaled(1e3, ProbeMode::Paper, 0);
     println!("paper probe: mean radius growth {g1:.4} in metres, {g1000:.3} in millimetres");
-    assert!((1.02..1.2).contains(&g1), "in metres: growth {g1}, expected ~1 + r/2 = 1.08");
-    assert!(g1000 > 20.0, "in millimetres the paper's rule should enlarge r tens of times: {g1000}");
+    assert!(
+        (1.02..1.2).contains(&g1),
+        "in metres: growth {g1}, expected ~1 + r/2 = 1.08"
+    );
+    assert!(
+        g1000 > 20.0,
+        "in millimetres the paper's rule should enlarge r tens of times: {g1000}"
+    );
 }
 
 /// SPPM with the probe: a pixel whose first eye path left no hit point (it saw the light, or its glass
@@ -175,20 +222,31 @@ fn paper_probe_depends_on_the_scene_units() {
 fn sppm_probe_leaves_pixels_without_a_hit_point_at_r() {
     let ctx = ctx();
     let scene = cornell(RES, RES);
-    let settings = Settings { mode: ppm_vk_engine::Mode::Sppm, ..settings(ProbeMode::ScaleFree) };
+    let settings = Settings {
+        mode: ppm_vk_engine::Mode::Sppm,
+        ..settings(ProbeMode::ScaleFree)
+    };
     let r = Renderer::new(&ctx, &scene, settings).unwrap();
     let (hits, gpu, cpu, r0) = gpu_and_cpu_probe(&r);
     let empty: Vec<usize> = (0..hits.len()).filter(|&i| hits[i].is_empty()).collect();
     println!("{} of {} pixels have no hit point", empty.len(), hits.len());
-    assert!(!empty.is_empty(), "the test needs pixels without a hit point (the light is in view)");
+    assert!(
+        !empty.is_empty(),
+        "the test needs pixels without a hit point (the light is in view)"
+    );
     for &i in &empty {
         assert_eq!(gpu[i].r2, r0 * r0, "pixel {i}: no hit point, yet its radius changed");
         assert_eq!(cpu[i].1, r0 * r0);
     }
     let live = hits.len() - empty.len();
-    let agree = (0..hits.len()).filter(|&i| !hits[i].is_empty() && (gpu[i].r2 - cpu[i].1).abs() <= 2e-4 * cpu[i].1).count();
+    let agree = (0..hits.len())
+        .filter(|&i| !hits[i].is_empty() && (gpu[i].r2 - cpu[i].1).abs() <= 2e-4 * cpu[i].1)
+        .count();
     // As in PPM (probe_case): paths that diverged at a threshold move some hit points' means; 90%.
-    assert!(agree * 100 >= live * 90, "only {agree} of {live} hit points agree with the CPU probe");
+    assert!(
+        agree * 100 >= live * 90,
+        "only {agree} of {live} hit points agree with the CPU probe"
+    );
     drop(r);
     assert_clean(&ctx);
 }

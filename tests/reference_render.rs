@@ -54,11 +54,22 @@ fn score(image: &RgbImage) -> Result<Scores, String> {
         return Err(format!("{} non-finite pixel components", image.count_non_finite()));
     }
     let regions = cornell_regions();
-    let region = |name: &str| regions.iter().find(|r| r.name == name).cloned().ok_or(format!("no region {name}"));
+    let region = |name: &str| {
+        regions
+            .iter()
+            .find(|r| r.name == name)
+            .cloned()
+            .ok_or(format!("no region {name}"))
+    };
     let cmp = |name: &str| -> Result<metrics::ErrorStats, String> {
         metrics::compare(image, refr, Some(&region(name)?), true).map_err(|e| format!("{e:#}"))
     };
-    Ok(Scores { mean: image.mean(), ref_mean: refr.image.mean(), back_wall: cmp("back_wall")?, caustic: cmp("caustic")? })
+    Ok(Scores {
+        mean: image.mean(),
+        ref_mean: refr.image.mean(),
+        back_wall: cmp("back_wall")?,
+        caustic: cmp("caustic")?,
+    })
 }
 
 /// The checks every good render must pass: mean per channel within 2% of the reference's mean, and relMSE
@@ -70,11 +81,19 @@ fn check_against_reference(image: &RgbImage) -> Result<(), String> {
     for c in 0..3 {
         let rel = (s.mean[c] - s.ref_mean[c]) / s.ref_mean[c];
         if rel.abs() > MEAN_TOL {
-            errors.push(format!("channel {c}: mean {:.4} vs reference {:.4} ({:+.2}%)", s.mean[c], s.ref_mean[c], 100.0 * rel));
+            errors.push(format!(
+                "channel {c}: mean {:.4} vs reference {:.4} ({:+.2}%)",
+                s.mean[c],
+                s.ref_mean[c],
+                100.0 * rel
+            ));
         }
     }
     if !(s.back_wall.rel_mse <= BACK_WALL_REL_MSE) {
-        errors.push(format!("back_wall relMSE {:.5} > {BACK_WALL_REL_MSE}", s.back_wall.rel_mse));
+        errors.push(format!(
+            "back_wall relMSE {:.5} > {BACK_WALL_REL_MSE}",
+            s.back_wall.rel_mse
+        ));
     }
     if !(s.caustic.rel_mse <= CAUSTIC_REL_MSE) {
         errors.push(format!("caustic relMSE {:.5} > {CAUSTIC_REL_MSE}", s.caustic.rel_mse));
@@ -97,13 +116,25 @@ fn render_scene(path: &str) -> (RgbImage, Vec<String>) {
         load(path).with_resolution(RES, RES)
     };
     assert_eq!((scene.camera.width, scene.camera.height), (RES, RES));
-    let mut r = Renderer::new(&ctx, &scene, Settings { mode: ppm_vk_engine::Mode::Ppm, photons_per_pass: PHOTONS, ..Settings::default() }).unwrap();
+    let mut r = Renderer::new(
+        &ctx,
+        &scene,
+        Settings {
+            mode: ppm_vk_engine::Mode::Ppm,
+            photons_per_pass: PHOTONS,
+            ..Settings::default()
+        },
+    )
+    .unwrap();
     let t = std::time::Instant::now();
     for _ in 0..PASSES {
         r.pass().unwrap();
     }
     let image = r.image().unwrap();
-    println!("rendered {path} at {RES}x{RES}, {PASSES} passes of {PHOTONS} photons in {:.1} s", t.elapsed().as_secs_f64());
+    println!(
+        "rendered {path} at {RES}x{RES}, {PASSES} passes of {PHOTONS} photons in {:.1} s",
+        t.elapsed().as_secs_f64()
+    );
     drop(r);
     (image, ctx.validation_messages())
 }
@@ -137,12 +168,24 @@ fn mitsuba_xml_matches_reference_and_toml_render() {
     // the same geometry, quad corners in another order); the bounds leave room for noise alone.
     for c in 0..3 {
         let rel = (xml.mean[c] - toml.mean[c]) / toml.mean[c];
-        assert!(rel.abs() < 0.002, "channel {c}: XML mean {:.4} vs TOML {:.4}", xml.mean[c], toml.mean[c]);
+        assert!(
+            rel.abs() < 0.002,
+            "channel {c}: XML mean {:.4} vs TOML {:.4}",
+            xml.mean[c],
+            toml.mean[c]
+        );
     }
-    for (name, x, t) in [("back_wall", xml.back_wall.rel_mse, toml.back_wall.rel_mse), ("caustic", xml.caustic.rel_mse, toml.caustic.rel_mse)] {
+    for (name, x, t) in [
+        ("back_wall", xml.back_wall.rel_mse, toml.back_wall.rel_mse),
+        ("caustic", xml.caustic.rel_mse, toml.caustic.rel_mse),
+    ] {
         assert!((x / t - 1.0).abs() < 0.25, "{name} relMSE: XML {x:.5} vs TOML {t:.5}");
     }
-    println!("XML {:?}\nTOML {:?}", (xml.mean, xml.back_wall.rel_mse, xml.caustic.rel_mse), (toml.mean, toml.back_wall.rel_mse, toml.caustic.rel_mse));
+    println!(
+        "XML {:?}\nTOML {:?}",
+        (xml.mean, xml.back_wall.rel_mse, xml.caustic.rel_mse),
+        (toml.mean, toml.back_wall.rel_mse, toml.caustic.rel_mse)
+    );
 }
 
 /// A kernel that applied the BRDF's 1/pi twice would scale the image by 1/pi: the checks must see it.

@@ -13,7 +13,13 @@ const RES: u32 = 32;
 const BUILD: &str = "test-build";
 
 fn settings(mode: Mode) -> Settings {
-    Settings { mode, photons_per_pass: 10_000, probe: ProbeMode::ScaleFree, emission_samples: 2, ..Settings::default() }
+    Settings {
+        mode,
+        photons_per_pass: 10_000,
+        probe: ProbeMode::ScaleFree,
+        emission_samples: 2,
+        ..Settings::default()
+    }
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -47,13 +53,25 @@ fn resume_is_bit_exact(mode: Mode) {
     assert_eq!((checkpoint.header.passes, checkpoint.header.emitted), (3, 30_000));
     let mut resumed = Renderer::resume(&ctx, &scene, settings(mode), &checkpoint, BUILD).unwrap();
     assert_eq!(resumed.probe_report(), checkpoint.header.probe.as_ref());
-    assert!(resumed.probe_report().is_some_and(|p| p.enlarged > 0), "the probe must have changed radii to be tested");
+    assert!(
+        resumed.probe_report().is_some_and(|p| p.enlarged > 0),
+        "the probe must have changed radii to be tested"
+    );
     let continued = render(&mut resumed, 3);
     assert_eq!((resumed.passes(), resumed.emitted()), (6, 60_000));
     // The passes after the checkpoint changed the image: the equality below is not of an idle state.
     assert_ne!(bits(&half), bits(&whole), "{mode:?}: 3 passes gave the image of 6");
-    let differ = bits(&continued).iter().zip(bits(&whole)).filter(|(a, b)| *a != b).count();
-    assert_eq!(differ, 0, "{mode:?}: {differ} of {} channels differ after resuming", RES * RES * 3);
+    let differ = bits(&continued)
+        .iter()
+        .zip(bits(&whole))
+        .filter(|(a, b)| *a != b)
+        .count();
+    assert_eq!(
+        differ,
+        0,
+        "{mode:?}: {differ} of {} channels differ after resuming",
+        RES * RES * 3
+    );
     assert_clean(&ctx);
 }
 
@@ -74,18 +92,37 @@ fn foreign_checkpoints_are_refused_saying_which() {
     let mut r = Renderer::new(&ctx, &scene, settings(Mode::Sppm)).unwrap();
     r.pass().unwrap();
     let checkpoint = r.checkpoint(BUILD).unwrap();
-    let refusal = |scene: &Scene, settings: Settings, build: &str| match Renderer::resume(&ctx, scene, settings, &checkpoint, build) {
+    let refusal = |scene: &Scene, settings: Settings, build: &str| match Renderer::resume(
+        &ctx,
+        scene,
+        settings,
+        &checkpoint,
+        build,
+    ) {
         Ok(_) => panic!("resumed a checkpoint that does not match"),
         Err(e) => format!("{e:#}"),
     };
     let e = refusal(&scene, settings(Mode::Sppm), "another-build");
     assert!(e.contains("build test-build") && e.contains("another-build"), "{e}");
     let e = refusal(&furnace(RES, RES), settings(Mode::Sppm), BUILD);
-    assert!(e.contains("another scene") && e.contains("cornell-spheres") && e.contains("furnace"), "{e}");
+    assert!(
+        e.contains("another scene") && e.contains("cornell-spheres") && e.contains("furnace"),
+        "{e}"
+    );
     let e = refusal(&cornell(RES, 2 * RES), settings(Mode::Sppm), BUILD);
     assert!(e.contains("another scene") && e.contains("32x64"), "{e}");
-    let e = refusal(&scene, Settings { alpha: 0.6, ..settings(Mode::Sppm) }, BUILD);
-    assert!(e.contains("other settings") && e.contains("alpha: 0.7 in the checkpoint, 0.6 now"), "{e}");
+    let e = refusal(
+        &scene,
+        Settings {
+            alpha: 0.6,
+            ..settings(Mode::Sppm)
+        },
+        BUILD,
+    );
+    assert!(
+        e.contains("other settings") && e.contains("alpha: 0.7 in the checkpoint, 0.6 now"),
+        "{e}"
+    );
     assert!(!e.contains("seed"), "only what differs is named: {e}");
     assert_clean(&ctx);
 }
@@ -101,6 +138,9 @@ fn scene_hash_covers_mesh_content() {
     assert_ne!(scene.content_sha256(), moved.content_sha256());
     let mut renamed = scene.clone();
     renamed.meshes[0].name = "elsewhere/mesh.obj".into();
-    renamed.materials.iter_mut().for_each(|m| m.name = format!("elsewhere:{}", m.name));
+    renamed
+        .materials
+        .iter_mut()
+        .for_each(|m| m.name = format!("elsewhere:{}", m.name));
     assert_eq!(scene.content_sha256(), renamed.content_sha256());
 }

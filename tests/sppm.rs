@@ -12,7 +12,11 @@ use ppm_vk_engine::{reference, Mode, Renderer, Settings};
 const RES: u32 = 32;
 
 fn sppm(photons: u32) -> Settings {
-    Settings { mode: Mode::Sppm, photons_per_pass: photons, ..Settings::default() }
+    Settings {
+        mode: Mode::Sppm,
+        photons_per_pass: photons,
+        ..Settings::default()
+    }
 }
 
 /// GPU hit points of eye pass `pass` against the CPU's: the same slots filled, positions and weights
@@ -29,11 +33,18 @@ fn check_eye_pass(r: &Renderer, pass: u32) {
         .zip(&cpu)
         .filter(|(a, b)| {
             a.is_empty() == b.is_empty()
-                && (0..3).all(|c| (a.pos[c] - b.pos[c]).abs() <= tol && (a.weight[c] - b.weight[c]).abs() <= 1e-4 * b.weight[c].abs().max(1e-3))
+                && (0..3).all(|c| {
+                    (a.pos[c] - b.pos[c]).abs() <= tol
+                        && (a.weight[c] - b.weight[c]).abs() <= 1e-4 * b.weight[c].abs().max(1e-3)
+                })
         })
         .count();
     println!("eye pass {pass}: {agree} of {} hit points agree", gpu.len());
-    assert!(agree * 1000 >= gpu.len() * 995, "eye pass {pass}: only {agree} of {} agree", gpu.len());
+    assert!(
+        agree * 1000 >= gpu.len() * 995,
+        "eye pass {pass}: only {agree} of {} agree",
+        gpu.len()
+    );
 }
 
 #[test]
@@ -56,8 +67,16 @@ fn eye_passes_and_statistics_match_reference() {
         assert_eq!(accum[i].m, cpu_gather[i].0, "pixel {i}: M");
         let cpu = reference::update(&before[i], &accum[i], hits[i].weight, r.settings().alpha, flux_fixed);
         // f64 on both sides from the same fixed-point sums: only the last bits may differ.
-        for (x, y) in [(after[i].n, cpu.n), (after[i].r2, cpu.r2), (after[i].tau_r, cpu.tau_r), (after[i].tau_b, cpu.tau_b)] {
-            assert!((x - y).abs() <= 1e-12 * y.abs().max(1e-300), "pixel {i}: GPU {x} CPU {y}");
+        for (x, y) in [
+            (after[i].n, cpu.n),
+            (after[i].r2, cpu.r2),
+            (after[i].tau_r, cpu.tau_r),
+            (after[i].tau_b, cpu.tau_b),
+        ] {
+            assert!(
+                (x - y).abs() <= 1e-12 * y.abs().max(1e-300),
+                "pixel {i}: GPU {x} CPU {y}"
+            );
         }
         updated += (accum[i].m > 0) as usize;
     }
@@ -87,8 +106,18 @@ fn sppm_converges_to_the_box_filtered_reference_at_edges() {
     };
     let s = render(sppm(50_000), 40);
     // PPM's hit points sit at pixel centres; without emission samples its direct term does too.
-    let ppm = Settings { mode: Mode::Ppm, photons_per_pass: 50_000, ..Settings::default() };
-    let p = render(Settings { emission_samples: 0, ..ppm.clone() }, 40);
+    let ppm = Settings {
+        mode: Mode::Ppm,
+        photons_per_pass: 50_000,
+        ..Settings::default()
+    };
+    let p = render(
+        Settings {
+            emission_samples: 0,
+            ..ppm.clone()
+        },
+        40,
+    );
     let pe = render(ppm, 40);
     assert_eq!(s.count_non_finite(), 0);
     let es = compare(&s, &reference, None, true).unwrap();
@@ -103,12 +132,25 @@ fn sppm_converges_to_the_box_filtered_reference_at_edges() {
     for c in 0..3 {
         // 2%: the same bound as the PPM reference test; the photon estimate is unbiased in the limit and
         // the direct term is averaged over 40 jittered samples per pixel.
-        assert!((mean[c] / want[c] - 1.0).abs() < 0.02, "mean {mean:?} vs reference {want:?}");
+        assert!(
+            (mean[c] / want[c] - 1.0).abs() < 0.02,
+            "mean {mean:?} vs reference {want:?}"
+        );
     }
     // Edges dominate a whole-image RMSE (the light: 34 against ~0.5); SPPM, and PPM with jittered emission
     // samples, must beat PPM's pixel-centre samples there clearly. Measured: SPPM 0.168 (relMSE 0.0056),
     // PPM 0.821 (relMSE 0.0142) before emission samples.
-    assert!(es.rmse < 0.5 * ep.rmse, "SPPM RMSE {} is not clearly below PPM's {}", es.rmse, ep.rmse);
-    assert!(epe.rmse < 0.5 * ep.rmse, "PPM with emission samples: RMSE {} is not clearly below {}", epe.rmse, ep.rmse);
+    assert!(
+        es.rmse < 0.5 * ep.rmse,
+        "SPPM RMSE {} is not clearly below PPM's {}",
+        es.rmse,
+        ep.rmse
+    );
+    assert!(
+        epe.rmse < 0.5 * ep.rmse,
+        "PPM with emission samples: RMSE {} is not clearly below {}",
+        epe.rmse,
+        ep.rmse
+    );
     assert_clean(&ctx);
 }

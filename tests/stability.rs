@@ -9,7 +9,11 @@ use ppm_vk_engine::{reference, Renderer, RgbImage, Scene, Settings};
 use ppm_vk_kernels::photon::SALT_PHOTON;
 
 fn small(photons: u32) -> Settings {
-    Settings { mode: ppm_vk_engine::Mode::Ppm, photons_per_pass: photons, ..Settings::default() }
+    Settings {
+        mode: ppm_vk_engine::Mode::Ppm,
+        photons_per_pass: photons,
+        ..Settings::default()
+    }
 }
 
 fn render(scene: &Scene, settings: Settings, passes: u32) -> RgbImage {
@@ -31,8 +35,21 @@ fn same_seed_same_image_bit_for_bit() {
     let scene = cornell(32, 32);
     let a = render(&scene, small(20_000), 3);
     let b = render(&scene, small(20_000), 3);
-    assert!(a.pixels.iter().zip(&b.pixels).all(|(x, y)| x.map(f32::to_bits) == y.map(f32::to_bits)), "images differ");
-    let c = render(&scene, Settings { seed: 1, ..small(20_000) }, 3);
+    assert!(
+        a.pixels
+            .iter()
+            .zip(&b.pixels)
+            .all(|(x, y)| x.map(f32::to_bits) == y.map(f32::to_bits)),
+        "images differ"
+    );
+    let c = render(
+        &scene,
+        Settings {
+            seed: 1,
+            ..small(20_000)
+        },
+        3,
+    );
     assert!(a.pixels != c.pixels, "another seed gave the same image");
 }
 
@@ -44,41 +61,91 @@ fn photon_streams_and_counts_past_32_bits() {
     // Photon 2^32 + 7 has its own stream: truncating the index to 32 bits would repeat photon 7.
     let low = r.trace_and_gather(7, 500).unwrap();
     let high = r.trace_and_gather((1u64 << 32) + 7, 500).unwrap();
-    assert_ne!(low.iter().map(|p| p.pos).collect::<Vec<_>>(), high.iter().map(|p| p.pos).collect::<Vec<_>>());
+    assert_ne!(
+        low.iter().map(|p| p.pos).collect::<Vec<_>>(),
+        high.iter().map(|p| p.pos).collect::<Vec<_>>()
+    );
     let cpu = reference::photon_pass(&g, (1u64 << 32) + 7, 500, SALT_PHOTON);
-    assert!((high.len() as i64 - cpu.len() as i64).abs() <= 3, "GPU {} CPU {} records past 2^32", high.len(), cpu.len());
+    assert!(
+        (high.len() as i64 - cpu.len() as i64).abs() <= 3,
+        "GPU {} CPU {} records past 2^32",
+        high.len(),
+        cpu.len()
+    );
     // The emitted total crosses 2^32 exactly, and the resolve divides by it in double.
     r.set_emitted((1u64 << 32) - 1_000);
     r.write_accum(&vec![PassAccum::default(); g.slots() as usize]).unwrap();
     let s = r.pass().unwrap();
     assert_eq!(s.emitted_total, (1u64 << 32) + 3_000);
     let image = r.image().unwrap();
-    let cpu = reference::resolve(&g, &r.read_stats().unwrap(), &r.read_direct().unwrap(), s.emitted_total as f64, 1.0);
+    let cpu = reference::resolve(
+        &g,
+        &r.read_stats().unwrap(),
+        &r.read_direct().unwrap(),
+        s.emitted_total as f64,
+        1.0,
+    );
     for (p, c) in image.pixels.iter().zip(&cpu) {
         for ch in 0..3 {
-            assert!((p[ch] as f64 - c[ch]).abs() <= 1e-5 * c[ch].abs().max(1e-6), "{p:?} vs {c:?}");
+            assert!(
+                (p[ch] as f64 - c[ch]).abs() <= 1e-5 * c[ch].abs().max(1e-6),
+                "{p:?} vs {c:?}"
+            );
         }
     }
     // Per-hit-point N near 2^32: the update adds alpha M without losing it (f64 on the device).
     let slots = g.slots() as usize;
-    let stats = vec![HitStats { n: 4_294_967_000.0, r2: 1e-4, tau_r: 1.0, tau_g: 1.0, tau_b: 1.0, probe: 0.0 }; slots];
+    let stats = vec![
+        HitStats {
+            n: 4_294_967_000.0,
+            r2: 1e-4,
+            tau_r: 1.0,
+            tau_g: 1.0,
+            tau_b: 1.0,
+            probe: 0.0
+        };
+        slots
+    ];
     r.write_stats(&stats).unwrap();
-    r.write_accum(&vec![PassAccum { flux_r: 1 << 20, flux_g: 1 << 20, flux_b: 1 << 20, m: 3, pad0: 0 }; slots]).unwrap();
+    r.write_accum(&vec![
+        PassAccum {
+            flux_r: 1 << 20,
+            flux_g: 1 << 20,
+            flux_b: 1 << 20,
+            m: 3,
+            pad0: 0
+        };
+        slots
+    ])
+    .unwrap();
     r.update_only().unwrap();
     let hits = r.read_hit_points().unwrap();
     for (i, (s, h)) in r.read_stats().unwrap().iter().zip(&hits).enumerate() {
         if h.is_empty() {
             continue;
         }
-        assert_eq!(s.n, 4_294_967_000.0 + 0.7f32 as f64 * 3.0, "slot {i}: N lost the increment");
+        assert_eq!(
+            s.n,
+            4_294_967_000.0 + 0.7f32 as f64 * 3.0,
+            "slot {i}: N lost the increment"
+        );
     }
     assert_clean(&ctx);
 }
 
 /// The f64 update applied `steps` times with M photons each pass, as the CPU model.
 fn model(steps: usize, m: u32, alpha: f32, flux_fixed: f32) -> HitStats {
-    let mut s = HitStats { r2: 1e-4, ..Default::default() };
-    let a = PassAccum { flux_r: 1 << 22, flux_g: 1 << 22, flux_b: 1 << 22, m, pad0: 0 };
+    let mut s = HitStats {
+        r2: 1e-4,
+        ..Default::default()
+    };
+    let a = PassAccum {
+        flux_r: 1 << 22,
+        flux_g: 1 << 22,
+        flux_b: 1 << 22,
+        m,
+        pad0: 0,
+    };
     for _ in 0..steps {
         s = reference::update(&s, &a, [0.2, 0.2, 0.2], alpha, flux_fixed);
     }
@@ -96,8 +163,24 @@ fn long_runs_stay_finite_positive_and_exact() {
     let weight = [0.2f32; 3];
     // Give every non-empty hit point the same weight so one CPU model serves all (weights come from
     // the ray pass; the model uses 0.2): compare through the ratio tau / weight instead.
-    r.write_stats(&vec![HitStats { r2: 1e-4, ..Default::default() }; slots]).unwrap();
-    let accum = vec![PassAccum { flux_r: 1 << 22, flux_g: 1 << 22, flux_b: 1 << 22, m: 20, pad0: 0 }; slots];
+    r.write_stats(&vec![
+        HitStats {
+            r2: 1e-4,
+            ..Default::default()
+        };
+        slots
+    ])
+    .unwrap();
+    let accum = vec![
+        PassAccum {
+            flux_r: 1 << 22,
+            flux_g: 1 << 22,
+            flux_b: 1 << 22,
+            m: 20,
+            pad0: 0
+        };
+        slots
+    ];
     for _ in 0..2000 {
         r.write_accum(&accum).unwrap();
         r.update_only().unwrap();
@@ -107,9 +190,16 @@ fn long_runs_stay_finite_positive_and_exact() {
         if h.is_empty() {
             continue;
         }
-        assert!((s.n - m.n).abs() <= 1e-12 * m.n && (s.r2 - m.r2).abs() <= 1e-9 * m.r2, "slot {i}: {s:?} vs {m:?}");
+        assert!(
+            (s.n - m.n).abs() <= 1e-12 * m.n && (s.r2 - m.r2).abs() <= 1e-9 * m.r2,
+            "slot {i}: {s:?} vs {m:?}"
+        );
         let tau = s.tau_r / h.weight[0] as f64 * weight[0] as f64;
-        assert!((tau - m.tau_r).abs() <= 1e-9 * m.tau_r, "slot {i}: tau {tau} vs {}", m.tau_r);
+        assert!(
+            (tau - m.tau_r).abs() <= 1e-9 * m.tau_r,
+            "slot {i}: tau {tau} vs {}",
+            m.tau_r
+        );
     }
     assert_clean(&ctx);
     // The CPU model (the same f64 operations, checked equal above) over 10^5 and 10^6 updates: N counts
@@ -176,13 +266,42 @@ fn irradiance_under_a_square_light_matches_its_closed_form() {
     // ~0.25% across it (E ~ (1 + d^2/h^2)^-2), and gathers ~500 photons per pass per hit point. The cone
     // filter's normalisation (eq. 11) and the probe's radii (eq. 9: 1.5x here, where the density is even)
     // are checked against the closed form too, not only against their CPU twins.
-    let base = Settings { initial_radius: Some(0.05), ..small(200_000) };
+    let base = Settings {
+        initial_radius: Some(0.05),
+        ..small(200_000)
+    };
     let configs = [
         ("plain", base.clone()),
-        ("cone 1.1", Settings { cone_k: Some(1.1), ..base.clone() }),
-        ("cone 1.0", Settings { cone_k: Some(1.0), ..base.clone() }),
-        ("probe scale-free", Settings { probe: ppm_vk_engine::ProbeMode::ScaleFree, ..base.clone() }),
-        ("SPPM, probe and cone", Settings { mode: ppm_vk_engine::Mode::Sppm, probe: ppm_vk_engine::ProbeMode::ScaleFree, cone_k: Some(1.1), ..base }),
+        (
+            "cone 1.1",
+            Settings {
+                cone_k: Some(1.1),
+                ..base.clone()
+            },
+        ),
+        (
+            "cone 1.0",
+            Settings {
+                cone_k: Some(1.0),
+                ..base.clone()
+            },
+        ),
+        (
+            "probe scale-free",
+            Settings {
+                probe: ppm_vk_engine::ProbeMode::ScaleFree,
+                ..base.clone()
+            },
+        ),
+        (
+            "SPPM, probe and cone",
+            Settings {
+                mode: ppm_vk_engine::Mode::Sppm,
+                probe: ppm_vk_engine::ProbeMode::ScaleFree,
+                cone_k: Some(1.1),
+                ..base
+            },
+        ),
     ];
     for (name, settings) in configs {
         let image = render(&scene, settings, 20);
@@ -192,7 +311,11 @@ fn irradiance_under_a_square_light_matches_its_closed_form() {
             // 3%: with alpha = 0.7 a hit point keeps ~7000 of its ~10000 photons (1.2% noise; the 64 pixels'
             // discs overlap, so their mean averages little of it), plus the 0.25% falloff bias (0.6% at the
             // probe's 1.5x radius): 2.5 sigma. A wrong cone normalisation is off by 2/(3k) - 2/(3k') or more.
-            assert!((got[c] / want - 1.0).abs() < 0.03, "{name}, channel {c}: {} vs {want}", got[c]);
+            assert!(
+                (got[c] / want - 1.0).abs() < 0.03,
+                "{name}, channel {c}: {} vs {want}",
+                got[c]
+            );
         }
     }
 }
@@ -265,7 +388,10 @@ fn albedo_one_box_and_camera_inside_glass_stay_finite() {
     inside.camera.eye = glam::Vec3::new(0.0, -0.5, 0.0);
     inside.camera.look_at = glam::Vec3::new(0.0, -0.5, -1.0);
     let image = render(&inside, small(20_000), 3);
-    assert!(image.mean().iter().all(|&c| c > 0.0), "camera inside glass: black image");
+    assert!(
+        image.mean().iter().all(|&c| c > 0.0),
+        "camera inside glass: black image"
+    );
 }
 
 /// `scene` moved by `t` (geometry and camera).
@@ -401,7 +527,15 @@ material = "glass"
 fn hot_spot_sums_match_an_f64_brute_force() {
     let scene = Scene::parse(HOT_SPOT, "hot-spot.toml").unwrap();
     let ctx = ctx();
-    let mut r = Renderer::new(&ctx, &scene, Settings { initial_radius: Some(0.01), ..small(200_000) }).unwrap();
+    let mut r = Renderer::new(
+        &ctx,
+        &scene,
+        Settings {
+            initial_radius: Some(0.01),
+            ..small(200_000)
+        },
+    )
+    .unwrap();
     let records = r.trace_and_gather(0, 200_000).unwrap();
     let accum = r.read_accum().unwrap();
     let hits = r.read_hit_points().unwrap();
@@ -409,13 +543,24 @@ fn hot_spot_sums_match_an_f64_brute_force() {
     let flux_fixed = r.gpu_scene().params.flux_fixed as f64;
     let cpu = reference::gather(&hits, &stats, &records, 0.0);
     let hottest = accum.iter().map(|a| a.m).max().unwrap();
-    println!("hot spot: {} records, the hottest hit point gathered {hottest}", records.len());
-    assert!(hottest > 1000, "not a hot spot: at most {hottest} photons per hit point");
+    println!(
+        "hot spot: {} records, the hottest hit point gathered {hottest}",
+        records.len()
+    );
+    assert!(
+        hottest > 1000,
+        "not a hot spot: at most {hottest} photons per hit point"
+    );
     for (i, (a, (m, sum))) in accum.iter().zip(&cpu).enumerate() {
         assert_eq!(a.m, *m, "slot {i}: M");
         // Fixed point rounds each photon by at most 1/(2 flux_fixed): exact otherwise, whatever the order.
         let bound = *m as f64 / (2.0 * flux_fixed) + 1e-6 * sum.x;
-        assert!((a.flux_r as f64 / flux_fixed - sum.x).abs() <= bound, "slot {i}: GPU {} CPU {}", a.flux_r as f64 / flux_fixed, sum.x);
+        assert!(
+            (a.flux_r as f64 / flux_fixed - sum.x).abs() <= bound,
+            "slot {i}: GPU {} CPU {}",
+            a.flux_r as f64 / flux_fixed,
+            sum.x
+        );
     }
     assert_clean(&ctx);
 }
@@ -458,7 +603,12 @@ fn rays_grazing_a_sphere_give_finite_hits_that_match_the_reference() {
     let ctx = ctx();
     let r = Renderer::new(&ctx, &scene, small(20_000)).unwrap();
     let gpu = r.read_hit_points().unwrap();
-    let cpu = reference::eye_pass(r.gpu_scene(), &r.ray_pushes(0, true), &mut vec![0; r.gpu_scene().pixels() as usize]).hits;
+    let cpu = reference::eye_pass(
+        r.gpu_scene(),
+        &r.ray_pushes(0, true),
+        &mut vec![0; r.gpu_scene().pixels() as usize],
+    )
+    .hits;
     let mut on_sphere = 0;
     for (i, (a, b)) in gpu.iter().zip(&cpu).enumerate() {
         if a.is_empty() {
@@ -473,14 +623,27 @@ fn rays_grazing_a_sphere_give_finite_hits_that_match_the_reference() {
             // Grazing hits: position within 1e-3 of the CPU's (the discriminant's cancellation costs
             // digits there), and on the same side of the silhouette.
             if !b.is_empty() {
-                assert!((p - glam::Vec3::from_array(b.pos)).length() < 1e-3, "slot {i}: GPU {p} CPU {:?}", b.pos);
+                assert!(
+                    (p - glam::Vec3::from_array(b.pos)).length() < 1e-3,
+                    "slot {i}: GPU {p} CPU {:?}",
+                    b.pos
+                );
             }
         }
     }
     assert!(on_sphere > 0, "no pixel hit the sphere");
-    let same = gpu.iter().zip(&cpu).filter(|(a, b)| a.is_empty() == b.is_empty()).count();
+    let same = gpu
+        .iter()
+        .zip(&cpu)
+        .filter(|(a, b)| a.is_empty() == b.is_empty())
+        .count();
     // A pixel whose ray passes within an ulp of the silhouette may land on either side: at most a few.
-    assert!(same + 4 >= gpu.len(), "{} of {} slots differ in being hit", gpu.len() - same, gpu.len());
+    assert!(
+        same + 4 >= gpu.len(),
+        "{} of {} slots differ in being hit",
+        gpu.len() - same,
+        gpu.len()
+    );
     drop(r);
     let image = render(&scene, small(20_000), 2);
     assert!(image.mean().iter().all(|&c| c > 0.0));
@@ -491,10 +654,19 @@ fn sppm_same_seed_same_image_bit_for_bit() {
     // SPPM adds an eye pass per photon pass (random pixel positions, random Fresnel branches) and emission
     // samples: all drawn from streams indexed by pass and pixel, so a render repeats exactly.
     let scene = cornell(32, 32);
-    let sppm = Settings { mode: ppm_vk_engine::Mode::Sppm, ..small(20_000) };
+    let sppm = Settings {
+        mode: ppm_vk_engine::Mode::Sppm,
+        ..small(20_000)
+    };
     let a = render(&scene, sppm.clone(), 3);
     let b = render(&scene, sppm.clone(), 3);
-    assert!(a.pixels.iter().zip(&b.pixels).all(|(x, y)| x.map(f32::to_bits) == y.map(f32::to_bits)), "SPPM images differ");
+    assert!(
+        a.pixels
+            .iter()
+            .zip(&b.pixels)
+            .all(|(x, y)| x.map(f32::to_bits) == y.map(f32::to_bits)),
+        "SPPM images differ"
+    );
     let c = render(&scene, Settings { seed: 7, ..sppm }, 3);
     assert!(a.pixels != c.pixels, "another seed gave the same SPPM image");
 }
@@ -511,7 +683,11 @@ fn eq8_radius_of_the_test_scene() {
     let r = Renderer::new(&ctx, &cornell(64, 48), small(1000)).unwrap();
     let r0 = want * 512.0 / 64.0;
     assert!((r.gpu_scene().initial_radius as f64 / r0 - 1.0).abs() < 1e-6);
-    assert!(r.read_stats().unwrap().iter().all(|s| (s.r2 / (r0 * r0) - 1.0).abs() < 1e-6));
+    assert!(r
+        .read_stats()
+        .unwrap()
+        .iter()
+        .all(|s| (s.r2 / (r0 * r0) - 1.0).abs() < 1e-6));
     drop(r);
     assert_clean(&ctx);
 }
@@ -524,10 +700,22 @@ fn a_non_square_image_is_the_square_one_widened() {
     let ctx = ctx();
     // Without the glass sphere: its Fresnel choices draw from streams indexed by pixel, which differ.
     let mut scene = cornell(32, 32);
-    let glass = scene.materials.iter().position(|m| matches!(m.surface, ppm_vk_engine::scene::Surface::Glass { .. })).unwrap();
+    let glass = scene
+        .materials
+        .iter()
+        .position(|m| matches!(m.surface, ppm_vk_engine::scene::Surface::Glass { .. }))
+        .unwrap();
     scene.spheres.retain(|s| s.material as usize != glass);
     let hits = |w: u32, h: u32| {
-        let r = Renderer::new(&ctx, &scene.with_resolution(w, h), Settings { hit_slots: 1, ..small(1000) }).unwrap();
+        let r = Renderer::new(
+            &ctx,
+            &scene.with_resolution(w, h),
+            Settings {
+                hit_slots: 1,
+                ..small(1000)
+            },
+        )
+        .unwrap();
         r.read_hit_points().unwrap()
     };
     let (wide, square) = (hits(64, 32), hits(32, 32));
@@ -537,10 +725,18 @@ fn a_non_square_image_is_the_square_one_widened() {
             let (a, b) = (&square[y * 32 + x], &wide[y * 64 + x + 16]);
             compared += 1;
             let close = a.is_empty() == b.is_empty()
-                && (a.is_empty() || (glam::Vec3::from_array(a.pos) - glam::Vec3::from_array(b.pos)).abs().max_element() < 1e-4);
+                && (a.is_empty()
+                    || (glam::Vec3::from_array(a.pos) - glam::Vec3::from_array(b.pos))
+                        .abs()
+                        .max_element()
+                        < 1e-4);
             same += close as usize;
             if !a.is_empty() {
-                assert_eq!(b.pixel as usize, y * 64 + x + 16, "the wide image's slot names another pixel");
+                assert_eq!(
+                    b.pixel as usize,
+                    y * 64 + x + 16,
+                    "the wide image's slot names another pixel"
+                );
             }
         }
     }
@@ -596,8 +792,21 @@ fn eye_paths_between_parallel_mirrors_end_at_the_backstop_and_are_counted() {
     let scene = Scene::parse(MIRROR_CORRIDOR, "mirror-corridor.toml").unwrap();
     let ctx = ctx();
     for (settings, min_cut) in [
-        (Settings { emission_samples: 0, ..small(20_000) }, 1),
-        (Settings { mode: ppm_vk_engine::Mode::Sppm, max_eye_depth: 10, ..small(20_000) }, 33 * 33 / 10),
+        (
+            Settings {
+                emission_samples: 0,
+                ..small(20_000)
+            },
+            1,
+        ),
+        (
+            Settings {
+                mode: ppm_vk_engine::Mode::Sppm,
+                max_eye_depth: 10,
+                ..small(20_000)
+            },
+            33 * 33 / 10,
+        ),
     ] {
         let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
         let limits = r.path_limits();
@@ -605,7 +814,11 @@ fn eye_paths_between_parallel_mirrors_end_at_the_backstop_and_are_counted() {
         let image = r.image().unwrap();
         println!("{limits:?}: {} eye paths cut", stats.eye_paths_cut);
         assert_eq!(image.count_non_finite(), 0);
-        assert!(stats.eye_paths_cut >= min_cut, "{} eye paths cut, expected at least {min_cut}", stats.eye_paths_cut);
+        assert!(
+            stats.eye_paths_cut >= min_cut,
+            "{} eye paths cut, expected at least {min_cut}",
+            stats.eye_paths_cut
+        );
     }
     assert_clean(&ctx);
 }

@@ -11,7 +11,10 @@ use ppm_vk_engine::{Renderer, Scene, Settings};
 fn context_with_validation_opens() {
     let ctx = ctx();
     let info = ctx.info();
-    println!("device [{}] {} ({}), Vulkan {}, driver {}", info.index, info.name, info.kind, info.api_version, info.driver);
+    println!(
+        "device [{}] {} ({}), Vulkan {}, driver {}",
+        info.index, info.name, info.kind, info.api_version, info.driver
+    );
     assert!(info.missing.is_empty(), "the chosen device lacks {:?}", info.missing);
     assert!(ctx.limits().max_storage_buffer_range > 0);
     assert_clean(&ctx);
@@ -35,14 +38,28 @@ fn validation_layer_reports_misuse() {
     }
     let msgs = ctx.validation_messages();
     println!("the layer said: {msgs:#?}");
-    assert!(!msgs.is_empty(), "a zero-sized buffer passed the validation layer unreported: is the layer loaded?");
-    assert!(msgs.iter().any(|m| m.contains("00912") || m.contains("size")), "unexpected messages: {msgs:?}");
+    assert!(
+        !msgs.is_empty(),
+        "a zero-sized buffer passed the validation layer unreported: is the layer loaded?"
+    );
+    assert!(
+        msgs.iter().any(|m| m.contains("00912") || m.contains("size")),
+        "unexpected messages: {msgs:?}"
+    );
 }
 
 #[test]
 fn small_render_is_validation_clean() {
     let ctx = ctx();
-    let mut r = Renderer::new(&ctx, &cornell(16, 16), Settings { photons_per_pass: 10_000, ..Settings::default() }).unwrap();
+    let mut r = Renderer::new(
+        &ctx,
+        &cornell(16, 16),
+        Settings {
+            photons_per_pass: 10_000,
+            ..Settings::default()
+        },
+    )
+    .unwrap();
     for i in 1..=2 {
         let stats = r.pass().unwrap();
         assert_eq!(stats.index, i);
@@ -50,7 +67,11 @@ fn small_render_is_validation_clean() {
         assert!(stats.records > 0, "pass {i} left no records");
         for stage in ["photon", "lookup", "gather", "update"] {
             // A stage may be timed as a whole or in steps (`lookup/count`, ...): stage_ms sums both.
-            assert!(stats.stage_ms(stage) > 0.0, "pass {i}: no {stage} timing in {:?}", stats.stages);
+            assert!(
+                stats.stage_ms(stage) > 0.0,
+                "pass {i}: no {stage} timing in {:?}",
+                stats.stages
+            );
         }
     }
     let image = r.image().unwrap();
@@ -58,7 +79,16 @@ fn small_render_is_validation_clean() {
     assert_eq!(image.count_non_finite(), 0);
     assert!(image.mean().iter().all(|&m| m > 0.0), "black image {:?}", image.mean());
     // The furnace too (six lights, no spheres), with the cone filter on.
-    let mut r = Renderer::new(&ctx, &furnace(16, 16), Settings { photons_per_pass: 10_000, cone_k: Some(1.1), ..Settings::default() }).unwrap();
+    let mut r = Renderer::new(
+        &ctx,
+        &furnace(16, 16),
+        Settings {
+            photons_per_pass: 10_000,
+            cone_k: Some(1.1),
+            ..Settings::default()
+        },
+    )
+    .unwrap();
     r.pass().unwrap();
     r.pass().unwrap();
     assert_eq!(r.image().unwrap().count_non_finite(), 0);
@@ -70,17 +100,74 @@ fn small_render_is_validation_clean() {
 fn bad_settings_are_errors() {
     let ctx = ctx();
     let scene = cornell(16, 16);
-    let base = Settings { photons_per_pass: 10_000, ..Settings::default() };
+    let base = Settings {
+        photons_per_pass: 10_000,
+        ..Settings::default()
+    };
     let cases = [
-        (Settings { alpha: 1.5, ..base.clone() }, "alpha"),
-        (Settings { alpha: 0.0, ..base.clone() }, "alpha"),
-        (Settings { alpha: f32::NAN, ..base.clone() }, "alpha"),
-        (Settings { photons_per_pass: 0, ..base.clone() }, "photons"),
-        (Settings { cone_k: Some(0.5), ..base.clone() }, "cone"),
-        (Settings { initial_radius: Some(-1.0), ..base.clone() }, "radius"),
-        (Settings { hit_slots: 0, ..base.clone() }, "hit slots"),
-        (Settings { hit_slots: 9, ..base.clone() }, "hit slots"),
-        (Settings { max_photon_depth: 0, ..base.clone() }, "depth"),
+        (
+            Settings {
+                alpha: 1.5,
+                ..base.clone()
+            },
+            "alpha",
+        ),
+        (
+            Settings {
+                alpha: 0.0,
+                ..base.clone()
+            },
+            "alpha",
+        ),
+        (
+            Settings {
+                alpha: f32::NAN,
+                ..base.clone()
+            },
+            "alpha",
+        ),
+        (
+            Settings {
+                photons_per_pass: 0,
+                ..base.clone()
+            },
+            "photons",
+        ),
+        (
+            Settings {
+                cone_k: Some(0.5),
+                ..base.clone()
+            },
+            "cone",
+        ),
+        (
+            Settings {
+                initial_radius: Some(-1.0),
+                ..base.clone()
+            },
+            "radius",
+        ),
+        (
+            Settings {
+                hit_slots: 0,
+                ..base.clone()
+            },
+            "hit slots",
+        ),
+        (
+            Settings {
+                hit_slots: 9,
+                ..base.clone()
+            },
+            "hit slots",
+        ),
+        (
+            Settings {
+                max_photon_depth: 0,
+                ..base.clone()
+            },
+            "depth",
+        ),
     ];
     for (settings, what) in cases {
         // An error, not a panic (a panic would fail this test), naming the setting.
@@ -88,7 +175,10 @@ fn bad_settings_are_errors() {
             Ok(_) => panic!("Renderer::new accepted {settings:?}"),
             Err(e) => {
                 let msg = format!("{e:#}");
-                assert!(msg.contains(what), "error for {settings:?} does not mention {what:?}: {msg}");
+                assert!(
+                    msg.contains(what),
+                    "error for {settings:?} does not mention {what:?}: {msg}"
+                );
             }
         }
     }
@@ -99,18 +189,29 @@ fn bad_settings_are_errors() {
 fn bad_scene_is_an_error_naming_the_line() {
     let text = std::fs::read_to_string(CORNELL).unwrap();
     // The blue sphere's radius, the only "radius = 0.3" line.
-    let line = text.lines().position(|l| l.trim() == "radius = 0.3").expect("the blue sphere's radius line") + 1;
+    let line = text
+        .lines()
+        .position(|l| l.trim() == "radius = 0.3")
+        .expect("the blue sphere's radius line")
+        + 1;
     let bad = text.replacen("radius = 0.3", "radius = nan", 1);
     let err = Scene::parse(&bad, "cornell-nan.toml").expect_err("a NaN radius was accepted");
     let msg = format!("{err:#}");
     println!("{msg}");
-    assert!(msg.starts_with(&format!("cornell-nan.toml:{line}:")), "error does not name line {line}: {msg}");
+    assert!(
+        msg.starts_with(&format!("cornell-nan.toml:{line}:")),
+        "error does not name line {line}: {msg}"
+    );
     assert!(msg.contains("sphere[1].radius") && msg.contains("NaN"), "{msg}");
 
     // The unmodified text parses, so the error above is the radius's alone.
     Scene::parse(&text, "cornell.toml").unwrap();
     // A few more: a negative radius, an emission that is not finite, a missing camera.
     assert!(Scene::parse(&text.replacen("radius = 0.3", "radius = -0.3", 1), "x").is_err());
-    assert!(Scene::parse(&text.replacen("emission = [34.0, 30.0, 24.0]", "emission = [inf, 30.0, 24.0]", 1), "x").is_err());
+    assert!(Scene::parse(
+        &text.replacen("emission = [34.0, 30.0, 24.0]", "emission = [inf, 30.0, 24.0]", 1),
+        "x"
+    )
+    .is_err());
     assert!(Scene::parse(&text.replacen("[camera]", "[kamera]", 1), "x").is_err());
 }

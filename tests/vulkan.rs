@@ -11,13 +11,25 @@ use ppm_vk_engine::{Context, ContextOptions, Renderer, Settings};
 
 /// A validated context whose pipeline cache lives in `dir`.
 fn cached_ctx(dir: &Path) -> Context {
-    Context::new(&ContextOptions { validation: true, pipeline_cache: Some(dir.to_path_buf()), ..ContextOptions::default() })
-        .expect("opening a validated context with a pipeline cache")
+    Context::new(&ContextOptions {
+        validation: true,
+        pipeline_cache: Some(dir.to_path_buf()),
+        ..ContextOptions::default()
+    })
+    .expect("opening a validated context with a pipeline cache")
 }
 
 /// Creates every pipeline a render of cornell-spheres uses.
 fn make_pipelines(ctx: &Context) {
-    Renderer::new(ctx, &cornell(8, 8), Settings { photons_per_pass: 1000, ..Settings::default() }).unwrap();
+    Renderer::new(
+        ctx,
+        &cornell(8, 8),
+        Settings {
+            photons_per_pass: 1000,
+            ..Settings::default()
+        },
+    )
+    .unwrap();
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -30,7 +42,12 @@ fn scratch(name: &str) -> PathBuf {
 /// The one cache file in `dir`.
 fn cache_file(dir: &Path) -> PathBuf {
     let files: Vec<PathBuf> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
-    assert_eq!(files.len(), 1, "expected one cache file in {}: {files:?}", dir.display());
+    assert_eq!(
+        files.len(),
+        1,
+        "expected one cache file in {}: {files:?}",
+        dir.display()
+    );
     files[0].clone()
 }
 
@@ -39,7 +56,10 @@ fn cache_file(dir: &Path) -> PathBuf {
 #[test]
 fn validation_messages_name_the_objects() {
     let ctx = ctx();
-    assert!(ctx.names_objects(), "VK_EXT_debug_utils is not on although validation is");
+    assert!(
+        ctx.names_objects(),
+        "VK_EXT_debug_utils is not on although validation is"
+    );
     // An upload buffer is only a copy source: filling it breaks VUID-vkCmdFillBuffer-dstBuffer-00029 (no
     // TRANSFER_DST usage), which the layer reports naming the buffer and the command buffer. The fill stays
     // inside the buffer, so running it is harmless.
@@ -52,9 +72,18 @@ fn validation_messages_name_the_objects() {
     .unwrap();
     let msgs = ctx.validation_messages();
     println!("the layer said: {msgs:#?}");
-    assert!(msgs.iter().any(|m| m.contains("00029")), "the misuse went unreported: {msgs:?}");
-    assert!(msgs.iter().any(|m| m.contains("the misused buffer")), "the buffer's name is not in {msgs:?}");
-    assert!(msgs.iter().any(|m| m.contains("Context::run")), "the command buffer's name is not in {msgs:?}");
+    assert!(
+        msgs.iter().any(|m| m.contains("00029")),
+        "the misuse went unreported: {msgs:?}"
+    );
+    assert!(
+        msgs.iter().any(|m| m.contains("the misused buffer")),
+        "the buffer's name is not in {msgs:?}"
+    );
+    assert!(
+        msgs.iter().any(|m| m.contains("Context::run")),
+        "the command buffer's name is not in {msgs:?}"
+    );
 }
 
 /// Naming every kind of object a render makes (and a name with a NUL inside) is itself clean.
@@ -73,11 +102,19 @@ fn naming_is_validation_clean() {
 fn pipeline_cache_is_saved_and_read_back() {
     let dir = scratch("roundtrip");
     let ctx = cached_ctx(&dir);
-    assert_eq!((ctx.pipeline_cache_loaded_bytes(), ctx.pipeline_cache_note()), (0, None), "an empty directory");
+    assert_eq!(
+        (ctx.pipeline_cache_loaded_bytes(), ctx.pipeline_cache_note()),
+        (0, None),
+        "an empty directory"
+    );
     make_pipelines(&ctx);
     let written = ctx.save_pipeline_cache().unwrap().map(Path::to_path_buf);
     assert_eq!(written.as_deref(), Some(cache_file(&dir).as_path()));
-    assert_eq!(ctx.save_pipeline_cache().unwrap(), None, "a second save with nothing new wrote again");
+    assert_eq!(
+        ctx.save_pipeline_cache().unwrap(),
+        None,
+        "a second save with nothing new wrote again"
+    );
     assert_clean(&ctx);
     drop(ctx);
 
@@ -86,12 +123,26 @@ fn pipeline_cache_is_saved_and_read_back() {
     let bytes = std::fs::read(cache_file(&dir)).unwrap();
     assert_eq!(&bytes[..8], b"PPMVKPC\0");
     let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
-    assert!(word(28) >= 32 && word(32) == 1, "Vulkan header size {} version {}", word(28), word(32));
-    println!("cache file: {} bytes, vendor {:#x} device {:#x}", bytes.len(), word(36), word(40));
+    assert!(
+        word(28) >= 32 && word(32) == 1,
+        "Vulkan header size {} version {}",
+        word(28),
+        word(32)
+    );
+    println!(
+        "cache file: {} bytes, vendor {:#x} device {:#x}",
+        bytes.len(),
+        word(36),
+        word(40)
+    );
 
     let again = cached_ctx(&dir);
     assert_eq!(again.pipeline_cache_note(), None);
-    assert_eq!(again.pipeline_cache_loaded_bytes(), bytes.len() - 28, "the second context did not load the file");
+    assert_eq!(
+        again.pipeline_cache_loaded_bytes(),
+        bytes.len() - 28,
+        "the second context did not load the file"
+    );
     make_pipelines(&again);
     assert_clean(&again);
     drop(again);
@@ -131,14 +182,20 @@ fn damaged_or_foreign_cache_files_are_ignored() {
         std::fs::write(&path, &bytes).unwrap();
         let ctx = cached_ctx(&dir);
         let note = ctx.pipeline_cache_note().unwrap_or_else(|| panic!("{what}: no note"));
-        assert!(note.contains(why) && note.contains(&path.display().to_string()), "{what}: {note}");
+        assert!(
+            note.contains(why) && note.contains(&path.display().to_string()),
+            "{what}: {note}"
+        );
         assert_eq!(ctx.pipeline_cache_loaded_bytes(), 0, "{what}: used");
         make_pipelines(&ctx);
         assert_clean(&ctx);
         ctx.save_pipeline_cache().unwrap();
         drop(ctx);
         let ctx = cached_ctx(&dir);
-        assert!(ctx.pipeline_cache_note().is_none() && ctx.pipeline_cache_loaded_bytes() > 0, "{what}: not replaced");
+        assert!(
+            ctx.pipeline_cache_note().is_none() && ctx.pipeline_cache_loaded_bytes() > 0,
+            "{what}: not replaced"
+        );
         assert_clean(&ctx);
     }
     let _ = std::fs::remove_dir_all(&dir);
@@ -150,6 +207,9 @@ fn pipeline_cache_off_saves_nothing() {
     let ctx = ctx();
     make_pipelines(&ctx);
     assert_eq!(ctx.save_pipeline_cache().unwrap(), None);
-    assert_eq!((ctx.pipeline_cache_loaded_bytes(), ctx.pipeline_cache_note()), (0, None));
+    assert_eq!(
+        (ctx.pipeline_cache_loaded_bytes(), ctx.pipeline_cache_note()),
+        (0, None)
+    );
     assert_clean(&ctx);
 }

@@ -22,8 +22,11 @@ pub const CORNELL_REFERENCE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../sha
 
 /// A context with the Khronos validation layer on: every test ends with [`assert_clean`].
 pub fn ctx() -> Context {
-    Context::new(&ContextOptions { validation: true, ..ContextOptions::default() })
-        .expect("opening a Vulkan device with VK_LAYER_KHRONOS_validation (is vulkan-validationlayers installed?)")
+    Context::new(&ContextOptions {
+        validation: true,
+        ..ContextOptions::default()
+    })
+    .expect("opening a Vulkan device with VK_LAYER_KHRONOS_validation (is vulkan-validationlayers installed?)")
 }
 
 /// Panics listing every warning and error the validation layer reported on `ctx` so far.
@@ -48,7 +51,9 @@ pub fn bin() -> std::process::Command {
 
 /// Where [`bin`]'s runs keep their pipeline cache.
 pub fn pipeline_cache_dir() -> std::path::PathBuf {
-    std::env::temp_dir().join(format!("ppm-vk-tests-{}", std::process::id())).join("pipeline-cache")
+    std::env::temp_dir()
+        .join(format!("ppm-vk-tests-{}", std::process::id()))
+        .join("pipeline-cache")
 }
 
 pub fn load(path: &str) -> Scene {

@@ -54,12 +54,18 @@ impl Buffer {
         };
         let shared = ctx.shared().clone();
         let device = &shared.device;
-        let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let info = vk::BufferCreateInfo::default()
+            .size(size)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
         let raw = unsafe { device.create_buffer(&info, None) }.with_context(|| format!("creating buffer {name:?}"))?;
         ctx.name_object(raw, name);
         let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
         let allocation = {
-            let mut guard = shared.allocator.lock().map_err(|_| anyhow!("allocator lock poisoned"))?;
+            let mut guard = shared
+                .allocator
+                .lock()
+                .map_err(|_| anyhow!("allocator lock poisoned"))?;
             let allocator = guard.as_mut().ok_or_else(|| anyhow!("allocator already destroyed"))?;
             let a = allocator.allocate(&AllocationCreateDesc {
                 name,
@@ -69,7 +75,9 @@ impl Buffer {
                 allocation_scheme: AllocationScheme::GpuAllocatorManaged,
             });
             let reserved = allocator.generate_report().total_capacity_bytes;
-            shared.peak_reserved.fetch_max(reserved, std::sync::atomic::Ordering::Relaxed);
+            shared
+                .peak_reserved
+                .fetch_max(reserved, std::sync::atomic::Ordering::Relaxed);
             a
         };
         let allocation = match allocation {
@@ -77,7 +85,10 @@ impl Buffer {
             Err(e) => {
                 unsafe { device.destroy_buffer(raw, None) };
                 return Err(anyhow!(e)).with_context(|| {
-                    format!("allocating {} MiB for buffer {name:?} (device memory exhausted?)", size >> 20)
+                    format!(
+                        "allocating {} MiB for buffer {name:?} (device memory exhausted?)",
+                        size >> 20
+                    )
                 });
             }
         };
@@ -90,7 +101,13 @@ impl Buffer {
             }
             return Err(e).with_context(|| format!("binding memory of buffer {name:?}"));
         }
-        Ok(Buffer { shared, raw, allocation: Some(allocation), size, name: name.to_string() })
+        Ok(Buffer {
+            shared,
+            raw,
+            allocation: Some(allocation),
+            size,
+            name: name.to_string(),
+        })
     }
 
     pub fn raw(&self) -> vk::Buffer {
@@ -123,7 +140,11 @@ impl Buffer {
 
     /// Records a fill of the whole buffer with a repeated 32-bit word.
     pub fn cmd_fill(&self, cmd: vk::CommandBuffer, word: u32) {
-        unsafe { self.shared.device.cmd_fill_buffer(cmd, self.raw, 0, vk::WHOLE_SIZE, word) };
+        unsafe {
+            self.shared
+                .device
+                .cmd_fill_buffer(cmd, self.raw, 0, vk::WHOLE_SIZE, word)
+        };
     }
 
     /// Records a copy of `size` bytes from the start of `self` into `dst`.
@@ -134,11 +155,17 @@ impl Buffer {
     /// Records a copy of `size` bytes from `self` at `src_offset` into `dst` at `dst_offset` (clamped to
     /// both buffers).
     pub fn cmd_copy(&self, cmd: vk::CommandBuffer, dst: &Buffer, src_offset: u64, dst_offset: u64, size: u64) {
-        let size = size.min(self.size.saturating_sub(src_offset)).min(dst.size.saturating_sub(dst_offset));
+        let size = size
+            .min(self.size.saturating_sub(src_offset))
+            .min(dst.size.saturating_sub(dst_offset));
         if size == 0 {
             return;
         }
-        let region = [vk::BufferCopy { src_offset, dst_offset, size }];
+        let region = [vk::BufferCopy {
+            src_offset,
+            dst_offset,
+            size,
+        }];
         unsafe { self.shared.device.cmd_copy_buffer(cmd, self.raw, dst.raw, &region) };
     }
 }
@@ -171,7 +198,12 @@ impl Context {
             return Ok(());
         }
         if bytes.len() as u64 > dst.size() {
-            bail!("upload of {} bytes into buffer {:?} of {} bytes", bytes.len(), dst.name(), dst.size());
+            bail!(
+                "upload of {} bytes into buffer {:?} of {} bytes",
+                bytes.len(),
+                dst.name(),
+                dst.size()
+            );
         }
         let mut staging = Buffer::new(self, "staging upload", bytes.len() as u64, BufferKind::Upload)?;
         staging.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
@@ -191,7 +223,11 @@ impl Context {
     pub fn download_prefix<T: bytemuck::Pod>(&self, src: &Buffer, count: usize) -> Result<Vec<T>> {
         let bytes = (count * std::mem::size_of::<T>()) as u64;
         if bytes > src.size() {
-            bail!("reading {bytes} bytes from buffer {:?} of {} bytes", src.name(), src.size());
+            bail!(
+                "reading {bytes} bytes from buffer {:?} of {} bytes",
+                src.name(),
+                src.size()
+            );
         }
         if count == 0 {
             return Ok(Vec::new());
@@ -204,6 +240,9 @@ impl Context {
         })?;
         let mapped = &staging.mapped()?[..bytes as usize];
         // The mapping has no alignment promise for T: copy out element by element.
-        Ok(mapped.chunks_exact(std::mem::size_of::<T>()).map(bytemuck::pod_read_unaligned).collect())
+        Ok(mapped
+            .chunks_exact(std::mem::size_of::<T>())
+            .map(bytemuck::pod_read_unaligned)
+            .collect())
     }
 }

@@ -80,7 +80,11 @@ struct Inner {
     /// Present when VK_EXT_debug_utils is (always with validation; without it when the driver offers it).
     debug_names: Option<ash::ext::debug_utils::Device>,
     pipeline_cache: Option<DiskCache>,
-    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT, Box<Arc<Mutex<Vec<String>>>>)>,
+    debug: Option<(
+        ash::ext::debug_utils::Instance,
+        vk::DebugUtilsMessengerEXT,
+        Box<Arc<Mutex<Vec<String>>>>,
+    )>,
     instance: ash::Instance,
     _entry: ash::Entry,
 }
@@ -94,7 +98,9 @@ unsafe extern "system" fn debug_callback(
     user: *mut c_void,
 ) -> vk::Bool32 {
     // Info and verbose messages are the loader chatting; warnings and errors are bugs.
-    if severity.intersects(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
+    if severity
+        .intersects(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
+    {
         let text = if data.is_null() || (*data).p_message.is_null() {
             "(no message)".to_string()
         } else {
@@ -109,7 +115,12 @@ unsafe extern "system" fn debug_callback(
 }
 
 fn api_string(v: u32) -> String {
-    format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v))
+    format!(
+        "{}.{}.{}",
+        vk::api_version_major(v),
+        vk::api_version_minor(v),
+        vk::api_version_patch(v)
+    )
 }
 
 /// What the kernels need from a device, checked before it is chosen.
@@ -133,14 +144,19 @@ fn missing_features(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Vec<Str
         missing.push("hostQueryReset".into());
     }
     let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
-    let has_push = exts
-        .iter()
-        .any(|e| e.extension_name_as_c_str().map(|n| n == ash::khr::push_descriptor::NAME).unwrap_or(false));
+    let has_push = exts.iter().any(|e| {
+        e.extension_name_as_c_str()
+            .map(|n| n == ash::khr::push_descriptor::NAME)
+            .unwrap_or(false)
+    });
     if !has_push {
         missing.push("VK_KHR_push_descriptor".into());
     }
     let queues = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-    if !queues.iter().any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE) && q.timestamp_valid_bits > 0) {
+    if !queues
+        .iter()
+        .any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE) && q.timestamp_valid_bits > 0)
+    {
         missing.push("a compute queue with timestamps".into());
     }
     missing
@@ -151,14 +167,23 @@ pub const LAVAPIPE_LOOP_BUDGET: u32 = 65535;
 
 fn describe(instance: &ash::Instance, index: usize, pd: vk::PhysicalDevice) -> DeviceInfo {
     let props = unsafe { instance.get_physical_device_properties(pd) };
-    let name = props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = props
+        .device_name_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
     let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
     unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
     let driver = format!(
         "{} {}",
-        driver_props.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
-        driver_props.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
+        driver_props
+            .driver_name_as_c_str()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        driver_props
+            .driver_info_as_c_str()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
     );
     let kind = match props.device_type {
         vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
@@ -220,9 +245,14 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> Result<(ash::Instanc
     }
     // The validation layer provides debug_utils itself; the loader lists what the driver and implicit layers
     // offer (Mesa's drivers, lavapipe included, do).
-    let offered = unsafe { entry.enumerate_instance_extension_properties(None) }.context("listing Vulkan instance extensions")?;
+    let offered =
+        unsafe { entry.enumerate_instance_extension_properties(None) }.context("listing Vulkan instance extensions")?;
     let debug_utils = validation
-        || offered.iter().any(|e| e.extension_name_as_c_str().map(|n| n == ash::ext::debug_utils::NAME).unwrap_or(false));
+        || offered.iter().any(|e| {
+            e.extension_name_as_c_str()
+                .map(|n| n == ash::ext::debug_utils::NAME)
+                .unwrap_or(false)
+        });
     if debug_utils {
         exts.push(ash::ext::debug_utils::NAME.as_ptr());
     }
@@ -230,8 +260,8 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> Result<(ash::Instanc
         .application_info(&app)
         .enabled_layer_names(&layers)
         .enabled_extension_names(&exts);
-    let instance =
-        unsafe { entry.create_instance(&info, None) }.context("vkCreateInstance failed (is a Vulkan driver installed?)")?;
+    let instance = unsafe { entry.create_instance(&info, None) }
+        .context("vkCreateInstance failed (is a Vulkan driver installed?)")?;
     Ok((instance, debug_utils))
 }
 
@@ -241,7 +271,12 @@ impl Context {
         let entry = load_entry()?;
         let (instance, _) = create_instance(&entry, false)?;
         let pds = unsafe { instance.enumerate_physical_devices() }.context("enumerating Vulkan devices");
-        let out = pds.map(|pds| pds.iter().enumerate().map(|(i, &pd)| describe(&instance, i, pd)).collect());
+        let out = pds.map(|pds| {
+            pds.iter()
+                .enumerate()
+                .map(|(i, &pd)| describe(&instance, i, pd))
+                .collect()
+        });
         unsafe { instance.destroy_instance(None) };
         out
     }
@@ -261,7 +296,12 @@ impl Context {
         }
     }
 
-    fn open(entry: ash::Entry, instance: ash::Instance, debug_utils: bool, options: &ContextOptions) -> Result<Context> {
+    fn open(
+        entry: ash::Entry,
+        instance: ash::Instance,
+        debug_utils: bool,
+        options: &ContextOptions,
+    ) -> Result<Context> {
         let sink = Arc::new(Mutex::new(Vec::<String>::new()));
         let debug = if options.validation {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
@@ -288,7 +328,11 @@ impl Context {
         if pds.is_empty() {
             bail!("no Vulkan device found. On Debian/Ubuntu: `sudo apt-get install mesa-vulkan-drivers` for lavapipe (CPU)");
         }
-        let infos: Vec<DeviceInfo> = pds.iter().enumerate().map(|(i, &pd)| describe(&instance, i, pd)).collect();
+        let infos: Vec<DeviceInfo> = pds
+            .iter()
+            .enumerate()
+            .map(|(i, &pd)| describe(&instance, i, pd))
+            .collect();
         let wanted = options.device.clone().filter(|s| !s.is_empty());
         let chosen = match wanted {
             Some(w) => {
@@ -296,11 +340,15 @@ impl Context {
                     Ok(i) => infos.get(i),
                     Err(_) => infos.iter().find(|d| d.name.to_lowercase().contains(&w.to_lowercase())),
                 };
-                let d = hit.ok_or_else(|| {
-                    anyhow!("no Vulkan device matches {w:?}; devices: {}", list_names(&infos))
-                })?;
+                let d =
+                    hit.ok_or_else(|| anyhow!("no Vulkan device matches {w:?}; devices: {}", list_names(&infos)))?;
                 if !d.missing.is_empty() {
-                    bail!("device {} ({}) lacks what ppm-vk needs: {}", d.index, d.name, d.missing.join(", "));
+                    bail!(
+                        "device {} ({}) lacks what ppm-vk needs: {}",
+                        d.index,
+                        d.name,
+                        d.missing.join(", ")
+                    );
                 }
                 d.clone()
             }
@@ -317,7 +365,11 @@ impl Context {
                     Some(d) => (*d).clone(),
                     None => bail!(
                         "no Vulkan device has what ppm-vk needs: {}",
-                        infos.iter().map(|d| format!("{} lacks {}", d.name, d.missing.join(", "))).collect::<Vec<_>>().join("; ")
+                        infos
+                            .iter()
+                            .map(|d| format!("{} lacks {}", d.name, d.missing.join(", ")))
+                            .collect::<Vec<_>>()
+                            .join("; ")
                     ),
                 }
             }
@@ -333,8 +385,12 @@ impl Context {
             .ok_or_else(|| anyhow!("device {} has no compute queue with timestamps", chosen.name))?;
 
         let priorities = [1.0f32];
-        let queue_info = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
-        let features = vk::PhysicalDeviceFeatures::default().shader_int64(true).shader_float64(true);
+        let queue_info = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(queue_family)
+            .queue_priorities(&priorities)];
+        let features = vk::PhysicalDeviceFeatures::default()
+            .shader_int64(true)
+            .shader_float64(true);
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default().host_query_reset(true);
         let exts = [ash::khr::push_descriptor::NAME.as_ptr()];
         let info = vk::DeviceCreateInfo::default()
@@ -367,7 +423,8 @@ impl Context {
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(queue_family)
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
-        let command_pool = unsafe { device.create_command_pool(&pool_info, None) }.context("creating a command pool")?;
+        let command_pool =
+            unsafe { device.create_command_pool(&pool_info, None) }.context("creating a command pool")?;
         let push_descriptor = ash::khr::push_descriptor::Device::new(&instance, &device);
         let debug_names = debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
         let shared = Arc::new(Shared {
@@ -407,7 +464,9 @@ impl Context {
     pub fn name_object<H: vk::Handle>(&self, handle: H, name: &str) {
         let Some(names) = &self.inner.debug_names else { return };
         let name = debug_name(name);
-        let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
+        let info = vk::DebugUtilsObjectNameInfoEXT::default()
+            .object_handle(handle)
+            .object_name(&name);
         let _ = unsafe { names.set_debug_utils_object_name(&info) };
     }
 
@@ -418,7 +477,10 @@ impl Context {
 
     /// The pipeline cache every pipeline of this context is created with (null when the cache is off).
     pub(crate) fn pipeline_cache(&self) -> vk::PipelineCache {
-        self.inner.pipeline_cache.as_ref().map_or(vk::PipelineCache::null(), |c| c.raw)
+        self.inner
+            .pipeline_cache
+            .as_ref()
+            .map_or(vk::PipelineCache::null(), |c| c.raw)
     }
 
     /// Why the pipeline cache file was not used (damaged, another driver, unreadable), in one line; `None`
@@ -465,14 +527,23 @@ impl Context {
             }
             None => (0, 0),
         };
-        let peak = shared.peak_reserved.load(std::sync::atomic::Ordering::Relaxed).max(reserved);
-        MemoryUsage { in_use_bytes: in_use, reserved_bytes: reserved, peak_reserved_bytes: peak }
+        let peak = shared
+            .peak_reserved
+            .load(std::sync::atomic::Ordering::Relaxed)
+            .max(reserved);
+        MemoryUsage {
+            in_use_bytes: in_use,
+            reserved_bytes: reserved,
+            peak_reserved_bytes: peak,
+        }
     }
 
     /// Starts a new peak: [`MemoryUsage::peak_reserved_bytes`] counts from what is held now.
     pub fn reset_memory_peak(&self) {
         let now = self.memory_usage().reserved_bytes;
-        self.shared().peak_reserved.store(now, std::sync::atomic::Ordering::Relaxed);
+        self.shared()
+            .peak_reserved
+            .store(now, std::sync::atomic::Ordering::Relaxed);
     }
 
     pub fn limits(&self) -> &vk::PhysicalDeviceLimits {
@@ -503,7 +574,11 @@ impl Context {
     /// Records commands into a fresh command buffer, submits it and waits for the queue.
     pub fn run<T>(&self, record: impl FnOnce(vk::CommandBuffer) -> Result<T>) -> Result<T> {
         let device = self.device();
-        let pool = self.inner.command_pool.lock().map_err(|_| anyhow!("command pool lock poisoned"))?;
+        let pool = self
+            .inner
+            .command_pool
+            .lock()
+            .map_err(|_| anyhow!("command pool lock poisoned"))?;
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(*pool)
             .level(vk::CommandBufferLevel::PRIMARY)
@@ -538,7 +613,11 @@ fn debug_name(name: &str) -> CString {
 }
 
 fn list_names(infos: &[DeviceInfo]) -> String {
-    infos.iter().map(|d| format!("[{}] {}", d.index, d.name)).collect::<Vec<_>>().join(", ")
+    infos
+        .iter()
+        .map(|d| format!("[{}] {}", d.index, d.name))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 impl Drop for Inner {

@@ -88,7 +88,9 @@ impl ComputePipeline {
         // Through the context's pipeline cache: a kernel compiled by an earlier run is not compiled again.
         let created = unsafe { device.create_compute_pipelines(ctx.pipeline_cache(), &info, None) };
         unsafe { device.destroy_shader_module(module, None) };
-        out.pipeline = created.map_err(|(_, e)| e).with_context(|| format!("compiling kernel {name}"))?[0];
+        out.pipeline = created
+            .map_err(|(_, e)| e)
+            .with_context(|| format!("compiling kernel {name}"))?[0];
         ctx.name_object(out.pipeline, name);
         Ok(out)
     }
@@ -107,20 +109,43 @@ impl ComputePipeline {
         let groups = invocations.div_ceil(self.local_size as u64);
         // Spread over y when x would exceed the 65535 limit many devices (lavapipe included) have; kernels
         // linearise gl_WorkGroupID with gl_NumWorkGroups.
-        let (gx, gy) = if groups <= 65535 { (groups, 1) } else { (65535, groups.div_ceil(65535)) };
+        let (gx, gy) = if groups <= 65535 {
+            (groups, 1)
+        } else {
+            (65535, groups.div_ceil(65535))
+        };
         if gy > 65535 {
-            bail!("kernel {}: {invocations} invocations are more than one dispatch can hold", self.name);
+            bail!(
+                "kernel {}: {invocations} invocations are more than one dispatch can hold",
+                self.name
+            );
         }
         self.dispatch_groups(cmd, buffers, push, [gx as u32, gy as u32, 1])
     }
 
     /// Records a dispatch of exactly `groups` workgroups.
-    pub fn dispatch_groups(&self, cmd: vk::CommandBuffer, buffers: &[&Buffer], push: &[u8], groups: [u32; 3]) -> Result<()> {
+    pub fn dispatch_groups(
+        &self,
+        cmd: vk::CommandBuffer,
+        buffers: &[&Buffer],
+        push: &[u8],
+        groups: [u32; 3],
+    ) -> Result<()> {
         if buffers.len() != self.bindings as usize {
-            bail!("kernel {} takes {} buffers, got {}", self.name, self.bindings, buffers.len());
+            bail!(
+                "kernel {} takes {} buffers, got {}",
+                self.name,
+                self.bindings,
+                buffers.len()
+            );
         }
         if push.len() != self.push_size as usize {
-            bail!("kernel {} takes {} bytes of push constants, got {}", self.name, self.push_size, push.len());
+            bail!(
+                "kernel {} takes {} bytes of push constants, got {}",
+                self.name,
+                self.push_size,
+                push.len()
+            );
         }
         if groups.contains(&0) {
             return Ok(());
@@ -128,7 +153,13 @@ impl ComputePipeline {
         let device = &self.shared.device;
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
             .iter()
-            .map(|b| [vk::DescriptorBufferInfo { buffer: b.raw(), offset: 0, range: vk::WHOLE_SIZE }])
+            .map(|b| {
+                [vk::DescriptorBufferInfo {
+                    buffer: b.raw(),
+                    offset: 0,
+                    range: vk::WHOLE_SIZE,
+                }]
+            })
             .collect();
         let writes: Vec<vk::WriteDescriptorSet> = infos
             .iter()
@@ -142,9 +173,13 @@ impl ComputePipeline {
             .collect();
         unsafe {
             device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
-            self.shared
-                .push_descriptor
-                .cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &writes);
+            self.shared.push_descriptor.cmd_push_descriptor_set(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &writes,
+            );
             if !push.is_empty() {
                 device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
             }

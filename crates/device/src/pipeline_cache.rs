@@ -78,7 +78,10 @@ pub(crate) fn unwrap<'a>(bytes: &'a [u8], key: &CacheKey) -> Result<&'a [u8], St
     let len = u64::from_le_bytes(bytes[16..24].try_into().expect("8 bytes"));
     let data = &bytes[WRAPPER_LEN..];
     if data.len() as u64 != len {
-        return Err(format!("truncated or padded ({} bytes of data, the header says {len})", data.len()));
+        return Err(format!(
+            "truncated or padded ({} bytes of data, the header says {len})",
+            data.len()
+        ));
     }
     if crc32fast::hash(data) != u32_at(bytes, 24) {
         return Err("damaged (checksum mismatch)".into());
@@ -135,22 +138,38 @@ impl DiskCache {
         let (initial, note) = match std::fs::read(&path) {
             Ok(bytes) => match unwrap(&bytes, &key) {
                 Ok(data) => (data.to_vec(), None),
-                Err(why) => (Vec::new(), Some(format!("pipeline cache {} ignored: {why}", path.display()))),
+                Err(why) => (
+                    Vec::new(),
+                    Some(format!("pipeline cache {} ignored: {why}", path.display())),
+                ),
             },
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => (Vec::new(), None),
-            Err(e) => (Vec::new(), Some(format!("pipeline cache {} ignored: {e}", path.display()))),
+            Err(e) => (
+                Vec::new(),
+                Some(format!("pipeline cache {} ignored: {e}", path.display())),
+            ),
         };
         let info = vk::PipelineCacheCreateInfo::default().initial_data(&initial);
         let raw = unsafe { device.create_pipeline_cache(&info, None) }.context("creating the pipeline cache")?;
         let saved_crc = Mutex::new((!initial.is_empty()).then(|| crc32fast::hash(&initial)));
-        Ok(DiskCache { raw, path, key, saved_crc, note, loaded: initial.len() })
+        Ok(DiskCache {
+            raw,
+            path,
+            key,
+            saved_crc,
+            note,
+            loaded: initial.len(),
+        })
     }
 
     /// Writes the cache back if it holds anything new; returns the file written, if any.
     pub fn save(&self, device: &ash::Device) -> Result<Option<&Path>> {
         let data = unsafe { device.get_pipeline_cache_data(self.raw) }.context("reading the pipeline cache")?;
         let crc = crc32fast::hash(&data);
-        let mut saved = self.saved_crc.lock().map_err(|_| anyhow!("pipeline cache lock poisoned"))?;
+        let mut saved = self
+            .saved_crc
+            .lock()
+            .map_err(|_| anyhow!("pipeline cache lock poisoned"))?;
         if data.is_empty() || *saved == Some(crc) {
             return Ok(None);
         }
@@ -182,7 +201,12 @@ mod tests {
     use super::*;
 
     fn key() -> CacheKey {
-        CacheKey { vendor_id: 0x10005, device_id: 0, driver_version: 42, uuid: *b"0123456789abcdef" }
+        CacheKey {
+            vendor_id: 0x10005,
+            device_id: 0,
+            driver_version: 42,
+            uuid: *b"0123456789abcdef",
+        }
     }
 
     /// Vulkan data as a driver would write it for `key`: its header, then a payload.
@@ -217,7 +241,14 @@ mod tests {
         let mut flipped = file.clone();
         *flipped.last_mut().unwrap() ^= 1;
         refused(&flipped, &k, "checksum");
-        refused(&file, &CacheKey { driver_version: 43, ..k }, "driver version");
+        refused(
+            &file,
+            &CacheKey {
+                driver_version: 43,
+                ..k
+            },
+            "driver version",
+        );
         refused(&file, &CacheKey { device_id: 1, ..k }, "another device");
         refused(&file, &CacheKey { uuid: [0; 16], ..k }, "pipelineCacheUUID");
         // A whole wrapper around a bad Vulkan header (as a buggy writer might leave).

@@ -31,11 +31,19 @@ impl Profiler {
     /// A pool for up to `max_scopes` scopes per command buffer.
     pub fn new(ctx: &Context, max_scopes: u32) -> Result<Profiler> {
         let capacity = max_scopes * 2;
-        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(capacity);
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::TIMESTAMP)
+            .query_count(capacity);
         let pool = unsafe { ctx.device().create_query_pool(&info, None) }.context("creating a timestamp query pool")?;
         ctx.name_object(pool, "profiler timestamps");
         unsafe { ctx.device().reset_query_pool(pool, 0, capacity) };
-        Ok(Profiler { ctx: ctx.clone(), pool, capacity, scopes: RefCell::new(Vec::new()), next: Cell::new(0) })
+        Ok(Profiler {
+            ctx: ctx.clone(),
+            pool,
+            capacity,
+            scopes: RefCell::new(Vec::new()),
+            next: Cell::new(0),
+        })
     }
 
     /// Forgets the previous command buffer's scopes (host-side reset; call before recording).

@@ -59,12 +59,20 @@ fn trace_rays(b: &Bvh, n: usize) -> Result<()> {
         }
     };
     let rays: Vec<TraceRay> = (0..n)
-        .map(|_| TraceRay { origin: (0.5 * point()).to_array(), tmin: 0.0, dir: point().normalize().to_array(), tmax: f32::INFINITY })
+        .map(|_| TraceRay {
+            origin: (0.5 * point()).to_array(),
+            tmin: 0.0,
+            dir: point().normalize().to_array(),
+            tmax: f32::INFINITY,
+        })
         .collect();
     let ray_buf = ctx.buffer_from("rays", &rays)?;
     let hit_buf = ctx.buffer_from("hits", &vec![TraceHit::default(); n])?;
     let kernel = ppm_vk_kernels::pipeline(&ctx, &ppm_vk_kernels::reflected::BVH_TRACE)?;
-    let push = TracePush { count: n as u32, budget: bvh_trace::MAX_BUDGET };
+    let push = TracePush {
+        count: n as u32,
+        budget: bvh_trace::MAX_BUDGET,
+    };
     let mut best = f64::INFINITY;
     for _ in 0..3 {
         // The first dispatch also compiles the kernel (lavapipe compiles at first use): best of three.
@@ -89,7 +97,10 @@ fn trace_rays(b: &Bvh, n: usize) -> Result<()> {
 }
 
 fn measure(name: &str, mesh: &[TriangleInput], threads: usize, runs: usize) -> Result<Bvh> {
-    let opts = BvhOptions { threads, ..BvhOptions::default() };
+    let opts = BvhOptions {
+        threads,
+        ..BvhOptions::default()
+    };
     let mut best = f64::INFINITY;
     let mut last = None;
     for _ in 0..runs.max(1) {

@@ -11,10 +11,23 @@ fn main() -> anyhow::Result<()> {
 
     let ctx = open_device(&ContextOptions::default())?;
     let scene = Scene::load(&scene_path)?.with_resolution(256, 256);
-    let mut renderer = Renderer::new(&ctx, &scene, Settings { photons_per_pass: 200_000, ..Settings::default() })?;
+    let mut renderer = Renderer::new(
+        &ctx,
+        &scene,
+        Settings {
+            photons_per_pass: 200_000,
+            ..Settings::default()
+        },
+    )?;
     for _ in 0..10 {
         let stats = renderer.pass()?;
-        println!("pass {:>2}: {:>7} records, {:.1} ms (gather {:.1} ms GPU)", stats.index, stats.records, stats.wall_ms, stats.stage_ms("gather"));
+        println!(
+            "pass {:>2}: {:>7} records, {:.1} ms (gather {:.1} ms GPU)",
+            stats.index,
+            stats.records,
+            stats.wall_ms,
+            stats.stage_ms("gather")
+        );
     }
     renderer.image()?.save(&out)?;
     println!("wrote {out}");

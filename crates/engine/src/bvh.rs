@@ -53,7 +53,12 @@ pub struct BvhOptions {
 
 impl Default for BvhOptions {
     fn default() -> BvhOptions {
-        BvhOptions { max_leaf: MAX_LEAF, bins: 32, max_depth: MAX_DEPTH, threads: 0 }
+        BvhOptions {
+            max_leaf: MAX_LEAF,
+            bins: 32,
+            max_depth: MAX_DEPTH,
+            threads: 0,
+        }
     }
 }
 
@@ -113,7 +118,10 @@ struct Aabb {
 }
 
 impl Aabb {
-    const EMPTY: Aabb = Aabb { lo: Vec3A::splat(f32::INFINITY), hi: Vec3A::splat(f32::NEG_INFINITY) };
+    const EMPTY: Aabb = Aabb {
+        lo: Vec3A::splat(f32::INFINITY),
+        hi: Vec3A::splat(f32::NEG_INFINITY),
+    };
 
     fn grow(&mut self, lo: Vec3A, hi: Vec3A) {
         self.lo = self.lo.min(lo);
@@ -121,7 +129,10 @@ impl Aabb {
     }
 
     fn union(self, o: Aabb) -> Aabb {
-        Aabb { lo: self.lo.min(o.lo), hi: self.hi.max(o.hi) }
+        Aabb {
+            lo: self.lo.min(o.lo),
+            hi: self.hi.max(o.hi),
+        }
     }
 
     /// Half the surface area, in f64 (large scenes overflow f32 products).
@@ -188,7 +199,12 @@ struct Split {
 type Bins = [[Bin; 64]; 3];
 
 fn new_bins() -> Box<Bins> {
-    Box::new([[Bin { b: Aabb::EMPTY, count: 0 }; 64]; 3])
+    Box::new(
+        [[Bin {
+            b: Aabb::EMPTY,
+            count: 0,
+        }; 64]; 3],
+    )
 }
 
 impl Builder {
@@ -224,7 +240,11 @@ impl Builder {
         // At the depth limit only a balanced split still fits below; with all centroids at one point no
         // plane separates them. Either way: a leaf if it may be one, else the median.
         let median = depth + levels_needed(n, self.max_leaf) >= self.max_depth || extent.max_element() <= 0.0;
-        let sah = if median { None } else { self.sah_split(refs, b, cb, scratch) };
+        let sah = if median {
+            None
+        } else {
+            self.sah_split(refs, b, cb, scratch)
+        };
         let (axis, mid, [(lb, lcb), (rb, rcb)]) = match sah {
             Some(s) if n > self.max_leaf || s.cost < n as f64 * TRIANGLE_COST => (s.axis, s.mid, s.sides),
             _ if n <= self.max_leaf => return self.leaf(out, b, first, n),
@@ -238,7 +258,12 @@ impl Builder {
         };
         let (left, right) = refs.split_at_mut(mid);
         let me = out.len();
-        out.push(BvhNode { lo: b.lo.to_array(), offset: 0, hi: b.hi.to_array(), count_axis: axis as u32 });
+        out.push(BvhNode {
+            lo: b.lo.to_array(),
+            offset: 0,
+            hi: b.hi.to_array(),
+            count_axis: axis as u32,
+        });
         if spawn > 0 && n >= PARALLEL_MIN {
             // The left subtree on another thread; its nodes follow this one, the right subtree's theirs.
             let (left_nodes, right_nodes, right_counters) = std::thread::scope(|s| {
@@ -246,12 +271,32 @@ impl Builder {
                     let mut nodes = Vec::with_capacity(2 * left.len() / self.max_leaf);
                     let mut c = Counters::default();
                     let mut scratch = new_bins();
-                    self.build(left, first, depth + 1, lb, lcb, spawn - 1, &mut nodes, &mut c, &mut scratch);
+                    self.build(
+                        left,
+                        first,
+                        depth + 1,
+                        lb,
+                        lcb,
+                        spawn - 1,
+                        &mut nodes,
+                        &mut c,
+                        &mut scratch,
+                    );
                     (nodes, c)
                 });
                 let mut nodes = Vec::with_capacity(2 * right.len() / self.max_leaf);
                 let mut c = Counters::default();
-                self.build(right, first + mid, depth + 1, rb, rcb, spawn - 1, &mut nodes, &mut c, scratch);
+                self.build(
+                    right,
+                    first + mid,
+                    depth + 1,
+                    rb,
+                    rcb,
+                    spawn - 1,
+                    &mut nodes,
+                    &mut c,
+                    scratch,
+                );
                 let (left_nodes, lc) = handle.join().expect("a BVH build thread panicked");
                 c.median_splits += lc.median_splits;
                 (left_nodes, nodes, c)
@@ -274,11 +319,18 @@ impl Builder {
         let nb = self.bins.min(refs.len().max(2));
         let extent = cb.hi - cb.lo;
         // (1 - 1e-6) keeps the largest centroid in the last bin; a flat axis puts everything in bin 0.
-        let scale = Vec3A::select(extent.cmpgt(Vec3A::ZERO), (nb as f32 * (1.0 - 1e-6)) / extent, Vec3A::ZERO);
+        let scale = Vec3A::select(
+            extent.cmpgt(Vec3A::ZERO),
+            (nb as f32 * (1.0 - 1e-6)) / extent,
+            Vec3A::ZERO,
+        );
         let max_bin = glam::UVec3::splat(nb as u32 - 1);
         let bin_of = |r: &PrimRef| ((r.c2() - cb.lo) * scale).as_uvec3().min(max_bin);
         for axis_bins in bins.iter_mut() {
-            axis_bins[..nb].fill(Bin { b: Aabb::EMPTY, count: 0 });
+            axis_bins[..nb].fill(Bin {
+                b: Aabb::EMPTY,
+                count: 0,
+            });
         }
         for r in refs.iter() {
             let k = bin_of(r);
@@ -296,7 +348,11 @@ impl Builder {
             for k in (1..nb).rev() {
                 acc = acc.union(bins[k].b);
                 count += bins[k].count;
-                right_cost[k] = if count > 0 { acc.half_area() * count as f64 } else { f64::INFINITY };
+                right_cost[k] = if count > 0 {
+                    acc.half_area() * count as f64
+                } else {
+                    f64::INFINITY
+                };
             }
             let (mut acc, mut count) = (Aabb::EMPTY, 0u32);
             for k in 0..nb - 1 {
@@ -333,20 +389,30 @@ impl Builder {
                 refs.swap(i, j);
             }
         }
-        Some(Split { axis, mid: i, cost, sides })
+        Some(Split {
+            axis,
+            mid: i,
+            cost,
+            sides,
+        })
     }
 }
 
 /// `f` over `0..n` cut into one contiguous range per thread, the results in order.
 fn parallel_chunks<T: Send>(n: usize, threads: usize, f: impl Fn(std::ops::Range<usize>) -> T + Sync) -> Vec<T> {
     let per = n.div_ceil(threads.max(1)).max(PARALLEL_MIN);
-    let ranges: Vec<_> = (0..n.div_ceil(per).max(1)).map(|k| k * per..((k + 1) * per).min(n)).collect();
+    let ranges: Vec<_> = (0..n.div_ceil(per).max(1))
+        .map(|k| k * per..((k + 1) * per).min(n))
+        .collect();
     if ranges.len() == 1 {
         return vec![f(ranges[0].clone())];
     }
     std::thread::scope(|s| {
         let handles: Vec<_> = ranges.iter().map(|r| s.spawn(|| f(r.clone()))).collect();
-        handles.into_iter().map(|h| h.join().expect("a BVH build thread panicked")).collect()
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a BVH build thread panicked"))
+            .collect()
     })
 }
 
@@ -370,14 +436,21 @@ pub fn build(input: &[TriangleInput], options: &BvhOptions) -> Result<Bvh> {
         "BVH: max_leaf must be 1..={MAX_LEAF}, got {}",
         options.max_leaf
     );
-    ensure!((2..=64).contains(&options.bins), "BVH: bins must be 2..=64, got {}", options.bins);
+    ensure!(
+        (2..=64).contains(&options.bins),
+        "BVH: bins must be 2..=64, got {}",
+        options.bins
+    );
     ensure!(
         (1..=MAX_DEPTH).contains(&options.max_depth),
         "BVH: max_depth must be 1..={MAX_DEPTH} (the GPU traversal's stack), got {}",
         options.max_depth
     );
     if input.len() > MAX_TRIANGLES {
-        bail!("BVH: {} triangles are more than one BVH holds ({MAX_TRIANGLES})", input.len());
+        bail!(
+            "BVH: {} triangles are more than one BVH holds ({MAX_TRIANGLES})",
+            input.len()
+        );
     }
     let threads = match options.threads {
         0 => std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
@@ -396,7 +469,11 @@ pub fn build(input: &[TriangleInput], options: &BvhOptions) -> Result<Bvh> {
             }
             let lo = Vec3A::from(t.v[0].min(t.v[1]).min(t.v[2]));
             let hi = Vec3A::from(t.v[0].max(t.v[1]).max(t.v[2]));
-            refs.push(PrimRef { lo, hi, index: i as u32 });
+            refs.push(PrimRef {
+                lo,
+                hi,
+                index: i as u32,
+            });
         }
         (refs, dropped)
     });
@@ -419,13 +496,34 @@ pub fn build(input: &[TriangleInput], options: &BvhOptions) -> Result<Bvh> {
     let mut nodes = Vec::with_capacity(2 * n.div_ceil(max_leaf));
     let mut counters = Counters::default();
     if n == 0 {
-        nodes.push(BvhNode { count_axis: BVH_LEAF, ..Default::default() });
+        nodes.push(BvhNode {
+            count_axis: BVH_LEAF,
+            ..Default::default()
+        });
     } else {
-        let builder = Builder { max_leaf, bins: options.bins as usize, max_depth: options.max_depth };
+        let builder = Builder {
+            max_leaf,
+            bins: options.bins as usize,
+            max_depth: options.max_depth,
+        };
         let (b, cb) = bounds_of(&refs);
         // Fork the top levels: about four subtrees per thread, so an uneven split still keeps all busy.
-        let spawn = if threads > 1 { usize::BITS - (threads - 1).leading_zeros() + 2 } else { 0 };
-        builder.build(&mut refs, 0, 0, b, cb, spawn, &mut nodes, &mut counters, &mut new_bins());
+        let spawn = if threads > 1 {
+            usize::BITS - (threads - 1).leading_zeros() + 2
+        } else {
+            0
+        };
+        builder.build(
+            &mut refs,
+            0,
+            0,
+            b,
+            cb,
+            spawn,
+            &mut nodes,
+            &mut counters,
+            &mut new_bins(),
+        );
     }
     let triangles: Vec<Triangle> = parallel_chunks(refs.len(), threads, |range| {
         refs[range]
@@ -444,10 +542,18 @@ pub fn build(input: &[TriangleInput], options: &BvhOptions) -> Result<Bvh> {
             .collect::<Vec<_>>()
     })
     .concat();
-    let mut bvh = Bvh { nodes, triangles, dropped, stats: BvhStats::default() };
+    let mut bvh = Bvh {
+        nodes,
+        triangles,
+        dropped,
+        stats: BvhStats::default(),
+    };
     let (depth, leaves, sah_cost) = bvh.shape();
     if depth > options.max_depth {
-        bail!("BVH: built {depth} levels deep, past the limit of {} (a bug in the builder)", options.max_depth);
+        bail!(
+            "BVH: built {depth} levels deep, past the limit of {} (a bug in the builder)",
+            options.max_depth
+        );
     }
     bvh.stats = BvhStats {
         input: input.len(),
@@ -466,13 +572,20 @@ pub fn build(input: &[TriangleInput], options: &BvhOptions) -> Result<Bvh> {
 impl Bvh {
     /// (depth, leaves, SAH cost) of the flattened tree.
     fn shape(&self) -> (u32, usize, f64) {
-        let root = Aabb { lo: Vec3A::from_array(self.nodes[0].lo), hi: Vec3A::from_array(self.nodes[0].hi) };
+        let root = Aabb {
+            lo: Vec3A::from_array(self.nodes[0].lo),
+            hi: Vec3A::from_array(self.nodes[0].hi),
+        };
         let root_area = root.half_area();
         // Children follow their parent in depth-first order, so one forward pass sets every depth.
         let mut depths = vec![0u32; self.nodes.len()];
         let (mut max_depth, mut leaves, mut cost) = (0, 0, 0.0);
         for (i, n) in self.nodes.iter().enumerate() {
-            let area = Aabb { lo: Vec3A::from_array(n.lo), hi: Vec3A::from_array(n.hi) }.half_area();
+            let area = Aabb {
+                lo: Vec3A::from_array(n.lo),
+                hi: Vec3A::from_array(n.hi),
+            }
+            .half_area();
             let rel = if root_area > 0.0 { area / root_area } else { 1.0 };
             max_depth = max_depth.max(depths[i]);
             if n.is_leaf() {
@@ -503,7 +616,10 @@ impl Bvh {
     pub fn validate(&self, max_leaf: u32, max_depth: u32) -> Result<()> {
         ensure!(!self.nodes.is_empty(), "no root node");
         if self.triangles.is_empty() {
-            ensure!(self.nodes.len() == 1 && self.nodes[0].is_leaf() && self.nodes[0].count() == 0, "empty tree");
+            ensure!(
+                self.nodes.len() == 1 && self.nodes[0].is_leaf() && self.nodes[0].count() == 0,
+                "empty tree"
+            );
             return Ok(());
         }
         let inside = |lo: [f32; 3], hi: [f32; 3], p: [f32; 3]| (0..3).all(|k| lo[k] <= p[k] && p[k] <= hi[k]);
@@ -513,14 +629,24 @@ impl Bvh {
         let mut visited = 0;
         while let Some((i, depth)) = stack.pop() {
             visited += 1;
-            let n = self.nodes.get(i).with_context(|| format!("node index {i} out of range"))?;
+            let n = self
+                .nodes
+                .get(i)
+                .with_context(|| format!("node index {i} out of range"))?;
             ensure!(depth <= max_depth, "node {i} at depth {depth}, past {max_depth}");
             if n.is_leaf() {
                 let (first, count) = (n.offset as usize, n.count() as usize);
-                ensure!((1..=max_leaf as usize).contains(&count), "leaf {i} holds {count} triangles");
+                ensure!(
+                    (1..=max_leaf as usize).contains(&count),
+                    "leaf {i} holds {count} triangles"
+                );
                 ensure!(first + count <= self.triangles.len(), "leaf {i} past the triangles");
                 for (k, t) in self.triangles[first..first + count].iter().enumerate() {
-                    ensure!(!std::mem::replace(&mut seen[first + k], true), "triangle {} in two leaves", first + k);
+                    ensure!(
+                        !std::mem::replace(&mut seen[first + k], true),
+                        "triangle {} in two leaves",
+                        first + k
+                    );
                     for v in [t.v0, t.v1, t.v2] {
                         ensure!(inside(n.lo, n.hi, v), "triangle {} outside leaf {i}", first + k);
                     }
@@ -528,15 +654,25 @@ impl Bvh {
             } else {
                 let second = n.offset as usize;
                 ensure!(n.axis() < 3, "node {i}: axis {}", n.axis());
-                ensure!(second > i + 1 && second < self.nodes.len(), "node {i}: second child {second}");
+                ensure!(
+                    second > i + 1 && second < self.nodes.len(),
+                    "node {i}: second child {second}"
+                );
                 for c in [i + 1, second] {
                     let child = &self.nodes[c];
-                    ensure!(inside(n.lo, n.hi, child.lo) && inside(n.lo, n.hi, child.hi), "node {c} outside its parent {i}");
+                    ensure!(
+                        inside(n.lo, n.hi, child.lo) && inside(n.lo, n.hi, child.hi),
+                        "node {c} outside its parent {i}"
+                    );
                     stack.push((c, depth + 1));
                 }
             }
         }
-        ensure!(visited == self.nodes.len(), "{} nodes unreachable", self.nodes.len() - visited);
+        ensure!(
+            visited == self.nodes.len(),
+            "{} nodes unreachable",
+            self.nodes.len() - visited
+        );
         ensure!(seen.iter().all(|&s| s), "a triangle in no leaf");
         Ok(())
     }
@@ -553,10 +689,15 @@ impl DeviceBvh {
     pub fn new(ctx: &Context, bvh: &Bvh) -> Result<DeviceBvh> {
         // build() never makes a tree the GPU cannot walk (its stack holds MAX_DEPTH levels), but a Bvh may
         // have been put together or changed by hand, and a bad index would read out of bounds there.
-        bvh.validate(MAX_LEAF, MAX_DEPTH).context("uploading a BVH the GPU traversal cannot take")?;
+        bvh.validate(MAX_LEAF, MAX_DEPTH)
+            .context("uploading a BVH the GPU traversal cannot take")?;
         Ok(DeviceBvh {
-            nodes: ctx.buffer_from("bvh nodes", &bvh.nodes).context("uploading the BVH's nodes")?,
-            triangles: ctx.buffer_from("bvh triangles", &bvh.triangles).context("uploading the BVH's triangles")?,
+            nodes: ctx
+                .buffer_from("bvh nodes", &bvh.nodes)
+                .context("uploading the BVH's nodes")?,
+            triangles: ctx
+                .buffer_from("bvh triangles", &bvh.triangles)
+                .context("uploading the BVH's triangles")?,
         })
     }
 }
@@ -568,12 +709,20 @@ pub struct BvhTracer {
 
 impl BvhTracer {
     pub fn new(ctx: &Context) -> Result<BvhTracer> {
-        Ok(BvhTracer { pipeline: ppm_vk_kernels::pipeline(ctx, &ppm_vk_kernels::reflected::BVH_TRACE)? })
+        Ok(BvhTracer {
+            pipeline: ppm_vk_kernels::pipeline(ctx, &ppm_vk_kernels::reflected::BVH_TRACE)?,
+        })
     }
 
     /// The nearest hit of each ray, each traversal taking at most `budget` steps (at most
     /// [`bvh_trace::MAX_BUDGET`]); records of cut traversals keep `cut = 1`. See [`BvhTracer::trace`].
-    pub fn trace_unchecked(&self, ctx: &Context, bvh: &DeviceBvh, rays: &[TraceRay], budget: u32) -> Result<Vec<TraceHit>> {
+    pub fn trace_unchecked(
+        &self,
+        ctx: &Context,
+        bvh: &DeviceBvh,
+        rays: &[TraceRay],
+        budget: u32,
+    ) -> Result<Vec<TraceHit>> {
         if rays.is_empty() {
             return Ok(Vec::new());
         }
@@ -585,17 +734,36 @@ impl BvhTracer {
                 * std::mem::size_of::<TraceHit>() as u64,
             ppm_vk_device::BufferKind::Storage,
         )?;
-        let push = TracePush { count: rays.len() as u32, budget };
-        ctx.run(|cmd| bvh_trace::record(&self.pipeline, cmd, &bvh.nodes, &bvh.triangles, &ray_buf, &hit_buf, &push))
-            .context("tracing rays through the BVH")?;
-        ctx.download_prefix(&hit_buf, rays.len()).context("reading the BVH hits back")
+        let push = TracePush {
+            count: rays.len() as u32,
+            budget,
+        };
+        ctx.run(|cmd| {
+            bvh_trace::record(
+                &self.pipeline,
+                cmd,
+                &bvh.nodes,
+                &bvh.triangles,
+                &ray_buf,
+                &hit_buf,
+                &push,
+            )
+        })
+        .context("tracing rays through the BVH")?;
+        ctx.download_prefix(&hit_buf, rays.len())
+            .context("reading the BVH hits back")
     }
 
     /// [`BvhTracer::trace_unchecked`] that fails if any traversal was cut at the budget: its hit would be
     /// wrong without a word (on lavapipe the device's own loop limit cuts the same way, silently).
     pub fn trace(&self, ctx: &Context, bvh: &DeviceBvh, rays: &[TraceRay], budget: u32) -> Result<Vec<TraceHit>> {
         let hits = self.trace_unchecked(ctx, bvh, rays, budget)?;
-        let cut: Vec<usize> = hits.iter().enumerate().filter(|(_, h)| h.cut != 0).map(|(i, _)| i).collect();
+        let cut: Vec<usize> = hits
+            .iter()
+            .enumerate()
+            .filter(|(_, h)| h.cut != 0)
+            .map(|(i, _)| i)
+            .collect();
         if let Some(&first) = cut.first() {
             bail!(
                 "{} of {} BVH traversals were cut at the budget of {budget} loop steps (node visits + triangle \
@@ -707,7 +875,12 @@ pub mod meshes {
         let mut out = Vec::new();
         let (mut x, mut s) = (0.0f32, 1.0f32);
         for _ in 0..n {
-            out.push(tri(Vec3::new(x, 0.0, 0.0), Vec3::new(x + s, 0.0, 0.0), Vec3::new(x, s, s), 0));
+            out.push(tri(
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + s, 0.0, 0.0),
+                Vec3::new(x, s, s),
+                0,
+            ));
             x += s;
             s *= ratio;
         }
@@ -770,14 +943,25 @@ mod tests {
                     w.t,
                     w.triangle
                 );
-                assert_eq!(test(g.triangle), Some(g.t), "{what}: the BVH's hit is not its triangle's");
+                assert_eq!(
+                    test(g.triangle),
+                    Some(g.t),
+                    "{what}: the BVH's hit is not its triangle's"
+                );
                 // Independent of the test's arithmetic: the barycentric point is the ray's point.
                 let t = &bvh.triangles[g.triangle as usize];
                 let p = (1.0 - g.bary.x - g.bary.y) * v3(t.v0) + g.bary.x * v3(t.v1) + g.bary.y * v3(t.v2);
                 let q = o + g.t * d;
                 let scale = o.abs().max_element().max(q.abs().max_element()).max(1.0);
-                assert!((p - q).length() <= 1e-4 * scale, "{what}: barycentric point {p} is not the ray's {q}");
-                assert!(g.bary.min_element() >= -1e-5 && g.bary.x + g.bary.y <= 1.0 + 1e-5, "{what}: bary {}", g.bary);
+                assert!(
+                    (p - q).length() <= 1e-4 * scale,
+                    "{what}: barycentric point {p} is not the ray's {q}"
+                );
+                assert!(
+                    g.bary.min_element() >= -1e-5 && g.bary.x + g.bary.y <= 1.0 + 1e-5,
+                    "{what}: bary {}",
+                    g.bary
+                );
                 Some((g, exact))
             }
             (g, w) => panic!("{what}: ray {o} {d}: BVH {g:?}, brute force {w:?}"),
@@ -788,7 +972,14 @@ mod tests {
 
     #[test]
     fn bvh_matches_brute_force_on_random_soups() {
-        for (seed, n, size) in [(1, 1, 0.3), (2, 2, 0.3), (3, 7, 0.2), (4, 100, 0.1), (5, 3000, 0.05), (6, 3000, 0.5)] {
+        for (seed, n, size) in [
+            (1, 1, 0.3),
+            (2, 2, 0.3),
+            (3, 7, 0.2),
+            (4, 100, 0.1),
+            (5, 3000, 0.05),
+            (6, 3000, 0.5),
+        ] {
             let input = random_soup(seed, n, 1.0, size);
             let bvh = built(&input);
             assert_eq!(bvh.stats.triangles, n);
@@ -807,7 +998,11 @@ mod tests {
                     // Aimed at a vertex or an edge point of a random triangle.
                     3 | 4 => {
                         let t = &input[rng.next_u32() as usize % n];
-                        let target = if k % 10 == 3 { t.v[0] } else { t.v[1].lerp(t.v[2], rng.float()) };
+                        let target = if k % 10 == 3 {
+                            t.v[0]
+                        } else {
+                            t.v[1].lerp(t.v[2], rng.float())
+                        };
                         d = target - o;
                     }
                     _ => {}
@@ -849,7 +1044,8 @@ mod tests {
                 for target in targets {
                     let d = target - o;
                     let hit = same_as_brute_force(&bvh, o, d, what);
-                    let (_, exact) = hit.unwrap_or_else(|| panic!("{what}: ray from {o} through {target} left the closed mesh"));
+                    let (_, exact) =
+                        hit.unwrap_or_else(|| panic!("{what}: ray from {o} through {target} left the closed mesh"));
                     rays += 1;
                     inexact += !exact as usize;
                 }
@@ -863,9 +1059,16 @@ mod tests {
         let mesh = uv_sphere(Vec3::ZERO, 1.0, 24, 32, 0);
         assert_eq!(mesh.len(), 2 * 32 * 23);
         // The centre makes the ray through a vertex exactly the vertex's own coordinates.
-        let inside = [Vec3::ZERO, Vec3::new(0.3, -0.2, 0.1), Vec3::new(0.0, 0.0, 0.9), Vec3::new(-0.5, 0.5, -0.6)];
+        let inside = [
+            Vec3::ZERO,
+            Vec3::new(0.3, -0.2, 0.1),
+            Vec3::new(0.0, 0.0, 0.9),
+            Vec3::new(-0.5, 0.5, -0.6),
+        ];
         let (rays, inexact) = watertight_from_inside(&mesh, &inside, "sphere");
-        println!("sphere: {rays} rays through vertices and edges, none missed; {inexact} hits a few ulps off brute force's");
+        println!(
+            "sphere: {rays} rays through vertices and edges, none missed; {inexact} hits a few ulps off brute force's"
+        );
     }
 
     #[test]
@@ -874,9 +1077,15 @@ mod tests {
         // the points of the shared (and diagonal) edges they aim at.
         let mesh = box_grid(Vec3::splat(-1.0), Vec3::splat(1.0), 8, 0);
         assert_eq!(mesh.len(), 12 * 64);
-        let inside = [Vec3::ZERO, Vec3::new(0.25, -0.125, 0.5), Vec3::new(0.875, 0.875, -0.875)];
+        let inside = [
+            Vec3::ZERO,
+            Vec3::new(0.25, -0.125, 0.5),
+            Vec3::new(0.875, 0.875, -0.875),
+        ];
         let (rays, inexact) = watertight_from_inside(&mesh, &inside, "box");
-        println!("box: {rays} rays through vertices and edges, none missed; {inexact} hits a few ulps off brute force's");
+        println!(
+            "box: {rays} rays through vertices and edges, none missed; {inexact} hits a few ulps off brute force's"
+        );
         // Along an edge of the box from outside: in the planes of two faces (no hit there), through the
         // corner vertex of the third: the hit is that corner.
         let bvh = built(&mesh);
@@ -887,7 +1096,8 @@ mod tests {
             // Along a shared edge inside the face z = 1, onto the edge between two faces.
             (Vec3::new(-3.0, 0.25, 1.0), Vec3::X, Vec3::new(-1.0, 0.25, 1.0)),
         ] {
-            let (hit, _) = same_as_brute_force(&bvh, o, d, "along an edge").expect("a ray along an edge hits the face it runs into");
+            let (hit, _) = same_as_brute_force(&bvh, o, d, "along an edge")
+                .expect("a ray along an edge hits the face it runs into");
             assert_eq!(o + hit.t * d, corner, "ray {o} {d}");
         }
         // From outside, aimed at every vertex and edge middle of the face x = 1 off its outline (a ray
@@ -900,7 +1110,8 @@ mod tests {
                     if target.x != 1.0 || target.y.abs() == 1.0 || target.z.abs() == 1.0 {
                         continue;
                     }
-                    let (hit, _) = same_as_brute_force(&bvh, o, target - o, "from outside").expect("ray at a vertex missed");
+                    let (hit, _) =
+                        same_as_brute_force(&bvh, o, target - o, "from outside").expect("ray at a vertex missed");
                     assert!((hit.t - 1.0).abs() <= 1e-6, "ray at {target} hit at t {}", hit.t);
                     aimed += 1;
                 }
@@ -929,7 +1140,10 @@ mod tests {
         }
         // A tiny triangle is not degenerate: its f32 cross product would underflow, its area is not 0.
         let q = Vec3::new(0.0, 0.0, 0.5);
-        let tiny = TriangleInput { v: [q, q + Vec3::X * 1e-25, q + Vec3::Y * 1e-25], material: 0 };
+        let tiny = TriangleInput {
+            v: [q, q + Vec3::X * 1e-25, q + Vec3::Y * 1e-25],
+            material: 0,
+        };
         input.push(tiny);
         let bvh = built(&input);
         assert_eq!(bvh.dropped, bad_at);
@@ -948,9 +1162,20 @@ mod tests {
     fn bvh_empty_and_single() {
         let empty = built(&[]);
         assert_eq!((empty.stats.nodes, empty.stats.triangles, empty.stats.depth), (1, 0, 0));
-        let miss = intersect(&empty.nodes, &empty.triangles, Vec3::ZERO, Vec3::X, 0.0, f32::INFINITY, NO_BUDGET);
+        let miss = intersect(
+            &empty.nodes,
+            &empty.triangles,
+            Vec3::ZERO,
+            Vec3::X,
+            0.0,
+            f32::INFINITY,
+            NO_BUDGET,
+        );
         assert_eq!((miss.hit, miss.steps, miss.cut), (None, 1, false));
-        let one = [TriangleInput { v: [Vec3::X, Vec3::Y, Vec3::Z], material: 3 }];
+        let one = [TriangleInput {
+            v: [Vec3::X, Vec3::Y, Vec3::Z],
+            material: 3,
+        }];
         let bvh = built(&one);
         assert_eq!((bvh.stats.nodes, bvh.stats.leaves, bvh.stats.depth), (1, 1, 0));
         let (hit, _) = same_as_brute_force(&bvh, Vec3::ZERO, Vec3::ONE, "single").unwrap();
@@ -966,10 +1191,19 @@ mod tests {
         let free = built(&chain);
         let limit = 12;
         assert!(free.stats.depth > limit, "SAH alone: depth {}", free.stats.depth);
-        let opts = BvhOptions { max_depth: limit, ..BvhOptions::default() };
+        let opts = BvhOptions {
+            max_depth: limit,
+            ..BvhOptions::default()
+        };
         let bvh = build(&chain, &opts).unwrap();
         bvh.validate(MAX_LEAF, limit).unwrap();
-        println!("chain of {}: depth {} by SAH, {} with the limit ({} median splits)", chain.len(), free.stats.depth, bvh.stats.depth, bvh.stats.median_splits);
+        println!(
+            "chain of {}: depth {} by SAH, {} with the limit ({} median splits)",
+            chain.len(),
+            free.stats.depth,
+            bvh.stats.depth,
+            bvh.stats.median_splits
+        );
         assert_eq!(bvh.stats.depth, limit);
         assert!(bvh.stats.median_splits > 0);
         // Rays onto every triangle, the deepest leaves included.
@@ -980,19 +1214,32 @@ mod tests {
         }
         // The tightest limit: 4000 triangles in leaves of 4 need 10 levels.
         let soup = random_soup(3, 4000, 1.0, 0.05);
-        let opts = BvhOptions { max_depth: 10, ..BvhOptions::default() };
+        let opts = BvhOptions {
+            max_depth: 10,
+            ..BvhOptions::default()
+        };
         let bvh = build(&soup, &opts).unwrap();
         bvh.validate(MAX_LEAF, 10).unwrap();
         assert_eq!(bvh.stats.depth, 10);
         let err = build(&soup, &BvhOptions { max_depth: 9, ..opts }).unwrap_err();
         assert!(err.to_string().contains("10 levels deep"), "{err}");
-        assert!(build(&soup, &BvhOptions { max_depth: MAX_DEPTH + 1, ..opts }).is_err());
+        assert!(build(
+            &soup,
+            &BvhOptions {
+                max_depth: MAX_DEPTH + 1,
+                ..opts
+            }
+        )
+        .is_err());
     }
 
     /// Thousands of identical triangles: no plane separates them; median splits, and every one is tested.
     #[test]
     fn bvh_identical_triangles() {
-        let t = TriangleInput { v: [Vec3::ZERO, Vec3::X, Vec3::Y], material: 0 };
+        let t = TriangleInput {
+            v: [Vec3::ZERO, Vec3::X, Vec3::Y],
+            material: 0,
+        };
         let bvh = built(&vec![t; 5000]);
         assert_eq!(bvh.stats.depth, levels_needed(5000, MAX_LEAF as usize));
         assert!(bvh.stats.median_splits > 0);
@@ -1025,8 +1272,22 @@ mod tests {
     #[test]
     fn bvh_build_is_deterministic_across_threads() {
         let soup = random_soup(8, 50_000, 10.0, 0.1);
-        let one = build(&soup, &BvhOptions { threads: 1, ..BvhOptions::default() }).unwrap();
-        let many = build(&soup, &BvhOptions { threads: 4, ..BvhOptions::default() }).unwrap();
+        let one = build(
+            &soup,
+            &BvhOptions {
+                threads: 1,
+                ..BvhOptions::default()
+            },
+        )
+        .unwrap();
+        let many = build(
+            &soup,
+            &BvhOptions {
+                threads: 4,
+                ..BvhOptions::default()
+            },
+        )
+        .unwrap();
         many.validate(MAX_LEAF, MAX_DEPTH).unwrap();
         assert_eq!(one.nodes, many.nodes);
         assert_eq!(one.triangles, many.triangles);
@@ -1045,7 +1306,11 @@ mod tests {
         // A ray that meets the root tests a handful of nodes and triangles, not 20000: the SAH cost of a
         // good tree over a closed surface is a few tens (one leaf of everything would cost 20000).
         assert!(s.sah_cost > 1.0 && s.sah_cost < 100.0, "SAH cost {}", s.sah_cost);
-        assert!(s.depth >= levels_needed(mesh.len(), MAX_LEAF as usize) && s.depth < 40, "depth {}", s.depth);
+        assert!(
+            s.depth >= levels_needed(mesh.len(), MAX_LEAF as usize) && s.depth < 40,
+            "depth {}",
+            s.depth
+        );
         assert_eq!(bvh.node_bytes(), 32 * s.nodes);
         assert_eq!(bvh.triangle_bytes(), 48 * s.triangles);
     }

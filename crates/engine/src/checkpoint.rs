@@ -106,12 +106,22 @@ impl Checkpoint {
         ensure!(bytes.len() >= 16 && &bytes[..8] == MAGIC, "not a ppm-vk checkpoint");
         let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"));
         let format = word(8);
-        ensure!(format == FORMAT, "format version {format}, this build reads version {FORMAT}");
+        ensure!(
+            format == FORMAT,
+            "format version {format}, this build reads version {FORMAT}"
+        );
         let len = word(12);
-        ensure!(len <= MAX_HEADER && 16 + len as usize <= bytes.len(), "truncated header ({len} bytes)");
+        ensure!(
+            len <= MAX_HEADER && 16 + len as usize <= bytes.len(),
+            "truncated header ({len} bytes)"
+        );
         let header: Header = serde_json::from_slice(&bytes[16..16 + len as usize]).context("parsing the header")?;
         let mut rest = &bytes[16 + len as usize..];
-        ensure!(header.sections.len() == 5, "{} sections, expected 5", header.sections.len());
+        ensure!(
+            header.sections.len() == 5,
+            "{} sections, expected 5",
+            header.sections.len()
+        );
         let total = header.sections.iter().try_fold(0u64, |sum, &n| sum.checked_add(n));
         ensure!(
             total == Some(rest.len() as u64),
@@ -131,8 +141,18 @@ impl Checkpoint {
         let busy = section(take(header.sections[3]), "pilot marks")?;
         let cut: Vec<PathCounters> = section(take(header.sections[4]), "path counters")?;
         ensure!(cut.len() == 1, "path counters: {} entries, expected 1", cut.len());
-        let c = Checkpoint { header, stats, hit_points, direct, busy, cut: cut[0] };
-        ensure!(sha256(&c.payload()) == c.header.payload_sha256, "the buffers do not match their checksum (damaged file)");
+        let c = Checkpoint {
+            header,
+            stats,
+            hit_points,
+            direct,
+            busy,
+            cut: cut[0],
+        };
+        ensure!(
+            sha256(&c.payload()) == c.header.payload_sha256,
+            "the buffers do not match their checksum (damaged file)"
+        );
         Ok(c)
     }
 
@@ -141,7 +161,10 @@ impl Checkpoint {
     pub fn check(&self, scene: &Scene, settings: &Settings, build: &str) -> Result<()> {
         let h = &self.header;
         if h.build != build {
-            bail!("it was written by build {}, this is build {build}: resume it with that build", h.build);
+            bail!(
+                "it was written by build {}, this is build {build}: resume it with that build",
+                h.build
+            );
         }
         let sha = scene.content_sha256();
         if h.scene_sha256 != sha {
@@ -160,7 +183,13 @@ impl Checkpoint {
                 (serde_json::Value::Object(a), serde_json::Value::Object(b)) => a
                     .iter()
                     .filter(|(k, v)| b.get(*k) != Some(v))
-                    .map(|(k, v)| format!("{k}: {} in the checkpoint, {} now", show(v), b.get(k).map_or("none".into(), show)))
+                    .map(|(k, v)| {
+                        format!(
+                            "{k}: {} in the checkpoint, {} now",
+                            show(v),
+                            b.get(k).map_or("none".into(), show)
+                        )
+                    })
                     .collect(),
                 _ => vec![],
             };
@@ -181,7 +210,11 @@ fn show(v: &serde_json::Value) -> String {
 /// One buffer of the file as `T`s; its size must be a whole number of them.
 fn section<T: bytemuck::Pod>(bytes: &[u8], what: &str) -> Result<Vec<T>> {
     let size = std::mem::size_of::<T>();
-    ensure!(bytes.len() % size == 0, "{what}: {} bytes, not a multiple of {size}", bytes.len());
+    ensure!(
+        bytes.len() % size == 0,
+        "{what}: {} bytes, not a multiple of {size}",
+        bytes.len()
+    );
     Ok(bytemuck::pod_collect_to_vec(bytes))
 }
 
@@ -212,11 +245,22 @@ mod tests {
                 sections: vec![],
                 payload_sha256: String::new(),
             },
-            stats: vec![HitStats { n: 1.5, r2: 0.01, tau_r: 2.0, ..Default::default() }; 3],
+            stats: vec![
+                HitStats {
+                    n: 1.5,
+                    r2: 0.01,
+                    tau_r: 2.0,
+                    ..Default::default()
+                };
+                3
+            ],
             hit_points: vec![],
             direct: vec![[1.0, 2.0, 3.0, 4.0]; 2],
             busy: vec![1, 0],
-            cut: PathCounters { photon_paths: 7, ..Default::default() },
+            cut: PathCounters {
+                photon_paths: 7,
+                ..Default::default()
+            },
         }
         .seal()
     }

@@ -27,7 +27,13 @@ pub enum Error {
     /// `file` is the scene's name and `line` and `column` are 0). `field` is the path of the field
     /// (`sphere[1].radius`, `materials.white.diffuse`; empty for the scene as a whole).
     #[error("{}", Located { file, line: *line, column: *column, field, message })]
-    Scene { file: String, line: usize, column: usize, field: String, message: String },
+    Scene {
+        file: String,
+        line: usize,
+        column: usize,
+        field: String,
+        message: String,
+    },
 
     /// A render setting out of its range (`field` names it, as in [`crate::Settings`]).
     #[error("settings: {field}: {message}")]
@@ -39,7 +45,12 @@ pub enum Error {
         Some(v) => format!("needs {v}, more"),
         None => "reached no more".to_string(),
     })]
-    Limit { what: String, value: Option<u64>, limit: u64, lower: String },
+    Limit {
+        what: String,
+        value: Option<u64>,
+        limit: u64,
+        lower: String,
+    },
 
     /// A Vulkan or driver failure while `context`; `error` is the wrapper's own error (the message
     /// shows its whole chain on one line).
@@ -83,23 +94,37 @@ impl Error {
 
     /// A device limit: `what` needs `value` where the device allows `limit`; `lower` is the advice.
     pub fn limit(what: impl Into<String>, value: Option<u64>, limit: u64, lower: impl Into<String>) -> Error {
-        Error::Limit { what: what.into(), value, limit, lower: lower.into() }
+        Error::Limit {
+            what: what.into(),
+            value,
+            limit,
+            lower: lower.into(),
+        }
     }
 
     /// An I/O failure on `path`.
     pub fn io(path: impl AsRef<Path>, source: std::io::Error) -> Error {
-        Error::Io { path: path.as_ref().to_path_buf(), error: source }
+        Error::Io {
+            path: path.as_ref().to_path_buf(),
+            error: source,
+        }
     }
 
     /// A file whose content could not be decoded (`source`: the decoder's error).
     pub fn decode(path: impl AsRef<Path>, source: impl Into<Source>) -> Error {
-        Error::io(path, std::io::Error::new(std::io::ErrorKind::InvalidData, source.into()))
+        Error::io(
+            path,
+            std::io::Error::new(std::io::ErrorKind::InvalidData, source.into()),
+        )
     }
 
     /// A device failure while `context`; for `map_err`: `.map_err(Error::device("reading the image"))`.
     pub fn device<E: Into<Source>>(context: impl Into<String>) -> impl FnOnce(E) -> Error {
         let context = context.into();
-        move |e| Error::Device { context, error: e.into() }
+        move |e| Error::Device {
+            context,
+            error: e.into(),
+        }
     }
 }
 
@@ -110,7 +135,10 @@ pub(crate) trait DeviceContext<T> {
 
 impl<T> DeviceContext<T> for anyhow::Result<T> {
     fn device(self, context: &str) -> Result<T> {
-        self.map_err(|e| Error::Device { context: context.to_string(), error: e.into() })
+        self.map_err(|e| Error::Device {
+            context: context.to_string(),
+            error: e.into(),
+        })
     }
 }
 

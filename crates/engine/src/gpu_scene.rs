@@ -2,11 +2,13 @@
 //! constants. Both the GPU renderer and the CPU reference start from this one conversion.
 
 use glam::Vec3;
-use ppm_vk_kernels::layout::{self, BvhNode, Light, Material, Quad, RenderParams, Sphere, Triangle, LIGHT_QUAD, LIGHT_TRIANGLE};
+use ppm_vk_kernels::layout::{
+    self, BvhNode, Light, Material, Quad, RenderParams, Sphere, Triangle, LIGHT_QUAD, LIGHT_TRIANGLE,
+};
 use ppm_vk_kernels::lookup::SCAN_BLOCK;
 
-use crate::error::{Error, Result};
 use crate::bvh::{self, BvhOptions, BvhStats, TriangleInput};
+use crate::error::{Error, Result};
 use crate::scene::{Scene, Surface};
 use crate::settings::Settings;
 
@@ -58,13 +60,23 @@ impl GpuScene {
                     Surface::Mirror { reflectance } => (reflectance, layout::SURFACE_MIRROR, 1.0),
                     Surface::Glass { ior } => (Vec3::ONE, layout::SURFACE_GLASS, ior),
                 };
-                Material { color: arr(color), surface, emission: arr(m.emission), ior }
+                Material {
+                    color: arr(color),
+                    surface,
+                    emission: arr(m.emission),
+                    ior,
+                }
             })
             .collect();
         let spheres: Vec<Sphere> = scene
             .spheres
             .iter()
-            .map(|s| Sphere { center: arr(s.center), radius: s.radius, material: s.material, ..Default::default() })
+            .map(|s| Sphere {
+                center: arr(s.center),
+                radius: s.radius,
+                material: s.material,
+                ..Default::default()
+            })
             .collect();
         let quads: Vec<Quad> = scene
             .quads
@@ -90,13 +102,28 @@ impl GpuScene {
         let input: Vec<TriangleInput> = scene
             .meshes
             .iter()
-            .flat_map(|m| m.triangles().map(|t| TriangleInput { v: t.p, material: t.material }))
+            .flat_map(|m| {
+                m.triangles().map(|t| TriangleInput {
+                    v: t.p,
+                    material: t.material,
+                })
+            })
             .collect();
         let built = bvh::build(&input, &BvhOptions::default())
             .map_err(|e| Error::scene(&scene.name, 0, 0, "", format!("building the BVH: {e:#}")))?;
         if !built.dropped.is_empty() {
             // Scene validation drops degenerate triangles first, so this is a NaN or an area that rounds to 0.
-            return Err(Error::scene(&scene.name, 0, 0, "", format!("{} triangles are degenerate (zero area or not finite), e.g. input triangle {}", built.dropped.len(), built.dropped[0])));
+            return Err(Error::scene(
+                &scene.name,
+                0,
+                0,
+                "",
+                format!(
+                    "{} triangles are degenerate (zero area or not finite), e.g. input triangle {}",
+                    built.dropped.len(),
+                    built.dropped[0]
+                ),
+            ));
         }
 
         // Lights: emitting quads and triangles, chosen in proportion to their power (summed over RGB).
@@ -108,7 +135,12 @@ impl GpuScene {
             for c in 0..3 {
                 total_power[c] += power[c] as f64;
             }
-            lights.push(Light { index, kind, power: arr(power), ..Default::default() });
+            lights.push(Light {
+                index,
+                kind,
+                power: arr(power),
+                ..Default::default()
+            });
         };
         for qi in scene.lights() {
             let q = &scene.quads[qi as usize];
@@ -121,7 +153,10 @@ impl GpuScene {
                 add(ti as u32, LIGHT_TRIANGLE, e, 0.5 * (v1 - v0).cross(v2 - v0).length());
             }
         }
-        let sum: f64 = lights.iter().map(|l| l.power.iter().map(|&p| p as f64).sum::<f64>()).sum();
+        let sum: f64 = lights
+            .iter()
+            .map(|l| l.power.iter().map(|&p| p as f64).sum::<f64>())
+            .sum();
         if lights.is_empty() || sum <= 0.0 {
             return Err(Error::scene(&scene.name, 0, 0, "", "no light emits power"));
         }
@@ -151,16 +186,28 @@ impl GpuScene {
 
         // No photon carries more flux than it leaves its light with (roulette divides by the largest
         // albedo, mirrors and glass never amplify), so this bounds one photon's share of a fixed-point sum.
-        let max_flux = lights.iter().flat_map(|l| l.power.map(|p| p as f64 / l.prob as f64)).fold(0f64, f64::max);
+        let max_flux = lights
+            .iter()
+            .flat_map(|l| l.power.map(|p| p as f64 / l.prob as f64))
+            .fold(0f64, f64::max);
         let flux_fixed = 2f64.powi((2f64.powi(30) / max_flux).log2().floor() as i32) as f32;
         if !(flux_fixed.is_finite() && flux_fixed > 0.0) {
-            return Err(Error::scene(&scene.name, 0, 0, "", format!("light power {max_flux} W is out of the representable range")));
+            return Err(Error::scene(
+                &scene.name,
+                0,
+                0,
+                "",
+                format!("light power {max_flux} W is out of the representable range"),
+            ));
         }
         let (lo, hi) = scene.bounds();
         let extent = (hi - lo).max_element();
         let initial_radius = settings.initial_radius.unwrap_or_else(|| default_radius(scene));
         if !(initial_radius.is_finite() && initial_radius > 0.0) {
-            return Err(Error::Settings { field: "initial_radius", message: format!("must be positive and finite, got {initial_radius}") });
+            return Err(Error::Settings {
+                field: "initial_radius",
+                message: format!("must be positive and finite, got {initial_radius}"),
+            });
         }
         // Cells of CELL_PER_RADIUS starting radii. The probe may enlarge radii; the renderer then sizes
         // the cells for the largest (Renderer::fit_grid).
@@ -168,7 +215,10 @@ impl GpuScene {
         // A lookup window must stay under 1024 cells a side (grid_key in grid.glsl).
         let cell_size = match settings.grid_cell {
             Some(c) if !(c.is_finite() && c > 0.0 && c * 256.0 >= cell_size) => {
-                return Err(Error::Settings { field: "grid_cell", message: format!("{c} must be positive and at least 1/256 of {cell_size} (the starting cell)") })
+                return Err(Error::Settings {
+                    field: "grid_cell",
+                    message: format!("{c} must be positive and at least 1/256 of {cell_size} (the starting cell)"),
+                })
             }
             Some(c) => c,
             None => cell_size,
@@ -234,14 +284,17 @@ impl GpuScene {
     pub fn set_grid_cell(&mut self, cell_size: f32, photon_capacity: u32) {
         self.params.cell_size = cell_size;
         self.params.grid_min = arr(Vec3::from(self.lo) - Vec3::splat(cell_size));
-        let buckets = self.fixed_buckets.unwrap_or_else(|| grid_buckets(self.surface_area, cell_size, photon_capacity));
+        let buckets = self
+            .fixed_buckets
+            .unwrap_or_else(|| grid_buckets(self.surface_area, cell_size, photon_capacity));
         self.params.grid_mask = buckets - 1;
     }
 
     /// The most buckets the grid's table can be given (all cell sizes): allocated once, so memory never
     /// grows with the passes as the cells shrink and want more buckets (`grid_buckets`).
     pub fn max_buckets(&self) -> u32 {
-        self.fixed_buckets.unwrap_or_else(|| grid_buckets(f64::INFINITY, 1.0, self.params.photon_capacity))
+        self.fixed_buckets
+            .unwrap_or_else(|| grid_buckets(f64::INFINITY, 1.0, self.params.photon_capacity))
     }
 
     pub fn pixels(&self) -> u32 {
@@ -255,8 +308,17 @@ impl GpuScene {
 
 fn scene_surface_area(scene: &Scene) -> f64 {
     scene.quads.iter().map(|q| q.area() as f64).sum::<f64>()
-        + scene.spheres.iter().map(|s| 4.0 * std::f64::consts::PI * (s.radius as f64).powi(2)).sum::<f64>()
-        + scene.meshes.iter().flat_map(|m| m.triangles()).map(|t| t.area() as f64).sum::<f64>()
+        + scene
+            .spheres
+            .iter()
+            .map(|s| 4.0 * std::f64::consts::PI * (s.radius as f64).powi(2))
+            .sum::<f64>()
+        + scene
+            .meshes
+            .iter()
+            .flat_map(|m| m.triangles())
+            .map(|t| t.area() as f64)
+            .sum::<f64>()
 }
 
 /// A photon-grid cell's edge in search radii (of the largest radius live in the pass). The trade: smaller
@@ -273,5 +335,7 @@ pub const CELL_PER_RADIUS: f32 = 1.5;
 pub fn grid_buckets(surface_area: f64, cell_size: f32, photon_capacity: u32) -> u32 {
     let cells = 1.5 * surface_area / (cell_size as f64).powi(2);
     let wanted = (2.0 * cells).min(2.0 * photon_capacity as f64).max(1.0);
-    (wanted as u64).next_power_of_two().clamp(SCAN_BLOCK as u64, SCAN_BLOCK as u64 * 65536) as u32
+    (wanted as u64)
+        .next_power_of_two()
+        .clamp(SCAN_BLOCK as u64, SCAN_BLOCK as u64 * 65536) as u32
 }

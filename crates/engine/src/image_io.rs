@@ -34,11 +34,7 @@ impl RgbImage {
             rgba.len()
         );
         let pixels = rgba.iter().map(|&[r, g, b, _]| [r, g, b]).collect();
-        Ok(Self {
-            width,
-            height,
-            pixels,
-        })
+        Ok(Self { width, height, pixels })
     }
 
     /// The pixel at column `x`, row `y` (row 0 at the top). Panics when out of bounds, like indexing.
@@ -67,11 +63,7 @@ impl RgbImage {
 
     /// Number of NaN or infinite components.
     pub fn count_non_finite(&self) -> usize {
-        self.pixels
-            .iter()
-            .flatten()
-            .filter(|v| !v.is_finite())
-            .count()
+        self.pixels.iter().flatten().filter(|v| !v.is_finite()).count()
     }
 
     /// Average of each `k` x `k` block: for box-filtered pixels this is exactly the box-filtered image at
@@ -114,8 +106,15 @@ impl RgbImage {
             bail!("upscale factor must be at least 1");
         }
         let (w, h) = (self.width * k, self.height * k);
-        let pixels = (0..h).flat_map(|y| (0..w).map(move |x| (x / k, y / k))).map(|(x, y)| self.get(x, y)).collect();
-        Ok(RgbImage { width: w, height: h, pixels })
+        let pixels = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x / k, y / k)))
+            .map(|(x, y)| self.get(x, y))
+            .collect();
+        Ok(RgbImage {
+            width: w,
+            height: h,
+            pixels,
+        })
     }
 
     /// The `w` x `h` rectangle whose top-left pixel is (`x0`, `y0`).
@@ -168,11 +167,7 @@ impl RgbImage {
                 pixels.extend_from_slice(&img.pixels[row..row + img.width as usize]);
             }
         }
-        Ok(Self {
-            width,
-            height,
-            pixels,
-        })
+        Ok(Self { width, height, pixels })
     }
 
     /// Any EXR the `image` crate reads (RGB or RGBA, f32 or f16); alpha is dropped.
@@ -195,16 +190,8 @@ impl RgbImage {
             other => other.into_rgb32f(),
         };
         let (width, height) = rgb.dimensions();
-        let pixels = rgb
-            .into_raw()
-            .chunks_exact(3)
-            .map(|c| [c[0], c[1], c[2]])
-            .collect();
-        Ok(Self {
-            width,
-            height,
-            pixels,
-        })
+        let pixels = rgb.into_raw().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        Ok(Self { width, height, pixels })
     }
 
     /// Linear float32 RGB OpenEXR, written atomically.
@@ -249,16 +236,16 @@ impl RgbImage {
     /// Chooses the format by extension: `.exr` (linear float) or `.png` (sRGB, exposure 0).
     pub fn save(&self, path: impl AsRef<Path>) -> crate::Result<()> {
         let path = path.as_ref();
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
         match ext.as_deref() {
             Some("exr") => self.save_exr(path),
             Some("png") => self.save_png(path, 0.0),
             _ => Err(crate::Error::io(
                 path,
-                std::io::Error::new(std::io::ErrorKind::InvalidInput, "unsupported extension (supported: .exr, .png)"),
+                std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    "unsupported extension (supported: .exr, .png)",
+                ),
             )),
         }
     }
@@ -271,7 +258,10 @@ impl RgbImage {
 /// A failed write as [`crate::Error::Io`]: the kind of the io error in the chain (if any) and the
 /// whole chain as its message (which step failed: creating, encoding, renaming).
 fn write_error(path: &Path, e: anyhow::Error) -> crate::Error {
-    let kind = e.chain().find_map(|c| c.downcast_ref::<std::io::Error>()).map_or(std::io::ErrorKind::Other, |io| io.kind());
+    let kind = e
+        .chain()
+        .find_map(|c| c.downcast_ref::<std::io::Error>())
+        .map_or(std::io::ErrorKind::Other, |io| io.kind());
     crate::Error::io(path, std::io::Error::new(kind, format!("{e:#}")))
 }
 
@@ -282,11 +272,7 @@ fn pixel_count(width: u32, height: u32) -> usize {
 /// The sRGB OETF (IEC 61966-2-1, piecewise) of a linear value, quantised to 8 bits.
 pub(crate) fn srgb_encode_u8(linear: f32) -> u8 {
     // `clamp` passes NaN through, so map it to black first.
-    let v = if linear.is_nan() {
-        0.0
-    } else {
-        linear.clamp(0.0, 1.0)
-    };
+    let v = if linear.is_nan() { 0.0 } else { linear.clamp(0.0, 1.0) };
     let encoded = if v <= 0.003_130_8 {
         12.92 * v
     } else {
@@ -304,9 +290,7 @@ pub(crate) fn write_atomically(
 ) -> Result<()> {
     let tmp: PathBuf = path.with_extension(format!("tmp.{ext}"));
     let result = (|| -> Result<()> {
-        let mut w = BufWriter::new(
-            File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?,
-        );
+        let mut w = BufWriter::new(File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?);
         write(&mut w)?;
         let file = w.into_inner().map_err(|e| e.into_error())?;
         file.sync_all()?;
@@ -324,8 +308,7 @@ mod tests {
     use super::*;
 
     fn scratch_dir(name: &str) -> PathBuf {
-        let dir =
-            std::env::temp_dir().join(format!("ppm-vk-image-io-{}-{name}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!("ppm-vk-image-io-{}-{name}", std::process::id()));
         fs::create_dir_all(&dir).unwrap();
         dir
     }
@@ -337,20 +320,14 @@ mod tests {
                 [i, 0.5 * i + 1.0, -0.25 * i]
             })
             .collect();
-        RgbImage {
-            width,
-            height,
-            pixels,
-        }
+        RgbImage { width, height, pixels }
     }
 
     #[test]
     fn from_rgba_drops_alpha_and_checks_size() {
         let img = RgbImage::from_rgba(2, 1, &[[1.0, 2.0, 3.0, 9.0], [4.0, 5.0, 6.0, 9.0]]).unwrap();
         assert_eq!(img.pixels, vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
-        let err = RgbImage::from_rgba(2, 2, &[[0.0; 4]; 3])
-            .unwrap_err()
-            .to_string();
+        let err = RgbImage::from_rgba(2, 2, &[[0.0; 4]; 3]).unwrap_err().to_string();
         assert!(err.contains("3 pixels") && err.contains("2x2"), "{err}");
     }
 
@@ -436,13 +413,7 @@ mod tests {
         img.save_exr(&path).unwrap();
         let back = RgbImage::load_exr(&path).unwrap();
         assert_eq!((back.width, back.height), (5, 3));
-        let bits = |im: &RgbImage| {
-            im.pixels
-                .iter()
-                .flatten()
-                .map(|v| v.to_bits())
-                .collect::<Vec<_>>()
-        };
+        let bits = |im: &RgbImage| im.pixels.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&back), bits(&img));
         // No temporary file is left beside it.
         assert!(!path.with_extension("tmp.exr").exists());
@@ -461,9 +432,7 @@ mod tests {
         assert!(err.contains("does-not-exist.exr"), "{err}");
         // A PNG is not an EXR, whatever it is called.
         let fake = dir.join("fake.exr");
-        RgbImage::new(2, 2)
-            .save_png(&dir.join("real.png"), 0.0)
-            .unwrap();
+        RgbImage::new(2, 2).save_png(&dir.join("real.png"), 0.0).unwrap();
         fs::rename(dir.join("real.png"), &fake).unwrap();
         let err = format!("{:#}", RgbImage::load_exr(&fake).unwrap_err());
         assert!(err.contains("fake.exr"), "{err}");
@@ -504,10 +473,7 @@ mod tests {
         img.save(&path).unwrap();
         let png = image::open(&path).unwrap().into_rgb8();
         assert_eq!(png.dimensions(), (3, 1));
-        assert_eq!(
-            png.as_raw().as_slice(),
-            &[188, 255, 0, 137, 0, 255, 10, 0, 255]
-        );
+        assert_eq!(png.as_raw().as_slice(), &[188, 255, 0, 137, 0, 255, 10, 0, 255]);
         // Exposure +1 doubles: 0.25 -> 0.5 -> 188.
         img.save_png(&path, 1.0).unwrap();
         let png = image::open(&path).unwrap().into_rgb8();
@@ -533,9 +499,6 @@ mod tests {
     fn write_errors_name_the_path() {
         let path = Path::new("/nonexistent-dir-for-ppm-vk/out.exr");
         let err = format!("{:#}", RgbImage::new(1, 1).save(path).unwrap_err());
-        assert!(
-            err.contains("writing /nonexistent-dir-for-ppm-vk/out.exr"),
-            "{err}"
-        );
+        assert!(err.contains("writing /nonexistent-dir-for-ppm-vk/out.exr"), "{err}");
     }
 }

@@ -27,8 +27,8 @@
 pub mod checkpoint;
 mod error;
 mod image_io;
-mod renderer;
 pub mod metrics;
+mod renderer;
 pub mod report;
 pub mod scene;
 pub mod settings;

@@ -115,9 +115,7 @@ impl Reference {
         } else {
             None
         };
-        k.with_context(|| {
-            format!("{w}x{h} is not the {rw}x{rh} reference reduced by an integer factor")
-        })
+        k.with_context(|| format!("{w}x{h} is not the {rw}x{rh} reference reduced by an integer factor"))
     }
 }
 
@@ -149,14 +147,12 @@ pub fn compare(
     remove_reference_noise: bool,
 ) -> Result<ErrorStats> {
     let (rw, rh) = (reference.image.width, reference.image.height);
-    let k = reference
-        .scale_factor(image.width, image.height)
-        .with_context(|| {
-            format!(
-                "image size {}x{} does not match reference size {rw}x{rh}",
-                image.width, image.height
-            )
-        })?;
+    let k = reference.scale_factor(image.width, image.height).with_context(|| {
+        format!(
+            "image size {}x{} does not match reference size {rw}x{rh}",
+            image.width, image.height
+        )
+    })?;
     let bad = image.count_non_finite();
     ensure!(bad == 0, "image has {bad} non-finite pixels");
     if let Some(var) = &reference.variance {
@@ -181,10 +177,7 @@ pub fn compare(
     let (x0, y0, x1, y1) = match region {
         None => (0, 0, image.width, image.height),
         Some(r) => {
-            let (end_x, end_y) = (
-                u64::from(r.x0) + u64::from(r.w),
-                u64::from(r.y0) + u64::from(r.h),
-            );
+            let (end_x, end_y) = (u64::from(r.x0) + u64::from(r.w), u64::from(r.y0) + u64::from(r.h));
             if r.w == 0 || r.h == 0 || end_x > u64::from(rw) || end_y > u64::from(rh) {
                 bail!(
                     "region {:?} ({}x{} at ({}, {})) is empty or outside the {rw}x{rh} reference",
@@ -205,12 +198,8 @@ pub fn compare(
         }
     };
 
-    let variance = reference
-        .variance
-        .as_ref()
-        .filter(|_| remove_reference_noise);
-    let (mut sq, mut rel, mut bias, mut var_sum, mut var_rel) =
-        (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let variance = reference.variance.as_ref().filter(|_| remove_reference_noise);
+    let (mut sq, mut rel, mut bias, mut var_sum, mut var_rel) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for y in y0..y1 {
         for x in x0..x1 {
             let p = image.get(x, y);
@@ -263,11 +252,7 @@ mod tests {
 
     fn assert_stats(s: ErrorStats, rmse: f64, rel_mse: f64, mean_bias: f64, pixels: u64) {
         assert!(close(s.rmse, rmse), "rmse {} != {rmse}", s.rmse);
-        assert!(
-            close(s.rel_mse, rel_mse),
-            "rel_mse {} != {rel_mse}",
-            s.rel_mse
-        );
+        assert!(close(s.rel_mse, rel_mse), "rel_mse {} != {rel_mse}", s.rel_mse);
         assert!(
             close(s.mean_bias, mean_bias),
             "mean_bias {} != {mean_bias}",
@@ -317,13 +302,7 @@ mod tests {
             false,
         )
         .unwrap();
-        assert_stats(
-            s,
-            (5.0f64 / 3.0).sqrt(),
-            (100.0 + 4.0 / 4.01) / 3.0,
-            -1.0 / 3.0,
-            1,
-        );
+        assert_stats(s, (5.0f64 / 3.0).sqrt(), (100.0 + 4.0 / 4.01) / 3.0, -1.0 / 3.0, 1);
     }
 
     #[test]
@@ -334,13 +313,7 @@ mod tests {
         let x = img(2, 1, &[[2.0; 3]; 2]);
         let var = img(2, 1, &[[0.25; 3]; 2]);
         let refr = reference(r.clone(), Some(var));
-        assert_stats(
-            compare(&x, &refr, None, false).unwrap(),
-            1.0,
-            1.0 / 1.01,
-            1.0,
-            2,
-        );
+        assert_stats(compare(&x, &refr, None, false).unwrap(), 1.0, 1.0 / 1.01, 1.0, 2);
         assert_stats(
             compare(&x, &refr, None, true).unwrap(),
             0.75f64.sqrt(),
@@ -361,9 +334,7 @@ mod tests {
     #[test]
     fn regions_and_lower_resolutions() {
         // 4x4 reference with red = column index x, green = row y, blue = 0; image all zero.
-        let pixels: Vec<[f32; 3]> = (0..16)
-            .map(|i| [(i % 4) as f32, (i / 4) as f32, 0.0])
-            .collect();
+        let pixels: Vec<[f32; 3]> = (0..16).map(|i| [(i % 4) as f32, (i / 4) as f32, 0.0]).collect();
         let refr = reference(img(4, 4, &pixels), Some(img(4, 4, &[[0.5; 3]; 16])));
         let zero4 = RgbImage::new(4, 4);
         // Region x 2-3, y 0: pixels (2,0,0) and (3,0,0). d^2 sum = 4 + 9 = 13 over n = 6.
@@ -382,24 +353,13 @@ mod tests {
         let half = refr.at_resolution(2, 2).unwrap();
         assert_eq!(
             half.image.pixels,
-            vec![
-                [0.5, 0.5, 0.0],
-                [2.5, 0.5, 0.0],
-                [0.5, 2.5, 0.0],
-                [2.5, 2.5, 0.0]
-            ]
+            vec![[0.5, 0.5, 0.0], [2.5, 0.5, 0.0], [0.5, 2.5, 0.0], [2.5, 2.5, 0.0]]
         );
         assert_eq!(half.variance.as_ref().unwrap().pixels, vec![[0.125; 3]; 4]);
         let zero2 = RgbImage::new(2, 2);
         let s = compare(&zero2, &refr, Some(&region), false).unwrap();
         // d^2 = 6.25 + 0.25 + 0 = 6.5 over n = 3; rel = 6.25/6.26 + 0.25/0.26 + 0.
-        assert_stats(
-            s,
-            (6.5f64 / 3.0).sqrt(),
-            (6.25 / 6.26 + 0.25 / 0.26) / 3.0,
-            -1.0,
-            1,
-        );
+        assert_stats(s, (6.5f64 / 3.0).sqrt(), (6.25 / 6.26 + 0.25 / 0.26) / 3.0, -1.0, 1);
         // With noise removal: minus 0.125 per channel -> (6.5 - 0.375) / 3.
         let s = compare(&zero2, &refr, Some(&region), true).unwrap();
         assert!(close(s.rmse, (6.125f64 / 3.0).sqrt()), "{s:?}");
@@ -429,13 +389,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(msg.contains("outside"), "{msg}");
-        assert!(compare(
-            &RgbImage::new(4, 4),
-            &refr,
-            Some(&Region::new("e", 0, 0, 0, 1)),
-            false
-        )
-        .is_err());
+        assert!(compare(&RgbImage::new(4, 4), &refr, Some(&Region::new("e", 0, 0, 0, 1)), false).is_err());
         let mismatched = reference(RgbImage::new(4, 4), Some(RgbImage::new(2, 2)));
         let msg = compare(&RgbImage::new(4, 4), &mismatched, None, true)
             .unwrap_err()
@@ -449,10 +403,7 @@ mod tests {
             variance_path(Path::new("/a/b/scene.exr")),
             PathBuf::from("/a/b/scene_var.exr")
         );
-        assert_eq!(
-            variance_path(Path::new("scene")),
-            PathBuf::from("scene_var")
-        );
+        assert_eq!(variance_path(Path::new("scene")), PathBuf::from("scene_var"));
     }
 
     /// The regions of scenes/cornell-spheres.toml (fractions of the image) in the 512 x 512 reference's
@@ -466,8 +417,10 @@ mod tests {
     /// The scene file's regions are the boxes picked on the reference (x0, y0, w, h in its pixels).
     #[test]
     fn cornell_regions_are_the_picked_boxes() {
-        let boxes: Vec<(String, u32, u32, u32, u32)> =
-            cornell_regions().into_iter().map(|r| (r.name, r.x0, r.y0, r.w, r.h)).collect();
+        let boxes: Vec<(String, u32, u32, u32, u32)> = cornell_regions()
+            .into_iter()
+            .map(|r| (r.name, r.x0, r.y0, r.w, r.h))
+            .collect();
         let picked = [
             ("caustic", 250, 436, 70, 40),
             ("shadow_edge", 364, 384, 40, 24),
@@ -497,10 +450,7 @@ mod tests {
             .as_ref()
             .expect("cornell-spheres_var.exr beside the reference");
         let mean = refr.image.mean();
-        println!(
-            "cornell-spheres mean RGB {mean:?}, mean variance {:?}",
-            var.mean()
-        );
+        println!("cornell-spheres mean RGB {mean:?}, mean variance {:?}", var.mean());
         // A closed, mostly white box lit by a radiance-34 light: mean radiance well inside (0.05, 5).
         for c in mean {
             assert!(c > 0.05 && c < 5.0, "implausible mean {mean:?}");
@@ -517,10 +467,7 @@ mod tests {
             }
         );
         let denoised = compare(&refr.image, &refr, None, true).unwrap();
-        assert!(
-            denoised.rmse >= 0.0 && denoised.rel_mse >= 0.0,
-            "{denoised:?}"
-        );
+        assert!(denoised.rmse >= 0.0 && denoised.rel_mse >= 0.0, "{denoised:?}");
         for r in cornell_regions() {
             let s = compare(&refr.image, &refr, Some(&r), true).unwrap();
             assert_eq!(s.rmse, 0.0, "{r:?}");

@@ -7,7 +7,6 @@ use std::time::Instant;
 
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
 use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers};
-use ppm_vk_kernels::update::RadiusMax;
 use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, Triangle};
 use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PathLimits, PhotonPush, SALT_EYE, SALT_PHOTON, SALT_PROBE};
@@ -15,6 +14,7 @@ use ppm_vk_kernels::probe::{self, ProbePush, MODE_PAPER, MODE_SCALE_FREE};
 use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers, JITTER_RANDOM};
 use ppm_vk_kernels::resolve::{self, ResolvePush};
 use ppm_vk_kernels::specialize::{self, MAX_INLINE_PRIMITIVES};
+use ppm_vk_kernels::update::RadiusMax;
 use ppm_vk_kernels::update::{self, UpdatePush};
 use ppm_vk_kernels::{pipeline, pipeline_from, reflected};
 
@@ -201,10 +201,21 @@ pub struct ProbeReport {
 impl ProbeReport {
     fn new(stats: &[HitStats], hits: &[HitPoint], r: f32, photons: u32, gpu_ms: f64) -> ProbeReport {
         let r2 = (r as f64).powi(2);
-        let live: Vec<&HitStats> = stats.iter().zip(hits).filter(|(_, h)| !h.is_empty()).map(|(s, _)| s).collect();
+        let live: Vec<&HitStats> = stats
+            .iter()
+            .zip(hits)
+            .filter(|(_, h)| !h.is_empty())
+            .map(|(s, _)| s)
+            .collect();
         let mut ratios: Vec<f64> = live.iter().map(|s| s.probe).collect();
         ratios.sort_by(|a, b| a.total_cmp(b));
-        let q = |f: f64| if ratios.is_empty() { 0.0 } else { ratios[((ratios.len() - 1) as f64 * f).round() as usize] };
+        let q = |f: f64| {
+            if ratios.is_empty() {
+                0.0
+            } else {
+                ratios[((ratios.len() - 1) as f64 * f).round() as usize]
+            }
+        };
         ProbeReport {
             photons,
             hit_points: live.len() as u32,
@@ -255,21 +266,42 @@ impl Renderer {
         let stats = self.download(&self.stats, slots, "reading the hit-point statistics")?;
         let direct = self.download(&self.direct, pixels, "reading the direct emission")?;
         let busy = self.download(&self.busy, pixels, "reading the emission-sampled pixels")?;
-        Ok(Checkpoint { header, stats, hit_points, direct, busy, cut }.seal())
+        Ok(Checkpoint {
+            header,
+            stats,
+            hit_points,
+            direct,
+            busy,
+            cut,
+        }
+        .seal())
     }
 
     /// Continues the render `checkpoint` saved: the passes after it give the image the uninterrupted
     /// render would have, bit for bit. Fails, saying what differs, unless the checkpoint is of `scene`
     /// rendered with `settings` by `build`.
-    pub fn resume(ctx: &Context, scene: &Scene, settings: Settings, checkpoint: &Checkpoint, build: &str) -> Result<Renderer> {
-        let refused = |e: anyhow::Error| Error::Checkpoint { message: format!("cannot resume from this checkpoint: {e:#}") };
+    pub fn resume(
+        ctx: &Context,
+        scene: &Scene,
+        settings: Settings,
+        checkpoint: &Checkpoint,
+        build: &str,
+    ) -> Result<Renderer> {
+        let refused = |e: anyhow::Error| Error::Checkpoint {
+            message: format!("cannot resume from this checkpoint: {e:#}"),
+        };
         checkpoint.check(scene, &settings, build).map_err(refused)?;
         let mut r = Renderer::prepare(ctx, scene, settings)?;
         let c = checkpoint;
         let (slots, pixels) = (r.gpu.slots() as usize, r.gpu.pixels() as usize);
         let ppm_hits = if r.settings.mode == Mode::Ppm { slots } else { 0 };
-        if !(c.stats.len() == slots && c.hit_points.len() == ppm_hits && c.direct.len() == pixels && c.busy.len() == pixels) {
-            let message = format!("the checkpoint's buffers do not fit this render ({slots} hit points, {pixels} pixels)");
+        if !(c.stats.len() == slots
+            && c.hit_points.len() == ppm_hits
+            && c.direct.len() == pixels
+            && c.busy.len() == pixels)
+        {
+            let message =
+                format!("the checkpoint's buffers do not fit this render ({slots} hit points, {pixels} pixels)");
             return Err(Error::Checkpoint { message });
         }
         let restore = |buffer: &Buffer, bytes: &[u8]| r.ctx.upload(buffer, bytes).device("restoring the checkpoint");
@@ -300,7 +332,11 @@ impl Renderer {
         let mut gpu = GpuScene::new(scene, &settings, capacity)?;
         // Depth backstops and photons per thread that keep every loop inside the device's budget. The
         // intersection loops are counted as loops even where the specialised kernels unroll them.
-        let limits = if gpu.params.num_triangles > 0 { PathLimits::with_bvh } else { PathLimits::new };
+        let limits = if gpu.params.num_triangles > 0 {
+            PathLimits::with_bvh
+        } else {
+            PathLimits::new
+        };
         let budget = ctx.info().loop_budget;
         let limits = limits(
             budget,
@@ -313,7 +349,8 @@ impl Renderer {
             settings.max_eye_depth,
         )
         .map_err(|e| {
-            let lower = "the spheres and quads (or put them in meshes), the hit points per pixel or the emission samples";
+            let lower =
+                "the spheres and quads (or put them in meshes), the hit points per pixel or the emission samples";
             Error::limit(format!("{e:#}"), None, budget.unwrap_or(0) as u64, lower)
         })?;
         gpu.params.max_photon_depth = limits.photon_depth;
@@ -332,14 +369,22 @@ impl Renderer {
                 "the scene's {triangles} triangles (at most {} in all)",
                 max_range / std::mem::size_of::<Triangle>() as u64
             );
-            return Err(Error::limit("the BVH (bytes in one buffer)", Some(bvh_bytes), max_range, lower));
+            return Err(Error::limit(
+                "the BVH (bytes in one buffer)",
+                Some(bvh_bytes),
+                max_range,
+                lower,
+            ));
         }
         // Every buffer within the device's largest binding and all of them within its memory, checked
         // before anything is allocated.
         let size = std::mem::size_of::<HitPoint>() as u64;
         let per_pixel = [
             ("the hit points", slots * size),
-            ("the hit-point statistics", slots * std::mem::size_of::<HitStats>() as u64),
+            (
+                "the hit-point statistics",
+                slots * std::mem::size_of::<HitStats>() as u64,
+            ),
             ("the pass accumulators", slots * std::mem::size_of::<PassAccum>() as u64),
             ("the direct emission", pixels * 32),
             ("the image", pixels * 16),
@@ -351,7 +396,10 @@ impl Renderer {
             settings.slots()
         );
         let others = [
-            ("the photon records, their staging copy and the grid build's counts", capacity as u64 * Grid::bytes_per_record()),
+            (
+                "the photon records, their staging copy and the grid build's counts",
+                capacity as u64 * Grid::bytes_per_record(),
+            ),
             ("the BVH", bvh_bytes),
         ];
         fits_device(&per_pixel, &others, max_range, ctx.info().memory_bytes, &advice)?;
@@ -377,64 +425,76 @@ impl Renderer {
         let kernels = pipelines().device("creating the compute pipelines")?;
         let storage = |name: &str, bytes: u64| Buffer::new(ctx, name, bytes, BufferKind::Storage);
         let r2 = (gpu.initial_radius as f64).powi(2);
-        let stats_init = vec![HitStats { r2, ..Default::default() }; slots as usize];
+        let stats_init = vec![
+            HitStats {
+                r2,
+                ..Default::default()
+            };
+            slots as usize
+        ];
         let buffers = || -> anyhow::Result<Renderer> {
             Ok(Renderer {
-            probe_report: None,
-            scene_name: scene.name.clone(),
-            scene_sha256: scene.content_sha256(),
-            cancel: CancelToken::new(),
-            params: ctx.buffer_from("params", &[gpu.params])?,
-            spheres: ctx.buffer_from("spheres", &gpu.spheres)?,
-            quads: ctx.buffer_from("quads", &gpu.quads)?,
-            materials: ctx.buffer_from("materials", &gpu.materials)?,
-            lights: ctx.buffer_from("lights", &gpu.lights)?,
-            bvh_nodes: ctx.buffer_from("BVH nodes", &gpu.bvh_nodes)?,
-            // One zeroed triangle where there are none (a buffer may not be empty); never read then.
-            bvh_triangles: match gpu.bvh_triangles.is_empty() {
-                true => ctx.buffer_from("BVH triangles", &[Triangle::default()])?,
-                false => ctx.buffer_from("BVH triangles", &gpu.bvh_triangles)?,
-            },
-            cut: ctx.buffer_from("path counters", &[PathCounters::default()])?,
-            limits,
-            hit_points: storage("hit points", slots * std::mem::size_of::<HitPoint>() as u64)?,
-            stats: ctx.buffer_from("hit stats", &stats_init)?,
-            accum: storage("pass accumulators", slots * std::mem::size_of::<PassAccum>() as u64)?,
-            order: storage("hit-point order", slots * 4)?,
-            active: 0,
-            direct: storage("direct emission", pixels * 32)?,
-            busy: storage("emission-sampled pixels", pixels * 4)?,
-            image: storage("image", pixels * 16)?,
-            counter: storage("photon counter", 4)?,
-            batch_log: storage("batch log", MAX_BATCHES as u64 * 4)?,
-            grid: Grid::new(ctx, gpu.max_buckets(), capacity)?,
-            r2_max: storage("largest radius", 8)?,
-            profiler: Profiler::new(ctx, 8 + 7 * MAX_BATCHES)?,
-            batch: settings.photons_per_pass,
-            passes: 0,
-            emitted: 0,
-            ray_ms: 0.0,
-            ctx: ctx.clone(),
-            settings,
-            gpu,
-            kernels,
-        })
+                probe_report: None,
+                scene_name: scene.name.clone(),
+                scene_sha256: scene.content_sha256(),
+                cancel: CancelToken::new(),
+                params: ctx.buffer_from("params", &[gpu.params])?,
+                spheres: ctx.buffer_from("spheres", &gpu.spheres)?,
+                quads: ctx.buffer_from("quads", &gpu.quads)?,
+                materials: ctx.buffer_from("materials", &gpu.materials)?,
+                lights: ctx.buffer_from("lights", &gpu.lights)?,
+                bvh_nodes: ctx.buffer_from("BVH nodes", &gpu.bvh_nodes)?,
+                // One zeroed triangle where there are none (a buffer may not be empty); never read then.
+                bvh_triangles: match gpu.bvh_triangles.is_empty() {
+                    true => ctx.buffer_from("BVH triangles", &[Triangle::default()])?,
+                    false => ctx.buffer_from("BVH triangles", &gpu.bvh_triangles)?,
+                },
+                cut: ctx.buffer_from("path counters", &[PathCounters::default()])?,
+                limits,
+                hit_points: storage("hit points", slots * std::mem::size_of::<HitPoint>() as u64)?,
+                stats: ctx.buffer_from("hit stats", &stats_init)?,
+                accum: storage("pass accumulators", slots * std::mem::size_of::<PassAccum>() as u64)?,
+                order: storage("hit-point order", slots * 4)?,
+                active: 0,
+                direct: storage("direct emission", pixels * 32)?,
+                busy: storage("emission-sampled pixels", pixels * 4)?,
+                image: storage("image", pixels * 16)?,
+                counter: storage("photon counter", 4)?,
+                batch_log: storage("batch log", MAX_BATCHES as u64 * 4)?,
+                grid: Grid::new(ctx, gpu.max_buckets(), capacity)?,
+                r2_max: storage("largest radius", 8)?,
+                profiler: Profiler::new(ctx, 8 + 7 * MAX_BATCHES)?,
+                batch: settings.photons_per_pass,
+                passes: 0,
+                emitted: 0,
+                ray_ms: 0.0,
+                ctx: ctx.clone(),
+                settings,
+                gpu,
+                kernels,
+            })
         };
         let mut r = buffers().device("allocating the render's buffers")?;
         drop(stats_init);
-        r.grid.set_cells(r.gpu.params.grid_mask + 1).device("setting up the render")?;
-        r.ctx.run(|cmd| {
-            r.accum.cmd_fill(cmd, 0);
-            r.direct.cmd_fill(cmd, 0);
-            r.busy.cmd_fill(cmd, 0);
-            Ok(())
-        }).device("setting up the render")?;
+        r.grid
+            .set_cells(r.gpu.params.grid_mask + 1)
+            .device("setting up the render")?;
+        r.ctx
+            .run(|cmd| {
+                r.accum.cmd_fill(cmd, 0);
+                r.direct.cmd_fill(cmd, 0);
+                r.busy.cmd_fill(cmd, 0);
+                Ok(())
+            })
+            .device("setting up the render")?;
         r.ray_ms = r.ray_pass(0, true)?.iter().map(|s| s.duration_ms).sum();
         r.path_counters()?;
         let (width, height) = (r.gpu.params.width, r.gpu.params.height);
         let mut busy: Vec<u32> = r.download(&r.busy, r.gpu.pixels(), "reading the pilot's marks")?;
         spread_marks(&mut busy, width, height);
-        r.ctx.upload(&r.busy, bytemuck::cast_slice(&busy)).device("writing the pilot's marks")?;
+        r.ctx
+            .upload(&r.busy, bytemuck::cast_slice(&busy))
+            .device("writing the pilot's marks")?;
         // The gather walks the hit points in Morton order, so neighbouring threads read the same buckets.
         // PPM's hit points never move: order them by position once, on the host. SPPM's move every pass:
         // order the pixels by their screen position, which is nearly as coherent and never changes.
@@ -449,7 +509,9 @@ impl Renderer {
     /// The hit-point slots the gather and the update visit, in this order.
     fn set_order(&mut self, order: Vec<u32>) -> Result<()> {
         self.active = order.len() as u32;
-        self.ctx.upload(&self.order, bytemuck::cast_slice(&order)).device("uploading the hit-point order")
+        self.ctx
+            .upload(&self.order, bytemuck::cast_slice(&order))
+            .device("uploading the hit-point order")
     }
 
     /// The ray kernel's dispatches for eye pass `eye_pass` (the CPU reference, `reference::eye_pass`,
@@ -493,7 +555,12 @@ impl Renderer {
     }
 
     fn hit_buffers(&self) -> HitBuffers<'_> {
-        HitBuffers { hit_points: &self.hit_points, stats: &self.stats, accum: &self.accum, order: &self.order }
+        HitBuffers {
+            hit_points: &self.hit_points,
+            stats: &self.stats,
+            accum: &self.accum,
+            order: &self.order,
+        }
     }
 
     /// Pass 1, eye pass number `eye_pass`: PPM's one pass through pixel centres, or one of SPPM's, through
@@ -505,24 +572,32 @@ impl Renderer {
         let scene = self.scene_buffers();
         let (profiler, k) = (&self.profiler, &self.kernels);
         let (hit_points, direct, cut, busy) = (&self.hit_points, &self.direct, &self.cut, &self.busy);
-        self.ctx.run(|cmd| {
-            profiler.scope(cmd, "ray", || {
-                for push in &pushes {
-                    ray::record(&k.ray, cmd, &scene, hit_points, direct, cut, busy, pixels, push)?;
-                    barrier(&self.ctx, cmd); // the next dispatch adds to the same `direct`
-                }
+        self.ctx
+            .run(|cmd| {
+                profiler.scope(cmd, "ray", || {
+                    for push in &pushes {
+                        ray::record(&k.ray, cmd, &scene, hit_points, direct, cut, busy, pixels, push)?;
+                        barrier(&self.ctx, cmd); // the next dispatch adds to the same `direct`
+                    }
+                    Ok(())
+                })?;
+                barrier(&self.ctx, cmd);
                 Ok(())
-            })?;
-            barrier(&self.ctx, cmd);
-            Ok(())
-        })
-        .device("the eye pass")?;
+            })
+            .device("the eye pass")?;
         self.profiler.read().device("the eye pass")
     }
 
     /// Records photon tracing, the grid build and what uses the grid (the gather, or the probe's first
     /// phase) for one batch of photons `first..first+count` (global indices).
-    fn record_batch(&self, cmd: vk::CommandBuffer, first: u64, count: u32, log_index: u32, use_: GridUse) -> anyhow::Result<()> {
+    fn record_batch(
+        &self,
+        cmd: vk::CommandBuffer,
+        first: u64,
+        count: u32,
+        log_index: u32,
+        use_: GridUse,
+    ) -> anyhow::Result<()> {
         let ctx = &self.ctx;
         let scene = self.scene_buffers();
         let hits = self.hit_buffers();
@@ -534,22 +609,52 @@ impl Renderer {
             GridUse::Gather => SALT_PHOTON,
             GridUse::Probe => SALT_PROBE,
         };
-        let push = PhotonPush { first, count, salt, per_thread: self.limits.per_thread, pad0: 0 };
+        let push = PhotonPush {
+            first,
+            count,
+            salt,
+            per_thread: self.limits.per_thread,
+            pad0: 0,
+        };
         self.profiler.scope(cmd, "photon", || {
-            photon::record(&k.photon, cmd, &scene, &self.lights, &self.grid.records, &self.counter, &self.cut, &push)
+            photon::record(
+                &k.photon,
+                cmd,
+                &scene,
+                &self.lights,
+                &self.grid.records,
+                &self.counter,
+                &self.cut,
+                &push,
+            )
         })?;
         barrier(ctx, cmd);
         self.counter.cmd_copy(cmd, &self.batch_log, 0, log_index as u64 * 4, 4);
-        k.lookup.record(ctx, cmd, &self.profiler, &self.params, &self.counter, &self.grid, capacity)?;
+        k.lookup.record(
+            ctx,
+            cmd,
+            &self.profiler,
+            &self.params,
+            &self.counter,
+            &self.grid,
+            capacity,
+        )?;
         barrier(ctx, cmd);
         match use_ {
             GridUse::Gather => {
-                let push = GatherPush { count: self.active, cone_k: self.settings.cone_k.unwrap_or(0.0) };
-                self.profiler.scope(cmd, "gather", || gather::record_gather(&k.gather, cmd, &self.params, &hits, &self.grid, &push))?;
+                let push = GatherPush {
+                    count: self.active,
+                    cone_k: self.settings.cone_k.unwrap_or(0.0),
+                };
+                self.profiler.scope(cmd, "gather", || {
+                    gather::record_gather(&k.gather, cmd, &self.params, &hits, &self.grid, &push)
+                })?;
             }
             GridUse::Probe => {
                 let push = self.probe_push(0);
-                self.profiler.scope(cmd, "probe", || probe::record(&k.probe, cmd, &self.params, &hits, &self.grid, &push))?;
+                self.profiler.scope(cmd, "probe", || {
+                    probe::record(&k.probe, cmd, &self.params, &hits, &self.grid, &push)
+                })?;
             }
         }
         barrier(ctx, cmd);
@@ -557,7 +662,12 @@ impl Renderer {
     }
 
     fn update_push(&self) -> UpdatePush {
-        UpdatePush { count: self.active, alpha: self.settings.alpha, flux_fixed: self.gpu.params.flux_fixed, pad0: 0 }
+        UpdatePush {
+            count: self.active,
+            alpha: self.settings.alpha,
+            flux_fixed: self.gpu.params.flux_fixed,
+            pad0: 0,
+        }
     }
 
     fn probe_push(&self, phase: u32) -> ProbePush {
@@ -565,7 +675,12 @@ impl Renderer {
             ProbeMode::Paper => MODE_PAPER,
             _ => MODE_SCALE_FREE,
         };
-        ProbePush { count: self.active, phase, mode, beta_frac: self.settings.probe_beta }
+        ProbePush {
+            count: self.active,
+            phase,
+            mode,
+            beta_frac: self.settings.probe_beta,
+        }
     }
 
     /// Traces `total` photons from global index `first` and feeds each batch's grid to `use_`, in as few
@@ -578,42 +693,71 @@ impl Renderer {
             let batches = total.div_ceil(self.batch);
             if batches > MAX_BATCHES {
                 let what = "photon batches in one pass (the scene leaves too many records per photon)";
-                return Err(Error::limit(what, Some(batches as u64), MAX_BATCHES as u64, "the photons per pass"));
+                return Err(Error::limit(
+                    what,
+                    Some(batches as u64),
+                    MAX_BATCHES as u64,
+                    "the photons per pass",
+                ));
             }
             self.profiler.reset();
             let batch = self.batch;
-            self.ctx.run(|cmd| {
-                for b in 0..batches {
-                    let start = b * batch;
-                    self.record_batch(cmd, first + start as u64, batch.min(total - start), b, use_)?;
-                }
-                Ok(())
-            }).device("a photon pass")?;
-            let log: Vec<u32> = self.ctx.download_prefix(&self.batch_log, batches as usize).device("a photon pass")?;
+            self.ctx
+                .run(|cmd| {
+                    for b in 0..batches {
+                        let start = b * batch;
+                        self.record_batch(cmd, first + start as u64, batch.min(total - start), b, use_)?;
+                    }
+                    Ok(())
+                })
+                .device("a photon pass")?;
+            let log: Vec<u32> = self
+                .ctx
+                .download_prefix(&self.batch_log, batches as usize)
+                .device("a photon pass")?;
             self.check_lookups()?;
             if log.iter().all(|&n| n as u64 <= capacity) {
-                return Ok((self.profiler.read().device("a photon pass")?, log.iter().map(|&n| n as u64).sum(), batches));
+                return Ok((
+                    self.profiler.read().device("a photon pass")?,
+                    log.iter().map(|&n| n as u64).sum(),
+                    batches,
+                ));
             }
             if self.batch == 1 {
-                return Err(Error::limit("the records one photon left", None, capacity, "the photon depth (max_photon_depth)"));
+                return Err(Error::limit(
+                    "the records one photon left",
+                    None,
+                    capacity,
+                    "the photon depth (max_photon_depth)",
+                ));
             }
             self.batch = self.batch.div_ceil(2);
-            self.ctx.run(|cmd| {
-                self.accum.cmd_fill(cmd, 0);
-                Ok(())
-            }).device("a photon pass")?;
+            self.ctx
+                .run(|cmd| {
+                    self.accum.cmd_fill(cmd, 0);
+                    Ok(())
+                })
+                .device("a photon pass")?;
         }
     }
 
     /// Fails if a gather or probe lookup may have stopped early: lavapipe ends every loop of a SIMD group
     /// after 65535 iterations in all, and a cut lookup would silently lose photons.
     fn check_lookups(&self) -> Result<()> {
-        let status: Vec<u32> = self.ctx.download_prefix(&self.grid.status, 1).device("reading the lookup status")?;
+        let status: Vec<u32> = self
+            .ctx
+            .download_prefix(&self.grid.status, 1)
+            .device("reading the lookup status")?;
         if status[0] != 0 {
             let what = "a photon lookup may have been cut short at the device's limit on loop iterations per SIMD \
                         group (too many photons in the grid cells one subgroup reads)";
             let lower = format!("the photons per pass (now {})", self.settings.photons_per_pass);
-            return Err(Error::limit(what, None, self.ctx.info().loop_budget.unwrap_or(0) as u64, lower));
+            return Err(Error::limit(
+                what,
+                None,
+                self.ctx.info().loop_budget.unwrap_or(0) as u64,
+                lower,
+            ));
         }
         Ok(())
     }
@@ -626,15 +770,32 @@ impl Renderer {
         let push = self.probe_push(1);
         let hits = self.hit_buffers();
         let (profiler, k, params, grid) = (&self.profiler, &self.kernels, &self.params, &self.grid);
-        self.ctx.run(|cmd| profiler.scope(cmd, "probe", || probe::record(&k.probe, cmd, params, &hits, grid, &push))).device("the probe pass")?;
+        self.ctx
+            .run(|cmd| {
+                profiler.scope(cmd, "probe", || {
+                    probe::record(&k.probe, cmd, params, &hits, grid, &push)
+                })
+            })
+            .device("the probe pass")?;
         stages.extend(self.profiler.read().device("the probe pass")?);
         let gpu_ms = stages.iter().map(|s| s.duration_ms).sum();
         let stats: Vec<HitStats> = self.download(&self.stats, self.gpu.slots(), "reading the probe's radii")?;
         let hits: Vec<HitPoint> = self.download(&self.hit_points, self.gpu.slots(), "reading the hit points")?;
-        self.probe_report = Some(ProbeReport::new(&stats, &hits, self.gpu.initial_radius, photons, gpu_ms));
+        self.probe_report = Some(ProbeReport::new(
+            &stats,
+            &hits,
+            self.gpu.initial_radius,
+            photons,
+            gpu_ms,
+        ));
         // The largest radius as the update would report it (as f32, the lookups' precision).
         let radius_max = RadiusMax {
-            live: stats.iter().zip(&hits).filter(|(_, h)| !h.is_empty()).map(|(s, _)| s.r2 as f32).fold(0.0, f32::max),
+            live: stats
+                .iter()
+                .zip(&hits)
+                .filter(|(_, h)| !h.is_empty())
+                .map(|(s, _)| s.r2 as f32)
+                .fold(0.0, f32::max),
             all: stats.iter().map(|s| s.r2 as f32).fold(0.0, f32::max),
         };
         self.fit_grid(radius_max)
@@ -657,7 +818,10 @@ impl Renderer {
             let widest = 2.0 * max.all.sqrt();
             if widest > 512.0 * c {
                 let message = format!("{c} is under 1/512 of twice the largest search radius ({widest})");
-                return Err(Error::Settings { field: "grid_cell", message });
+                return Err(Error::Settings {
+                    field: "grid_cell",
+                    message,
+                });
             }
             return Ok(());
         }
@@ -670,8 +834,12 @@ impl Renderer {
             return Ok(());
         }
         self.gpu.set_grid_cell(cell, self.gpu.params.photon_capacity);
-        self.grid.set_cells(self.gpu.params.grid_mask + 1).device("resizing the photon grid")?;
-        self.ctx.upload(&self.params, bytemuck::bytes_of(&self.gpu.params)).device("resizing the photon grid")
+        self.grid
+            .set_cells(self.gpu.params.grid_mask + 1)
+            .device("resizing the photon grid")?;
+        self.ctx
+            .upload(&self.params, bytemuck::bytes_of(&self.gpu.params))
+            .device("resizing the photon grid")
     }
 
     /// One photon pass: `photons_per_pass` photons traced and gathered, then the progressive update.
@@ -697,12 +865,16 @@ impl Renderer {
         stages.extend(batch_stages);
         if self.cancel.is_cancelled() {
             // The batches' sums wait in the pass accumulators for the update: drop them.
-            self.ctx.run(|cmd| Ok(self.accum.cmd_fill(cmd, 0))).device("cancelling the photon pass")?;
+            self.ctx
+                .run(|cmd| Ok(self.accum.cmd_fill(cmd, 0)))
+                .device("cancelling the photon pass")?;
             return Err(Error::Cancelled);
         }
         // The update in its own submission, so an overflowed try above never touches the statistics.
         self.profiler.reset();
-        self.ctx.run(|cmd| self.profiler.scope(cmd, "update", || self.record_update(cmd))).device("the photon pass")?;
+        self.ctx
+            .run(|cmd| self.profiler.scope(cmd, "update", || self.record_update(cmd)))
+            .device("the photon pass")?;
         stages.extend(self.profiler.read().device("the photon pass")?);
         self.passes += 1;
         self.emitted += total as u64;
@@ -744,24 +916,42 @@ impl Renderer {
     /// Resolves the current estimate into an image buffer on the device (eq. 1-2) and returns its GPU time.
     pub fn resolve(&mut self) -> Result<f64> {
         self.profiler.reset();
-        let push = ResolvePush { emitted: self.emitted as f64, norm: self.settings.cone_norm(), pad0: 0.0 };
+        let push = ResolvePush {
+            emitted: self.emitted as f64,
+            norm: self.settings.cone_norm(),
+            pad0: 0.0,
+        };
         let pixels = self.gpu.pixels();
         let (profiler, k) = (&self.profiler, &self.kernels);
         let (params, stats, direct, image) = (&self.params, &self.stats, &self.direct, &self.image);
-        self.ctx.run(|cmd| {
-            profiler.scope(cmd, "resolve", || resolve::record(&k.resolve, cmd, params, stats, direct, image, pixels, &push))?;
-            barrier(&self.ctx, cmd);
-            Ok(())
-        }).device("the resolve")?;
-        Ok(self.profiler.read().device("the resolve")?.iter().map(|s| s.duration_ms).sum())
+        self.ctx
+            .run(|cmd| {
+                profiler.scope(cmd, "resolve", || {
+                    resolve::record(&k.resolve, cmd, params, stats, direct, image, pixels, &push)
+                })?;
+                barrier(&self.ctx, cmd);
+                Ok(())
+            })
+            .device("the resolve")?;
+        Ok(self
+            .profiler
+            .read()
+            .device("the resolve")?
+            .iter()
+            .map(|s| s.duration_ms)
+            .sum())
     }
 
     /// The current image (resolves, then reads it back).
     pub fn image(&mut self) -> Result<RgbImage> {
         self.resolve()?;
         let rgba: Vec<[f32; 4]> = self.ctx.download(&self.image).device("reading the image back")?;
-        RgbImage::from_rgba(self.gpu.params.width, self.gpu.params.height, &rgba[..self.gpu.pixels() as usize])
-            .device("reading the image back")
+        RgbImage::from_rgba(
+            self.gpu.params.width,
+            self.gpu.params.height,
+            &rgba[..self.gpu.pixels() as usize],
+        )
+        .device("reading the image back")
     }
 
     pub fn settings(&self) -> &Settings {
@@ -821,7 +1011,10 @@ impl Renderer {
     /// Fails if a BVH traversal ran out of the device's loop budget: its hit, and so the image, would be
     /// wrong.
     pub fn path_counters(&self) -> Result<PathCounters> {
-        let c: Vec<PathCounters> = self.ctx.download_prefix(&self.cut, 1).device("reading the path counters")?;
+        let c: Vec<PathCounters> = self
+            .ctx
+            .download_prefix(&self.cut, 1)
+            .device("reading the path counters")?;
         if c[0].traversal_cut > 0 {
             let what = format!(
                 "{} ray(s) through the triangle BVH were stopped at the device's limit on loop iterations per \
@@ -829,7 +1022,12 @@ impl Renderer {
                 c[0].traversal_cut, self.limits.photon_bvh_budget, self.limits.eye_bvh_budget
             );
             let lower = "the overlap of the scene's triangles (degenerate or duplicated geometry?)";
-            return Err(Error::limit(what, None, self.ctx.info().loop_budget.unwrap_or(0) as u64, lower));
+            return Err(Error::limit(
+                what,
+                None,
+                self.ctx.info().loop_budget.unwrap_or(0) as u64,
+                lower,
+            ));
         }
         Ok(c[0])
     }
@@ -839,14 +1037,23 @@ impl Renderer {
     /// photons, and counts the intersections each traces (an untimed run of each). For `ppm-vk bench`:
     /// the trace-only variant is this design's ceiling. The render's state is left as it was.
     pub fn photon_breakdown(&mut self, photons: u32) -> Result<Vec<PhotonVariant>> {
-        self.photon_variants(photons).device("timing the photon kernel's variants")
+        self.photon_variants(photons)
+            .device("timing the photon kernel's variants")
     }
 
     fn photon_variants(&mut self, photons: u32) -> anyhow::Result<Vec<PhotonVariant>> {
         let saved: Vec<PathCounters> = self.ctx.download_prefix(&self.cut, 1)?;
         let photons = photons.min(self.batch); // one batch: the records must fit
-        let push = PhotonPush { first: 0, count: photons, salt: SALT_PHOTON, per_thread: self.limits.per_thread, pad0: 0 };
-        let variant = |r: &Self, defines: &[(&str, &str)]| tracing_pipeline(&r.ctx, &r.gpu, &r.settings, &reflected::PHOTON, defines);
+        let push = PhotonPush {
+            first: 0,
+            count: photons,
+            salt: SALT_PHOTON,
+            per_thread: self.limits.per_thread,
+            pad0: 0,
+        };
+        let variant = |r: &Self, defines: &[(&str, &str)]| {
+            tracing_pipeline(&r.ctx, &r.gpu, &r.settings, &reflected::PHOTON, defines)
+        };
         // One dispatch over the counters cleared; its GPU milliseconds.
         let dispatch = |r: &Self, k: &ComputePipeline| -> anyhow::Result<f64> {
             r.ctx.upload(&r.cut, bytemuck::bytes_of(&PathCounters::default()))?;
@@ -855,7 +1062,9 @@ impl Renderer {
                 r.counter.cmd_fill(cmd, 0);
                 barrier(&r.ctx, cmd);
                 let scene = r.scene_buffers();
-                r.profiler.scope(cmd, "photon", || photon::record(k, cmd, &scene, &r.lights, &r.grid.records, &r.counter, &r.cut, &push))
+                r.profiler.scope(cmd, "photon", || {
+                    photon::record(k, cmd, &scene, &r.lights, &r.grid.records, &r.counter, &r.cut, &push)
+                })
             })?;
             Ok(r.profiler.read()?.iter().map(|s| s.duration_ms).sum())
         };
@@ -872,7 +1081,9 @@ impl Renderer {
         };
         let full_steps = count(self, &[])?;
         // Trace-only paths as long as the real ones on average, so both amortise a path's start alike.
-        let segments = ((full_steps as f64 / photons as f64).round() as u32).clamp(1, self.limits.photon_depth).to_string();
+        let segments = ((full_steps as f64 / photons as f64).round() as u32)
+            .clamp(1, self.limits.photon_depth)
+            .to_string();
         let mut out = Vec::new();
         for (name, defines) in [
             ("as rendered", vec![]),
@@ -881,8 +1092,17 @@ impl Renderer {
             ("trace only", vec![("PHOTON_TRACE_ONLY", segments.as_str())]),
         ] {
             let gpu_ms = time(self, &defines)?;
-            let steps = if defines.is_empty() { full_steps } else { count(self, &defines)? };
-            out.push(PhotonVariant { name, photons, gpu_ms, steps });
+            let steps = if defines.is_empty() {
+                full_steps
+            } else {
+                count(self, &defines)?
+            };
+            out.push(PhotonVariant {
+                name,
+                photons,
+                gpu_ms,
+                steps,
+            });
         }
         self.ctx.upload(&self.cut, bytemuck::cast_slice(&saved))?;
         Ok(out)
@@ -898,7 +1118,13 @@ impl Renderer {
     fn record_update(&self, cmd: vk::CommandBuffer) -> anyhow::Result<()> {
         self.r2_max.cmd_fill(cmd, 0);
         barrier(&self.ctx, cmd);
-        update::record_update(&self.kernels.update, cmd, &self.hit_buffers(), &self.r2_max, &self.update_push())?;
+        update::record_update(
+            &self.kernels.update,
+            cmd,
+            &self.hit_buffers(),
+            &self.r2_max,
+            &self.update_push(),
+        )?;
         barrier(&self.ctx, cmd);
         Ok(())
     }
@@ -985,7 +1211,8 @@ impl Renderer {
         let push = self.probe_push(1);
         let hits = self.hit_buffers();
         let (k, params, grid) = (&self.kernels, &self.params, &self.grid);
-        self.ctx.run(|cmd| probe::record(&k.probe, cmd, params, &hits, grid, &push))
+        self.ctx
+            .run(|cmd| probe::record(&k.probe, cmd, params, &hits, grid, &push))
     }
 
     fn trace_batch(&mut self, first: u64, count: u32, use_: GridUse) -> anyhow::Result<Vec<Photon>> {
@@ -995,7 +1222,11 @@ impl Renderer {
         self.check_lookups()?;
         self.path_counters()?;
         if n[0] > self.gpu.params.photon_capacity {
-            anyhow::bail!("a test batch of {count} photons left {} records, over the capacity {}", n[0], self.gpu.params.photon_capacity);
+            anyhow::bail!(
+                "a test batch of {count} photons left {} records, over the capacity {}",
+                n[0],
+                self.gpu.params.photon_capacity
+            );
         }
         self.ctx.download_prefix(&self.grid.records, n[0] as usize)
     }
@@ -1056,15 +1287,35 @@ fn tracing_pipeline(
 /// Fails, saying what to lower, unless every buffer fits the device's largest storage binding
 /// (`max_range` bytes) and all of them its memory (`memory` bytes; 0: unknown, not checked).
 /// `per_pixel` grow with the image (`advice` says how to shrink them); `others` are checked for the total.
-fn fits_device(per_pixel: &[(&str, u64)], others: &[(&str, u64)], max_range: u64, memory: u64, advice: &str) -> Result<()> {
+fn fits_device(
+    per_pixel: &[(&str, u64)],
+    others: &[(&str, u64)],
+    max_range: u64,
+    memory: u64,
+    advice: &str,
+) -> Result<()> {
     if let Some((what, bytes)) = per_pixel.iter().find(|(_, b)| *b > max_range) {
-        return Err(Error::limit(format!("{what} ({} MiB in one buffer)", bytes >> 20), Some(*bytes), max_range, advice));
+        return Err(Error::limit(
+            format!("{what} ({} MiB in one buffer)", bytes >> 20),
+            Some(*bytes),
+            max_range,
+            advice,
+        ));
     }
     let total: u64 = per_pixel.iter().chain(others).map(|(_, b)| b).sum();
     if memory > 0 && total > memory {
-        let list: Vec<String> = per_pixel.iter().chain(others).map(|(w, b)| format!("{w} {} MiB", b >> 20)).collect();
+        let list: Vec<String> = per_pixel
+            .iter()
+            .chain(others)
+            .map(|(w, b)| format!("{w} {} MiB", b >> 20))
+            .collect();
         let what = format!("the render's device memory ({} MiB: {})", total >> 20, list.join(", "));
-        return Err(Error::limit(what, Some(total), memory, format!("{advice}, or --photons-per-pass")));
+        return Err(Error::limit(
+            what,
+            Some(total),
+            memory,
+            format!("{advice}, or --photons-per-pass"),
+        ));
     }
     Ok(())
 }
@@ -1077,8 +1328,9 @@ fn pixel_order(width: u32, height: u32) -> Vec<u32> {
         x = (x | (x << 2)) & 0x33333333;
         (x | (x << 1)) & 0x55555555
     }
-    let mut keyed: Vec<(u64, u32)> =
-        (0..width * height).map(|p| (spread(p % width) | (spread(p / width) << 1), p)).collect();
+    let mut keyed: Vec<(u64, u32)> = (0..width * height)
+        .map(|p| (spread(p % width) | (spread(p / width) << 1), p))
+        .collect();
     keyed.sort_unstable();
     keyed.into_iter().map(|(_, p)| p).collect()
 }
@@ -1106,7 +1358,10 @@ fn morton_order(hits: &[HitPoint]) -> Vec<u32> {
         .filter(|(_, h)| !h.is_empty())
         .map(|(i, h)| {
             let q = ((glam::Vec3::from_array(h.pos) - min) * scale).clamp(glam::Vec3::ZERO, glam::Vec3::splat(1023.0));
-            (spread(q.x as u32) | (spread(q.y as u32) << 1) | (spread(q.z as u32) << 2), i as u32)
+            (
+                spread(q.x as u32) | (spread(q.y as u32) << 1) | (spread(q.z as u32) << 2),
+                i as u32,
+            )
         })
         .collect();
     keyed.sort_unstable();
@@ -1146,14 +1401,27 @@ mod tests {
         let others = [("records", 256 << 20)];
         assert!(fits_device(&[("hits", range)], &others, range, memory, "it").is_ok());
         let e = fits_device(&[("hits", range + 1)], &others, range, memory, "it").unwrap_err();
-        assert!(matches!(e, crate::Error::Limit { value: Some(v), limit, .. } if v == range + 1 && limit == range), "{e:?}");
+        assert!(
+            matches!(e, crate::Error::Limit { value: Some(v), limit, .. } if v == range + 1 && limit == range),
+            "{e:?}"
+        );
         let e = e.to_string();
-        assert!(e.contains("hits (128 MiB in one buffer)") && e.contains("limit of 134217728; lower it"), "{e}");
+        assert!(
+            e.contains("hits (128 MiB in one buffer)") && e.contains("limit of 134217728; lower it"),
+            "{e}"
+        );
         let full = [("hits", 128 << 20), ("stats", 128 << 20)];
         assert!(fits_device(&full, &others, range, memory, "it").is_ok());
         let over = [("hits", 128 << 20), ("stats", 128 << 20), ("order", 1)];
-        let e = fits_device(&over, &others, range, memory, "it").unwrap_err().to_string();
-        assert!(e.contains("device memory (512 MiB: ") && e.contains("records 256 MiB") && e.contains("lower it, or --photons-per-pass"), "{e}");
+        let e = fits_device(&over, &others, range, memory, "it")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("device memory (512 MiB: ")
+                && e.contains("records 256 MiB")
+                && e.contains("lower it, or --photons-per-pass"),
+            "{e}"
+        );
         // Unknown memory (0) is not checked.
         assert!(fits_device(&over, &others, range, 0, "it").is_ok());
     }

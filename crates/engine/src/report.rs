@@ -84,7 +84,9 @@ impl PassRecord {
         let mut stage_start_ms = BTreeMap::new();
         for s in &stats.stages {
             *stage_ms.entry(stage_of(s.name).to_string()).or_insert(0.0) += s.duration_ms;
-            stage_start_ms.entry(stage_of(s.name).to_string()).or_insert(s.start_ms - gpu_origin_ms);
+            stage_start_ms
+                .entry(stage_of(s.name).to_string())
+                .or_insert(s.start_ms - gpu_origin_ms);
         }
         PassRecord {
             pass: stats.index,
@@ -107,12 +109,20 @@ impl PassRecord {
 
 impl RunReport {
     pub fn new(header: RunHeader) -> RunReport {
-        RunReport { header, passes: Vec::new() }
+        RunReport {
+            header,
+            passes: Vec::new(),
+        }
     }
 
     /// Writes JSON (`.json`) or CSV (`.csv`) by the extension of `path`.
     pub fn save(&self, path: &Path) -> Result<()> {
-        let text = match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
+        let text = match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .as_deref()
+        {
             Some("json") => serde_json::to_string_pretty(self)?,
             Some("csv") => self.to_csv(),
             _ => bail!("report {}: the extension must be .json or .csv", path.display()),
@@ -124,7 +134,11 @@ impl RunReport {
         let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
         let report: RunReport = serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
         if report.header.schema != SCHEMA {
-            bail!("{}: schema {:?}, expected {SCHEMA:?}", path.display(), report.header.schema);
+            bail!(
+                "{}: schema {:?}, expected {SCHEMA:?}",
+                path.display(),
+                report.header.schema
+            );
         }
         Ok(report)
     }
@@ -140,7 +154,10 @@ impl RunReport {
         }
         out += ",rmse,rel_mse,mean_bias\n";
         for p in &self.passes {
-            out += &format!("{},{:.6},{:.3},{},{}", p.pass, p.elapsed_s, p.wall_ms, p.photons_total, p.records);
+            out += &format!(
+                "{},{:.6},{:.3},{},{}",
+                p.pass, p.elapsed_s, p.wall_ms, p.photons_total, p.records
+            );
             for s in &stages {
                 out += &format!(",{:.3}", p.stage_ms.get(*s).copied().unwrap_or(0.0));
             }
@@ -178,7 +195,8 @@ impl RunReport {
     }
 
     pub fn save_chrome_trace(&self, path: &Path) -> Result<()> {
-        std::fs::write(path, serde_json::to_string(&self.to_chrome_trace())?).with_context(|| format!("writing {}", path.display()))
+        std::fs::write(path, serde_json::to_string(&self.to_chrome_trace())?)
+            .with_context(|| format!("writing {}", path.display()))
     }
 }
 
@@ -186,7 +204,10 @@ impl RunReport {
 pub fn file_sha256(path: &Path) -> Result<String> {
     use sha2::Digest;
     let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-    Ok(sha2::Sha256::digest(&bytes).iter().map(|b| format!("{b:02x}")).collect())
+    Ok(sha2::Sha256::digest(&bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect())
 }
 
 #[cfg(test)]
@@ -207,14 +228,35 @@ mod tests {
             cell_size: 0.02,
             wall_ms: 12.5,
             stages: vec![
-                ScopeTiming { name: "photon", start_ms: 100.0, duration_ms: 3.0 },
-                ScopeTiming { name: "lookup/count", start_ms: 103.0, duration_ms: 1.0 },
-                ScopeTiming { name: "lookup/scan", start_ms: 104.0, duration_ms: 0.5 },
-                ScopeTiming { name: "gather", start_ms: 105.0, duration_ms: 5.0 },
+                ScopeTiming {
+                    name: "photon",
+                    start_ms: 100.0,
+                    duration_ms: 3.0,
+                },
+                ScopeTiming {
+                    name: "lookup/count",
+                    start_ms: 103.0,
+                    duration_ms: 1.0,
+                },
+                ScopeTiming {
+                    name: "lookup/scan",
+                    start_ms: 104.0,
+                    duration_ms: 0.5,
+                },
+                ScopeTiming {
+                    name: "gather",
+                    start_ms: 105.0,
+                    duration_ms: 5.0,
+                },
             ],
         };
         let mut p = PassRecord::new(&stats, 0.5, 100.0);
-        p.error = Some(ErrorStats { rmse: 0.1, rel_mse: 0.01, mean_bias: -0.001, pixels: 16 });
+        p.error = Some(ErrorStats {
+            rmse: 0.1,
+            rel_mse: 0.01,
+            mean_bias: -0.001,
+            pixels: 16,
+        });
         RunReport {
             header: RunHeader {
                 schema: SCHEMA.into(),
@@ -258,8 +300,14 @@ mod tests {
     fn csv_has_a_row_per_pass_and_the_errors() {
         let csv = sample().to_csv();
         let lines: Vec<&str> = csv.lines().collect();
-        assert_eq!(lines[0], "pass,elapsed_s,wall_ms,photons_total,records,gather_ms,lookup_ms,photon_ms,rmse,rel_mse,mean_bias");
-        assert_eq!(lines[1], "1,0.500000,12.500,1000,2800,5.000,1.500,3.000,0.100000,0.010000,-0.001000");
+        assert_eq!(
+            lines[0],
+            "pass,elapsed_s,wall_ms,photons_total,records,gather_ms,lookup_ms,photon_ms,rmse,rel_mse,mean_bias"
+        );
+        assert_eq!(
+            lines[1],
+            "1,0.500000,12.500,1000,2800,5.000,1.500,3.000,0.100000,0.010000,-0.001000"
+        );
     }
 
     #[test]

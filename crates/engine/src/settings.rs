@@ -118,33 +118,64 @@ impl Settings {
         }
         if let Some(k) = self.cone_k {
             if !(k.is_finite() && k >= 1.0) {
-                return Err(invalid("cone_k", format!("the cone filter constant k must be >= 1, got {k}")));
+                return Err(invalid(
+                    "cone_k",
+                    format!("the cone filter constant k must be >= 1, got {k}"),
+                ));
             }
         }
         if let Some(r) = self.initial_radius {
             if !(r.is_finite() && r > 0.0) {
-                return Err(invalid("initial_radius", format!("must be positive and finite, got {r}")));
+                return Err(invalid(
+                    "initial_radius",
+                    format!("must be positive and finite, got {r}"),
+                ));
             }
         }
         if !(self.probe_beta.is_finite() && self.probe_beta > 0.0 && self.probe_beta < 1.0) {
-            return Err(invalid("probe_beta", format!("must be a fraction of r in (0, 1), got {}", self.probe_beta)));
+            return Err(invalid(
+                "probe_beta",
+                format!("must be a fraction of r in (0, 1), got {}", self.probe_beta),
+            ));
         }
         if self.probe_photons == Some(0) {
             return Err(invalid("probe_photons", "must be at least 1".into()));
         }
         if !(1..=8).contains(&self.hit_slots) {
-            return Err(invalid("hit_slots", format!("hit slots per pixel must be in 1..=8, got {}", self.hit_slots)));
+            return Err(invalid(
+                "hit_slots",
+                format!("hit slots per pixel must be in 1..=8, got {}", self.hit_slots),
+            ));
         }
         if let Some(b) = self.grid_buckets {
             if !b.is_power_of_two() || !(SCAN_BLOCK..=SCAN_BLOCK * 65536).contains(&b) {
-                return Err(invalid("grid_buckets", format!("photon grid buckets must be a power of two in [{SCAN_BLOCK}, {}], got {b}", SCAN_BLOCK as u64 * 65536)));
+                return Err(invalid(
+                    "grid_buckets",
+                    format!(
+                        "photon grid buckets must be a power of two in [{SCAN_BLOCK}, {}], got {b}",
+                        SCAN_BLOCK as u64 * 65536
+                    ),
+                ));
             }
         }
         if self.max_eye_depth == 0 || self.max_photon_depth == 0 {
-            return Err(invalid(if self.max_eye_depth == 0 { "max_eye_depth" } else { "max_photon_depth" }, "path depth limits must be at least 1".into()));
+            return Err(invalid(
+                if self.max_eye_depth == 0 {
+                    "max_eye_depth"
+                } else {
+                    "max_photon_depth"
+                },
+                "path depth limits must be at least 1".into(),
+            ));
         }
         if self.emission_samples > MAX_EMISSION_SAMPLES {
-            return Err(invalid("emission_samples", format!("emission samples per pixel and pass must be at most {MAX_EMISSION_SAMPLES}, got {}", self.emission_samples)));
+            return Err(invalid(
+                "emission_samples",
+                format!(
+                    "emission samples per pixel and pass must be at most {MAX_EMISSION_SAMPLES}, got {}",
+                    self.emission_samples
+                ),
+            ));
         }
         Ok(())
     }

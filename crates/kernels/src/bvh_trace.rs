@@ -26,7 +26,12 @@ pub struct TraceRay {
     pub dir: [f32; 3],
     pub tmax: f32,
 }
-gpu_struct!(TraceRay { origin, tmin, dir, tmax });
+gpu_struct!(TraceRay {
+    origin,
+    tmin,
+    dir,
+    tmax
+});
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -48,7 +53,17 @@ pub struct TraceHit {
     pub subgroup_size: u32,
     pub pad0: u32,
 }
-gpu_struct!(TraceHit { normal, t, bary, triangle, steps, cut, subgroup_cost, subgroup_size, pad0 });
+gpu_struct!(TraceHit {
+    normal,
+    t,
+    bary,
+    triangle,
+    steps,
+    cut,
+    subgroup_cost,
+    subgroup_size,
+    pad0
+});
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -70,9 +85,17 @@ pub fn record(
     push: &TracePush,
 ) -> Result<()> {
     if push.budget > MAX_BUDGET {
-        bail!("bvh_trace: a step budget of {} is more than lavapipe's loop limit allows ({MAX_BUDGET})", push.budget);
+        bail!(
+            "bvh_trace: a step budget of {} is more than lavapipe's loop limit allows ({MAX_BUDGET})",
+            push.budget
+        );
     }
-    k.dispatch(cmd, &[nodes, triangles, rays, hits], bytemuck::bytes_of(push), push.count as u64)
+    k.dispatch(
+        cmd,
+        &[nodes, triangles, rays, hits],
+        bytemuck::bytes_of(push),
+        push.count as u64,
+    )
 }
 
 #[cfg(test)]
@@ -82,7 +105,11 @@ mod tests {
     /// The limits stated here are the ones bvh.glsl uses.
     #[test]
     fn constants_match_the_glsl() {
-        let glsl = crate::reflected::SOURCES.iter().find(|(p, _)| *p == "common/bvh.glsl").unwrap().1;
+        let glsl = crate::reflected::SOURCES
+            .iter()
+            .find(|(p, _)| *p == "common/bvh.glsl")
+            .unwrap()
+            .1;
         for line in [
             format!("const uint BVH_MAX_DEPTH = {MAX_DEPTH}u;"),
             format!("const uint BVH_LOOP_LIMIT = {LOOP_LIMIT}u;"),

@@ -29,7 +29,16 @@ pub struct HitBuffers<'a> {
 
 /// The bindings of the kernels that read the photon grid per hit point (gather.comp and probe.comp).
 pub fn grid_reader_bindings<'a>(params: &'a Buffer, hits: &HitBuffers<'a>, grid: &'a Grid) -> [&'a Buffer; 8] {
-    [params, hits.hit_points, hits.stats, hits.accum, &grid.records, &grid.cell_start, hits.order, &grid.status]
+    [
+        params,
+        hits.hit_points,
+        hits.stats,
+        hits.accum,
+        &grid.records,
+        &grid.cell_start,
+        hits.order,
+        &grid.status,
+    ]
 }
 
 /// Hit points one gather or probe thread takes together in the kernels as built (`GROUP` in
@@ -40,7 +49,11 @@ pub const GROUP: u32 = 2;
 pub fn with_group(ctx: &ppm_vk_device::Context, k: &crate::reflected::KernelInfo, group: u32) -> Result<GridReader> {
     let pipeline = match group {
         GROUP => crate::pipeline(ctx, k)?,
-        _ => crate::pipeline_from(ctx, k, &crate::specialize::compile_with(k, &[("GROUP_SIZE", &group.to_string())], "")?)?,
+        _ => crate::pipeline_from(
+            ctx,
+            k,
+            &crate::specialize::compile_with(k, &[("GROUP_SIZE", &group.to_string())], "")?,
+        )?,
     };
     Ok(GridReader { pipeline, group })
 }
@@ -60,5 +73,10 @@ pub fn record_gather(
     push: &GatherPush,
 ) -> Result<()> {
     let threads = push.count.div_ceil(k.group) as u64;
-    k.pipeline.dispatch(cmd, &grid_reader_bindings(params, hits, grid), bytemuck::bytes_of(push), threads)
+    k.pipeline.dispatch(
+        cmd,
+        &grid_reader_bindings(params, hits, grid),
+        bytemuck::bytes_of(push),
+        threads,
+    )
 }

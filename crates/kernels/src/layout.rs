@@ -21,7 +21,12 @@ pub struct Material {
     pub emission: [f32; 3],
     pub ior: f32,
 }
-gpu_struct!(Material { color, surface, emission, ior });
+gpu_struct!(Material {
+    color,
+    surface,
+    emission,
+    ior
+});
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -33,7 +38,14 @@ pub struct Sphere {
     pub pad1: u32,
     pub pad2: u32,
 }
-gpu_struct!(Sphere { center, radius, material, pad0, pad1, pad2 });
+gpu_struct!(Sphere {
+    center,
+    radius,
+    material,
+    pad0,
+    pad1,
+    pad2
+});
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -49,7 +61,18 @@ pub struct Quad {
     pub w: [f32; 3],
     pub pad1: f32,
 }
-gpu_struct!(Quad { origin, material, edge_u, area, edge_v, plane_d, normal, pad0, w, pad1 });
+gpu_struct!(Quad {
+    origin,
+    material,
+    edge_u,
+    area,
+    edge_v,
+    plane_d,
+    normal,
+    pad0,
+    w,
+    pad1
+});
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -62,7 +85,14 @@ pub struct Light {
     pub power: [f32; 3],
     pub pad1: f32,
 }
-gpu_struct!(Light { index, cdf, prob, kind, power, pad1 });
+gpu_struct!(Light {
+    index,
+    cdf,
+    prob,
+    kind,
+    power,
+    pad1
+});
 pub const LIGHT_QUAD: u32 = 0;
 pub const LIGHT_TRIANGLE: u32 = 1;
 
@@ -103,9 +133,32 @@ pub struct RenderParams {
     pub lookup_limit: u32,
 }
 gpu_struct!(RenderParams {
-    eye, tan_half_fov, right, aspect, up, width, forward, height, grid_min, cell_size, grid_mask,
-    num_spheres, num_quads, num_lights, eps, max_photon_depth, max_eye_depth, hit_slots, photon_capacity,
-    seed, flux_fixed, eps_rel, num_triangles, photon_bvh_budget, eye_bvh_budget, lookup_limit
+    eye,
+    tan_half_fov,
+    right,
+    aspect,
+    up,
+    width,
+    forward,
+    height,
+    grid_min,
+    cell_size,
+    grid_mask,
+    num_spheres,
+    num_quads,
+    num_lights,
+    eps,
+    max_photon_depth,
+    max_eye_depth,
+    hit_slots,
+    photon_capacity,
+    seed,
+    flux_fixed,
+    eps_rel,
+    num_triangles,
+    photon_bvh_budget,
+    eye_bvh_budget,
+    lookup_limit
 });
 
 #[repr(C)]
@@ -118,7 +171,14 @@ pub struct HitPoint {
     pub weight: [f32; 3],
     pub pad1: u32,
 }
-gpu_struct!(HitPoint { pos, pixel, normal, pad0, weight, pad1 });
+gpu_struct!(HitPoint {
+    pos,
+    pixel,
+    normal,
+    pad0,
+    weight,
+    pad1
+});
 
 impl HitPoint {
     pub fn is_empty(&self) -> bool {
@@ -137,7 +197,14 @@ pub struct HitStats {
     /// lambda / r^2 from the probe pass (eq. 7), or 0 without probing.
     pub probe: f64,
 }
-gpu_struct!(HitStats { n, r2, tau_r, tau_g, tau_b, probe });
+gpu_struct!(HitStats {
+    n,
+    r2,
+    tau_r,
+    tau_g,
+    tau_b,
+    probe
+});
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
@@ -148,7 +215,13 @@ pub struct PassAccum {
     pub m: u32,
     pub pad0: u32,
 }
-gpu_struct!(PassAccum { flux_r, flux_g, flux_b, m, pad0 });
+gpu_struct!(PassAccum {
+    flux_r,
+    flux_g,
+    flux_b,
+    m,
+    pad0
+});
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -172,7 +245,12 @@ pub struct PathCounters {
     pub traversal_cut: u32,
     pub pad0: u32,
 }
-gpu_struct!(PathCounters { photon_paths, eye_paths, traversal_cut, pad0 });
+gpu_struct!(PathCounters {
+    photon_paths,
+    eye_paths,
+    traversal_cut,
+    pad0
+});
 
 /// `BvhNode::count_axis & 3` of a leaf (`BVH_LEAF` in bvh.glsl); 0-2 is an interior node's split axis.
 pub const BVH_LEAF: u32 = 3;
@@ -189,7 +267,12 @@ pub struct BvhNode {
     /// `count << 2 | axis`, axis [`BVH_LEAF`] for a leaf.
     pub count_axis: u32,
 }
-gpu_struct!(BvhNode { lo, offset, hi, count_axis });
+gpu_struct!(BvhNode {
+    lo,
+    offset,
+    hi,
+    count_axis
+});
 
 impl BvhNode {
     pub fn is_leaf(&self) -> bool {
@@ -223,4 +306,11 @@ pub struct Triangle {
     pub v2: [f32; 3],
     pub pad0: u32,
 }
-gpu_struct!(Triangle { v0, material, v1, source, v2, pad0 });
+gpu_struct!(Triangle {
+    v0,
+    material,
+    v1,
+    source,
+    v2,
+    pad0
+});

@@ -29,8 +29,20 @@ pub mod reflected {
     include!(concat!(env!("OUT_DIR"), "/reflected.rs"));
 
     /// Every kernel, in pipeline order, then the test kernel of the BVH traversal.
-    pub const ALL: &[KernelInfo] =
-        &[RAY, PROBE, PHOTON, GRID_COUNT, GRID_SCAN, GRID_OFFSETS, GRID_PARTITION, GRID_SCATTER, GATHER, UPDATE, RESOLVE, BVH_TRACE];
+    pub const ALL: &[KernelInfo] = &[
+        RAY,
+        PROBE,
+        PHOTON,
+        GRID_COUNT,
+        GRID_SCAN,
+        GRID_OFFSETS,
+        GRID_PARTITION,
+        GRID_SCATTER,
+        GATHER,
+        UPDATE,
+        RESOLVE,
+        BVH_TRACE,
+    ];
 }
 
 pub mod bvh_trace;
@@ -89,7 +101,11 @@ macro_rules! push_struct {
     ($ty:ident, $kernel:ident) => {
         const _: () = assert!(
             ::core::mem::size_of::<$ty>() == $crate::reflected::$kernel.push_size as usize,
-            concat!(stringify!($ty), ": size differs from the push-constant block of kernel ", stringify!($kernel))
+            concat!(
+                stringify!($ty),
+                ": size differs from the push-constant block of kernel ",
+                stringify!($kernel)
+            )
         );
     };
 }

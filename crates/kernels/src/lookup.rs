@@ -57,7 +57,10 @@ impl GridPush {
     /// (the batch over the partitions) stay in cache while they are placed.
     pub fn for_cells(cells: u32) -> GridPush {
         let parts = (cells / SCAN_BLOCK).clamp(1, MAX_PARTS);
-        GridPush { parts, shift: (cells / parts).trailing_zeros() }
+        GridPush {
+            parts,
+            shift: (cells / parts).trailing_zeros(),
+        }
     }
 }
 
@@ -94,7 +97,10 @@ impl Grid {
     /// at most [`MAX_CHUNKS`] chunks.
     pub fn new(ctx: &Context, cells: u32, capacity: u32) -> Result<Grid> {
         if !cells.is_power_of_two() || cells < SCAN_BLOCK || cells / SCAN_BLOCK > 65536 {
-            bail!("photon grid: {cells} buckets is not a power of two in [{SCAN_BLOCK}, {}]", SCAN_BLOCK as u64 * 65536);
+            bail!(
+                "photon grid: {cells} buckets is not a power of two in [{SCAN_BLOCK}, {}]",
+                SCAN_BLOCK as u64 * 65536
+            );
         }
         let chunks = chunks_for(capacity)?;
         let record = std::mem::size_of::<crate::layout::Photon>() as u64;
@@ -109,11 +115,26 @@ impl Grid {
             cells,
             allocated: cells,
             records: Buffer::new(ctx, "photon records", capacity as u64 * record, BufferKind::Storage)?,
-            staging: Buffer::new(ctx, "grid staging records", capacity as u64 * record, BufferKind::Storage)?,
+            staging: Buffer::new(
+                ctx,
+                "grid staging records",
+                capacity as u64 * record,
+                BufferKind::Storage,
+            )?,
             cell_count,
-            part_count: Buffer::new(ctx, "grid part_count", chunks.max(1) as u64 * MAX_PARTS as u64 * 4, BufferKind::Storage)?,
+            part_count: Buffer::new(
+                ctx,
+                "grid part_count",
+                chunks.max(1) as u64 * MAX_PARTS as u64 * 4,
+                BufferKind::Storage,
+            )?,
             cell_start: Buffer::new(ctx, "grid cell_start", (cells as u64 + 1) * 4, BufferKind::Storage)?,
-            block_sums: Buffer::new(ctx, "grid block_sums", (cells / SCAN_BLOCK) as u64 * 4, BufferKind::Storage)?,
+            block_sums: Buffer::new(
+                ctx,
+                "grid block_sums",
+                (cells / SCAN_BLOCK) as u64 * 4,
+                BufferKind::Storage,
+            )?,
             status,
         })
     }
@@ -123,7 +144,10 @@ impl Grid {
     /// Uses the first `cells` buckets (the kernels' hash mask must agree).
     pub fn set_cells(&mut self, cells: u32) -> Result<()> {
         if !cells.is_power_of_two() || cells < SCAN_BLOCK || cells > self.allocated {
-            bail!("photon grid: {cells} buckets in use is not a power of two in [{SCAN_BLOCK}, {}]", self.allocated);
+            bail!(
+                "photon grid: {cells} buckets in use is not a power of two in [{SCAN_BLOCK}, {}]",
+                self.allocated
+            );
         }
         self.cells = cells;
         Ok(())
@@ -134,7 +158,10 @@ impl Grid {
 pub fn chunks_for(capacity: u32) -> Result<u32> {
     let chunks = capacity.div_ceil(CHUNK);
     if chunks > MAX_CHUNKS {
-        bail!("photon grid: {capacity} records are more than the build takes ({} at most)", MAX_CHUNKS as u64 * CHUNK as u64);
+        bail!(
+            "photon grid: {capacity} records are more than the build takes ({} at most)",
+            MAX_CHUNKS as u64 * CHUNK as u64
+        );
     }
     Ok(chunks)
 }
@@ -189,11 +216,20 @@ impl Lookup {
         let scan_buffers = [&grid.cell_count, &grid.cell_start, &grid.block_sums];
         profiler.scope(cmd, "lookup/scan", || {
             for (phase, groups) in [(0u32, blocks), (1, 1), (2, blocks)] {
-                let push = ScanPush { cells: grid.cells, phase };
-                self.scan.dispatch_groups(cmd, &scan_buffers, bytemuck::bytes_of(&push), [groups, 1, 1])?;
+                let push = ScanPush {
+                    cells: grid.cells,
+                    phase,
+                };
+                self.scan
+                    .dispatch_groups(cmd, &scan_buffers, bytemuck::bytes_of(&push), [groups, 1, 1])?;
                 barrier(ctx, cmd);
             }
-            self.offsets.dispatch(cmd, &[params, counter, &grid.cell_start, &grid.part_count], push, parts.parts as u64)
+            self.offsets.dispatch(
+                cmd,
+                &[params, counter, &grid.cell_start, &grid.part_count],
+                push,
+                parts.parts as u64,
+            )
         })?;
         barrier(ctx, cmd);
         profiler.scope(cmd, "lookup/split", || {
@@ -202,7 +238,14 @@ impl Lookup {
         })?;
         barrier(ctx, cmd);
         profiler.scope(cmd, "lookup/scatter", || {
-            let buffers = [params, &grid.staging, counter, &grid.cell_count, &grid.cell_start, &grid.records];
+            let buffers = [
+                params,
+                &grid.staging,
+                counter,
+                &grid.cell_count,
+                &grid.cell_start,
+                &grid.records,
+            ];
             self.scatter.dispatch(cmd, &buffers, &[], capacity as u64)
         })
     }
@@ -233,11 +276,25 @@ mod tests {
     /// The chunk and partition bounds stated here are the ones the kernels use.
     #[test]
     fn constants_match_the_glsl() {
-        let glsl = crate::reflected::SOURCES.iter().find(|(p, _)| *p == "lookup/partition.glsl").unwrap().1;
-        for line in [format!("const uint CHUNK = {CHUNK}u;"), format!("const uint MAX_PARTS = {MAX_PARTS}u;")] {
-            assert!(glsl.lines().any(|l| l.starts_with(&line)), "partition.glsl lacks `{line}`");
+        let glsl = crate::reflected::SOURCES
+            .iter()
+            .find(|(p, _)| *p == "lookup/partition.glsl")
+            .unwrap()
+            .1;
+        for line in [
+            format!("const uint CHUNK = {CHUNK}u;"),
+            format!("const uint MAX_PARTS = {MAX_PARTS}u;"),
+        ] {
+            assert!(
+                glsl.lines().any(|l| l.starts_with(&line)),
+                "partition.glsl lacks `{line}`"
+            );
         }
-        let scan = crate::reflected::SOURCES.iter().find(|(p, _)| *p == "lookup/grid_scan.comp").unwrap().1;
+        let scan = crate::reflected::SOURCES
+            .iter()
+            .find(|(p, _)| *p == "lookup/grid_scan.comp")
+            .unwrap()
+            .1;
         assert!(scan.contains("const uint BLOCK = 256u * PER_THREAD;") && scan.contains("const uint PER_THREAD = 4u;"));
         assert_eq!(SCAN_BLOCK, 256 * 4);
     }

@@ -88,7 +88,15 @@ impl PathLimits {
     /// light; `slots`: hit-point paths one eye thread traces; `emission`: emission samples per pixel and
     /// eye pass; `photon_cap` and `eye_cap`: the depths asked for (Settings).
     #[allow(clippy::too_many_arguments)]
-    pub fn new(budget: Option<u32>, intersect_steps: u32, lights: u32, slots: u32, emission: u32, photon_cap: u32, eye_cap: u32) -> Result<PathLimits> {
+    pub fn new(
+        budget: Option<u32>,
+        intersect_steps: u32,
+        lights: u32,
+        slots: u32,
+        emission: u32,
+        photon_cap: u32,
+        eye_cap: u32,
+    ) -> Result<PathLimits> {
         let Some(budget) = budget else {
             return Ok(PathLimits {
                 per_thread: MAX_PER_THREAD,
@@ -144,7 +152,15 @@ impl PathLimits {
     /// The limits of a scene with a triangle BVH: one photon per thread, and what the depths leave of the
     /// budget goes to traversal (see the struct). Arguments as [`PathLimits::new`].
     #[allow(clippy::too_many_arguments)]
-    pub fn with_bvh(budget: Option<u32>, intersect_steps: u32, lights: u32, slots: u32, emission: u32, photon_cap: u32, eye_cap: u32) -> Result<PathLimits> {
+    pub fn with_bvh(
+        budget: Option<u32>,
+        intersect_steps: u32,
+        lights: u32,
+        slots: u32,
+        emission: u32,
+        photon_cap: u32,
+        eye_cap: u32,
+    ) -> Result<PathLimits> {
         let Some(budget) = budget else {
             return PathLimits::new(None, intersect_steps, lights, slots, emission, photon_cap, eye_cap);
         };
@@ -166,7 +182,11 @@ impl PathLimits {
                 depth = (depth / 2).max(floor);
             }
         };
-        let photon = fit(BVH_PHOTON_DEPTH.min(photon_cap), MIN_DEPTH.min(photon_cap), &photon_loops);
+        let photon = fit(
+            BVH_PHOTON_DEPTH.min(photon_cap),
+            MIN_DEPTH.min(photon_cap),
+            &photon_loops,
+        );
         let eye = fit(BVH_EYE_DEPTH.min(eye_cap), MIN_EYE_DEPTH.min(eye_cap), &eye_loops);
         let (Some((photon_depth, photon_bvh_budget)), Some((eye_depth, eye_bvh_budget))) = (photon, eye) else {
             bail!(
@@ -176,7 +196,14 @@ impl PathLimits {
                  and emission samples)"
             );
         };
-        Ok(PathLimits { per_thread: 1, photon_depth, eye_depth, photon_bvh_budget, eye_bvh_budget, emission_per_dispatch })
+        Ok(PathLimits {
+            per_thread: 1,
+            photon_depth,
+            eye_depth,
+            photon_bvh_budget,
+            eye_bvh_budget,
+            emission_per_dispatch,
+        })
     }
 }
 
@@ -217,19 +244,41 @@ mod tests {
 
     #[test]
     fn limits_fit_the_budget_and_reach_the_target_depth() {
-        for (steps, lights, slots, emission) in [(0, 0, 1, 0), (10, 1, 1, 16), (11, 2, 4, 16), (64, 1, 8, 16), (100, 3, 1, 4), (70, 2, 4, 16)] {
+        for (steps, lights, slots, emission) in [
+            (0, 0, 1, 0),
+            (10, 1, 1, 16),
+            (11, 2, 4, 16),
+            (64, 1, 8, 16),
+            (100, 3, 1, 4),
+            (70, 2, 4, 16),
+        ] {
             let l = PathLimits::new(Some(65535), steps, lights, slots, emission, 4096, 1024).unwrap();
             let (photon, eye) = worst(&l, steps, lights, slots);
-            assert!(photon <= 65535 && eye <= 65535, "{steps} steps: {l:?} needs {photon} / {eye}");
+            assert!(
+                photon <= 65535 && eye <= 65535,
+                "{steps} steps: {l:?} needs {photon} / {eye}"
+            );
             assert!(l.photon_depth >= MIN_DEPTH && l.eye_depth >= MIN_EYE_DEPTH, "{l:?}");
-            assert!(l.emission_per_dispatch >= emission.min(1) && l.emission_per_dispatch <= emission, "{l:?}");
+            assert!(
+                l.emission_per_dispatch >= emission.min(1) && l.emission_per_dispatch <= emission,
+                "{l:?}"
+            );
             // The budget is used, not wasted: one more bounce would not fit.
-            let deeper = PathLimits { photon_depth: l.photon_depth + 1, ..l };
-            assert!(l.photon_depth == 4096 || worst(&deeper, steps, lights, slots).0 > 65535, "{l:?}");
+            let deeper = PathLimits {
+                photon_depth: l.photon_depth + 1,
+                ..l
+            };
+            assert!(
+                l.photon_depth == 4096 || worst(&deeper, steps, lights, slots).0 > 65535,
+                "{l:?}"
+            );
         }
         // Small scenes keep 8 photons per thread at the target depth and every emission sample in one go.
         let l = PathLimits::new(Some(65535), 11, 1, 1, 16, 4096, 1024).unwrap();
-        assert!(l.per_thread == 8 && l.photon_depth >= TARGET_DEPTH && l.emission_per_dispatch == 16, "{l:?}");
+        assert!(
+            l.per_thread == 8 && l.photon_depth >= TARGET_DEPTH && l.emission_per_dispatch == 16,
+            "{l:?}"
+        );
     }
 
     #[test]
@@ -238,13 +287,18 @@ mod tests {
         assert_eq!((l.photon_depth, l.eye_depth), (40, 3));
         let l = PathLimits::new(None, 1000, 1, 4, 16, 4096, 1024).unwrap();
         assert_eq!(l.per_thread, MAX_PER_THREAD);
-        assert_eq!((l.photon_depth, l.eye_depth, l.photon_bvh_budget, l.eye_bvh_budget), (4096, 1024, u32::MAX, u32::MAX));
+        assert_eq!(
+            (l.photon_depth, l.eye_depth, l.photon_bvh_budget, l.eye_bvh_budget),
+            (4096, 1024, u32::MAX, u32::MAX)
+        );
         assert_eq!(l.emission_per_dispatch, 16);
     }
 
     #[test]
     fn a_scene_too_large_for_the_budget_is_an_error() {
-        let e = PathLimits::new(Some(65535), 1000, 1, 4, 1, 4096, 4096).unwrap_err().to_string();
+        let e = PathLimits::new(Some(65535), 1000, 1, 4, 1, 4096, 4096)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("loop budget") && e.contains("1000 primitives"), "{e}");
     }
 
@@ -256,14 +310,20 @@ mod tests {
             let photon = (l.photon_depth as u64 + 1) * step + lights as u64 + 1 + l.photon_bvh_budget as u64;
             let eye = l.eye_paths(slots) as u64 * ((l.eye_depth as u64 + 1) * step + 2) + l.eye_bvh_budget as u64;
             assert!(photon <= 65534 && eye <= 65534, "{l:?}");
-            assert!(l.per_thread == 1 && l.photon_bvh_budget >= MIN_BVH_BUDGET && l.eye_bvh_budget >= MIN_BVH_BUDGET, "{l:?}");
+            assert!(
+                l.per_thread == 1 && l.photon_bvh_budget >= MIN_BVH_BUDGET && l.eye_bvh_budget >= MIN_BVH_BUDGET,
+                "{l:?}"
+            );
             assert!(l.photon_depth >= MIN_DEPTH && l.eye_depth >= MIN_EYE_DEPTH, "{l:?}");
         }
         assert!(PathLimits::with_bvh(Some(65535), 500, 1, 8, 4, 4096, 1024).is_err());
         // A device without a loop limit (any but lavapipe) takes the caps and an unbounded traversal,
         // however many primitives the scene has.
         let l = PathLimits::with_bvh(None, 500, 1, 8, 4, 4096, 1024).unwrap();
-        assert_eq!((l.photon_depth, l.eye_depth, l.photon_bvh_budget, l.eye_bvh_budget), (4096, 1024, u32::MAX, u32::MAX));
+        assert_eq!(
+            (l.photon_depth, l.eye_depth, l.photon_bvh_budget, l.eye_bvh_budget),
+            (4096, 1024, u32::MAX, u32::MAX)
+        );
         assert_eq!(l.emission_per_dispatch, 4);
     }
 }

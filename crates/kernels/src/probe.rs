@@ -35,6 +35,15 @@ pub fn record(
     push: &ProbePush,
 ) -> Result<()> {
     // Phase 0 takes GROUP hit points per thread (neighbours.glsl), phase 1 one.
-    let threads = if push.phase == 0 { push.count.div_ceil(k.group) } else { push.count };
-    k.pipeline.dispatch(cmd, &crate::gather::grid_reader_bindings(params, hits, grid), bytemuck::bytes_of(push), threads as u64)
+    let threads = if push.phase == 0 {
+        push.count.div_ceil(k.group)
+    } else {
+        push.count
+    };
+    k.pipeline.dispatch(
+        cmd,
+        &crate::gather::grid_reader_bindings(params, hits, grid),
+        bytemuck::bytes_of(push),
+        threads as u64,
+    )
 }

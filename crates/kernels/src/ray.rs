@@ -44,7 +44,14 @@ pub struct SceneBuffers<'a> {
 impl SceneBuffers<'_> {
     /// Bindings 0-5 in order.
     pub fn bindings(&self) -> [&Buffer; 6] {
-        [self.params, self.spheres, self.quads, self.materials, self.bvh_nodes, self.bvh_triangles]
+        [
+            self.params,
+            self.spheres,
+            self.quads,
+            self.materials,
+            self.bvh_nodes,
+            self.bvh_triangles,
+        ]
     }
 }
 

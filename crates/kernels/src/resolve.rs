@@ -28,5 +28,10 @@ pub fn record(
     pixels: u32,
     push: &ResolvePush,
 ) -> Result<()> {
-    k.dispatch(cmd, &[params, stats, direct, image], bytemuck::bytes_of(push), pixels as u64)
+    k.dispatch(
+        cmd,
+        &[params, stats, direct, image],
+        bytemuck::bytes_of(push),
+        pixels as u64,
+    )
 }

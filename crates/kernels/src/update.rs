@@ -43,6 +43,9 @@ pub struct RadiusMax {
 
 impl RadiusMax {
     pub fn from_bits(bits: [u32; 2]) -> RadiusMax {
-        RadiusMax { live: f32::from_bits(bits[0]), all: f32::from_bits(bits[1]) }
+        RadiusMax {
+            live: f32::from_bits(bits[0]),
+            all: f32::from_bits(bits[1]),
+        }
     }
 }

@@ -51,7 +51,14 @@ impl BvhRay {
             std::mem::swap(&mut kx, &mut ky);
         }
         let sz = 1.0 / d[kz];
-        BvhRay { o, d, inv_d, parallel, k: [kx, ky, kz], s: Vec3::new(d[kx] * sz, d[ky] * sz, sz) }
+        BvhRay {
+            o,
+            d,
+            inv_d,
+            parallel,
+            k: [kx, ky, kz],
+            s: Vec3::new(d[kx] * sz, d[ky] * sz, sz),
+        }
     }
 }
 
@@ -64,7 +71,11 @@ pub fn box_test(r: &BvhRay, lo: Vec3, hi: Vec3, tmin: f32, tmax: f32) -> bool {
     for k in 0..3 {
         if r.parallel[k] {
             // Inside the slab (faces included) for every t, or for none.
-            let entry = if lo[k] <= r.o[k] && r.o[k] <= hi[k] { -HUGE } else { HUGE };
+            let entry = if lo[k] <= r.o[k] && r.o[k] <= hi[k] {
+                -HUGE
+            } else {
+                HUGE
+            };
             tn[k] = entry;
             tf[k] = -entry;
         }
@@ -140,7 +151,15 @@ pub struct Traversal {
 
 /// `bvh_intersect`: the nearest hit of o + t d, t in (tmin, tmax), through the flattened BVH, taking at
 /// most `budget` steps. Panics if the tree is deeper than its stack (the builder never makes one).
-pub fn intersect(nodes: &[BvhNode], tris: &[Triangle], o: Vec3, d: Vec3, tmin: f32, tmax: f32, budget: u32) -> Traversal {
+pub fn intersect(
+    nodes: &[BvhNode],
+    tris: &[Triangle],
+    o: Vec3,
+    d: Vec3,
+    tmin: f32,
+    tmax: f32,
+    budget: u32,
+) -> Traversal {
     const NONE: u32 = u32::MAX;
     let r = BvhRay::new(o, d);
     let mut best = tmax;
@@ -194,7 +213,12 @@ pub fn intersect(nodes: &[BvhNode], tris: &[Triangle], o: Vec3, d: Vec3, tmin: f
         }
         stack_peak = stack_peak.max(sp as u32);
     }
-    Traversal { hit, steps, cut, stack_peak }
+    Traversal {
+        hit,
+        steps,
+        cut,
+        stack_peak,
+    }
 }
 
 /// The nearest hit by testing every triangle in order (the first of equal t wins): the check of
@@ -206,7 +230,11 @@ pub fn brute_force(tris: &[Triangle], o: Vec3, d: Vec3, tmin: f32, tmax: f32) ->
     for (i, tr) in tris.iter().enumerate() {
         if let Some((t, bary)) = triangle_test(&r, v3(tr.v0), v3(tr.v1), v3(tr.v2), tmin, best) {
             best = t;
-            hit = Some(BvhHit { t, triangle: i as u32, bary });
+            hit = Some(BvhHit {
+                t,
+                triangle: i as u32,
+                bary,
+            });
         }
     }
     hit
@@ -222,7 +250,12 @@ mod tests {
     use super::*;
 
     fn tri(v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> Triangle {
-        Triangle { v0, v1, v2, ..Default::default() }
+        Triangle {
+            v0,
+            v1,
+            v2,
+            ..Default::default()
+        }
     }
 
     #[test]
@@ -250,10 +283,23 @@ mod tests {
     /// The constants this file shares with bvh.glsl have the same values there.
     #[test]
     fn constants_match_the_glsl() {
-        let glsl = ppm_vk_kernels::reflected::SOURCES.iter().find(|(p, _)| *p == "common/bvh.glsl").unwrap().1;
+        let glsl = ppm_vk_kernels::reflected::SOURCES
+            .iter()
+            .find(|(p, _)| *p == "common/bvh.glsl")
+            .unwrap()
+            .1;
         let value = |name: &str| -> f32 {
-            let line = glsl.lines().find(|l| l.starts_with(&format!("const float {name} = "))).unwrap();
-            line.split('=').nth(1).unwrap().trim().trim_end_matches(';').parse().unwrap()
+            let line = glsl
+                .lines()
+                .find(|l| l.starts_with(&format!("const float {name} = ")))
+                .unwrap();
+            line.split('=')
+                .nth(1)
+                .unwrap()
+                .trim()
+                .trim_end_matches(';')
+                .parse()
+                .unwrap()
         };
         assert_eq!(value("BVH_ROBUST"), ROBUST);
         assert_eq!(value("BVH_TINY"), TINY);
@@ -268,12 +314,19 @@ mod tests {
         // The square's corners (0,0) and (1,1) are on its outline, where a ray may pass outside.
         for k in 1..64 {
             let s = k as f32 / 64.0;
-            for o in [Vec3::new(0.3, -0.2, -1.0), Vec3::new(-5.0, 7.0, 3.0), Vec3::new(0.1, 0.9, 0.001)] {
+            for o in [
+                Vec3::new(0.3, -0.2, -1.0),
+                Vec3::new(-5.0, 7.0, 3.0),
+                Vec3::new(0.1, 0.9, 0.001),
+            ] {
                 let target = Vec3::new(s, s, 0.0);
                 let r = BvhRay::new(o, target - o);
                 let ha = triangle_test(&r, v3(a.v0), v3(a.v1), v3(a.v2), 0.0, 10.0);
                 let hb = triangle_test(&r, v3(b.v0), v3(b.v1), v3(b.v2), 0.0, 10.0);
-                assert!(ha.is_some() || hb.is_some(), "ray from {o} through {target} passes between the triangles");
+                assert!(
+                    ha.is_some() || hb.is_some(),
+                    "ray from {o} through {target} passes between the triangles"
+                );
             }
         }
     }

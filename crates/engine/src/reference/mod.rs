@@ -7,14 +7,19 @@ pub mod rng;
 pub mod trace;
 
 use glam::{DVec3, Vec3};
-use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon, EMPTY_SLOT, LIGHT_TRIANGLE, SURFACE_DIFFUSE, SURFACE_MIRROR};
+use ppm_vk_kernels::layout::{
+    HitPoint, HitStats, PassAccum, Photon, EMPTY_SLOT, LIGHT_TRIANGLE, SURFACE_DIFFUSE, SURFACE_MIRROR,
+};
 use ppm_vk_kernels::photon::SALT_EMISSION;
 use ppm_vk_kernels::ray::RayPush;
 
 use crate::gpu_scene::GpuScene;
 use crate::settings::ProbeMode;
 use rng::Rng;
-use trace::{cosine_direction, fresnel_dielectric, glass_branch, intersect_scene, oct_decode, oct_encode, offset_ray, reflect, v3, PI};
+use trace::{
+    cosine_direction, fresnel_dielectric, glass_branch, intersect_scene, oct_decode, oct_encode, offset_ray, reflect,
+    v3, PI,
+};
 
 /// The camera ray through point `jitter` of pixel (px, py), as ray.comp's `camera_ray`.
 fn camera_ray(g: &GpuScene, px: u32, py: u32, j: [f32; 2]) -> Vec3 {
@@ -33,7 +38,9 @@ fn emission_sample(g: &GpuScene, px: u32, py: u32, rng: &mut Rng, cut: &mut u32,
     let mut d = camera_ray(g, px, py, j);
     let mut thr = Vec3::ONE;
     for _ in 0..g.params.max_eye_depth {
-        let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else { return Vec3::ZERO };
+        let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
+            return Vec3::ZERO;
+        };
         let m = &g.materials[h.material as usize];
         let front = d.dot(h.normal) < 0.0;
         let nf = if front { h.normal } else { -h.normal };
@@ -68,7 +75,11 @@ pub struct EyePass {
 /// one that traces them, emission samples summed over all.
 /// `busy`: per pixel, whether the pilot marked it (ray.comp); the pilot pass (push.pilot) sets it.
 pub fn eye_pass(g: &GpuScene, pushes: &[RayPush], busy: &mut [u32]) -> EyePass {
-    let mut out = EyePass { hits: Vec::new(), direct: vec![[0f64; 4]; g.pixels() as usize], cut: 0 };
+    let mut out = EyePass {
+        hits: Vec::new(),
+        direct: vec![[0f64; 4]; g.pixels() as usize],
+        cut: 0,
+    };
     for push in pushes {
         let one = ray_pass(g, push, busy);
         if push.trace_hits != 0 {
@@ -91,7 +102,11 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
     let slots = p.hit_slots as usize;
     let trace_hits = push.trace_hits != 0;
     let mut out = EyePass {
-        hits: if trace_hits { vec![HitPoint::default(); g.slots() as usize] } else { Vec::new() },
+        hits: if trace_hits {
+            vec![HitPoint::default(); g.slots() as usize]
+        } else {
+            Vec::new()
+        },
         direct: vec![[0f64; 4]; g.pixels() as usize],
         cut: 0,
     };
@@ -119,7 +134,9 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         out.cut += 1;
                         break;
                     }
-                    let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else { break };
+                    let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
+                        break;
+                    };
                     let m = &g.materials[h.material as usize];
                     let front = d.dot(h.normal) < 0.0;
                     let nf = if front { h.normal } else { -h.normal };
@@ -170,7 +187,10 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                 }
             }
             for s in slot..slots {
-                out.hits[base + s] = HitPoint { pixel: EMPTY_SLOT, ..Default::default() };
+                out.hits[base + s] = HitPoint {
+                    pixel: EMPTY_SLOT,
+                    ..Default::default()
+                };
             }
             // A fixed point of the pixel counts only when no random sample does (ray.comp).
             if push.jitter[0] < 0.0 || push.emission_samples == 0 {
@@ -178,7 +198,10 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                 samples += 1;
             }
         }
-        let mut rng = Rng::new(p.seed as u64 | ((SALT_EMISSION as u64) << 32), ((push.chunk as u64) << 48) | stream);
+        let mut rng = Rng::new(
+            p.seed as u64 | ((SALT_EMISSION as u64) << 32),
+            ((push.chunk as u64) << 48) | stream,
+        );
         let pilot = push.pilot != 0;
         let mut want = push.emission_samples;
         if !pilot && busy[pixel as usize] == 0 {
@@ -232,7 +255,9 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
     let mut d = cosine_direction(normal, u1, u2);
     let mut flux = v3(light.power) / light.prob;
     for _ in 0..p.max_photon_depth {
-        let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else { return true };
+        let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
+            return true;
+        };
         let m = &g.materials[h.material as usize];
         let front = d.dot(h.normal) < 0.0;
         let nf = if front { h.normal } else { -h.normal };
@@ -242,7 +267,12 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             if pr <= 0.0 {
                 return true;
             }
-            out.push(Photon { pos: h.pos.to_array(), cell: trace::grid_key(g, h.pos), flux: flux.to_array(), dir: oct_encode(d) });
+            out.push(Photon {
+                pos: h.pos.to_array(),
+                cell: trace::grid_key(g, h.pos),
+                flux: flux.to_array(),
+                dir: oct_encode(d),
+            });
             if rng.float() >= pr {
                 return true;
             }
@@ -289,7 +319,11 @@ pub fn gather_one(hp: &HitPoint, r2: f64, photons: &[Photon], cone_k: f32) -> (u
         if d2 > r2f || oct_decode(p.dir).dot(n) >= 0.0 {
             continue;
         }
-        let w = if cone_k > 0.0 { 1.0 - d2.sqrt() / (cone_k * r) } else { 1.0 }; // eq. 10
+        let w = if cone_k > 0.0 {
+            1.0 - d2.sqrt() / (cone_k * r)
+        } else {
+            1.0
+        }; // eq. 10
         m += 1;
         sum += v3(p.flux).as_dvec3() * w as f64;
     }
@@ -298,7 +332,10 @@ pub fn gather_one(hp: &HitPoint, r2: f64, photons: &[Photon], cone_k: f32) -> (u
 
 /// `gather_one` for every slot.
 pub fn gather(hits: &[HitPoint], stats: &[HitStats], photons: &[Photon], cone_k: f32) -> Vec<(u32, DVec3)> {
-    hits.iter().zip(stats).map(|(h, s)| gather_one(h, s.r2, photons, cone_k)).collect()
+    hits.iter()
+        .zip(stats)
+        .map(|(h, s)| gather_one(h, s.r2, photons, cone_k))
+        .collect()
 }
 
 /// The progressive update of one hit point (eq. 3, 6; eq. 14 with the cone filter's sums), in f64;
@@ -314,7 +351,7 @@ pub fn update(s: &HitStats, a: &PassAccum, weight: [f32; 3], alpha: f32, flux_fi
     let w = v3(weight).as_dvec3() / flux_fixed as f64;
     HitStats {
         n: s.n + alpha * m,
-        r2: s.r2 * ratio, // eq. 3, squared
+        r2: s.r2 * ratio,                                 // eq. 3, squared
         tau_r: (s.tau_r + a.flux_r as f64 * w.x) * ratio, // eq. 6
         tau_g: (s.tau_g + a.flux_g as f64 * w.y) * ratio,
         tau_b: (s.tau_b + a.flux_b as f64 * w.z) * ratio,
@@ -365,7 +402,13 @@ pub fn probe_radius(r: f64, ratio: f64, mode: ProbeMode, beta_frac: f64) -> f64 
 }
 
 /// The probe pass over `photons` for every slot, as probe.comp computes it: (lambda / r^2, new r^2).
-pub fn probe(hits: &[HitPoint], stats: &[HitStats], photons: &[Photon], mode: ProbeMode, beta_frac: f32) -> Vec<(f64, f64)> {
+pub fn probe(
+    hits: &[HitPoint],
+    stats: &[HitStats],
+    photons: &[Photon],
+    mode: ProbeMode,
+    beta_frac: f32,
+) -> Vec<(f64, f64)> {
     hits.iter()
         .zip(stats)
         .map(|(hp, st)| {
@@ -425,9 +468,15 @@ mod tests {
         assert!((probe_radius(r, ratio, ProbeMode::Paper, 0.2) - (r + ratio * r * r)).abs() < 1e-15);
         assert!((probe_radius(r, ratio, ProbeMode::ScaleFree, 0.2) - r * (1.0 + ratio)).abs() < 1e-15);
         // The scale-free rule does not depend on units; the paper's does.
-        let (a, b) = (probe_radius(1.0, 0.5, ProbeMode::ScaleFree, 0.2), probe_radius(1000.0, 0.5, ProbeMode::ScaleFree, 0.2));
+        let (a, b) = (
+            probe_radius(1.0, 0.5, ProbeMode::ScaleFree, 0.2),
+            probe_radius(1000.0, 0.5, ProbeMode::ScaleFree, 0.2),
+        );
         assert!((b / a - 1000.0).abs() < 1e-9);
-        let (a, b) = (probe_radius(1.0, 0.5, ProbeMode::Paper, 0.2), probe_radius(1000.0, 0.5, ProbeMode::Paper, 0.2));
+        let (a, b) = (
+            probe_radius(1.0, 0.5, ProbeMode::Paper, 0.2),
+            probe_radius(1000.0, 0.5, ProbeMode::Paper, 0.2),
+        );
         assert!((b / a - 1000.0).abs() > 100.0, "paper rule: {a} vs {b}");
         assert_eq!(probe_radius(r, 0.9, ProbeMode::Off, 0.2), r);
     }
@@ -450,7 +499,10 @@ mod tests {
         let (k, alpha, rho) = (1.1f64, 0.7f64, 4000.0f64);
         let norm = 1.0 - 2.0 / (3.0 * k);
         let mut rng = rng::Rng::new(3, 9);
-        let mut s = HitStats { r2: 0.01, ..Default::default() };
+        let mut s = HitStats {
+            r2: 0.01,
+            ..Default::default()
+        };
         let mut emitted = 0f64;
         for _ in 0..400 {
             // One pass: photons uniform on a 1x1 square around the hit point (Poisson count ~ rho).
@@ -466,7 +518,11 @@ mod tests {
                     tau_m += 1.0 - d / (k * r); // eq. 10
                 }
             }
-            let acc = PassAccum { flux_r: (tau_m * 65536.0).round() as i64, m, ..Default::default() };
+            let acc = PassAccum {
+                flux_r: (tau_m * 65536.0).round() as i64,
+                m,
+                ..Default::default()
+            };
             s = update(&s, &acc, [1.0; 3], alpha as f32, 65536.0);
         }
         // Radiance-like estimate of the density: tau / (norm pi R^2) per emitted photon, times the

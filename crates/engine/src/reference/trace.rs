@@ -69,12 +69,24 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
     Some(match kind {
         0 => {
             let s = &g.spheres[i];
-            Hit { pos, normal: (pos - v3(s.center)) * (1.0 / s.radius), material: s.material }
+            Hit {
+                pos,
+                normal: (pos - v3(s.center)) * (1.0 / s.radius),
+                material: s.material,
+            }
         }
-        1 => Hit { pos, normal: v3(g.quads[i].normal), material: g.quads[i].material },
+        1 => Hit {
+            pos,
+            normal: v3(g.quads[i].normal),
+            material: g.quads[i].material,
+        },
         _ => {
             let t = &g.bvh_triangles[i];
-            Hit { pos, normal: super::bvh::normal(t), material: t.material }
+            Hit {
+                pos,
+                normal: super::bvh::normal(t),
+                material: t.material,
+            }
         }
     })
 }
@@ -93,7 +105,10 @@ pub fn glass_branch(g: &GpuScene, pos: Vec3, nf: Vec3, front: bool, ior: f32, u:
     if u < f {
         (offset_ray(g, pos, nf), reflect(d, nf))
     } else {
-        (offset_ray(g, pos, -nf), (eta * d + (eta * cos_i - cos_t) * nf).normalize())
+        (
+            offset_ray(g, pos, -nf),
+            (eta * d + (eta * cos_i - cos_t) * nf).normalize(),
+        )
     }
 }
 
@@ -106,7 +121,10 @@ pub fn onb(n: Vec3) -> (Vec3, Vec3) {
     let s = if n.z >= 0.0 { 1.0 } else { -1.0 };
     let a = -1.0 / (s + n.z);
     let c = n.x * n.y * a;
-    (Vec3::new(1.0 + s * n.x * n.x * a, s * c, -s * n.x), Vec3::new(c, s + n.y * n.y * a, -n.y))
+    (
+        Vec3::new(1.0 + s * n.x * n.x * a, s * c, -s * n.x),
+        Vec3::new(c, s + n.y * n.y * a, -n.y),
+    )
 }
 
 pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
@@ -169,7 +187,11 @@ pub fn oct_decode(e: u32) -> Vec3 {
 /// `grid_key(grid_cell(p))` of grid.glsl: the cell's coordinates modulo 1024, packed 10 bits each.
 pub fn grid_key(g: &GpuScene, p: Vec3) -> u32 {
     let c = ((p - v3(g.params.grid_min)) / g.params.cell_size).floor();
-    let (x, y, z) = (c.x as i32 as u32 & 1023, c.y as i32 as u32 & 1023, c.z as i32 as u32 & 1023);
+    let (x, y, z) = (
+        c.x as i32 as u32 & 1023,
+        c.y as i32 as u32 & 1023,
+        c.z as i32 as u32 & 1023,
+    );
     x | (y << 10) | (z << 20)
 }
 
@@ -185,7 +207,15 @@ mod tests {
 
     #[test]
     fn octahedral_round_trip() {
-        for (i, v) in [Vec3::X, -Vec3::Y, Vec3::new(0.3, -0.5, -0.8), Vec3::new(-0.1, 0.2, 0.97)].iter().enumerate() {
+        for (i, v) in [
+            Vec3::X,
+            -Vec3::Y,
+            Vec3::new(0.3, -0.5, -0.8),
+            Vec3::new(-0.1, 0.2, 0.97),
+        ]
+        .iter()
+        .enumerate()
+        {
             let v = v.normalize();
             let back = oct_decode(oct_encode(v));
             assert!((back - v).length() < 1e-4, "case {i}: {v} -> {back}");

@@ -17,8 +17,7 @@ use glam::DVec3;
 pub const COMMAND: &str = "cargo run --release -p ppm-vk-engine --example gen_scenes";
 
 /// First line of every generated file; bump the version when the geometry changes.
-pub const STAMP: &str =
-    "# ppm-vk demo mesh v1: written by crates/engine/src/scene/demo.rs (gen_scenes), do not edit";
+pub const STAMP: &str = "# ppm-vk demo mesh v1: written by crates/engine/src/scene/demo.rs (gen_scenes), do not edit";
 
 /// One generated file.
 pub struct DemoFile {
@@ -93,11 +92,7 @@ pub const FILES: &[DemoFile] = &[
 pub fn default_dir() -> PathBuf {
     let engine = Path::new(env!("CARGO_MANIFEST_DIR"));
     // crates/engine -> the repository root.
-    engine
-        .ancestors()
-        .nth(2)
-        .unwrap_or(engine)
-        .join("scenes/meshes")
+    engine.ancestors().nth(2).unwrap_or(engine).join("scenes/meshes")
 }
 
 /// True when `path` names a file this module generates but git does not hold (for a hint in the
@@ -120,8 +115,7 @@ pub fn ensure(dir: &Path) -> Result<Vec<PathBuf>> {
         }
         let tmp = dir.join(format!("{}.tmp.{}", f.name, std::process::id()));
         std::fs::write(&tmp, f.contents()).with_context(|| format!("writing {}", tmp.display()))?;
-        std::fs::rename(&tmp, &path)
-            .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
+        std::fs::rename(&tmp, &path).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
         written.push(path);
     }
     Ok(written)
@@ -229,11 +223,7 @@ impl Model {
 
 /// A quad `origin + s u + t v` as two triangles whose front normal is `u x v` (as a TOML quad's).
 fn quad(m: &mut Model, origin: [f64; 3], u: [f64; 3], v: [f64; 3]) {
-    let (o, u, v) = (
-        DVec3::from_array(origin),
-        DVec3::from_array(u),
-        DVec3::from_array(v),
-    );
+    let (o, u, v) = (DVec3::from_array(origin), DVec3::from_array(u), DVec3::from_array(v));
     let c = [o, o + u, o + u + v, o + v].map(|p| m.vertex(p));
     let n = [NO_NORMAL; 3];
     m.face([c[0], c[1], c[2]], n, u.cross(v));
@@ -291,11 +281,7 @@ fn icosphere(level: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
         };
         let mut next = Vec::with_capacity(f.len() * 4);
         for [a, b, c] in f {
-            let (ab, bc, ca) = (
-                split(a, b, &mut v),
-                split(b, c, &mut v),
-                split(c, a, &mut v),
-            );
+            let (ab, bc, ca) = (split(a, b, &mut v), split(b, c, &mut v), split(c, a, &mut v));
             next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
         }
         f = next;
@@ -386,36 +372,16 @@ fn torus_model(m: &mut Model, centre: DVec3, big: f64, small: f64, nu: u32, nv: 
 
 /// cornell-spheres' six walls and light, `[origin, edge_u, edge_v]` as in its TOML, with materials.
 const CORNELL_QUADS: [(&str, &str, [[f64; 3]; 3]); 7] = [
-    (
-        "floor",
-        "white",
-        [[-1.0, 0.0, -1.0], [0.0, 0.0, 4.0], [2.0, 0.0, 0.0]],
-    ),
+    ("floor", "white", [[-1.0, 0.0, -1.0], [0.0, 0.0, 4.0], [2.0, 0.0, 0.0]]),
     (
         "ceiling",
         "white",
         [[-1.0, 2.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 4.0]],
     ),
-    (
-        "back",
-        "white",
-        [[-1.0, 0.0, -1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]],
-    ),
-    (
-        "front",
-        "white",
-        [[-1.0, 0.0, 3.0], [0.0, 2.0, 0.0], [2.0, 0.0, 0.0]],
-    ),
-    (
-        "left",
-        "red",
-        [[-1.0, 0.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 4.0]],
-    ),
-    (
-        "right",
-        "green",
-        [[1.0, 0.0, -1.0], [0.0, 0.0, 4.0], [0.0, 2.0, 0.0]],
-    ),
+    ("back", "white", [[-1.0, 0.0, -1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]]),
+    ("front", "white", [[-1.0, 0.0, 3.0], [0.0, 2.0, 0.0], [2.0, 0.0, 0.0]]),
+    ("left", "red", [[-1.0, 0.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 4.0]]),
+    ("right", "green", [[1.0, 0.0, -1.0], [0.0, 0.0, 4.0], [0.0, 2.0, 0.0]]),
     (
         "light",
         "light",
@@ -562,11 +528,7 @@ fn water_mtl() -> String {
 fn glass_on_table_obj() -> String {
     let mut m = Model::default();
     m.group("table", Some("wood"));
-    box_model(
-        &mut m,
-        DVec3::new(-0.6, 0.0, -0.4),
-        DVec3::new(0.6, 0.5, 0.4),
-    );
+    box_model(&mut m, DVec3::new(-0.6, 0.0, -0.4), DVec3::new(0.6, 0.5, 0.4));
     m.group("torus", Some("glass"));
     torus_model(&mut m, DVec3::new(0.0, 0.5505, 0.0), 0.15, 0.05, 96, 48);
     m.write(Some("glass-on-table.mtl"))
@@ -607,13 +569,8 @@ mod tests {
     fn committed_meshes_are_what_the_generator_writes() {
         for f in FILES.iter().filter(|f| f.committed) {
             let path = default_dir().join(f.name);
-            let on_disk = std::fs::read_to_string(&path)
-                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-            assert!(
-                on_disk == f.contents(),
-                "{} differs from the generator's",
-                f.name
-            );
+            let on_disk = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            assert!(on_disk == f.contents(), "{} differs from the generator's", f.name);
         }
         assert!(is_generated(Path::new("x/water.obj")));
         assert!(!is_generated(Path::new("x/cornell-box.obj")));
@@ -629,10 +586,7 @@ mod tests {
         std::fs::write(dir.join("water.mtl"), "# an older version\n").expect("write");
         std::fs::remove_file(dir.join("cornell-box.obj")).expect("remove");
         let again = ensure(&dir).expect("third");
-        let names: Vec<_> = again
-            .iter()
-            .filter_map(|p| p.file_name()?.to_str())
-            .collect();
+        let names: Vec<_> = again.iter().filter_map(|p| p.file_name()?.to_str()).collect();
         assert_eq!(names, ["cornell-box.obj", "water.mtl"]);
         assert_eq!(
             std::fs::read_to_string(dir.join("water.mtl")).expect("read"),
@@ -681,24 +635,12 @@ mod tests {
             for (k, t) in [(0, [0, 1, 2]), (1, [0, 2, 3])] {
                 let tri = mesh.meshes[0].triangle(2 * i + k);
                 for (p, c) in tri.p.iter().zip(t) {
-                    assert!(
-                        p.abs_diff_eq(corners[c], 1e-6),
-                        "quad {i}: {p} against {}",
-                        corners[c]
-                    );
+                    assert!(p.abs_diff_eq(corners[c], 1e-6), "quad {i}: {p} against {}", corners[c]);
                 }
                 assert!(tri.normal().abs_diff_eq(q.normal(), 1e-6));
                 let m = &mesh.materials[tri.material as usize];
-                assert_eq!(
-                    (m.surface, m.emission),
-                    (qm.surface, qm.emission),
-                    "quad {i}"
-                );
-                assert!(
-                    m.name.ends_with(&format!("cornell-box.obj:{}", qm.name)),
-                    "{}",
-                    m.name
-                );
+                assert_eq!((m.surface, m.emission), (qm.surface, qm.emission), "quad {i}");
+                assert!(m.name.ends_with(&format!("cornell-box.obj:{}", qm.name)), "{}", m.name);
             }
         }
         // The light: the two triangles of the one emitting quad.
@@ -711,10 +653,7 @@ mod tests {
             .sum();
         assert!((area - light.area()).abs() < 1e-6);
         for l in &lights {
-            assert_eq!(
-                mesh.meshes[0].triangle(l.triangle as usize).normal(),
-                Vec3::NEG_Y
-            );
+            assert_eq!(mesh.meshes[0].triangle(l.triangle as usize).normal(), Vec3::NEG_Y);
         }
     }
 
@@ -735,10 +674,7 @@ mod tests {
         assert!(lo.abs_diff_eq(Vec3::splat(-1.0), 1e-6) && hi.abs_diff_eq(Vec3::ONE, 1e-6));
         for t in s.meshes[0].triangles() {
             let c = (t.p[0] + t.p[1] + t.p[2]) / 3.0;
-            assert!(
-                t.normal().dot(s.camera.eye - c) > 0.9 * c.length(),
-                "faces the centre"
-            );
+            assert!(t.normal().dot(s.camera.eye - c) > 0.9 * c.length(), "faces the centre");
         }
         assert!(s.meshes[0].normals.is_none(), "flat");
     }
@@ -759,10 +695,7 @@ mod tests {
         let normals = m.normals.as_ref().expect("sphere normals");
         for (p, n) in m.positions.iter().zip(normals) {
             let r = *p - glass.center;
-            assert!(
-                (r.length() - glass.radius).abs() < 1e-5,
-                "vertex on the sphere"
-            );
+            assert!((r.length() - glass.radius).abs() < 1e-5, "vertex on the sphere");
             assert!(n.abs_diff_eq(r / glass.radius, 1e-4), "radial unit normal");
         }
         for t in m.triangles() {
@@ -788,10 +721,7 @@ mod tests {
         assert_eq!(water.surface, Surface::Glass { ior: 1.33 });
         assert!(m.materials.iter().all(|&k| k == m.materials[0]));
         let lo = m.positions.iter().fold(Vec3::INFINITY, |a, p| a.min(*p));
-        let hi = m
-            .positions
-            .iter()
-            .fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
+        let hi = m.positions.iter().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
         assert!(lo.abs_diff_eq(Vec3::new(-0.99, 0.002, -0.99), 1e-6), "{lo}");
         assert!(
             (hi.x - 0.99).abs() < 1e-6 && (hi.z - 2.99).abs() < 1e-6 && hi.y < 0.316,
@@ -815,11 +745,7 @@ mod tests {
         let s = demo_scene("glass-on-table");
         assert_eq!(s.triangle_count(), 12 + 9216);
         let m = &s.meshes[0];
-        let kinds: Vec<Surface> = m
-            .materials
-            .iter()
-            .map(|&k| s.materials[k as usize].surface)
-            .collect();
+        let kinds: Vec<Surface> = m.materials.iter().map(|&k| s.materials[k as usize].surface).collect();
         assert_eq!(
             kinds[0],
             Surface::Diffuse {
@@ -827,9 +753,7 @@ mod tests {
             }
         );
         assert!(kinds[..12].iter().all(|k| *k == kinds[0]));
-        assert!(kinds[12..]
-            .iter()
-            .all(|k| *k == Surface::Glass { ior: 1.5 }));
+        assert!(kinds[12..].iter().all(|k| *k == Surface::Glass { ior: 1.5 }));
         let torus_low = m
             .triangles()
             .skip(12)
@@ -851,7 +775,11 @@ mod tests {
             let g = crate::gpu_scene::GpuScene::new(&s, &crate::Settings::default(), 1 << 16).unwrap();
             assert_eq!(g.params.num_triangles as usize, s.triangle_count(), "{name}");
             assert_eq!(g.bvh_triangles.len(), s.triangle_count(), "{name}");
-            let tri_lights = g.lights.iter().filter(|l| l.kind == ppm_vk_kernels::layout::LIGHT_TRIANGLE).count();
+            let tri_lights = g
+                .lights
+                .iter()
+                .filter(|l| l.kind == ppm_vk_kernels::layout::LIGHT_TRIANGLE)
+                .count();
             assert_eq!(tri_lights, s.emitting_triangles().len(), "{name}");
             let p: f64 = g.lights.iter().map(|l| l.prob as f64).sum();
             assert!((p - 1.0).abs() < 1e-6, "{name}: light probabilities sum to {p}");
@@ -868,11 +796,7 @@ mod tests {
         }
         for (&(a, b), &n) in &edges {
             assert_eq!(n, 1, "{what}: edge {a}->{b} used {n} times");
-            assert_eq!(
-                edges.get(&(b, a)),
-                Some(&1),
-                "{what}: edge {a}->{b} has no twin"
-            );
+            assert_eq!(edges.get(&(b, a)), Some(&1), "{what}: edge {a}->{b} has no twin");
         }
     }
 
@@ -895,11 +819,7 @@ mod tests {
 
         let mut b = Model::default();
         b.group("b", None);
-        box_model(
-            &mut b,
-            DVec3::new(-1.0, 0.0, 2.0),
-            DVec3::new(1.0, 0.5, 3.0),
-        );
+        box_model(&mut b, DVec3::new(-1.0, 0.0, 2.0), DVec3::new(1.0, 0.5, 3.0));
         assert_eq!(b.triangles().count(), 12);
         assert_closed(b.triangles(), "box");
         assert!((volume(&b.v, b.triangles()) - 1.0).abs() < 1e-12);
@@ -930,13 +850,7 @@ mod tests {
             .map(|l| {
                 let i: Vec<u32> = l
                     .split(' ')
-                    .map(|c| {
-                        c.split('/')
-                            .next()
-                            .and_then(|x| x.parse::<u32>().ok())
-                            .expect("index")
-                            - 1
-                    })
+                    .map(|c| c.split('/').next().and_then(|x| x.parse::<u32>().ok()).expect("index") - 1)
                     .collect();
                 [i[0], i[1], i[2]]
             })

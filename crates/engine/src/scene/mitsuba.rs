@@ -50,7 +50,10 @@ fn too_deep(text: &str, max: usize) -> Option<usize> {
     let b = text.as_bytes();
     let (mut depth, mut i) = (0usize, 0usize);
     let skip_past = |from: usize, end: &[u8]| -> usize {
-        b[from..].windows(end.len()).position(|w| w == end).map_or(b.len(), |p| from + p + end.len())
+        b[from..]
+            .windows(end.len())
+            .position(|w| w == end)
+            .map_or(b.len(), |p| from + p + end.len())
     };
     while let Some(p) = b[i..].iter().position(|&c| c == b'<') {
         let at = i + p;
@@ -84,9 +87,7 @@ pub const DISK_SEGMENTS: u32 = 256;
 
 /// `name=value` of a `-D` override; the name is what `$name` refers to.
 pub fn parse_define(s: &str) -> Result<(String, String), String> {
-    let (name, value) = s
-        .split_once('=')
-        .ok_or_else(|| format!("{s:?}: expected NAME=VALUE"))?;
+    let (name, value) = s.split_once('=').ok_or_else(|| format!("{s:?}: expected NAME=VALUE"))?;
     if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
         return Err(format!(
             "{s:?}: the name must be letters, digits and underscores (it is used as $NAME)"
@@ -118,11 +119,7 @@ pub(super) fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene> {
             p.value
         );
     }
-    let name = path
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .unwrap_or(&shown)
-        .to_string();
+    let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or(&shown).to_string();
     let mut b = Builder::new(name, root);
     for e in &children {
         b.top_level(e)?;
@@ -158,10 +155,7 @@ struct Elem {
 
 impl Elem {
     fn attr(&self, name: &str) -> Option<&str> {
-        self.attrs
-            .iter()
-            .find(|(k, _)| k == name)
-            .map(|(_, v)| v.as_str())
+        self.attrs.iter().find(|(k, _)| k == name).map(|(_, v)| v.as_str())
     }
 
     fn kind(&self) -> &str {
@@ -183,7 +177,13 @@ impl Elem {
     /// field.
     fn err(&self, msg: impl fmt::Display) -> anyhow::Error {
         let Loc { file, line, col } = &self.loc;
-        anyhow::Error::from(Error::scene(file.to_string(), *line as usize, *col as usize, self.what(), msg.to_string()))
+        anyhow::Error::from(Error::scene(
+            file.to_string(),
+            *line as usize,
+            *col as usize,
+            self.what(),
+            msg.to_string(),
+        ))
     }
 
     fn warning(&self, msg: impl fmt::Display) -> String {
@@ -212,12 +212,7 @@ struct Reader {
 
 impl Reader {
     /// The root element of the file at `path` and its children (includes spliced in).
-    fn read(
-        &mut self,
-        path: &Path,
-        shown: &str,
-        included_at: Option<&Elem>,
-    ) -> Result<(Elem, Vec<Elem>)> {
+    fn read(&mut self, path: &Path, shown: &str, included_at: Option<&Elem>) -> Result<(Elem, Vec<Elem>)> {
         let at = |msg: String| match included_at {
             Some(e) => e.err(msg),
             None => anyhow!(msg),
@@ -509,9 +504,9 @@ impl<'a> Props<'a> {
     /// Refuses the properties nothing read.
     fn finish(&self) -> Result<()> {
         match self.items.iter().find(|(_, used)| !used.get()) {
-            Some((e, _)) if e.tag == "texture" => Err(
-                e.err("textures are not supported (only constant colours: rgb, float, spectrum)")
-            ),
+            Some((e, _)) if e.tag == "texture" => {
+                Err(e.err("textures are not supported (only constant colours: rgb, float, spectrum)"))
+            }
             Some((e, _)) => Err(e.err(format!(
                 "parameter not read by ppm-vk for {} (see docs/mitsuba.md)",
                 self.owner.what()
@@ -575,9 +570,9 @@ fn color(e: &Elem) -> Result<Vec3> {
         }
         "float" => Ok(Vec3::splat(number(e, e.required("value")?)? as f32)),
         "spectrum" => {
-            let v = e.attr("value").ok_or_else(|| {
-                e.err("only a constant spectrum (value=\"x\") is read, not a file")
-            })?;
+            let v = e
+                .attr("value")
+                .ok_or_else(|| e.err("only a constant spectrum (value=\"x\") is read, not a file"))?;
             if v.contains(':') {
                 return Err(e.err(
                     "a sampled spectrum (wavelength:value pairs) is not supported: ppm-vk renders \
@@ -586,9 +581,7 @@ fn color(e: &Elem) -> Result<Vec3> {
             }
             Ok(Vec3::splat(number(e, v)? as f32))
         }
-        "texture" => {
-            Err(e.err("textures are not supported (only constant colours: rgb, float, spectrum)"))
-        }
+        "texture" => Err(e.err("textures are not supported (only constant colours: rgb, float, spectrum)")),
         _ => Err(e.err("expected a colour: <rgb>, <float> or <spectrum>")),
     }
 }
@@ -612,17 +605,11 @@ fn transform(e: &Elem) -> Result<DAffine3> {
                 let v = step.required("value")?;
                 match numbers(step, v)?[..] {
                     // Row-major, as written.
-                    ref n if n.len() == 16 => {
-                        DMat4::from_cols_array(n.try_into().unwrap()).transpose()
-                    }
+                    ref n if n.len() == 16 => DMat4::from_cols_array(n.try_into().unwrap()).transpose(),
                     ref n if n.len() == 9 => {
                         DMat4::from_mat3(DMat3::from_cols_array(n.try_into().unwrap()).transpose())
                     }
-                    _ => {
-                        return Err(
-                            step.err(format!("value: expected 16 or 9 numbers, got \"{v}\""))
-                        )
-                    }
+                    _ => return Err(step.err(format!("value: expected 16 or 9 numbers, got \"{v}\""))),
                 }
             }
             "lookat" => {
@@ -637,9 +624,7 @@ fn transform(e: &Elem) -> Result<DAffine3> {
                 let dir = (target - origin).normalize_or_zero();
                 let left = up.cross(dir).normalize_or_zero();
                 if dir == DVec3::ZERO || left == DVec3::ZERO {
-                    return Err(step.err(
-                        "origin equals target, or up is zero or parallel to the view direction",
-                    ));
+                    return Err(step.err("origin equals target, or up is zero or parallel to the view direction"));
                 }
                 // Mitsuba's look_at: camera x = left, y = up, z = forward.
                 DMat4::from_cols(
@@ -756,7 +741,10 @@ impl Builder {
             "integrator" => self.integrator(e),
             "sensor" => {
                 if self.sensor.is_some() {
-                    self.warn(e, "a second sensor: ignored (ppm-vk renders the first, as Mitsuba does by default)");
+                    self.warn(
+                        e,
+                        "a second sensor: ignored (ppm-vk renders the first, as Mitsuba does by default)",
+                    );
                 } else {
                     self.sensor = Some(e.clone());
                 }
@@ -791,14 +779,7 @@ impl Builder {
     /// Integrators only choose how Mitsuba estimates the image; ppm-vk computes the same image
     /// (all paths) with its own. What would make Mitsuba's image differ is warned about.
     fn integrator(&mut self, e: &Elem) -> Result<()> {
-        const FULL: &[&str] = &[
-            "path",
-            "volpath",
-            "volpathmis",
-            "ptracer",
-            "prb",
-            "prbvolpath",
-        ];
+        const FULL: &[&str] = &["path", "volpath", "volpathmis", "ptracer", "prb", "prbvolpath"];
         if !FULL.contains(&e.kind()) {
             self.warn(
                 e,
@@ -808,10 +789,7 @@ impl Builder {
         let (props, _) = Props::of(e);
         if let Some(d) = props.float("max_depth")? {
             if d != -1.0 {
-                self.warn(
-                    e,
-                    format!("max_depth {d} ignored: ppm-vk renders paths of any length"),
-                );
+                self.warn(e, format!("max_depth {d} ignored: ppm-vk renders paths of any length"));
             }
         }
         Ok(())
@@ -820,11 +798,7 @@ impl Builder {
     fn bsdf(&mut self, e: &Elem) -> Result<Bsdf> {
         let (props, objects) = Props::of(e);
         let id = e.attr("id").map(str::to_string);
-        let nested: Vec<&Elem> = objects
-            .iter()
-            .copied()
-            .filter(|c| c.tag == "bsdf")
-            .collect();
+        let nested: Vec<&Elem> = objects.iter().copied().filter(|c| c.tag == "bsdf").collect();
         if let Some(o) = objects.iter().find(|c| c.tag != "bsdf") {
             return Err(o.err(format!("not expected inside {}", e.what())));
         }
@@ -871,14 +845,11 @@ impl Builder {
                     )));
                 }
                 if kind == "roughconductor" {
-                    props.ignore(&[
-                        "alpha",
-                        "alpha_u",
-                        "alpha_v",
-                        "distribution",
-                        "sample_visible",
-                    ]);
-                    self.warn(e, "rough conductor rendered as a smooth mirror (ppm-vk has no glossy reflection)");
+                    props.ignore(&["alpha", "alpha_u", "alpha_v", "distribution", "sample_visible"]);
+                    self.warn(
+                        e,
+                        "rough conductor rendered as a smooth mirror (ppm-vk has no glossy reflection)",
+                    );
                 }
                 Surface::Mirror {
                     reflectance: props.color("specular_reflectance")?.unwrap_or(Vec3::ONE),
@@ -899,9 +870,10 @@ impl Builder {
                 for name in ["specular_reflectance", "specular_transmittance"] {
                     if let Some(c) = props.color(name)? {
                         if c != Vec3::ONE {
-                            return Err(props.get(name).unwrap().err(
-                                "only 1 is supported (ppm-vk glass is clear and follows Fresnel)",
-                            ));
+                            return Err(props
+                                .get(name)
+                                .unwrap()
+                                .err("only 1 is supported (ppm-vk glass is clear and follows Fresnel)"));
                         }
                     }
                 }
@@ -912,14 +884,11 @@ impl Builder {
                     )));
                 }
                 if kind == "roughdielectric" {
-                    props.ignore(&[
-                        "alpha",
-                        "alpha_u",
-                        "alpha_v",
-                        "distribution",
-                        "sample_visible",
-                    ]);
-                    self.warn(e, "rough dielectric rendered as smooth glass (ppm-vk has no glossy transmission)");
+                    props.ignore(&["alpha", "alpha_u", "alpha_v", "distribution", "sample_visible"]);
+                    self.warn(
+                        e,
+                        "rough dielectric rendered as smooth glass (ppm-vk has no glossy transmission)",
+                    );
                 }
                 let surface = Surface::Glass {
                     ior: (int / ext) as f32,
@@ -963,12 +932,7 @@ impl Builder {
         };
         let mut candidate = name.to_string();
         for n in 2.. {
-            match self
-                .scene
-                .materials
-                .iter()
-                .position(|m| m.name == candidate)
-            {
+            match self.scene.materials.iter().position(|m| m.name == candidate) {
                 Some(i)
                     if self.scene.materials[i]
                         == Material {
@@ -982,8 +946,7 @@ impl Builder {
                 None => break,
             }
         }
-        self.origins
-            .insert(format!("materials.{candidate}"), e.clone());
+        self.origins.insert(format!("materials.{candidate}"), e.clone());
         self.scene.materials.push(Material {
             name: candidate,
             ..wanted
@@ -1008,8 +971,7 @@ impl Builder {
                     } else {
                         let id = o.required("id")?;
                         self.bsdfs.get(id).cloned().ok_or_else(|| {
-                            let mut known: Vec<&str> =
-                                self.bsdfs.keys().map(String::as_str).collect();
+                            let mut known: Vec<&str> = self.bsdfs.keys().map(String::as_str).collect();
                             known.sort();
                             o.err(format!(
                                 "no bsdf with id \"{id}\" defined before it (known: {})",
@@ -1050,9 +1012,7 @@ impl Builder {
             },
             e,
         ));
-        let shape_name = e
-            .attr("id")
-            .map_or_else(|| format!("shape[{index}]"), str::to_string);
+        let shape_name = e.attr("id").map_or_else(|| format!("shape[{index}]"), str::to_string);
         let (emission, emitter_at) = emission.unwrap_or((Vec3::ZERO, e));
         if emission.max_element() > 0.0 && !matches!(bsdf.surface, Surface::Diffuse { .. }) {
             return Err(emitter_at.err(format!(
@@ -1118,9 +1078,7 @@ impl Builder {
                     let a = step * f64::from(i);
                     DVec3::new(r * a.cos(), r * a.sin(), 0.0)
                 }));
-                let triangles = (0..n)
-                    .map(|i| ([0, 1 + i, 1 + (i + 1) % n], material))
-                    .collect();
+                let triangles = (0..n).map(|i| ([0, 1 + i, 1 + (i + 1) % n], material)).collect();
                 let raw = RawMesh {
                     name: format!("{} disk", e.loc),
                     positions,
@@ -1134,26 +1092,20 @@ impl Builder {
             "sphere" => {
                 let center = props.point("center")?.unwrap_or(DVec3::ZERO);
                 let radius = props.float("radius")?.unwrap_or(1.0);
-                let m = to_world
-                    * DAffine3::from_translation(center)
-                    * DAffine3::from_scale(DVec3::splat(radius));
+                let m = to_world * DAffine3::from_translation(center) * DAffine3::from_scale(DVec3::splat(radius));
                 let gram = m.matrix3.transpose() * m.matrix3;
                 let s2 = gram.x_axis.x;
                 let off = (gram - DMat3::from_diagonal(DVec3::splat(s2))).to_cols_array();
                 if off.iter().any(|x| x.abs() > 1e-6 * s2) {
-                    return Err(e.err(
-                        "to_world scales the sphere non-uniformly (an ellipsoid): not supported",
-                    ));
+                    return Err(e.err("to_world scales the sphere non-uniformly (an ellipsoid): not supported"));
                 }
                 if emission.max_element() > 0.0 {
-                    return Err(emitter_at.err(
-                        "an emitting sphere: ppm-vk lights are quads and triangles (use a mesh)",
-                    ));
+                    return Err(
+                        emitter_at.err("an emitting sphere: ppm-vk lights are quads and triangles (use a mesh)")
+                    );
                 }
                 if flip && matches!(bsdf.surface, Surface::Glass { .. }) {
-                    return Err(e.err(
-                        "flip_normals on a dielectric sphere (its inside outside) is not supported",
-                    ));
+                    return Err(e.err("flip_normals on a dielectric sphere (its inside outside) is not supported"));
                 }
                 self.origins
                     .insert(format!("sphere[{}]", self.scene.spheres.len()), e.clone());
@@ -1198,11 +1150,7 @@ impl Builder {
                 let i = self.mesh(e, raw, &to_world, flip)?;
                 closed(&self.scene.meshes[i])
             }
-            _ => {
-                return Err(
-                    e.err("unsupported shape (read: rectangle, cube, disk, sphere, obj, ply)")
-                )
-            }
+            _ => return Err(e.err("unsupported shape (read: rectangle, cube, disk, sphere, obj, ply)")),
         };
         props.finish()?;
         let one_sided = match bsdf.surface {
@@ -1226,16 +1174,7 @@ impl Builder {
     /// The quad `origin + s u + t v` (object space) placed by `m`; its front normal is `u x v` turned
     /// as Mitsuba turns normals (the inverse transpose), and flipped with `flip`.
     #[allow(clippy::too_many_arguments)]
-    fn quad(
-        &mut self,
-        e: &Elem,
-        m: &DAffine3,
-        flip: bool,
-        origin: [f64; 3],
-        u: [f64; 3],
-        v: [f64; 3],
-        material: u32,
-    ) {
+    fn quad(&mut self, e: &Elem, m: &DAffine3, flip: bool, origin: [f64; 3], u: [f64; 3], v: [f64; 3], material: u32) {
         let (mut u, mut v) = (m.transform_vector3(u.into()), m.transform_vector3(v.into()));
         // A mirroring transform turns u x v against the inverse-transposed normal.
         if (m.matrix3.determinant() < 0.0) != flip {
@@ -1252,8 +1191,7 @@ impl Builder {
     }
 
     fn mesh(&mut self, e: &Elem, raw: RawMesh, m: &DAffine3, flip: bool) -> Result<usize> {
-        let i = obj::add_mesh(&mut self.scene, raw, m, flip)
-            .map_err(|err| e.err(format!("{err:#}")))?;
+        let i = obj::add_mesh(&mut self.scene, raw, m, flip).map_err(|err| e.err(format!("{err:#}")))?;
         self.origins.insert(format!("mesh[{i}]"), e.clone());
         Ok(i)
     }
@@ -1292,7 +1230,10 @@ impl Builder {
             }
         }
         if !film_seen {
-            self.warn(&e, "no film: hdrfilm's defaults (768 x 576, gaussian filter) apply; rendered with a box filter");
+            self.warn(
+                &e,
+                "no film: hdrfilm's defaults (768 x 576, gaussian filter) apply; rendered with a box filter",
+            );
         }
         let aspect = f64::from(size.0) / f64::from(size.1);
         let x_fov = fov_x(&props, aspect, &e)?;
@@ -1314,9 +1255,7 @@ impl Builder {
             .iter()
             .any(|x| x.abs() > 1e-4)
         {
-            return Err(e.err(
-                "to_world of the sensor has a scale or shear (Mitsuba refuses scale factors too)",
-            ));
+            return Err(e.err("to_world of the sensor has a scale or shear (Mitsuba refuses scale factors too)"));
         }
         if l.determinant() < 0.0 {
             return Err(e.err("to_world of the sensor mirrors the image: not supported"));
@@ -1347,9 +1286,7 @@ impl Builder {
             if far < farthest {
                 self.warn(
                     &e,
-                    format!(
-                        "far_clip {far} ignored: ppm-vk renders the scene out to {farthest:.3}"
-                    ),
+                    format!("far_clip {far} ignored: ppm-vk renders the scene out to {farthest:.3}"),
                 );
             }
         }
@@ -1369,12 +1306,7 @@ impl Builder {
             }
         };
         let size = (size("width", 768)?, size("height", 576)?);
-        for name in [
-            "crop_offset_x",
-            "crop_offset_y",
-            "crop_width",
-            "crop_height",
-        ] {
+        for name in ["crop_offset_x", "crop_offset_y", "crop_width", "crop_height"] {
             if let Some(p) = fp.get(name) {
                 return Err(p.err("a crop window is not supported"));
             }
@@ -1429,10 +1361,7 @@ fn fov_x(props: &Props, aspect: f64, e: &Elem) -> Result<f64> {
     let (fov, axis) = match (props.float("fov")?, props.string("focal_length")?) {
         (Some(_), Some(_)) => return Err(e.err("give either fov or focal_length, not both")),
         (Some(fov), None) => {
-            let axis = props
-                .string("fov_axis")?
-                .unwrap_or("x")
-                .to_ascii_lowercase();
+            let axis = props.string("fov_axis")?.unwrap_or("x").to_ascii_lowercase();
             let axis = match axis.as_str() {
                 "smaller" => if aspect > 1.0 { "y" } else { "x" }.to_string(),
                 "larger" => if aspect > 1.0 { "x" } else { "y" }.to_string(),
@@ -1485,9 +1414,7 @@ fn closed(m: &Mesh) -> Closed {
     for t in &m.indices {
         for k in 0..3 {
             let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
-            *edges
-                .entry(if a < b { [a, b] } else { [b, a] })
-                .or_default() += 1;
+            *edges.entry(if a < b { [a, b] } else { [b, a] }).or_default() += 1;
         }
     }
     if edges.values().all(|&n| n == 2) {
@@ -1503,8 +1430,7 @@ fn read_ply(path: &Path, material: u32) -> Result<RawMesh> {
     use ply_rs_bw::parser::Parser;
     use ply_rs_bw::ply::{DefaultElement, Property};
     let shown = path.display().to_string();
-    let file =
-        std::fs::File::open(path).map_err(|e| anyhow!("{shown}: cannot read PLY file: {e}"))?;
+    let file = std::fs::File::open(path).map_err(|e| anyhow!("{shown}: cannot read PLY file: {e}"))?;
     let ply = Parser::<DefaultElement>::new()
         .read_ply(&mut std::io::BufReader::new(file))
         .map_err(|e| anyhow!("{shown}: malformed PLY: {e}"))?;
@@ -1553,9 +1479,7 @@ fn read_ply(path: &Path, material: u32) -> Result<RawMesh> {
         .ok_or_else(|| anyhow!("{shown}: no face element"))?;
     let mut triangles = Vec::new();
     for (f, face) in faces.iter().enumerate() {
-        let list = face
-            .get("vertex_indices")
-            .or_else(|| face.get("vertex_index"));
+        let list = face.get("vertex_indices").or_else(|| face.get("vertex_index"));
         let idx: Vec<i64> = match list {
             Some(Property::ListChar(l)) => l.iter().map(|&i| i64::from(i)).collect(),
             Some(Property::ListUChar(l)) => l.iter().map(|&i| i64::from(i)).collect(),
@@ -1565,10 +1489,7 @@ fn read_ply(path: &Path, material: u32) -> Result<RawMesh> {
             Some(Property::ListUInt(l)) => l.iter().map(|&i| i64::from(i)).collect(),
             _ => bail!("{shown}: face {f} has no integer list vertex_indices"),
         };
-        if let Some(&bad) = idx
-            .iter()
-            .find(|&&i| i < 0 || i as usize >= positions.len())
-        {
+        if let Some(&bad) = idx.iter().find(|&&i| i < 0 || i as usize >= positions.len()) {
             bail!(
                 "{shown}: face {f} has vertex index {bad}, out of range ({} vertices)",
                 positions.len()
@@ -1621,10 +1542,7 @@ mod tests {
     /// `body` after [`HEAD`], in a scene file of its own (with `files` beside it).
     fn load_in(dir: &TempDir, body: &str, defines: &[(&str, &str)]) -> Result<Scene> {
         let path = dir.write("scene.xml", &format!("{HEAD}{body}\n</scene>\n"));
-        let defines: Vec<(String, String)> = defines
-            .iter()
-            .map(|(k, v)| (k.to_string(), v.to_string()))
-            .collect();
+        let defines: Vec<(String, String)> = defines.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
         load(&path, &defines)
     }
 
@@ -1692,10 +1610,7 @@ mod tests {
     fn each_transform_of_a_rectangle_matches_its_toml_quad() {
         let cases: &[(&str, &str)] = &[
             // [-1, 1]^2 at z = 0, normal +z.
-            (
-                "",
-                "origin = [-1, -1, 0]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]",
-            ),
+            ("", "origin = [-1, -1, 0]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]"),
             (
                 r#"<translate x="1" y="2" z="3"/>"#,
                 "origin = [0, 1, 3]\nedge_u = [2, 0, 0]\nedge_v = [0, 2, 0]",
@@ -1756,11 +1671,9 @@ mod tests {
             assert_same_quads(&rectangle(transform, ""), &want);
         }
         // flip_normals turns the normal to -z.
-        let want = toml_quads("[[quad]]\norigin = [-1, -1, 0]\nedge_u = [0, 2, 0]\nedge_v = [2, 0, 0]\nmaterial = \"m\"\n");
-        assert_same_quads(
-            &rectangle("", r#"<boolean name="flip_normals" value="true"/>"#),
-            &want,
-        );
+        let want =
+            toml_quads("[[quad]]\norigin = [-1, -1, 0]\nedge_u = [0, 2, 0]\nedge_v = [2, 0, 0]\nmaterial = \"m\"\n");
+        assert_same_quads(&rectangle("", r#"<boolean name="flip_normals" value="true"/>"#), &want);
     }
 
     #[test]
@@ -1776,18 +1689,14 @@ mod tests {
                 ("[-1, -1, -1]", "[0, 2, 0]", "[2, 0, 0]"),
             ] {
                 let (u, v) = if inward { (v, u) } else { (u, v) };
-                s += &format!(
-                    "[[quad]]\norigin = {o}\nedge_u = {u}\nedge_v = {v}\nmaterial = \"m\"\n"
-                );
+                s += &format!("[[quad]]\norigin = {o}\nedge_u = {u}\nedge_v = {v}\nmaterial = \"m\"\n");
             }
             toml_quads(&s)
         };
         let cube = |extra: &str| {
-            load_body(&format!(
-                r#"<shape type="cube">{extra}<bsdf type="diffuse"/></shape>"#
-            ))
-            .unwrap()
-            .quads[1..]
+            load_body(&format!(r#"<shape type="cube">{extra}<bsdf type="diffuse"/></shape>"#))
+                .unwrap()
+                .quads[1..]
                 .to_vec()
         };
         let outward = cube("");
@@ -1796,10 +1705,7 @@ mod tests {
             // Outward: the normal points away from the centre.
             assert!(q.normal().dot(q.origin + 0.5 * (q.edge_u + q.edge_v)) > 0.99);
         }
-        assert_same_quads(
-            &cube(r#"<boolean name="flip_normals" value="true"/>"#),
-            &box_toml(true),
-        );
+        assert_same_quads(&cube(r#"<boolean name="flip_normals" value="true"/>"#), &box_toml(true));
         // A mirroring transform keeps them outward (Mitsuba flips the winding of a mirrored mesh).
         let mirrored = cube(r#"<transform name="to_world"><scale x="-1"/></transform>"#);
         assert_same_quads(&mirrored, &box_toml(false));
@@ -1828,7 +1734,10 @@ mod tests {
             assert!(r < 1e-6 || (r / 0.5 - 1.0 - 5.02e-5).abs() < 1e-6, "{p}");
         }
         assert_eq!(s.emitting_triangles().len(), DISK_SEGMENTS as usize);
-        let flipped = load_body(r#"<shape type="disk"><boolean name="flip_normals" value="true"/><bsdf type="diffuse"/></shape>"#).unwrap();
+        let flipped = load_body(
+            r#"<shape type="disk"><boolean name="flip_normals" value="true"/><bsdf type="diffuse"/></shape>"#,
+        )
+        .unwrap();
         assert!(flipped.meshes[0]
             .triangles()
             .all(|t| t.normal().distance(Vec3::NEG_Z) < 1e-5));
@@ -1848,19 +1757,14 @@ mod tests {
             // Both: centre and radius first, then to_world.
             r#"<float name="radius" value="0.25"/><transform name="to_world"><scale value="2"/><translate x="1" y="2" z="3"/></transform>"#,
         ] {
-            let s = load_body(&format!(
-                r#"<shape type="sphere">{body}<bsdf type="diffuse"/></shape>"#
-            ))
-            .unwrap();
+            let s = load_body(&format!(r#"<shape type="sphere">{body}<bsdf type="diffuse"/></shape>"#)).unwrap();
             let got = s.spheres[0];
             assert!(
                 got.center.distance(want.center) < 1e-6 && (got.radius - want.radius).abs() < 1e-6,
                 "{body}: {got:?}"
             );
         }
-        let e = error(
-            r#"<shape type="sphere"><transform name="to_world"><scale x="2"/></transform></shape>"#,
-        );
+        let e = error(r#"<shape type="sphere"><transform name="to_world"><scale x="2"/></transform></shape>"#);
         assert!(
             e.contains("<shape type=\"sphere\">") && e.contains("non-uniformly"),
             "{e}"
@@ -1869,7 +1773,10 @@ mod tests {
 
     /// A unit square at z = 0 as two triangles facing +z, as an OBJ and an ASCII PLY (one quad face).
     fn write_square_meshes(dir: &TempDir) {
-        dir.write("sq.obj", "mtllib ignored.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nusemtl nothing\nf 1 2 3 4\n");
+        dir.write(
+            "sq.obj",
+            "mtllib ignored.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nusemtl nothing\nf 1 2 3 4\n",
+        );
         dir.write(
             "sq.ply",
             "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
@@ -1899,11 +1806,7 @@ mod tests {
                 let area: f32 = m.triangles().map(|t| t.area()).sum();
                 assert!((area - 4.0).abs() < 1e-5, "{kind}: area {area}");
                 for t in m.triangles() {
-                    assert!(
-                        t.normal().distance(normal) < 1e-5,
-                        "{kind} flip {flip}: {}",
-                        t.normal()
-                    );
+                    assert!(t.normal().distance(normal) < 1e-5, "{kind} flip {flip}: {}", t.normal());
                     assert!(t.p.iter().all(|p| (p.y - 1.0).abs() < 1e-6));
                 }
                 // The bsdf is the XML's: the MTL is never read.
@@ -1945,7 +1848,8 @@ mod tests {
 
     #[test]
     fn camera_lookat_and_fov_axes_match_the_toml_camera() {
-        let look = r#"<transform name="to_world"><lookat origin="0, 1, 2.9" target="0, 0.8, 0" up="0, 1, 0"/></transform>"#;
+        let look =
+            r#"<transform name="to_world"><lookat origin="0, 1, 2.9" target="0, 0.8, 0" up="0, 1, 0"/></transform>"#;
         let c = camera(
             &format!(r#"<float name="fov" value="50"/><string name="fov_axis" value="y"/>{look}"#),
             "",
@@ -1957,12 +1861,7 @@ mod tests {
         let dir = (c.look_at - c.eye).normalize();
         assert!(dir.distance(Vec3::new(0.0, -0.2, -2.9).normalize()) < 1e-6);
         // up is orthogonalised by Mitsuba's lookat; it spans the same plane with dir as (0, 1, 0).
-        assert!(
-            c.up.cross(dir)
-                .normalize()
-                .distance(Vec3::Y.cross(dir).normalize())
-                < 1e-6
-        );
+        assert!(c.up.cross(dir).normalize().distance(Vec3::Y.cross(dir).normalize()) < 1e-6);
 
         // Horizontal fov 60 on a 2:1 image: vertical 2 atan(tan 30 / 2).
         let want = 2.0 * ((30f64.to_radians().tan()) / 2.0).atan().to_degrees();
@@ -1974,12 +1873,14 @@ mod tests {
             ("smaller", want),
             (
                 "diagonal",
-                2.0 * (30f64.to_radians().tan() * (1.0 + 0.25f64).sqrt())
-                    .atan()
-                    .to_degrees(),
+                2.0 * (30f64.to_radians().tan() * (1.0 + 0.25f64).sqrt()).atan().to_degrees(),
             ),
         ] {
-            let c = camera(&format!(r#"<float name="fov" value="{fov}"/><string name="fov_axis" value="{axis}"/>{look}"#), film).unwrap();
+            let c = camera(
+                &format!(r#"<float name="fov" value="{fov}"/><string name="fov_axis" value="{axis}"/>{look}"#),
+                film,
+            )
+            .unwrap();
             assert!(
                 (f64::from(c.vfov_deg) - want).abs() < 1e-4,
                 "{axis}: {} vs {want}",
@@ -2000,12 +1901,26 @@ mod tests {
         );
         assert!(c.up.distance(Vec3::Y) < 1e-6);
 
-        let e = format!("{:#}", camera(r#"<float name="fov" value="40"/><transform name="to_world"><scale x="-1"/></transform>"#, "").unwrap_err());
+        let e = format!(
+            "{:#}",
+            camera(
+                r#"<float name="fov" value="40"/><transform name="to_world"><scale x="-1"/></transform>"#,
+                ""
+            )
+            .unwrap_err()
+        );
         assert!(
             e.contains("mirrors the image") && e.contains("<sensor type=\"perspective\">"),
             "{e}"
         );
-        let e = format!("{:#}", camera(r#"<float name="fov" value="40"/><transform name="to_world"><scale value="2"/></transform>"#, "").unwrap_err());
+        let e = format!(
+            "{:#}",
+            camera(
+                r#"<float name="fov" value="40"/><transform name="to_world"><scale value="2"/></transform>"#,
+                ""
+            )
+            .unwrap_err()
+        );
         assert!(e.contains("scale"), "{e}");
     }
 
@@ -2043,16 +1958,16 @@ mod tests {
         );
         assert!(s.quads[0].normal().distance(Vec3::NEG_Y) < 1e-6);
 
-        let s = load_body(r#"<shape type="sphere"><bsdf type="roughconductor"><float name="alpha" value="0.1"/></bsdf></shape>"#).unwrap();
+        let s = load_body(
+            r#"<shape type="sphere"><bsdf type="roughconductor"><float name="alpha" value="0.1"/></bsdf></shape>"#,
+        )
+        .unwrap();
         assert_eq!(
             s.materials[s.spheres[0].material as usize].surface,
-            Surface::Mirror {
-                reflectance: Vec3::ONE
-            }
+            Surface::Mirror { reflectance: Vec3::ONE }
         );
         assert!(
-            s.warnings.len() == 1
-                && s.warnings[0].contains("rough conductor rendered as a smooth mirror"),
+            s.warnings.len() == 1 && s.warnings[0].contains("rough conductor rendered as a smooth mirror"),
             "{:?}",
             s.warnings
         );
@@ -2161,16 +2076,17 @@ mod tests {
         }
         // Malformed XML: roxmltree's position.
         let e = error("<shape type=\"cube\">\n  <bsdf type=\"diffuse\">\n</shape>");
-        assert!(
-            e.contains("scene.xml:14:1: malformed XML: expected 'bsdf' tag"),
-            "{e}"
-        );
+        assert!(e.contains("scene.xml:14:1: malformed XML: expected 'bsdf' tag"), "{e}");
         // Nesting past the bound is refused, not a stack overflow (found by tests/hostile_input.rs).
         let deep = format!("{}{}", "<bsdf type=\"twosided\">".repeat(1000), "</bsdf>".repeat(1000));
         let e = error(&deep);
         assert!(e.contains(&format!("nested deeper than {MAX_NESTING} levels")), "{e}");
         // Attribute values may hold "/>": they hide no level from the scan (roxmltree would overflow).
-        let hidden = format!("{}{}", "<bsdf type=\"twosided\" id=\"a/>\">".repeat(20000), "</bsdf>".repeat(20000));
+        let hidden = format!(
+            "{}{}",
+            "<bsdf type=\"twosided\" id=\"a/>\">".repeat(20000),
+            "</bsdf>".repeat(20000)
+        );
         let e = error(&hidden);
         assert!(e.contains(&format!("nested deeper than {MAX_NESTING} levels")), "{e}");
     }
@@ -2199,20 +2115,11 @@ mod tests {
         assert_eq!(s.materials[s.quads[1].material as usize].name, "grey");
         let s = load_in(&dir, body, &[("albedo", "0.5")]).unwrap();
         assert_eq!((albedo(&s, 1), albedo(&s, 7)), (0.5, 0.75));
-        let e = format!(
-            "{:#}",
-            load_in(&dir, body, &[("albdo", "0.5")]).unwrap_err()
-        );
-        assert!(
-            e.contains("-D albdo=0.5: the scene never uses $albdo"),
-            "{e}"
-        );
+        let e = format!("{:#}", load_in(&dir, body, &[("albdo", "0.5")]).unwrap_err());
+        assert!(e.contains("-D albdo=0.5: the scene never uses $albdo"), "{e}");
 
         // A cycle: a includes b includes a.
-        dir.write(
-            "a.xml",
-            r#"<scene version="3.0.0"><include filename="b.xml"/></scene>"#,
-        );
+        dir.write("a.xml", r#"<scene version="3.0.0"><include filename="b.xml"/></scene>"#);
         dir.write(
             "b.xml",
             "<scene version=\"3.0.0\">\n<include filename=\"a.xml\"/></scene>",
@@ -2222,9 +2129,7 @@ mod tests {
             load_in(&dir, r#"<include filename="a.xml"/>"#, &[]).unwrap_err()
         );
         assert!(
-            e.contains("b.xml:2:1: <include>: include cycle: ")
-                && e.contains("a.xml -> ")
-                && e.ends_with("a.xml"),
+            e.contains("b.xml:2:1: <include>: include cycle: ") && e.contains("a.xml -> ") && e.ends_with("a.xml"),
             "{e}"
         );
         let e = format!(
@@ -2232,8 +2137,7 @@ mod tests {
             load_in(&dir, r#"<include filename="missing.xml"/>"#, &[]).unwrap_err()
         );
         assert!(
-            e.contains("scene.xml:12:1: <include>: ")
-                && e.contains("missing.xml: cannot read scene file"),
+            e.contains("scene.xml:12:1: <include>: ") && e.contains("missing.xml: cannot read scene file"),
             "{e}"
         );
     }

@@ -157,12 +157,7 @@ impl Triangle {
 
 impl Mesh {
     /// A mesh whose triangles all have one material.
-    pub fn with_material(
-        name: impl Into<String>,
-        positions: Vec<Vec3>,
-        indices: Vec<[u32; 3]>,
-        material: u32,
-    ) -> Mesh {
+    pub fn with_material(name: impl Into<String>, positions: Vec<Vec3>, indices: Vec<[u32; 3]>, material: u32) -> Mesh {
         let materials = vec![material; indices.len()];
         Mesh {
             name: name.into(),
@@ -331,7 +326,8 @@ impl Scene {
     /// error is [`Error::Scene`] with no file of its own: its message starts with the OBJ or MTL file
     /// and the line there.
     pub fn import_obj(&mut self, path: impl AsRef<Path>, import: &ObjImport) -> Result<usize> {
-        obj::import(self, path.as_ref(), import, MAX_TRIANGLES).map_err(|e| Error::scene("", 0, 0, "", format!("{e:#}")))
+        obj::import(self, path.as_ref(), import, MAX_TRIANGLES)
+            .map_err(|e| Error::scene("", 0, 0, "", format!("{e:#}")))
     }
 
     /// Axis-aligned bounds `(min, max)` of all spheres, quads and mesh vertices; `(0, 0)` for an
@@ -410,14 +406,25 @@ impl Scene {
         let mut h = sha2::Sha256::new();
         let surfaces: Vec<(Surface, Vec3)> = self.materials.iter().map(|m| (m.surface, m.emission)).collect();
         // Writing into a hash cannot fail.
-        let _ = write!(Feed(&mut h), "{:?}", (&self.camera, &surfaces, &self.spheres, &self.quads));
-        let floats = |v: &[Vec3]| -> Vec<u8> { v.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect() };
+        let _ = write!(
+            Feed(&mut h),
+            "{:?}",
+            (&self.camera, &surfaces, &self.spheres, &self.quads)
+        );
+        let floats =
+            |v: &[Vec3]| -> Vec<u8> { v.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect() };
         for m in &self.meshes {
             h.update((m.positions.len() as u64).to_le_bytes());
             h.update(floats(&m.positions));
             h.update(floats(m.normals.as_deref().unwrap_or(&[])));
             h.update((m.indices.len() as u64).to_le_bytes());
-            h.update(m.indices.iter().flatten().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>());
+            h.update(
+                m.indices
+                    .iter()
+                    .flatten()
+                    .flat_map(|i| i.to_le_bytes())
+                    .collect::<Vec<u8>>(),
+            );
             h.update(m.materials.iter().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>());
         }
         h.finalize().iter().map(|b| format!("{b:02x}")).collect()
@@ -429,19 +436,14 @@ impl Scene {
     }
 
     fn emits(&self, material: u32) -> bool {
-        self.materials
-            .get(material as usize)
-            .is_some_and(Material::is_light)
+        self.materials.get(material as usize).is_some_and(Material::is_light)
     }
 
     /// Uniform scale about the world origin of all geometry and the camera
     /// position/target; `s` must be positive and finite. Radiance (emission) is
     /// unchanged, so a correct renderer produces the same image.
     pub fn scaled(&self, s: f32) -> Scene {
-        debug_assert!(
-            s.is_finite() && s > 0.0,
-            "scale must be positive and finite, got {s}"
-        );
+        debug_assert!(s.is_finite() && s > 0.0, "scale must be positive and finite, got {s}");
         let mut out = self.clone();
         out.camera.eye *= s;
         out.camera.look_at *= s;
@@ -463,10 +465,7 @@ impl Scene {
 
     /// Same scene at another image size (both at least 1).
     pub fn with_resolution(&self, w: u32, h: u32) -> Scene {
-        debug_assert!(
-            w >= 1 && h >= 1,
-            "resolution must be at least 1x1, got {w}x{h}"
-        );
+        debug_assert!(w >= 1 && h >= 1, "resolution must be at least 1x1, got {w}x{h}");
         let mut out = self.clone();
         out.camera.width = w;
         out.camera.height = h;
@@ -479,7 +478,8 @@ impl Scene {
     /// triangle). The error is [`Error::Scene`] with the field's path, the scene's name as its `file`
     /// and no line (a loader that knows where the field was written locates it instead).
     pub fn validate(&self) -> Result<()> {
-        self.check().map_err(|e| Error::scene(&self.name, 0, 0, e.path, e.message))
+        self.check()
+            .map_err(|e| Error::scene(&self.name, 0, 0, e.path, e.message))
     }
 
     /// [`Scene::validate`] with the field path kept apart, for loaders that can locate it.
@@ -492,10 +492,7 @@ impl Scene {
             self.materials.get(i as usize).ok_or_else(|| {
                 invalid(
                     path,
-                    format!(
-                        "material index {i} out of range ({} materials)",
-                        self.materials.len()
-                    ),
+                    format!("material index {i} out of range ({} materials)", self.materials.len()),
                 )
             })
         };
@@ -531,7 +528,10 @@ impl Scene {
         for (i, r) in self.regions.iter().enumerate() {
             r.check(&format!("region[{i}]"))?;
             if self.regions[..i].iter().any(|other| other.name == r.name) {
-                return Err(invalid(format!("region[{i}].name"), format!("region {:?} is named twice", r.name)));
+                return Err(invalid(
+                    format!("region[{i}].name"),
+                    format!("region {:?} is named twice", r.name),
+                ));
             }
         }
         let shapes = self.spheres.len() + self.quads.len();
@@ -551,10 +551,7 @@ impl Scene {
                 format!("{triangles} triangles, more than MAX_TRIANGLES = {MAX_TRIANGLES}"),
             ));
         }
-        let emitting_triangle = self
-            .meshes
-            .iter()
-            .any(|m| m.materials.iter().any(|&k| self.emits(k)));
+        let emitting_triangle = self.meshes.iter().any(|m| m.materials.iter().any(|&k| self.emits(k)));
         if self.lights().is_empty() && !emitting_triangle {
             return Err(invalid(
                 "",
@@ -576,10 +573,16 @@ pub(crate) fn read_bounded(path: &Path, max: u64, what: &str) -> Result<String> 
     let cannot = |e: std::io::Error| refuse(e.kind(), format!("cannot read {what}: {e}"));
     let meta = std::fs::metadata(path).map_err(cannot)?;
     if !meta.is_file() {
-        return Err(refuse(std::io::ErrorKind::InvalidInput, format!("cannot read {what}: not a regular file")));
+        return Err(refuse(
+            std::io::ErrorKind::InvalidInput,
+            format!("cannot read {what}: not a regular file"),
+        ));
     }
     if meta.len() > max {
-        return Err(refuse(std::io::ErrorKind::InvalidData, format!("{} bytes, more than a {what} may have ({max})", meta.len())));
+        return Err(refuse(
+            std::io::ErrorKind::InvalidData,
+            format!("{} bytes, more than a {what} may have ({max})", meta.len()),
+        ));
     }
     std::fs::read_to_string(path).map_err(cannot)
 }
@@ -594,10 +597,7 @@ fn finite_vec(v: Vec3, path: &str) -> Result<(), Invalid> {
     } else {
         Err(invalid(
             path,
-            format!(
-                "every component must be finite, got {}",
-                fmt_vec(v.to_array())
-            ),
+            format!("every component must be finite, got {}", fmt_vec(v.to_array())),
         ))
     }
 }
@@ -610,10 +610,7 @@ fn unit_vec(v: Vec3, path: &str) -> Result<(), Invalid> {
     } else {
         Err(invalid(
             path,
-            format!(
-                "every component must be in [0, 1], got {}",
-                fmt_vec(v.to_array())
-            ),
+            format!("every component must be in [0, 1], got {}", fmt_vec(v.to_array())),
         ))
     }
 }
@@ -633,9 +630,7 @@ fn check_camera(c: &Camera) -> Result<(), Invalid> {
     if !(1..=MAX_RESOLUTION).contains(&width) || !(1..=MAX_RESOLUTION).contains(&height) {
         return Err(invalid(
             "camera.resolution",
-            format!(
-                "width and height must each be in 1..={MAX_RESOLUTION}, got [{width}, {height}]"
-            ),
+            format!("width and height must each be in 1..={MAX_RESOLUTION}, got [{width}, {height}]"),
         ));
     }
     // In f64 so that far-apart finite points cannot overflow; zero length gives zero.
@@ -644,10 +639,7 @@ fn check_camera(c: &Camera) -> Result<(), Invalid> {
     if dir == DVec3::ZERO {
         return Err(invalid(
             "camera.look_at",
-            format!(
-                "must differ from camera.eye, both are {}",
-                fmt_vec(c.eye.to_array())
-            ),
+            format!("must differ from camera.eye, both are {}", fmt_vec(c.eye.to_array())),
         ));
     }
     let up_n = c.up.as_dvec3().normalize_or_zero();
@@ -675,10 +667,7 @@ fn check_material(m: &Material) -> Result<(), Invalid> {
     if m.emission.cmplt(Vec3::ZERO).any() {
         return Err(invalid(
             ep,
-            format!(
-                "every component must be >= 0, got {}",
-                fmt_vec(m.emission.to_array())
-            ),
+            format!("every component must be >= 0, got {}", fmt_vec(m.emission.to_array())),
         ));
     }
     match m.surface {
@@ -750,11 +739,7 @@ fn check_mesh(m: &Mesh, p: &str, num_materials: usize) -> Result<(), Invalid> {
     }
     if let Some(n) = &m.normals {
         if n.len() != m.positions.len() {
-            return fail(format!(
-                "{} normals for {} vertices",
-                n.len(),
-                m.positions.len()
-            ));
+            return fail(format!("{} normals for {} vertices", n.len(), m.positions.len()));
         }
         if let Some(k) = n.iter().position(|v| v.normalize_or_zero() == Vec3::ZERO) {
             return fail(format!(
@@ -775,11 +760,8 @@ fn check_mesh(m: &Mesh, p: &str, num_materials: usize) -> Result<(), Invalid> {
                 "triangle {t} has material index {mat}, out of range ({num_materials} materials)"
             ));
         }
-        if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] || m.triangle(t).is_degenerate()
-        {
-            return fail(format!(
-                "triangle {t} is degenerate (zero area or a repeated vertex)"
-            ));
+        if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] || m.triangle(t).is_degenerate() {
+            return fail(format!("triangle {t} is degenerate (zero area or a repeated vertex)"));
         }
     }
     Ok(())
@@ -886,24 +868,15 @@ mod tests {
         assert_eq!(
             s.emitting_triangles(),
             [
-                TriangleRef {
-                    mesh: 0,
-                    triangle: 0
-                },
-                TriangleRef {
-                    mesh: 0,
-                    triangle: 1
-                }
+                TriangleRef { mesh: 0, triangle: 0 },
+                TriangleRef { mesh: 0, triangle: 1 }
             ]
         );
         for t in s.meshes[0].triangles() {
             assert_eq!(t.normal(), Vec3::NEG_Y);
             assert!((t.area() - 0.5).abs() < 1e-6);
         }
-        assert_eq!(
-            s.bounds(),
-            (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 1.0, 1.0))
-        );
+        assert_eq!(s.bounds(), (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 1.0, 1.0)));
         let t = s.scaled(3.0);
         assert_eq!(t.bounds(), (s.bounds().0 * 3.0, s.bounds().1 * 3.0));
         assert!((t.meshes[0].triangle(1).area() - 4.5).abs() < 1e-5);
@@ -928,18 +901,9 @@ mod tests {
                 },
                 "1 triangle materials for 2 triangles",
             ),
-            (
-                |s| s.meshes[0].positions[2].x = f32::NAN,
-                "vertex 2 is not finite",
-            ),
-            (
-                |s| s.meshes[0].positions[2].z = f32::INFINITY,
-                "vertex 2 is not finite",
-            ),
-            (
-                |s| s.meshes[0].indices[0] = [0, 1, 1],
-                "triangle 0 is degenerate",
-            ),
+            (|s| s.meshes[0].positions[2].x = f32::NAN, "vertex 2 is not finite"),
+            (|s| s.meshes[0].positions[2].z = f32::INFINITY, "vertex 2 is not finite"),
+            (|s| s.meshes[0].indices[0] = [0, 1, 1], "triangle 0 is degenerate"),
             // Collinear: zero area though the indices differ.
             (
                 |s| s.meshes[0].positions[2] = Vec3::new(2.0, 1.0, 0.0),
@@ -1012,9 +976,7 @@ mod tests {
         assert_eq!(e.path, "sphere[0].material");
         assert!(e.message.contains("spheres cannot be emitters"), "{e}");
         s.spheres[0].material = 2;
-        assert!(check_err(&s)
-            .message
-            .contains("material index 2 out of range"));
+        assert!(check_err(&s).message.contains("material index 2 out of range"));
         let mut s = small_scene();
         s.quads[0].edge_v = s.quads[0].edge_u * 2.0;
         assert_eq!(check_err(&s).path, "quad[0].edge_v");

@@ -41,19 +41,11 @@ const DEFAULT_KD: f32 = 0.8;
 /// Index of refraction of a glass MTL material without Ni.
 const DEFAULT_IOR: f32 = 1.5;
 
-pub(super) fn import(
-    scene: &mut Scene,
-    path: &Path,
-    import: &ObjImport,
-    max_triangles: usize,
-) -> Result<usize> {
+pub(super) fn import(scene: &mut Scene, path: &Path, import: &ObjImport, max_triangles: usize) -> Result<usize> {
     let shown = path.display().to_string();
     let text = super::read_bounded(path, super::MAX_MESH_BYTES, "OBJ file").map_err(|e| {
         let hint = if demo::is_generated(path) {
-            format!(
-                " (a generated demo mesh: run `{}` to write it)",
-                demo::COMMAND
-            )
+            format!(" (a generated demo mesh: run `{}` to write it)", demo::COMMAND)
         } else {
             String::new()
         };
@@ -102,9 +94,7 @@ pub(super) fn import(
                 Ok(lib)
             }
             Ok(Err(e)) => {
-                mtl_error
-                    .borrow_mut()
-                    .get_or_insert(anyhow!("{}: {e}", full.display()));
+                mtl_error.borrow_mut().get_or_insert(anyhow!("{}: {e}", full.display()));
                 Err(e)
             }
             Err(e) => {
@@ -143,10 +133,7 @@ pub(super) fn import(
         for (line, name) in &stats.usemtls {
             if !mtl_materials.iter().any(|m| m.name == *name) {
                 let libs: Vec<&str> = stats.mtllibs.iter().map(|(_, n)| n.as_str()).collect();
-                bail!(
-                    "{shown}:{line}: usemtl {name}: no such material in {}",
-                    libs.join(", ")
-                );
+                bail!("{shown}:{line}: usemtl {name}: no such material in {}", libs.join(", "));
             }
         }
     }
@@ -206,8 +193,7 @@ pub(super) fn import(
             continue;
         }
         let material = material_of(m.material_id, &model.name)?;
-        let base =
-            u32::try_from(positions.len()).map_err(|_| anyhow!("{shown}: too many vertices"))?;
+        let base = u32::try_from(positions.len()).map_err(|_| anyhow!("{shown}: too many vertices"))?;
         let dvec = |p: &[f32]| DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
         positions.extend(m.positions.chunks_exact(3).map(dvec));
         if !m.normals.is_empty() && m.normals.len() == m.positions.len() {
@@ -255,12 +241,7 @@ pub(super) struct RawMesh {
 /// `scene.meshes`; returns its index. A mirroring transform reverses the winding so that the front
 /// side stays the one the file meant; `flip` turns every triangle (and normal) around on top of that.
 /// Degenerate triangles are dropped with a warning, and the vertices only they used with them.
-pub(super) fn add_mesh(
-    scene: &mut Scene,
-    raw: RawMesh,
-    transform: &DAffine3,
-    flip: bool,
-) -> Result<usize> {
+pub(super) fn add_mesh(scene: &mut Scene, raw: RawMesh, transform: &DAffine3, flip: bool) -> Result<usize> {
     let shown = raw.name;
     let mut warnings = Vec::new();
     let lin = transform.matrix3;
@@ -379,9 +360,7 @@ struct ObjStats {
 
 /// The name after a keyword, read as tobj does (the rest of the line after its first space).
 fn tobj_name(line: &str) -> String {
-    line.split_once(' ')
-        .map_or("", |(_, r)| r.trim())
-        .to_string()
+    line.split_once(' ').map_or("", |(_, r)| r.trim()).to_string()
 }
 
 fn numbers<const N: usize>(words: &[&str]) -> Option<[f32; N]> {
@@ -420,10 +399,7 @@ fn prescan(text: &str, shown: &str, max_triangles: usize) -> Result<ObjStats> {
                 so_far[0] += 1;
                 let k = so_far[0];
                 let Some(mut p) = numbers::<3>(args) else {
-                    return Err(fail(format!(
-                        "vertex {k} needs three numbers x y z: {:?}",
-                        line.trim()
-                    )));
+                    return Err(fail(format!("vertex {k} needs three numbers x y z: {:?}", line.trim())));
                 };
                 match args.len() {
                     // x y z, or with colours r g b (which tobj reads leniently).
@@ -439,8 +415,8 @@ fn prescan(text: &str, shown: &str, max_triangles: usize) -> Result<ObjStats> {
                     },
                     n => {
                         return Err(fail(format!(
-                        "vertex {k}: expected x y z with an optional w or r g b, got {n} numbers"
-                    )))
+                            "vertex {k}: expected x y z with an optional w or r g b, got {n} numbers"
+                        )))
                     }
                 }
                 if !p.iter().all(|c| c.is_finite()) {
@@ -459,10 +435,7 @@ fn prescan(text: &str, shown: &str, max_triangles: usize) -> Result<ObjStats> {
             "vn" => {
                 so_far[2] += 1;
                 if numbers::<3>(args).is_none() {
-                    return Err(fail(format!(
-                        "normal needs three numbers x y z: {:?}",
-                        line.trim()
-                    )));
+                    return Err(fail(format!("normal needs three numbers x y z: {:?}", line.trim())));
                 }
             }
             "f" | "l" => {
@@ -527,24 +500,17 @@ fn check_ref(token: &str, so_far: [usize; 3], total: [usize; 3]) -> Result<(), S
             }
             continue;
         }
-        let x: isize = part
-            .parse()
-            .map_err(|_| format!("bad face vertex {token:?}"))?;
+        let x: isize = part.parse().map_err(|_| format!("bad face vertex {token:?}"))?;
         // tobj ignores texture and normal indices when the file has none of that kind.
         if k > 0 && total[k] == 0 {
             continue;
         }
         let kind = KIND[k];
         if x == 0 {
-            return Err(format!(
-                "{kind} index 0 in {token:?}: OBJ indices start at 1"
-            ));
+            return Err(format!("{kind} index 0 in {token:?}: OBJ indices start at 1"));
         }
         if x > 0 && x as usize > total[k] {
-            return Err(format!(
-                "{kind} index {x} out of range ({} in the file)",
-                total[k]
-            ));
+            return Err(format!("{kind} index {x} out of range ({} in the file)", total[k]));
         }
         if x < 0 && x.unsigned_abs() > so_far[k] {
             return Err(format!(
@@ -582,14 +548,10 @@ fn read_mtl(path: &Path, mtllib_at: &str) -> Result<tobj::MTLLoadResult> {
                 return Err(fail(format!("illum needs a model number (0-10): {t:?}")))
             }
             "newmtl" if rest(6).is_empty() => return Err(fail("newmtl needs a name".into())),
-            "map_Ka" | "map_Kd" | "map_Ks" | "map_Ns" | "map_ns" | "map_NS"
-                if rest(6).is_empty() =>
-            {
+            "map_Ka" | "map_Kd" | "map_Ks" | "map_Ns" | "map_ns" | "map_NS" if rest(6).is_empty() => {
                 return Err(fail(format!("{kw} needs a file name")))
             }
-            "map_Bump" | "map_bump" if rest(8).is_empty() => {
-                return Err(fail(format!("{kw} needs a file name")))
-            }
+            "map_Bump" | "map_bump" if rest(8).is_empty() => return Err(fail(format!("{kw} needs a file name"))),
             "bump" if rest(4).is_empty() => return Err(fail(format!("{kw} needs a file name"))),
             "map_d" if rest(5).is_empty() => return Err(fail(format!("{kw} needs a file name"))),
             _ => {}
@@ -825,10 +787,7 @@ newmtl plain\nNs 10\n";
         assert_eq!(m.indices.len(), names.len());
         let got = |i: usize| {
             let k = &s.materials[m.materials[i] as usize];
-            assert_eq!(
-                k.name,
-                format!("{}:{}", dir.0.join("a.obj").display(), names[i])
-            );
+            assert_eq!(k.name, format!("{}:{}", dir.0.join("a.obj").display(), names[i]));
             (k.surface, k.emission)
         };
         let d = |r: f32, g: f32, b: f32| Surface::Diffuse {
@@ -875,8 +834,7 @@ newmtl plain\nNs 10\n";
         assert!(about("clear").contains("partial transparency"));
         let glossy = about("glossy");
         assert!(
-            glossy.contains("Ks/Ns glossy lobe ignored")
-                && glossy.contains("map_Kd wood.png ignored"),
+            glossy.contains("Ks/Ns glossy lobe ignored") && glossy.contains("map_Kd wood.png ignored"),
             "{glossy}"
         );
         assert!(about("plain").contains("no Kd: diffuse albedo 0.8"));
@@ -955,10 +913,7 @@ newmtl plain\nNs 10\n";
         assert_eq!(s.materials.len(), 1, "no MTL material added");
         // Without an MTL nor an override: refused.
         let e = err(&format!("{TRI}f 1 2 3\n"), None);
-        assert!(
-            e.starts_with("a.obj: no materials: the OBJ names no MTL file"),
-            "{e}"
-        );
+        assert!(e.starts_with("a.obj: no materials: the OBJ names no MTL file"), "{e}");
     }
 
     #[test]
@@ -972,9 +927,7 @@ newmtl plain\nNs 10\n";
         assert_eq!(m.positions.len(), 3, "unused vertices dropped");
         assert_eq!(s.warnings.len(), 1);
         assert!(
-            s.warnings[0].ends_with(
-                "a.obj: 2 degenerate triangles dropped (zero area or a repeated vertex)"
-            ),
+            s.warnings[0].ends_with("a.obj: 2 degenerate triangles dropped (zero area or a repeated vertex)"),
             "{:?}",
             s.warnings
         );
@@ -983,10 +936,7 @@ newmtl plain\nNs 10\n";
             "mtllib a.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 3 3 1\n",
             Some(MTL),
         );
-        assert!(
-            e.contains("a.obj: every one of its 2 triangles is degenerate"),
-            "{e}"
-        );
+        assert!(e.contains("a.obj: every one of its 2 triangles is degenerate"), "{e}");
     }
 
     #[test]
@@ -994,13 +944,8 @@ newmtl plain\nNs 10\n";
         let dir = TempDir::new("obj-normals");
         let obj = format!("mtllib a.mtl\nusemtl m\n{TRI}vn 0 0 2\nf 1//1 2//1 3//1\n");
         let s = import_into(&dir, &obj, Some(MTL), &ObjImport::default()).expect("loads");
-        assert_eq!(
-            s.meshes[0].normals.as_deref(),
-            Some(&[Vec3::Z; 3][..]),
-            "unit length"
-        );
-        let obj =
-            format!("mtllib a.mtl\nusemtl m\n{TRI}v 1 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\nf 2 4 3\n");
+        assert_eq!(s.meshes[0].normals.as_deref(), Some(&[Vec3::Z; 3][..]), "unit length");
+        let obj = format!("mtllib a.mtl\nusemtl m\n{TRI}v 1 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\nf 2 4 3\n");
         let s = import_into(&dir, &obj, Some(MTL), &ObjImport::default()).expect("loads");
         assert_eq!(s.meshes[0].normals, None);
         assert!(
@@ -1011,11 +956,7 @@ newmtl plain\nNs 10\n";
         let obj = format!("mtllib a.mtl\nusemtl m\n{TRI}vn 0 0 0\nf 1//1 2//1 3//1\n");
         let s = import_into(&dir, &obj, Some(MTL), &ObjImport::default()).expect("loads");
         assert_eq!(s.meshes[0].normals, None);
-        assert!(
-            s.warnings[0].contains("normal 0 is zero"),
-            "{:?}",
-            s.warnings
-        );
+        assert!(s.warnings[0].contains("normal 0 is zero"), "{:?}", s.warnings);
     }
 
     #[test]
@@ -1043,7 +984,13 @@ newmtl plain\nNs 10\n";
         let dir = TempDir::new("obj-lines");
         let s = import_into(&dir, &obj, Some(MTL), &ObjImport::default()).expect("loads");
         assert_eq!(s.meshes[0].indices.len(), 1);
-        assert!(s.warnings.iter().any(|w| w.ends_with("2 point and line elements ignored (only faces are surfaces)")), "{:?}", s.warnings);
+        assert!(
+            s.warnings
+                .iter()
+                .any(|w| w.ends_with("2 point and line elements ignored (only faces are surfaces)")),
+            "{:?}",
+            s.warnings
+        );
     }
 
     #[test]
@@ -1078,10 +1025,7 @@ newmtl plain\nNs 10\n";
                 "v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n",
                 "a.obj:4: vertex 2 needs three numbers x y z",
             ),
-            (
-                "v 0 0 0 0\n",
-                "a.obj:3: vertex 1: w must be a non-zero number",
-            ),
+            ("v 0 0 0 0\n", "a.obj:3: vertex 1: w must be a non-zero number"),
             (
                 "v 0 0 0 1 2\n",
                 "a.obj:3: vertex 1: expected x y z with an optional w or r g b, got 5",
@@ -1113,10 +1057,7 @@ newmtl plain\nNs 10\n";
             let e = err(&format!("{head}{body}"), Some(MTL));
             assert!(e.starts_with(needle), "{e:?} should start with {needle:?}");
         }
-        let e = err(
-            &format!("mtllib a.mtl\n{TRI}f 1 2 3\nusemtl m\nf 1 2 3\n"),
-            Some(MTL),
-        );
+        let e = err(&format!("mtllib a.mtl\n{TRI}f 1 2 3\nusemtl m\nf 1 2 3\n"), Some(MTL));
         assert!(
             e.starts_with("a.obj:5: face without a material (no usemtl before it)"),
             "{e}"
@@ -1133,10 +1074,7 @@ newmtl plain\nNs 10\n";
             ),
             ("newmtl m\nKe 1 x 1\n", "a.mtl:2: Ke needs three numbers"),
             ("newmtl m\nNi\n", "a.mtl:2: Ni needs a number"),
-            (
-                "newmtl m\nillum 300\n",
-                "a.mtl:2: illum needs a model number",
-            ),
+            ("newmtl m\nillum 300\n", "a.mtl:2: illum needs a model number"),
             ("newmtl\n", "a.mtl:1: newmtl needs a name"),
             ("newmtl m\nmap_Kd\n", "a.mtl:2: map_Kd needs a file name"),
             (
@@ -1155,10 +1093,7 @@ newmtl plain\nNs 10\n";
                 "newmtl m\nillum 7\nNi 0.5\n",
                 "a.mtl: material \"m\": Ni (index of refraction) must be >= 1 for glass, got 0.5",
             ),
-            (
-                "newmtl m\nTr lots\n",
-                "a.mtl: material \"m\": Tr needs a number",
-            ),
+            ("newmtl m\nTr lots\n", "a.mtl: material \"m\": Tr needs a number"),
         ];
         for (mtl, needle) in cases {
             let e = err(&obj, Some(mtl));
@@ -1191,19 +1126,14 @@ newmtl plain\nNs 10\n";
         );
         assert!(e.contains(demo::COMMAND), "a generated file's hint: {e}");
         // The limit, scaled down: three triangles against a limit of two.
-        let path = dir.write(
-            "a.obj",
-            &format!("{TRI}v 1 1 0\nf 1 2 3\nf 2 4 3\nf 1 2 4\n"),
-        );
+        let path = dir.write("a.obj", &format!("{TRI}v 1 1 0\nf 1 2 3\nf 2 4 3\nf 1 2 4\n"));
         let opts = ObjImport {
             material: Some(0),
             ..ObjImport::default()
         };
         let e = format!("{:#}", import(&mut s, &path, &opts, 2).unwrap_err());
         assert!(
-            e.ends_with(
-                "a.obj:7: more than 2 triangles: the limit (MAX_TRIANGLES) is reached here"
-            ),
+            e.ends_with("a.obj:7: more than 2 triangles: the limit (MAX_TRIANGLES) is reached here"),
             "{e}"
         );
         import(&mut s, &path, &opts, 3).expect("three is within a limit of three");
@@ -1219,13 +1149,7 @@ newmtl plain\nNs 10\n";
         let mut s = scene();
         s.materials[0].name = format!("{}:m", path.display());
         s.materials[0].surface = Surface::Glass { ior: 1.5 };
-        let e = format!(
-            "{:#}",
-            s.import_obj(&path, &ObjImport::default()).unwrap_err()
-        );
-        assert!(
-            e.contains("is already taken by a different material"),
-            "{e}"
-        );
+        let e = format!("{:#}", s.import_obj(&path, &ObjImport::default()).unwrap_err());
+        assert!(e.contains("is already taken by a different material"), "{e}");
     }
 }

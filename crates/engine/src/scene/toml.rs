@@ -164,9 +164,7 @@ impl Source<'_> {
 
 /// True when the text has no content but whitespace and comments.
 fn is_blank(text: &str) -> bool {
-    text.lines()
-        .map(str::trim)
-        .all(|l| l.is_empty() || l.starts_with('#'))
+    text.lines().map(str::trim).all(|l| l.is_empty() || l.starts_with('#'))
 }
 
 /// The field path as the rest of the engine writes it (`sphere[1].radius`, `materials.white.diffuse`,
@@ -298,7 +296,13 @@ fn build(src: &Source, raw: RawScene, base: &Path) -> Result<Scene> {
         let p = format!("region[{i}]");
         let r = g.get_ref();
         spans.insert(p.clone(), g.span());
-        for (field, span) in [("name", r.name.span()), ("x0", r.x0.span()), ("y0", r.y0.span()), ("x1", r.x1.span()), ("y1", r.y1.span())] {
+        for (field, span) in [
+            ("name", r.name.span()),
+            ("x0", r.x0.span()),
+            ("y0", r.y0.span()),
+            ("x1", r.x1.span()),
+            ("y1", r.y1.span()),
+        ] {
             spans.insert(format!("{p}.{field}"), span);
         }
         regions.push(ImageRegion {
@@ -328,10 +332,7 @@ fn build(src: &Source, raw: RawScene, base: &Path) -> Result<Scene> {
     // A problem of the whole scene (no light, too many triangles) points at the first quad, else the
     // first mesh, else line 1.
     let first = raw.quad.first().map(|q| q.span());
-    spans.insert(
-        "",
-        first.or(raw.mesh.first().map(|m| m.span())).unwrap_or(0..0),
-    );
+    spans.insert("", first.or(raw.mesh.first().map(|m| m.span())).unwrap_or(0..0));
     scene
         .check()
         .map_err(|e| src.error(spans.find(&e.path), Some(&e.path), &e.message))?;
@@ -339,21 +340,11 @@ fn build(src: &Source, raw: RawScene, base: &Path) -> Result<Scene> {
 }
 
 /// Index of the material `r` names among `materials`.
-fn lookup(
-    src: &Source,
-    materials: &[Material],
-    r: &Spanned<String>,
-    path: &str,
-) -> Result<u32> {
+fn lookup(src: &Source, materials: &[Material], r: &Spanned<String>, path: &str) -> Result<u32> {
     match materials.iter().position(|m| m.name == *r.get_ref()) {
-        Some(i) => {
-            u32::try_from(i).map_err(|_| src.error(r.span(), Some(path), "too many materials"))
-        }
+        Some(i) => u32::try_from(i).map_err(|_| src.error(r.span(), Some(path), "too many materials")),
         None => {
-            let known: Vec<String> = materials
-                .iter()
-                .map(|m| format!("\"{}\"", m.name))
-                .collect();
+            let known: Vec<String> = materials.iter().map(|m| format!("\"{}\"", m.name)).collect();
             let known = if known.is_empty() {
                 "none are defined".to_string()
             } else {
@@ -370,12 +361,7 @@ fn lookup(
 
 /// The material as written; its values are checked by `Scene::check`, what only the file can get
 /// wrong (two surface kinds, none, emission written beside mirror or glass) here.
-fn material(
-    src: &Source,
-    name: &str,
-    m: &Spanned<RawMaterial>,
-    spans: &mut Spans,
-) -> Result<Material> {
+fn material(src: &Source, name: &str, m: &Spanned<RawMaterial>, spans: &mut Spans) -> Result<Material> {
     let p = format!("materials.{name}");
     let r = m.get_ref();
     spans.insert(p.clone(), m.span());
@@ -421,9 +407,7 @@ fn material(
     let surface = if let Some(d) = &r.diffuse {
         Surface::Diffuse { albedo: vec3(d) }
     } else if let Some(mr) = &r.mirror {
-        Surface::Mirror {
-            reflectance: vec3(mr),
-        }
+        Surface::Mirror { reflectance: vec3(mr) }
     } else if let Some(g) = &r.glass {
         Surface::Glass { ior: *g.get_ref() }
     } else if r.emission.is_some() {
@@ -476,19 +460,13 @@ fn import_mesh(
     obj::import(
         scene,
         &base.join(file),
-        &ObjImport {
-            transform,
-            material,
-        },
+        &ObjImport { transform, material },
         MAX_TRIANGLES,
     )
     .map_err(|e| src.error(r.file.span(), Some(&fpath), format!("{e:#}")))?;
     // Imported materials are located at the mesh that brought them.
     for k in before..scene.materials.len() {
-        spans.insert(
-            format!("materials.{}", scene.materials[k].name),
-            r.file.span(),
-        );
+        spans.insert(format!("materials.{}", scene.materials[k].name), r.file.span());
     }
     Ok(())
 }
@@ -569,11 +547,7 @@ fn mesh_transform(src: &Source, r: &RawMesh, p: &str) -> Result<DAffine3> {
             };
             finite_all(src, &v, s.span(), &sp)?;
             if v.contains(&0.0) {
-                return Err(src.error(
-                    s.span(),
-                    Some(&sp),
-                    "must be non-zero (a zero scale flattens the mesh)",
-                ));
+                return Err(src.error(s.span(), Some(&sp), "must be non-zero (a zero scale flattens the mesh)"));
             }
             DVec3::from_array(v)
         }
@@ -590,10 +564,7 @@ mod tests {
     use super::*;
     use crate::scene::TempDir;
 
-    const CORNELL: &str = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenes/cornell-spheres.toml"
-    );
+    const CORNELL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/cornell-spheres.toml");
     const FURNACE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/furnace.toml");
 
     /// A valid scene; tests replace one line (1-based numbers in comments) to break it.
@@ -659,10 +630,7 @@ material = "light"
     /// Asserts that error text `e` starts at `t.toml:line:`, names field `path` and contains `needle`.
     fn assert_located(e: &str, line: usize, path: &str, needle: &str) {
         let prefix = format!("t.toml:{line}:");
-        assert!(
-            e.starts_with(&prefix),
-            "error {e:?} should start with {prefix:?}"
-        );
+        assert!(e.starts_with(&prefix), "error {e:?} should start with {prefix:?}");
         assert!(
             e.contains(&format!(" {path}: ")),
             "error {e:?} should name field {path:?}"
@@ -680,10 +648,7 @@ material = "light"
         // Materials keep file order (not alphabetical).
         let names: Vec<&str> = s.materials.iter().map(|m| m.name.as_str()).collect();
         assert_eq!(names, ["white", "light", "glass"]);
-        assert_eq!(
-            s.materials[1].surface,
-            Surface::Diffuse { albedo: Vec3::ZERO }
-        );
+        assert_eq!(s.materials[1].surface, Surface::Diffuse { albedo: Vec3::ZERO });
         assert!(s.materials[1].is_light());
         assert!(!s.materials[0].is_light());
         assert_eq!(s.materials[2].surface, Surface::Glass { ior: 1.5 });
@@ -698,15 +663,33 @@ material = "light"
             format!("{BASE}\n[[region]]\nname = \"{name}\"\nx0 = {x0}\ny0 = 0\nx1 = 0.5\ny1 = 1\n")
         };
         let s = Scene::parse(&region("0.25", "left"), "t.toml").expect("valid");
-        assert_eq!(s.regions, [ImageRegion { name: "left".into(), x0: 0.25, y0: 0.0, x1: 0.5, y1: 1.0 }]);
+        assert_eq!(
+            s.regions,
+            [ImageRegion {
+                name: "left".into(),
+                x0: 0.25,
+                y0: 0.0,
+                x1: 0.5,
+                y1: 1.0
+            }]
+        );
         // 64 x 48 pixels: x 16-31, all rows; at 6 x 4 the edge at 1.5 pixels rounds outward.
-        assert_eq!(s.regions[0].pixels(64, 48), crate::metrics::Region::new("left", 16, 0, 16, 48));
-        assert_eq!(s.regions[0].pixels(6, 4), crate::metrics::Region::new("left", 1, 0, 2, 4));
+        assert_eq!(
+            s.regions[0].pixels(64, 48),
+            crate::metrics::Region::new("left", 16, 0, 16, 48)
+        );
+        assert_eq!(
+            s.regions[0].pixels(6, 4),
+            crate::metrics::Region::new("left", 1, 0, 2, 4)
+        );
         // The region's table starts on line 38 (BASE has 36 lines and a blank one follows): x0 is line 40.
         assert_err(&region("0.5", "left"), 40, "region[0].x0", "0 <= x0 < x1 <= 1");
         assert_err(&region("-0.1", "left"), 40, "region[0].x0", "got x0 = -0.1");
         assert_err(&region("0.1", ""), 39, "region[0].name", "must not be empty");
-        let twice = format!("{}[[region]]\nname = \"left\"\nx0 = 0\ny0 = 0\nx1 = 1\ny1 = 1\n", region("0.1", "left"));
+        let twice = format!(
+            "{}[[region]]\nname = \"left\"\nx0 = 0\ny0 = 0\nx1 = 1\ny1 = 1\n",
+            region("0.1", "left")
+        );
         assert_err(&twice, 45, "region[1].name", "named twice");
         let e = err(&format!("{BASE}\n[[region]]\nname = \"a\"\nx0 = 0\ny0 = 0\nx1 = 1\n"));
         assert!(e.contains("y1"), "{e}");
@@ -754,17 +737,11 @@ material = "light"
         let centre = Vec3::new(0.0, 1.0, 1.0);
         for w in &walls {
             let wc = w.origin + 0.5 * (w.edge_u + w.edge_v);
-            assert!(
-                w.normal().dot(centre - wc) > 0.0,
-                "wall {w:?} must face into the box"
-            );
+            assert!(w.normal().dot(centre - wc) > 0.0, "wall {w:?} must face into the box");
         }
         let total: f32 = walls.iter().map(|w| w.area()).sum();
         assert!((total - 2.0 * (2.0 * 2.0 + 2.0 * 4.0 + 2.0 * 4.0)).abs() < 1e-4);
-        assert_eq!(
-            s.bounds(),
-            (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 2.0, 3.0))
-        );
+        assert_eq!(s.bounds(), (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 2.0, 3.0)));
 
         let albedo = |n: Vec3| {
             walls
@@ -835,10 +812,7 @@ material = "light"
         let (lo, hi) = s.bounds();
         assert_eq!((lo, hi), (Vec3::splat(-1.0), Vec3::splat(1.0)));
         let eye = s.camera.eye;
-        assert!(
-            eye.cmpgt(lo).all() && eye.cmplt(hi).all(),
-            "camera inside the box"
-        );
+        assert!(eye.cmpgt(lo).all() && eye.cmplt(hi).all(), "camera inside the box");
         let mut normals_sum = Vec3::ZERO;
         for q in &s.quads {
             let m = &s.materials[q.material as usize];
@@ -879,10 +853,7 @@ material = "light"
     fn bounds_lights_scaled_resolution() {
         let s = Scene::parse(BASE, "t.toml").expect("valid");
         // Quad 0 spans x,z in [-1,1] at y=0; the light tops out at y=2; spheres inside x <= 1.25.
-        assert_eq!(
-            s.bounds(),
-            (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.25, 2.0, 1.0))
-        );
+        assert_eq!(s.bounds(), (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.25, 2.0, 1.0)));
         assert_eq!(s.lights(), vec![1]);
 
         let k = 2.5;
@@ -899,13 +870,7 @@ material = "light"
 
         let r = s.with_resolution(7, 3);
         assert_eq!((r.camera.width, r.camera.height), (7, 3));
-        assert_eq!(
-            Scene {
-                camera: s.camera,
-                ..r
-            },
-            s
-        );
+        assert_eq!(Scene { camera: s.camera, ..r }, s);
     }
 
     #[test]
@@ -952,23 +917,16 @@ material = "light"
         assert!(e.starts_with("t.toml:5:"), "{e}");
         // Duplicate table is a TOML error, located at the second header.
         let e = err(&edit(9, "[materials.light]"));
-        assert!(e.starts_with("t.toml:11:") && e.contains("duplicate key `light`"), "{e}");
+        assert!(
+            e.starts_with("t.toml:11:") && e.contains("duplicate key `light`"),
+            "{e}"
+        );
     }
 
     #[test]
     fn wrong_types_and_missing_fields() {
-        assert_err(
-            &edit(18, "radius = \"big\""),
-            18,
-            "sphere[0].radius",
-            "invalid type",
-        );
-        assert_err(
-            &edit(23, "radius = true"),
-            23,
-            "sphere[1].radius",
-            "invalid type",
-        );
+        assert_err(&edit(18, "radius = \"big\""), 18, "sphere[0].radius", "invalid type");
+        assert_err(&edit(23, "radius = true"), 23, "sphere[1].radius", "invalid type");
         // Inside an array: the element, at its column.
         assert_err(&edit(7, "resolution = [64, -48]"), 7, "camera.resolution[1]", "");
         assert!(err(&edit(7, "resolution = [64, -48]")).starts_with("t.toml:7:19:"));
@@ -1002,12 +960,7 @@ material = "light"
             "materials.white.difuse",
             "unknown field `difuse`",
         );
-        assert_err(
-            &edit(1, "title = \"x\""),
-            1,
-            "title",
-            "unknown field `title`",
-        );
+        assert_err(&edit(1, "title = \"x\""), 1, "title", "unknown field `title`");
     }
 
     #[test]
@@ -1034,12 +987,7 @@ material = "light"
             "sphere[0].radius",
             "must be positive and finite, got -0.3",
         );
-        assert_err(
-            &edit(18, "radius = 0.0"),
-            18,
-            "sphere[0].radius",
-            "must be positive",
-        );
+        assert_err(&edit(18, "radius = 0.0"), 18, "sphere[0].radius", "must be positive");
         assert_err(&edit(23, "radius = nan"), 23, "sphere[1].radius", "got NaN");
         assert_err(&edit(23, "radius = inf"), 23, "sphere[1].radius", "got inf");
         // Overflows f32 to infinity.
@@ -1067,12 +1015,7 @@ material = "light"
         for (line, text, path) in cases {
             assert_err(&edit(line, text), line, path, "must be finite");
         }
-        assert_err(
-            &edit(14, "glass = nan"),
-            14,
-            "materials.glass.glass",
-            "finite",
-        );
+        assert_err(&edit(14, "glass = nan"), 14, "materials.glass.glass", "finite");
     }
 
     #[test]
@@ -1107,23 +1050,13 @@ material = "light"
         );
         // Emission with a specular surface is refused; with diffuse it is fine.
         let text = BASE.replace("glass = 1.5", "glass = 1.5\nemission = [1.0, 1.0, 1.0]");
-        assert_err(
-            &text,
-            15,
-            "materials.glass.emission",
-            "not with mirror or glass",
-        );
+        assert_err(&text, 15, "materials.glass.emission", "not with mirror or glass");
         let text = BASE.replace(
             "diffuse = [0.5, 0.5, 0.5]",
             "diffuse = [0.5, 0.5, 0.5]\nemission = [1.0, 1.0, 1.0]",
         );
         // Sphere 1 (line 24, one line lower now) uses "white", which now emits.
-        assert_err(
-            &text,
-            25,
-            "sphere[1].material",
-            "spheres cannot be emitters",
-        );
+        assert_err(&text, 25, "sphere[1].material", "spheres cannot be emitters");
         let text = text.replace(
             "radius = 0.25\nmaterial = \"white\"",
             "radius = 0.25\nmaterial = \"glass\"",
@@ -1152,19 +1085,9 @@ material = "light"
     #[test]
     fn material_kind_conflicts() {
         let text = BASE.replace("glass = 1.5", "glass = 1.5\nmirror = [0.9, 0.9, 0.9]");
-        assert_err(
-            &text,
-            14,
-            "materials.glass.glass",
-            "cannot be both mirror and glass",
-        );
+        assert_err(&text, 14, "materials.glass.glass", "cannot be both mirror and glass");
         let text = BASE.replace("glass = 1.5", "glass = 1.5\ndiffuse = [0.9, 0.9, 0.9]");
-        assert_err(
-            &text,
-            14,
-            "materials.glass",
-            "exactly one of diffuse, mirror, glass",
-        );
+        assert_err(&text, 14, "materials.glass", "exactly one of diffuse, mirror, glass");
         // A material with nothing in it.
         assert_err(
             &edit(14, ""),
@@ -1172,12 +1095,7 @@ material = "light"
             "materials.glass",
             "needs one of diffuse, mirror, glass",
         );
-        assert_err(
-            &edit(14, "glass = 0.9"),
-            14,
-            "materials.glass.glass",
-            ">= 1",
-        );
+        assert_err(&edit(14, "glass = 0.9"), 14, "materials.glass.glass", ">= 1");
     }
 
     #[test]
@@ -1215,8 +1133,7 @@ material = "light"
         );
         // Small but well-shaped quads are fine.
         let s = Scene::parse(
-            &edit(28, "edge_u = [0.0, 0.0, 1e-4]")
-                .replace("edge_v = [2.0, 0.0, 0.0]", "edge_v = [1e-4, 0.0, 0.0]"),
+            &edit(28, "edge_u = [0.0, 0.0, 1e-4]").replace("edge_v = [2.0, 0.0, 0.0]", "edge_v = [1e-4, 0.0, 0.0]"),
             "t.toml",
         );
         assert!(s.is_ok(), "{s:?}");
@@ -1229,12 +1146,7 @@ material = "light"
         assert_err(&edit(6, "vfov = -10"), 6, "camera.vfov", "(0, 180)");
         assert_err(&edit(6, "vfov = nan"), 6, "camera.vfov", "NaN");
         assert_err(&edit(6, "vfov = inf"), 6, "camera.vfov", "inf");
-        assert_err(
-            &edit(7, "resolution = [0, 48]"),
-            7,
-            "camera.resolution",
-            "1..=16384",
-        );
+        assert_err(&edit(7, "resolution = [0, 48]"), 7, "camera.resolution", "1..=16384");
         assert_err(
             &edit(7, "resolution = [64, 20000]"),
             7,
@@ -1259,10 +1171,7 @@ material = "light"
     #[test]
     fn no_light() {
         let e = err(&edit(36, "material = \"white\""));
-        assert!(
-            e.contains("no emitting quad or triangle: nothing to render"),
-            "{e}"
-        );
+        assert!(e.contains("no emitting quad or triangle: nothing to render"), "{e}");
         assert!(e.starts_with("t.toml:"), "{e}");
         // No quads at all: same message.
         let text = BASE.split("[[quad]]").next().unwrap_or("").to_string();
@@ -1285,7 +1194,9 @@ material = "light"
         let text = edit(10, "white = { diffuse = [0.5, \"x\", 0.5] }").replace("[materials.white]\n", "[materials]\n");
         let e = Scene::parse(&text, "t.toml").expect_err("a string in an albedo");
         match &e {
-            Error::Scene { line, column, field, .. } => {
+            Error::Scene {
+                line, column, field, ..
+            } => {
                 assert_eq!((*line, field.as_str()), (10, "materials.white.diffuse[1]"), "{e}");
                 assert_eq!(*column, 27, "the column of \"x\": {e}");
             }
@@ -1296,12 +1207,15 @@ material = "light"
                        { center = [1.0, 0.5, 0.0], material = \"white\" }]\n";
         let text = BASE.replace("[camera]", &format!("{spheres}[camera]"));
         let text = text.replace("[[sphere]]", "[[ignored]]");
-        let text: String = text.split("[[ignored]]").next().unwrap().to_string()
-            + &BASE[BASE.find("[[quad]]").unwrap()..];
+        let text: String =
+            text.split("[[ignored]]").next().unwrap().to_string() + &BASE[BASE.find("[[quad]]").unwrap()..];
         assert_err(&text, 3, "sphere[1]", "missing field `radius`");
         // A value check after parsing, in an inline table: located at the value.
         let text = text.replace("radius = 0.5", "radius = -0.5");
-        let text = text.replace("{ center = [1.0, 0.5, 0.0], material", "{ center = [1.0, 0.5, 0.0], radius = 1.0, material");
+        let text = text.replace(
+            "{ center = [1.0, 0.5, 0.0], material",
+            "{ center = [1.0, 0.5, 0.0], radius = 1.0, material",
+        );
         assert_err(&text, 2, "sphere[0].radius", "positive");
     }
 
@@ -1414,21 +1328,13 @@ material = "light"
             "{:#}",
             Scene::parse(&text, &dir.0.join("t.toml").display().to_string()).unwrap_err()
         );
-        assert!(
-            e.contains("t.toml:26:1: no emitting quad or triangle"),
-            "{e}"
-        );
+        assert!(e.contains("t.toml:26:1: no emitting quad or triangle"), "{e}");
     }
 
     #[test]
     fn mesh_errors_name_line_and_field() {
         let f = "file = \"a.obj\"\n";
-        assert_mesh_err(
-            &format!("{f}scale = 0"),
-            40,
-            "mesh[0].scale",
-            "must be non-zero",
-        );
+        assert_mesh_err(&format!("{f}scale = 0"), 40, "mesh[0].scale", "must be non-zero");
         assert_mesh_err(
             &format!("{f}scale = [1, 0, 1]"),
             40,
@@ -1459,12 +1365,7 @@ material = "light"
             "mesh[0].rotate",
             "must be finite",
         );
-        assert_mesh_err(
-            &format!("{f}rotate = [0, 0]"),
-            40,
-            "mesh[0].rotate",
-            "length 2",
-        );
+        assert_mesh_err(&format!("{f}rotate = [0, 0]"), 40, "mesh[0].rotate", "length 2");
         let identity = "matrix = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]";
         assert_mesh_err(
             &format!("{f}translate = [1, 0, 0]\n{identity}"),
