@@ -216,8 +216,8 @@ pub fn run(args: CompareArgs) -> Result<()> {
         let wall = clock(excluded).as_secs_f64();
         curve.push((wall, compare(&image, &reference, None, true)?.rel_mse));
         let stem = args.out.join(file_name(&v.name));
-        image.save(&stem.with_extension("exr"))?;
-        image.save(&stem.with_extension("png"))?;
+        image.save(stem.with_extension("exr"))?;
+        image.save(stem.with_extension("png"))?;
         let whole = compare(&image, &reference, None, true)?;
         let per_region: Vec<(String, ErrorStats)> = regions
             .iter()
@@ -314,7 +314,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
         // Enlarged 4x and 2 stops darker, so the caustic's structure is not clipped away.
         RgbImage::hstack(&refs)?
             .upscale(4)?
-            .save_png(&args.out.join(format!("crops-{}.png", r.name)), -2.0)?;
+            .save_png(args.out.join(format!("crops-{}.png", r.name)), -2.0)?;
     }
     let title = format!(
         "{} {}x{}, {} photons/pass, {}",

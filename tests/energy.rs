@@ -60,11 +60,10 @@ fn white_furnace_converges_to_le_over_one_minus_rho() {
     // The mean over 1024 pixels: the per-pixel noise (sd measured 0.020, see the print) averages down to
     // ~0.001, and the photon estimate has no radius bias here (uniform irradiance), so 2% is a wide margin
     // that still rejects any energy error of a few percent of the indirect half.
-    for c in 0..3 {
+    for (c, m) in mean.iter().enumerate() {
         assert!(
-            (mean[c] - EXPECTED).abs() <= 0.02 * EXPECTED,
-            "channel {c}: mean {} not within 2% of {EXPECTED}",
-            mean[c]
+            (m - EXPECTED).abs() <= 0.02 * EXPECTED,
+            "channel {c}: mean {m} not within 2% of {EXPECTED}"
         );
     }
     // Every pixel: each hit point's estimate has relative noise ~1/sqrt(photons gathered). Measured: pixel

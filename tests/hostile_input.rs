@@ -176,7 +176,7 @@ fn apply(text: &[u8], m: &Mutation) -> Vec<u8> {
             let mut l = lines(&t);
             let n = l.len();
             let line = l[i % n].clone();
-            l.splice(i % n..i % n, std::iter::repeat(line).take(k as usize));
+            l.splice(i % n..i % n, std::iter::repeat_n(line, k as usize));
             t = l.join(&b'\n');
         }
         Mutation::Number(i, k) => {

@@ -293,8 +293,8 @@ fn match_records(gpu: &[Photon], cpu: &[Photon], pos_tol: f32) -> usize {
 fn total_flux(records: &[Photon]) -> [f64; 3] {
     let mut t = [0.0; 3];
     for p in records {
-        for c in 0..3 {
-            t[c] += p.flux[c] as f64;
+        for (t, f) in t.iter_mut().zip(p.flux) {
+            *t += f as f64;
         }
     }
     t
@@ -338,11 +338,8 @@ fn photon_records_match_reference_case(specialize: bool) {
     let start = g.lights[0].power.map(|p| p / g.lights[0].prob);
     let mut cell_ok = 0usize;
     for (i, p) in gpu.iter().enumerate() {
-        for c in 0..3 {
-            assert!(
-                p.flux[c].is_finite() && p.flux[c] > 0.0 && p.flux[c] <= start[c] * (1.0 + 1e-6),
-                "record {i}: {p:?}"
-            );
+        for (f, s) in p.flux.iter().zip(start) {
+            assert!(f.is_finite() && *f > 0.0 && *f <= s * (1.0 + 1e-6), "record {i}: {p:?}");
         }
         let pos = v(p.pos);
         assert!(

@@ -24,7 +24,11 @@ fn settings(probe: ProbeMode) -> Settings {
 
 /// The renderer's hit points and probed statistics, the CPU probe of the same hit points, and eq. 8's r:
 /// the CPU traces the same probe photons (same streams) and probes every hit point by brute force.
-fn gpu_and_cpu_probe(r: &Renderer) -> (Vec<HitPoint>, Vec<HitStats>, Vec<(f64, f64)>, f64) {
+/// What gpu_and_cpu_probe returns: the hit points, the GPU's statistics, the CPU's (lambda / r^2, R^2) per
+/// hit point, and eq. 8's r.
+type ProbeResults = (Vec<HitPoint>, Vec<HitStats>, Vec<(f64, f64)>, f64);
+
+fn gpu_and_cpu_probe(r: &Renderer) -> ProbeResults {
     let g = r.gpu_scene();
     let hits = r.read_hit_points().unwrap();
     let gpu = r.read_stats().unwrap();

@@ -89,13 +89,13 @@ fn check_against_reference(image: &RgbImage) -> Result<(), String> {
             ));
         }
     }
-    if !(s.back_wall.rel_mse <= BACK_WALL_REL_MSE) {
+    if s.back_wall.rel_mse.is_nan() || s.back_wall.rel_mse > BACK_WALL_REL_MSE {
         errors.push(format!(
             "back_wall relMSE {:.5} > {BACK_WALL_REL_MSE}",
             s.back_wall.rel_mse
         ));
     }
-    if !(s.caustic.rel_mse <= CAUSTIC_REL_MSE) {
+    if s.caustic.rel_mse.is_nan() || s.caustic.rel_mse > CAUSTIC_REL_MSE {
         errors.push(format!("caustic relMSE {:.5} > {CAUSTIC_REL_MSE}", s.caustic.rel_mse));
     }
     if errors.is_empty() {

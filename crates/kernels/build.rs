@@ -3,6 +3,7 @@
 //! - per kernel: storage-buffer binding count and names, push-constant size, local size;
 //! - per named GLSL struct: std430 member offsets and size, checked against the `#[repr(C)]` Rust twin at
 //!   compile time by `gpu_struct!` in src/layout.rs.
+//!
 //! A struct that appears in several kernels must have one layout everywhere, or the build fails.
 
 use std::collections::{BTreeMap, HashMap};

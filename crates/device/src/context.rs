@@ -80,14 +80,18 @@ struct Inner {
     /// Present when VK_EXT_debug_utils is (always with validation; without it when the driver offers it).
     debug_names: Option<ash::ext::debug_utils::Device>,
     pipeline_cache: Option<DiskCache>,
-    debug: Option<(
-        ash::ext::debug_utils::Instance,
-        vk::DebugUtilsMessengerEXT,
-        Box<Arc<Mutex<Vec<String>>>>,
-    )>,
+    debug: Option<Messenger>,
     instance: ash::Instance,
     _entry: ash::Entry,
 }
+
+/// The validation messenger: its loader, its handle, and the messages its callback collects (boxed so the
+/// callback's user-data pointer stays put).
+type Messenger = (
+    ash::ext::debug_utils::Instance,
+    vk::DebugUtilsMessengerEXT,
+    Box<Arc<Mutex<Vec<String>>>>,
+);
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 

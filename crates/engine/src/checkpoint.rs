@@ -210,8 +210,9 @@ fn show(v: &serde_json::Value) -> String {
 /// One buffer of the file as `T`s; its size must be a whole number of them.
 fn section<T: bytemuck::Pod>(bytes: &[u8], what: &str) -> Result<Vec<T>> {
     let size = std::mem::size_of::<T>();
+    // is_multiple_of is Rust 1.87, newer than the workspace's rust-version
     ensure!(
-        bytes.len() % size == 0,
+        bytes.len().is_multiple_of(size),
         "{what}: {} bytes, not a multiple of {size}",
         bytes.len()
     );

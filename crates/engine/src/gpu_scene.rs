@@ -175,7 +175,7 @@ impl GpuScene {
             l.prob = (l.cdf as f64 - previous) as f32;
             previous = l.cdf as f64;
         }
-        if let Some(i) = lights.iter().position(|l| !(l.prob > 0.0)) {
+        if let Some(i) = lights.iter().position(|l| l.prob.is_nan() || l.prob <= 0.0) {
             let message = format!(
                 "light {i} of {} has too small a share of the total power to be chosen in an f32 light table \
                  (split the scene's lights more evenly)",

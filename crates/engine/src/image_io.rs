@@ -432,7 +432,7 @@ mod tests {
         assert!(err.contains("does-not-exist.exr"), "{err}");
         // A PNG is not an EXR, whatever it is called.
         let fake = dir.join("fake.exr");
-        RgbImage::new(2, 2).save_png(&dir.join("real.png"), 0.0).unwrap();
+        RgbImage::new(2, 2).save_png(dir.join("real.png"), 0.0).unwrap();
         fs::rename(dir.join("real.png"), &fake).unwrap();
         let err = format!("{:#}", RgbImage::load_exr(&fake).unwrap_err());
         assert!(err.contains("fake.exr"), "{err}");

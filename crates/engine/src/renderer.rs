@@ -866,7 +866,10 @@ impl Renderer {
         if self.cancel.is_cancelled() {
             // The batches' sums wait in the pass accumulators for the update: drop them.
             self.ctx
-                .run(|cmd| Ok(self.accum.cmd_fill(cmd, 0)))
+                .run(|cmd| {
+                    self.accum.cmd_fill(cmd, 0);
+                    Ok(())
+                })
                 .device("cancelling the photon pass")?;
             return Err(Error::Cancelled);
         }

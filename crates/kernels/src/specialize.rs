@@ -146,7 +146,7 @@ pub fn compile_with(kernel: &KernelInfo, defines: &[(&str, &str)], constants: &s
 mod tests {
     #[test]
     fn literals_round_trip_through_double() {
-        for x in [0.725f32, -1.0, 1.0 / 3.0, 3.4e-38, 1.99, -0.0, 16777217.0, 0.0104166670] {
+        for x in [0.725f32, -1.0, 1.0 / 3.0, 3.4e-38, 1.99, -0.0, 16777217.0, 0.010416667] {
             let text = super::f(x);
             assert_eq!(
                 (text.parse::<f64>().unwrap() as f32).to_bits(),

@@ -562,7 +562,7 @@ mod tests {
     }
 
     fn cornell_spheres() -> Scene {
-        Scene::load(&default_dir().join("../cornell-spheres.toml")).expect("cornell-spheres")
+        Scene::load(default_dir().join("../cornell-spheres.toml")).expect("cornell-spheres")
     }
 
     #[test]

@@ -842,7 +842,7 @@ newmtl plain\nNs 10\n";
         // The same file again: its materials (and their warnings) are not repeated.
         let mut again = s.clone();
         again
-            .import_obj(&dir.0.join("a.obj"), &ObjImport::default())
+            .import_obj(dir.0.join("a.obj"), &ObjImport::default())
             .expect("again");
         assert_eq!(again.materials.len(), s.materials.len());
         assert_eq!(again.warnings, s.warnings);
@@ -1112,8 +1112,7 @@ newmtl plain\nNs 10\n";
         let mut s = scene();
         let e = format!(
             "{:#}",
-            s.import_obj(&dir.0.join("none.obj"), &ObjImport::default())
-                .unwrap_err()
+            s.import_obj(dir.0.join("none.obj"), &ObjImport::default()).unwrap_err()
         );
         assert!(
             e.contains("none.obj: cannot read OBJ file: ") && !e.contains("gen_scenes"),
@@ -1121,7 +1120,7 @@ newmtl plain\nNs 10\n";
         );
         let e = format!(
             "{:#}",
-            s.import_obj(&dir.0.join("water.obj"), &ObjImport::default())
+            s.import_obj(dir.0.join("water.obj"), &ObjImport::default())
                 .unwrap_err()
         );
         assert!(e.contains(demo::COMMAND), "a generated file's hint: {e}");
