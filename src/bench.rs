@@ -4,13 +4,13 @@
 //! resident memory of each case, and whether either grew over the measured passes; prints a table and
 //! writes JSON.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use std::collections::BTreeMap;
 
 use anyhow::{Context as _, Result};
 use clap::Args;
-use ppm_vk_engine::{Mode, PassStats, ProbeMode, Renderer, Settings};
+use ppm_vk_engine::{Context, Mode, PassStats, ProbeMode, Renderer, Scene, Settings};
 use serde::Serialize;
 
 use crate::{Cone, DeviceArgs, ModeArg, ProbeArg};
@@ -21,14 +21,15 @@ const DEFAULT_CASES: &str = "100k@256x256,1M@256x256,4M@256x256,100k@512x512,1M@
 
 #[derive(Args)]
 pub struct BenchArgs {
-    /// Scene to benchmark.
+    /// Scene to benchmark; repeat it for a ladder of scenes, each case run on every one, and each scene's
+    /// photon stage per photon and eye pass per hit point printed as a ratio to the first scene's.
     #[arg(long, default_value = "scenes/cornell-spheres.toml")]
-    scene: PathBuf,
+    scene: Vec<PathBuf>,
     /// Override a Mitsuba scene's parameter: `-D name=value` sets what `$name` stands for (repeatable).
     #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = ppm_vk_engine::scene::parse_define)]
     pub defines: Vec<(String, String)>,
     /// Cases as PHOTONS@WIDTHxHEIGHT, comma-separated (photon counts accept k and M suffixes; width and
-    /// height 1..=16384).
+    /// height 1..=16384); PHOTONS alone renders at the scene's own resolution.
     #[arg(long, default_value = DEFAULT_CASES, value_parser = parse_cases)]
     cases: Cases,
     /// Passes run before timing starts.
@@ -60,8 +61,8 @@ pub struct BenchArgs {
 #[derive(Clone)]
 struct Case {
     photons: u32,
-    width: u32,
-    height: u32,
+    /// `None`: the scene's own resolution.
+    resolution: Option<(u32, u32)>,
 }
 
 #[derive(Clone)]
@@ -86,27 +87,30 @@ fn parse_cases(s: &str) -> Result<Cases, String> {
     let cases = s
         .split(',')
         .map(|c| {
-            let (p, r) = c
-                .split_once('@')
-                .ok_or_else(|| format!("case {c:?}: expected PHOTONS@WIDTHxHEIGHT"))?;
-            let (width, height) = crate::parse_resolution(r).map_err(|e| format!("case {c:?}: {e}"))?;
+            let (p, r) = match c.split_once('@') {
+                Some((p, r)) => (p, Some(r)),
+                None => (c, None),
+            };
+            let resolution = r
+                .map(crate::parse_resolution)
+                .transpose()
+                .map_err(|e| format!("case {c:?}: {e}"))?;
             Ok(Case {
-                photons: parse_count(p).map_err(|e| format!("case {c:?}: {e}"))?,
-                width,
-                height,
+                photons: parse_count(p).map_err(|e| format!("case {c:?}: expected PHOTONS[@WIDTHxHEIGHT]: {e}"))?,
+                resolution,
             })
         })
         .collect::<Result<_, String>>()?;
     Ok(Cases(cases))
 }
 
-/// bench.json (schema ppm-vk-bench/1).
+/// bench.json (schema ppm-vk-bench/2).
 #[derive(Serialize)]
 struct BenchDoc {
     schema: &'static str,
     device: DeviceDoc,
     git_revision: &'static str,
-    scene: String,
+    scenes: Vec<String>,
     mode: Mode,
     probe: ProbeMode,
     cone_k: Option<f32>,
@@ -125,6 +129,7 @@ struct DeviceDoc {
 
 #[derive(Serialize)]
 struct CaseResult {
+    scene: String,
     photons_per_pass: u32,
     width: u32,
     height: u32,
@@ -138,10 +143,20 @@ struct CaseResult {
     resolve_ms_median: f64,
     photons_per_second: f64,
     photon_stage_ns_per_photon: f64,
+    /// The eye pass (stage `ray`) per hit point; PPM's passes after the first trace emission samples only.
+    eye_ns_per_hit_point: f64,
+    /// This case against the same case of the first scene (a ladder of scenes only).
+    vs_first_scene: Option<Ratios>,
     photon_breakdown: Vec<BreakdownResult>,
     bvh: BvhResult,
     device_memory: DeviceMemoryResult,
     host_rss: HostRssResult,
+}
+
+#[derive(Clone, Copy, Serialize)]
+struct Ratios {
+    photon_stage_per_photon: f64,
+    eye_pass_per_hit_point: f64,
 }
 
 #[derive(Serialize)]
@@ -221,45 +236,29 @@ fn mib(bytes: u64) -> f64 {
 }
 
 /// The photon kernel's variants, each as a fraction of the trace-only ceiling (intersections per second).
-fn print_breakdown(variants: &[ppm_vk_engine::PhotonVariant]) {
+fn print_breakdown(variants: &[BreakdownResult]) {
     let Some(ceiling) = variants
         .iter()
-        .find(|v| v.name == "trace only")
-        .map(|v| v.steps_per_second())
+        .find(|v| v.variant == "trace only")
+        .map(|v| v.intersections_per_second)
     else {
         return;
     };
     for v in variants {
         println!(
             "    photon kernel, {:<16} {:>8.1} ms for {} photons, {:>6.2} M intersections, {:>6.1} M/s, {:>5.1}% of trace only",
-            v.name,
+            v.variant,
             v.gpu_ms,
             v.photons,
-            v.steps as f64 / 1e6,
-            v.steps_per_second() / 1e6,
-            100.0 * v.steps_per_second() / ceiling
+            v.intersections as f64 / 1e6,
+            v.intersections_per_second / 1e6,
+            100.0 * v.intersections_per_second / ceiling
         );
     }
 }
 
-pub fn run(args: BenchArgs) -> Result<()> {
-    let cases = &args.cases.0;
-    let mode = Mode::from(args.mode);
-    let loading = std::time::Instant::now();
-    let base = crate::load_scene(&args.scene, &args.defines)?;
-    let load_s = loading.elapsed().as_secs_f64();
-    let ctx = args.device.open()?;
-    let info = ctx.info().clone();
-    println!("device: {} ({}, {})", info.name, info.kind, info.driver);
-    println!(
-        "mode {}, probe {}, cone {}; {} warm-up passes, median of {}",
-        crate::cli_name(args.mode),
-        crate::cli_name(args.probe),
-        args.cone.0.map_or("off".to_string(), |k| k.to_string()),
-        args.warmup,
-        args.passes
-    );
-    println!(
+fn print_header(ladder: bool) {
+    print!(
         "{:>10} {:>11} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>9}",
         "photons",
         "resolution",
@@ -275,116 +274,175 @@ pub fn run(args: BenchArgs) -> Result<()> {
         "dev MiB",
         "RSS MiB"
     );
-    let mut results = Vec::new();
-    for case in cases {
-        let scene = base.with_resolution(case.width, case.height);
-        let settings = Settings {
-            photons_per_pass: case.photons,
-            mode,
-            probe: args.probe.into(),
-            cone_k: args.cone.0,
-            ..Settings::default()
-        };
-        ctx.reset_memory_peak();
-        reset_peak_rss();
-        let mut renderer = Renderer::new(&ctx, &scene, settings)?;
-        let bvh = renderer.bvh_stats().clone();
-        if bvh.triangles > 0 && results.is_empty() {
-            println!(
-                "scene: {} triangles loaded in {:.2} s; BVH built in {:.2} s ({:.2} M triangles/s), {} nodes, depth {}, {:.1} MiB",
-                bvh.triangles,
-                load_s,
-                bvh.build_seconds,
-                bvh.triangles as f64 / bvh.build_seconds.max(1e-9) / 1e6,
-                bvh.nodes,
-                bvh.depth,
-                mib((bvh.nodes * 32 + bvh.triangles * 48) as u64)
-            );
-        }
-        for _ in 0..args.warmup {
-            renderer.pass()?;
-        }
-        // Memory after the warm-up and after the measured passes: nothing should grow with passes.
-        let (dev_before, rss_before) = (ctx.memory_usage(), host_rss());
-        let measured: Vec<PassStats> = (0..args.passes).map(|_| renderer.pass()).collect::<Result<_, _>>()?;
-        let (dev_after, rss_after) = (ctx.memory_usage(), host_rss());
-        renderer.resolve()?; // the first resolve compiles its pipeline
-        let resolve_ms = median((0..3).map(|_| renderer.resolve()).collect::<Result<Vec<_>, _>>()?);
-        let breakdown = match args.breakdown {
-            true => renderer.photon_breakdown(case.photons)?,
-            false => Vec::new(),
-        };
-        let stage: Vec<f64> = STAGES
-            .iter()
-            .map(|s| median(measured.iter().map(|p| p.stage_ms(s)).collect()))
-            .collect();
-        let wall = median(measured.iter().map(|p| p.wall_ms).collect());
-        let rate = case.photons as f64 / (wall * 1e-3) / 1e6;
-        let records = median(measured.iter().map(|p| p.records as f64).collect());
-        let rss_peak = rss_after.map(|r| r.1);
-        println!(
-            "{:>10} {:>11} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>11.3} {:>9.1} {:>9.0} {:>9}",
-            case.photons,
-            format!("{}x{}", case.width, case.height),
-            renderer.ray_ms(),
-            stage[0],
-            stage[1],
-            stage[2],
-            stage[3],
-            stage[4],
-            wall,
-            rate,
-            resolve_ms,
-            mib(dev_after.peak_reserved_bytes),
-            rss_peak.map_or("-".to_string(), |b| format!("{:.0}", mib(b)))
+    if ladder {
+        print!(" {:>14} {:>12}", "photon/photon", "eye/hit pt");
+    }
+    println!();
+}
+
+fn print_row(r: &CaseResult) {
+    let stage = |s: &str| r.stage_ms_median.get(s).copied().unwrap_or(0.0);
+    print!(
+        "{:>10} {:>11} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>11.3} {:>9.1} {:>9.0} {:>9}",
+        r.photons_per_pass,
+        format!("{}x{}", r.width, r.height),
+        r.ray_ms,
+        stage("ray"),
+        stage("photon"),
+        stage("lookup"),
+        stage("gather"),
+        stage("update"),
+        r.pass_wall_ms_median,
+        r.photons_per_second / 1e6,
+        r.resolve_ms_median,
+        mib(r.device_memory.peak_reserved_bytes),
+        r.host_rss
+            .peak_bytes
+            .map_or("-".to_string(), |b| format!("{:.0}", mib(b)))
+    );
+    if let Some(v) = r.vs_first_scene {
+        print!(
+            " {:>13.2}x {:>11.2}x",
+            v.photon_stage_per_photon, v.eye_pass_per_hit_point
         );
-        print_breakdown(&breakdown);
-        results.push(CaseResult {
-            photons_per_pass: case.photons,
-            width: case.width,
-            height: case.height,
-            hit_points: renderer.active_hit_points(),
-            records_per_pass: records,
-            batches_per_pass: measured.last().map_or(0, |p| p.batches),
-            ray_ms: renderer.ray_ms(),
-            stage_ms_median: STAGES.iter().copied().zip(stage.iter().copied()).collect(),
-            pass_wall_ms_median: wall,
-            pass_wall_ms_all: measured.iter().map(|p| p.wall_ms).collect(),
-            resolve_ms_median: resolve_ms,
-            photons_per_second: rate * 1e6,
-            photon_stage_ns_per_photon: stage[1] * 1e6 / case.photons as f64,
-            photon_breakdown: breakdown
-                .iter()
-                .map(|v| BreakdownResult {
-                    variant: v.name,
-                    photons: v.photons,
-                    gpu_ms: v.gpu_ms,
-                    intersections: v.steps,
-                    intersections_per_second: v.steps_per_second(),
-                })
-                .collect(),
-            bvh: BvhResult {
-                triangles: bvh.triangles,
-                nodes: bvh.nodes,
-                depth: bvh.depth,
-                build_seconds: bvh.build_seconds,
-                bytes: bvh.nodes * 32 + bvh.triangles * 48,
-            },
-            device_memory: DeviceMemoryResult {
-                peak_reserved_bytes: dev_after.peak_reserved_bytes,
-                in_use_bytes_after_warmup: dev_before.in_use_bytes,
-                in_use_bytes_after_measured: dev_after.in_use_bytes,
-            },
-            host_rss: HostRssResult {
-                peak_bytes: rss_peak,
-                bytes_after_warmup: rss_before.map(|r| r.0),
-                bytes_after_measured: rss_after.map(|r| r.0),
-            },
-        });
-        crate::check_validation(&ctx)?;
+    }
+    println!();
+}
+
+/// Renders one case of one scene: warm-up, measured passes, resolves and (with --breakdown) the photon
+/// kernel's variants.
+fn measure(args: &BenchArgs, ctx: &Context, scene_path: &Path, scene: &Scene, photons: u32) -> Result<CaseResult> {
+    let settings = Settings {
+        photons_per_pass: photons,
+        mode: Mode::from(args.mode),
+        probe: args.probe.into(),
+        cone_k: args.cone.0,
+        ..Settings::default()
+    };
+    ctx.reset_memory_peak();
+    reset_peak_rss();
+    let mut renderer = Renderer::new(ctx, scene, settings)?;
+    for _ in 0..args.warmup {
+        renderer.pass()?;
+    }
+    // Memory after the warm-up and after the measured passes: nothing should grow with passes.
+    let (dev_before, rss_before) = (ctx.memory_usage(), host_rss());
+    let measured: Vec<PassStats> = (0..args.passes).map(|_| renderer.pass()).collect::<Result<_, _>>()?;
+    let (dev_after, rss_after) = (ctx.memory_usage(), host_rss());
+    renderer.resolve()?; // the first resolve compiles its pipeline
+    let resolve_ms = median((0..3).map(|_| renderer.resolve()).collect::<Result<Vec<_>, _>>()?);
+    let breakdown = match args.breakdown {
+        true => renderer.photon_breakdown(photons)?,
+        false => Vec::new(),
+    };
+    let stage: BTreeMap<&'static str, f64> = STAGES
+        .iter()
+        .map(|&s| (s, median(measured.iter().map(|p| p.stage_ms(s)).collect())))
+        .collect();
+    let wall = median(measured.iter().map(|p| p.wall_ms).collect());
+    let bvh = renderer.bvh_stats();
+    let hit_points = renderer.active_hit_points();
+    Ok(CaseResult {
+        scene: scene_path.display().to_string(),
+        photons_per_pass: photons,
+        width: scene.camera.width,
+        height: scene.camera.height,
+        hit_points,
+        records_per_pass: median(measured.iter().map(|p| p.records as f64).collect()),
+        batches_per_pass: measured.last().map_or(0, |p| p.batches),
+        ray_ms: renderer.ray_ms(),
+        pass_wall_ms_median: wall,
+        pass_wall_ms_all: measured.iter().map(|p| p.wall_ms).collect(),
+        resolve_ms_median: resolve_ms,
+        photons_per_second: photons as f64 / (wall * 1e-3),
+        photon_stage_ns_per_photon: stage["photon"] * 1e6 / photons as f64,
+        eye_ns_per_hit_point: stage["ray"] * 1e6 / hit_points.max(1) as f64,
+        vs_first_scene: None,
+        stage_ms_median: stage,
+        photon_breakdown: breakdown
+            .iter()
+            .map(|v| BreakdownResult {
+                variant: v.name,
+                photons: v.photons,
+                gpu_ms: v.gpu_ms,
+                intersections: v.steps,
+                intersections_per_second: v.steps_per_second(),
+            })
+            .collect(),
+        bvh: BvhResult {
+            triangles: bvh.triangles,
+            nodes: bvh.nodes,
+            depth: bvh.depth,
+            build_seconds: bvh.build_seconds,
+            bytes: renderer.bvh_bytes(),
+        },
+        device_memory: DeviceMemoryResult {
+            peak_reserved_bytes: dev_after.peak_reserved_bytes,
+            in_use_bytes_after_warmup: dev_before.in_use_bytes,
+            in_use_bytes_after_measured: dev_after.in_use_bytes,
+        },
+        host_rss: HostRssResult {
+            peak_bytes: rss_after.map(|r| r.1),
+            bytes_after_warmup: rss_before.map(|r| r.0),
+            bytes_after_measured: rss_after.map(|r| r.0),
+        },
+    })
+}
+
+pub fn run(args: BenchArgs) -> Result<()> {
+    let ctx = args.device.open()?;
+    let info = ctx.info().clone();
+    println!("device: {} ({}, {})", info.name, info.kind, info.driver);
+    println!(
+        "mode {}, probe {}, cone {}; {} warm-up passes, median of {}",
+        crate::cli_name(args.mode),
+        crate::cli_name(args.probe),
+        args.cone.0.map_or("off".to_string(), |k| k.to_string()),
+        args.warmup,
+        args.passes
+    );
+    let ladder = args.scene.len() > 1;
+    let mut results: Vec<CaseResult> = Vec::new();
+    for path in &args.scene {
+        let loading = std::time::Instant::now();
+        let base = crate::load_scene(path, &args.defines)?;
+        let load_s = loading.elapsed().as_secs_f64();
+        if ladder {
+            println!("scene {}", path.display());
+        }
+        for (index, case) in args.cases.0.iter().enumerate() {
+            let (width, height) = case.resolution.unwrap_or((base.camera.width, base.camera.height));
+            let mut r = measure(&args, &ctx, path, &base.with_resolution(width, height), case.photons)?;
+            if index == 0 {
+                if r.bvh.triangles > 0 {
+                    println!(
+                        "{} triangles loaded in {:.2} s; BVH built in {:.2} s ({:.2} M triangles/s), {} nodes, depth {}, {:.1} MiB",
+                        r.bvh.triangles,
+                        load_s,
+                        r.bvh.build_seconds,
+                        r.bvh.triangles as f64 / r.bvh.build_seconds.max(1e-9) / 1e6,
+                        r.bvh.nodes,
+                        r.bvh.depth,
+                        mib(r.bvh.bytes as u64)
+                    );
+                }
+                print_header(ladder);
+            }
+            // The same case of the first scene (cases run in order, the first scene first).
+            if let Some(first) = results.get(index).filter(|_| ladder) {
+                r.vs_first_scene = Some(Ratios {
+                    photon_stage_per_photon: r.photon_stage_ns_per_photon / first.photon_stage_ns_per_photon,
+                    eye_pass_per_hit_point: r.eye_ns_per_hit_point / first.eye_ns_per_hit_point,
+                });
+            }
+            print_row(&r);
+            print_breakdown(&r.photon_breakdown);
+            results.push(r);
+            crate::check_validation(&ctx)?;
+        }
     }
     let doc = BenchDoc {
-        schema: "ppm-vk-bench/1",
+        schema: "ppm-vk-bench/2",
         device: DeviceDoc {
             name: info.name,
             kind: info.kind,
@@ -392,8 +450,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
             api: info.api_version,
         },
         git_revision: env!("PPM_VK_GIT_REV"),
-        scene: args.scene.display().to_string(),
-        mode,
+        scenes: args.scene.iter().map(|p| p.display().to_string()).collect(),
+        mode: Mode::from(args.mode),
         probe: args.probe.into(),
         cone_k: args.cone.0,
         warmup_passes: args.warmup,

@@ -207,7 +207,7 @@ fn bench_writes_cases_with_stages_and_memory() {
         (doc["mode"].as_str(), doc["probe"].as_str()),
         (Some("ppm"), Some("scale-free"))
     );
-    assert_eq!(doc["schema"], "ppm-vk-bench/1");
+    assert_eq!(doc["schema"], "ppm-vk-bench/2");
     let cases = doc["cases"].as_array().unwrap();
     assert_eq!(cases.len(), 2);
     for c in cases {

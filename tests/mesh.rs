@@ -232,3 +232,106 @@ fn a_degenerate_bvh_stops_the_render_instead_of_losing_hits() {
     }
     assert_clean(&ctx);
 }
+
+/// A batch's records in a fixed order (by their bits), to compare two runs that trace the same photons in
+/// a different order.
+fn sorted_records(mut records: Vec<ppm_vk_engine::layout::Photon>) -> Vec<[u32; 8]> {
+    let mut keys: Vec<[u32; 8]> = records
+        .drain(..)
+        .map(|p| {
+            [
+                p.pos[0].to_bits(),
+                p.pos[1].to_bits(),
+                p.pos[2].to_bits(),
+                p.cell,
+                p.flux[0].to_bits(),
+                p.flux[1].to_bits(),
+                p.flux[2].to_bits(),
+                p.dir,
+            ]
+        })
+        .collect();
+    keys.sort_unstable();
+    keys
+}
+
+/// A small mesh is written into the tracing kernels and tested triangle by triangle, with the BVH's
+/// watertight test: it must trace exactly what the BVH traces. cornell-mesh (14 triangles, three spheres)
+/// both ways: the same hit points from the eye pass and the same photon records, bit for bit, and those
+/// the CPU reference traces.
+#[test]
+fn a_small_mesh_written_into_the_kernels_traces_what_the_bvh_traces() {
+    let ctx = ctx();
+    let s = scene("cornell-mesh.toml").with_resolution(32, 32);
+    let photons = 20_000;
+    let run = |max_inline_triangles: u32| {
+        let settings = Settings {
+            max_inline_triangles,
+            ..sppm(photons)
+        };
+        let mut r = Renderer::new(&ctx, &s, settings).unwrap();
+        let inline = r.gpu_scene().triangles_inline;
+        let hits = r.read_hit_points().unwrap();
+        let records = r.trace_and_gather(0, photons).unwrap();
+        let cpu = ppm_vk_engine::reference::photon_pass(r.gpu_scene(), 0, photons, ppm_vk_kernels::photon::SALT_PHOTON);
+        let matched = match_records(&records, &cpu, 1e-4 * (s.bounds().1 - s.bounds().0).max_element());
+        (inline, hits, sorted_records(records), (cpu.len(), matched))
+    };
+    let (inline, hits_inline, records_inline, (cpu, matched)) = run(64);
+    let (bvh, hits_bvh, records_bvh, _) = run(0);
+    assert!(
+        inline && !bvh,
+        "cornell-mesh should be written out with the default, traversed with 0"
+    );
+    assert_eq!(hits_inline.len(), hits_bvh.len());
+    let differ = hits_inline.iter().zip(&hits_bvh).filter(|(a, b)| a != b).count();
+    assert_eq!(differ, 0, "{differ} of {} hit points differ", hits_inline.len());
+    println!(
+        "records: {} written out, {} through the BVH, {cpu} on the CPU, {matched} of them matched",
+        records_inline.len(),
+        records_bvh.len(),
+    );
+    assert!(records_inline == records_bvh, "the two paths left different records");
+    // The CPU twin of the written-out triangles (reference::trace) tests them in the same order; its
+    // records match as tests/kernels.rs's do (paths split where a last bit lands on a threshold).
+    assert!(
+        matched * 1000 >= cpu * 995,
+        "only {matched} of {cpu} CPU records have a GPU twin"
+    );
+    assert_clean(&ctx);
+}
+
+/// In a BVH scene a photon thread takes photons while its loop budget lasts; a photon whose traversal
+/// runs out is suspended, and it and the photons no thread took are traced in the resume round. With a
+/// first-round budget so small that most photons go that way, the batch's records are exactly those of
+/// the ordinary run: nothing lost, nothing traced twice.
+#[test]
+fn photons_suspended_or_left_over_finish_in_the_resume_round() {
+    let ctx = ctx();
+    let s = scene("cornell-glass-mesh.toml").with_resolution(32, 32);
+    let photons = 20_000;
+    let mut r = Renderer::new(&ctx, &s, sppm(photons)).unwrap();
+    assert!(r.gpu_scene().traverses_bvh());
+    let ordinary = sorted_records(r.trace_and_gather(0, photons).unwrap());
+    let work = r.read_photon_work().unwrap();
+    println!("ordinary: {} records, {work:?}", ordinary.len());
+    // 600 loop iterations in the first round and none started below 300: a thread gets through a photon
+    // or two, and many traversals (the glass sphere's 20480 facets) run out.
+    r.set_photon_round(600, 300);
+    let forced = sorted_records(r.trace_and_gather(0, photons).unwrap());
+    let work = r.read_photon_work().unwrap();
+    println!("forced: {} records, {work:?}", forced.len());
+    assert!(
+        work.suspended > 100,
+        "too few photons suspended to test the resume round: {work:?}"
+    );
+    assert!(
+        work.started < photons,
+        "every photon started in the first round: {work:?}"
+    );
+    assert_eq!(forced.len(), ordinary.len());
+    assert!(forced == ordinary, "the resume round traced other records");
+    let counters = r.path_counters().unwrap();
+    assert_eq!(counters.traversal_cut, 0, "{counters:?}");
+    assert_clean(&ctx);
+}

@@ -1,11 +1,13 @@
 // Scene bindings shared by the kernels that trace rays (ray, photon): always bindings 0-5, in this order
 // (4 and 5: the triangle BVH, crates/engine/src/bvh.rs; one empty leaf in scenes without meshes).
-// The intersection loops read the scene through SPHERE(i), QUAD(i), NUM_SPHERES and NUM_QUADS. Built as
-// shipped, they read the buffers; the renderer recompiles the tracing kernels with SCENE_CONSTANTS defined
-// and the primitives written out as constants (crates/kernels/src/specialize.rs), so the unrolled loops
-// need no loads at all. Only loop indices may index the constants: a dynamic index into a constant array
-// makes lavapipe copy it per invocation, so materials are read from their buffer (a chain of selects over
-// constants measured no faster).
+// The intersection loops read the scene through SPHERE(i), QUAD(i), INLINE_TRIANGLE(i), NUM_SPHERES,
+// NUM_QUADS and NUM_INLINE_TRIANGLES, and traverse the BVH when NUM_TRIANGLES > 0. Built as shipped, they
+// read the buffers; the renderer recompiles the tracing kernels with SCENE_CONSTANTS defined and the
+// spheres and quads written out as constants (crates/kernels/src/specialize.rs), so the unrolled loops
+// need no loads at all; the triangles of a small mesh are written out too, and then no BVH is traversed.
+// Only loop indices may index the constants: a dynamic index into a constant array makes lavapipe copy it
+// per invocation, so materials are read from their buffer (a chain of selects over constants measured no
+// faster).
 #ifndef BINDINGS_GLSL
 #define BINDINGS_GLSL
 #include "params.glsl"
@@ -18,12 +20,16 @@ layout(std430, binding = 5) readonly buffer BvhTriangles { Triangle bvh_triangle
 #include "scene_constants.glsl"
 #define SPHERE(i) SCENE_SPHERES[i]
 #define QUAD(i) SCENE_QUADS[i]
-#define NUM_TRIANGLES 0u
+#define INLINE_TRIANGLE(i) SCENE_TRIANGLES[i]
+// SCENE_BVH: the scene's triangles are in the BVH, not written out.
+#define NUM_TRIANGLES (SCENE_BVH ? params.num_triangles : 0u)
 #else
 #define NUM_TRIANGLES params.num_triangles
 #define NUM_SPHERES params.num_spheres
 #define NUM_QUADS params.num_quads
+#define NUM_INLINE_TRIANGLES 0u
 #define SPHERE(i) spheres[i]
 #define QUAD(i) quads[i]
+#define INLINE_TRIANGLE(i) bvh_triangles[i]
 #endif
 #endif

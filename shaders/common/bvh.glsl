@@ -207,8 +207,13 @@ uint bvh_subgroup_cost(BvhHit hit) {
     return subgroupMax(hit.steps) + 1u;
 }
 
-// The geometric normal of a triangle: its front side is the one its vertices wind counter-clockwise on.
+// The geometric normal of a triangle from its edges v1 - v0 and v2 - v0: its front side is the one its
+// vertices wind counter-clockwise on.
+vec3 triangle_normal(vec3 e1, vec3 e2) {
+    return normalize(cross(e1, e2));
+}
+
 vec3 bvh_normal(Triangle tr) {
-    return normalize(cross(tr.v1 - tr.v0, tr.v2 - tr.v0));
+    return triangle_normal(tr.v1 - tr.v0, tr.v2 - tr.v0);
 }
 #endif

@@ -49,18 +49,25 @@ void glass_branch(vec3 pos, vec3 nf, bool front, float ior, float u, inout vec3 
 struct Hit {
     float t;
     vec3 pos;
-    vec3 normal;     // geometric normal: outward for spheres, the front normal for quads
+    vec3 normal;     // geometric normal: outward for spheres, the front normal for quads and triangles
     uint material;
 };
 
+const uint HIT_QUAD = 0u;     // hit.normal set in the loop
+const uint HIT_SPHERE = 1u;
+const uint HIT_TRIANGLE = 2u; // hit.normal from the triangle's vertices, after the loops
+
 // Nearest hit with t in (tmin, tmax); false if none. What the hit needs is taken inside the loops, where
-// the primitive's index is the loop's own.
+// the primitive's index is the loop's own. The tests run in a fixed order (spheres, quads, the triangles
+// written out, the BVH), each only accepting a hit nearer than the best so far: the CPU reference
+// (reference::trace::intersect_scene) keeps the same order, so equal distances resolve the same way.
 bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {
     hit.t = tmax;
     bool found = false;
-    bool on_sphere = false;
+    uint kind = HIT_QUAD;
     vec3 center = vec3(0.0);
     float inv_radius = 0.0;
+    Triangle tri = Triangle(vec3(0.0), 0u, vec3(0.0), 0u, vec3(0.0), 0u);
     for (uint i = 0u; i < NUM_SPHERES; i++) {
         Sphere s = SPHERE(i);
         vec3 oc = o - s.center;
@@ -72,7 +79,7 @@ bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {
         float t = -b - sq;
         if (t <= tmin) t = -b + sq;
         if (t > tmin && t < hit.t) {
-            hit.t = t; found = true; on_sphere = true;
+            hit.t = t; found = true; kind = HIT_SPHERE;
             center = s.center; inv_radius = 1.0 / s.radius; hit.material = s.material;
         }
     }
@@ -86,16 +93,29 @@ bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {
         float a = dot(q.w, cross(rel, q.edge_v));
         float b = dot(q.w, cross(q.edge_u, rel));
         if (a < 0.0 || a > 1.0 || b < 0.0 || b > 1.0) continue;
-        hit.t = t; found = true; on_sphere = false;
+        hit.t = t; found = true; kind = HIT_QUAD;
         hit.normal = q.normal; hit.material = q.material;
+    }
+    // A small mesh's triangles, written out (specialize.rs): each tested, with the BVH's watertight test.
+    if (NUM_INLINE_TRIANGLES > 0u) {
+        BvhRay br = bvh_ray(o, d);
+        [[unroll]] for (uint i = 0u; i < NUM_INLINE_TRIANGLES; i++) {
+            Triangle tr = INLINE_TRIANGLE(i);
+            float t;
+            vec2 bary;
+            if (bvh_triangle_test(br, tr.v0, tr.v1, tr.v2, tmin, hit.t, t, bary)) {
+                hit.t = t; found = true; kind = HIT_TRIANGLE;
+                tri = tr; hit.material = tr.material;
+            }
+        }
     }
     if (NUM_TRIANGLES > 0u) {
         BvhHit bh;
         uint had = bvh_left;
         if (bvh_intersect(o, d, tmin, hit.t, bvh_left, bh)) {
-            Triangle tr = bvh_triangles[bh.triangle];
-            hit.t = bh.t; found = true; on_sphere = false;
-            hit.normal = bvh_normal(tr); hit.material = tr.material;
+            tri = bvh_triangles[bh.triangle];
+            hit.t = bh.t; found = true; kind = HIT_TRIANGLE;
+            hit.material = tri.material;
         }
         // bvh_left is a budget, not a count of loop iterations: unlimited devices pass 0xffffffff.
         if (bvh_left != 0xffffffffu) bvh_left -= min(bvh_left, bvh_subgroup_cost(bh));
@@ -106,7 +126,8 @@ bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {
     }
     if (found) {
         hit.pos = o + hit.t * d;
-        if (on_sphere) hit.normal = (hit.pos - center) * inv_radius;
+        if (kind == HIT_SPHERE) hit.normal = (hit.pos - center) * inv_radius;
+        if (kind == HIT_TRIANGLE) hit.normal = bvh_normal(tri);
     }
     return found;
 }

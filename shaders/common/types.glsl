@@ -168,6 +168,29 @@ struct PathCounters {
     uint pad0;
 };
 
+// A batch's photon work in a BVH scene (photon.comp): photons taken from the counter, photons suspended
+// for the resume round, and the resume round's dispatch (a VkDispatchIndirectCommand, photon_resume.comp).
+struct PhotonWork {
+    uint started;    // photons of the batch threads have taken (may pass the batch's count)
+    uint suspended;  // entries of the suspended photons' buffer
+    uint pad0;
+    uint pad1;
+    uvec3 groups;    // workgroups of the resume round
+    uint pad2;
+};
+
+// A photon suspended where its thread's loop budget ran out, to go on from the same intersection.
+struct PhotonState {
+    uint64_t state;  // its random stream (Rng)
+    uint64_t inc;
+    vec3 o;          // the ray still to trace
+    uint depth;      // surface interactions so far
+    vec3 d;
+    uint pad0;
+    vec3 flux;
+    uint pad1;
+};
+
 // A node of the flattened BVH (crates/engine/src/bvh.rs), in depth-first order: an interior node's first
 // child is the node after it, its second child is at `offset`; a leaf holds triangles offset .. offset +
 // count - 1 of the leaf-ordered triangle buffer.

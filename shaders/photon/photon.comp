@@ -6,6 +6,7 @@
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_KHR_shader_subgroup_vote : require
 #extension GL_EXT_control_flow_attributes : require
 layout(local_size_x = 64) in;
 
@@ -15,13 +16,17 @@ layout(std430, binding = 6) readonly buffer Lights { Light lights[]; };
 layout(std430, binding = 7) writeonly buffer Photons { u64vec4 photons[]; }; // Photon records (photon_words)
 layout(std430, binding = 8) buffer Counter { uint photon_count; };
 layout(std430, binding = 9) buffer Cut { PathCounters cut; };
+layout(std430, binding = 10) buffer Work { PhotonWork work; };
+layout(std430, binding = 11) buffer Suspended { PhotonState suspended[]; };
 layout(push_constant) uniform PhotonPush {
     uint64_t first;  // global index of this batch's first photon: its random stream
     uint count;      // photons in this batch
     uint salt;       // random stream family (photon passes and the probe pass differ)
     uint per_thread; // photons per thread, set with params.max_photon_depth so that no SIMD group can
                      // exceed the device's loop budget (crates/kernels/src/photon.rs, PathLimits)
-    uint pad0;
+    uint resume;     // 1: the resume round of a BVH scene's batch (below)
+    uint reserve;    // BVH scenes: the least budget a thread starts a photon with
+    uint budget;     // BVH scenes: a thread's budget in the first round (the resume round's: params)
 } pc;
 
 #include "rng.glsl"
@@ -52,14 +57,16 @@ void emit(Photon rec) {
 
 // The light a photon leaves, for the uniform number u (the first of its stream): the first whose running
 // cdf exceeds u.
-#ifdef SCENE_CONSTANTS
+#ifdef SCENE_INLINE_LIGHTS
 // The lights are constants: a chain of selects, unrolled, reads no memory (a dynamically indexed constant
-// array would be copied per invocation).
+// array would be copied per invocation). A triangle's normal is computed from its edges as the buffer
+// path below computes it (bvh_normal), so both start photons from the same bits.
 Emitter choose_emitter(float u) {
     Emitter e = SCENE_EMITTERS[0];
     [[unroll]] for (uint i = 1u; i < NUM_LIGHTS; i++) {
         if (u >= SCENE_EMITTERS[i - 1u].cdf) e = SCENE_EMITTERS[i];
     }
+    if (e.triangle) e.normal = triangle_normal(e.edge_u, e.edge_v);
     return e;
 }
 #else
@@ -83,21 +90,43 @@ Emitter choose_emitter(float u) {
 }
 #endif
 
+// Loop iterations of one step of the path loop besides the BVH's: the step itself and the loops over the
+// spheres, quads and written-out triangles in intersect_scene (counted as loops even where they are
+// unrolled), and choosing a light (its binary search; counted on every step a lane starts a photon).
+#define PATH_STEP_LOOPS (NUM_SPHERES + NUM_QUADS + NUM_INLINE_TRIANGLES + 3u)
+#define LIGHT_LOOPS (findMSB(params.num_lights) + 2u)
+
+// A photon's path is its own: the numbers it draws come from its own stream (its global index), so which
+// thread traces it, and when, changes nothing but the order of the records.
+//
 // A thread traces pc.per_thread photons and starts its next one as soon as a path ends ("path
 // regeneration"), so the lanes of a subgroup stay busy instead of waiting for the longest of their paths.
-// Paths end by Russian roulette only; params.max_photon_depth (surface interactions) is a backstop that
-// keeps every SIMD group inside lavapipe's loop budget. A path that reaches it between diffuse surfaces
-// has survived roulette at each, which happens with probability at most rho_max^depth (< 1e-15 at rho 0.95
-// and the depths PathLimits picks); such a path is counted in cut.photon_paths, never dropped silently.
+// Paths end by Russian roulette only; params.max_photon_depth (surface interactions) is a backstop. A path
+// that reaches it between diffuse surfaces has survived roulette at each, which happens with probability
+// at most rho_max^depth (< 1e-15 at rho 0.95 and the depths PathLimits picks); such a path is counted in
+// cut.photon_paths, never dropped silently.
+//
+// Without a BVH the depth backstop also keeps every SIMD group inside lavapipe's loop budget: photon
+// t + k * threads is thread t's k-th. With a BVH no bound on a path's loop iterations is useful, so each
+// thread counts what its subgroup has spent (bvh_left: traversal steps and path steps alike, geometry.glsl)
+// and takes its photons from a counter (work.started), one at a time, while at least pc.reserve is left.
+// A photon whose traversal runs out is suspended: its state (photon_state) goes to `suspended`, and the
+// thread stops. The resume round (pc.resume = 1, dispatched by photon_resume.comp after this one) gives
+// each suspended photon, and each photon of the batch no thread started, a thread and a whole budget of
+// its own, which is what every photon of a BVH scene had when a thread traced one. There a traversal that
+// runs out is what it was then: an error if it alone took BVH_TRAVERSAL_MIN steps or more (a degenerate
+// BVH), else the end of a very long path, counted in cut.photon_paths.
 // lavapipe runs both sides of every branch under a mask, so the loop below is written to have as little
 // inside branches as it can: the cosine-weighted direction that a new photon and a diffuse bounce both
 // need is drawn once per step, after either.
 void main() {
     load_params();
     uint t = invocation_index();
-    uint threads = (pc.count + pc.per_thread - 1u) / pc.per_thread;
+    bool dynamic = NUM_TRIANGLES > 0u;
+    uint started = pc.resume != 0u ? min(work.started, pc.count) : 0u;
+    uint threads = pc.resume != 0u ? work.suspended + pc.count - started : (pc.count + pc.per_thread - 1u) / pc.per_thread;
     if (t >= threads) return;
-    bvh_left = params.photon_bvh_budget;
+    bvh_left = pc.resume != 0u || !dynamic ? params.photon_bvh_budget : pc.budget;
     uint next = 0u;          // photons of this thread started so far
     bool alive = false;
     Rng rng;
@@ -105,11 +134,39 @@ void main() {
     vec3 lobe;               // the normal a direction is still to be drawn about (pending)
     bool pending = false;
     uint depth = 0u;
+    if (pc.resume != 0u && t < work.suspended) {
+        PhotonState s = suspended[t];
+        rng = Rng(s.state, s.inc);
+        o = s.o;
+        d = s.d;
+        flux = s.flux;
+        depth = s.depth;
+        alive = true;
+        next = 1u;
+    }
     for (;;) {
+        if (dynamic && bvh_left != 0xffffffffu) {
+            // The subgroup's iterations of this loop (and of choose_emitter's), on every lane alike.
+            bvh_left -= min(bvh_left, PATH_STEP_LOOPS + (subgroupAny(!alive) ? LIGHT_LOOPS : 0u));
+        }
         if (!alive) {
-            // Photon t + k * threads: consecutive threads start consecutive photons.
-            uint i = t + next * threads;
-            if (next == pc.per_thread || i >= pc.count) break;
+            uint i;
+            if (pc.resume != 0u) {
+                // One photon no thread of the first round started.
+                if (next == 1u) break;
+                i = started + t - work.suspended;
+            } else if (dynamic) {
+                if (next == pc.per_thread || bvh_left < pc.reserve) break;
+                uvec4 ballot = subgroupBallot(true);
+                uint base = 0u;
+                if (subgroupElect()) base = atomicAdd(work.started, subgroupBallotBitCount(ballot));
+                i = subgroupBroadcastFirst(base) + subgroupBallotExclusiveBitCount(ballot);
+                if (i >= pc.count) break;
+            } else {
+                // Photon t + k * threads: consecutive threads start consecutive photons.
+                i = t + next * threads;
+                if (next == pc.per_thread || i >= pc.count) break;
+            }
             next++;
             rng = rng_new(uint64_t(params.seed) | (uint64_t(pc.salt) << 32), pc.first + uint64_t(i));
             Emitter e = choose_emitter(rng_float(rng));
@@ -141,8 +198,14 @@ void main() {
 #endif
         Hit h;
         if (!intersect_scene(o, d, 0.0, 1e30, h)) {
-            // Out of traversal steps: an error (bvh_cut) or a long path's end (bvh_spent); either way this
-            // thread's budget is gone, so it stops (BVH scenes trace one photon per thread).
+            // Out of traversal steps: this thread's budget is gone, so it stops. In the first round of a
+            // BVH scene the photon waits for the resume round, from this intersection; in the resume round
+            // it is an error (bvh_cut) or a long path's end (bvh_spent).
+            if ((bvh_cut || bvh_spent) && pc.resume == 0u) {
+                uint at = atomicAdd(work.suspended, 1u);
+                suspended[at] = PhotonState(rng.state, rng.inc, o, depth, d, 0u, flux, 0u);
+                break;
+            }
             if (bvh_cut) { atomicAdd(cut.traversal_cut, 1u); break; }
             if (bvh_spent) { atomicAdd(cut.photon_paths, 1u); break; }
             alive = false;

@@ -26,6 +26,7 @@
 // chosen their own count would bias it).
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_control_flow_attributes : require
 layout(local_size_x = 64) in;
 
 #include "types.glsl"

@@ -74,3 +74,50 @@ pub fn furnace(w: u32, h: u32) -> Scene {
 pub fn close(a: f64, b: f64, rel: f64, abs: f64) -> bool {
     (a - b).abs() <= rel * a.abs().max(b.abs()) + abs
 }
+
+/// How many of `cpu`'s records have a distinct twin in `gpu`: position within `pos_tol`, flux within
+/// 1e-5 relative, direction code within 4 units per 16-bit half.
+pub fn match_records(
+    gpu: &[ppm_vk_engine::layout::Photon],
+    cpu: &[ppm_vk_engine::layout::Photon],
+    pos_tol: f32,
+) -> usize {
+    let q = |x: f32| (x / (4.0 * pos_tol)).floor() as i64;
+    let mut index: std::collections::HashMap<[i64; 3], Vec<usize>> = std::collections::HashMap::new();
+    for (i, p) in gpu.iter().enumerate() {
+        index.entry(p.pos.map(q)).or_default().push(i);
+    }
+    let mut used = vec![false; gpu.len()];
+    let twins = |a: &ppm_vk_engine::layout::Photon, b: &ppm_vk_engine::layout::Photon| {
+        let dir_close = |x: u32, y: u32| {
+            ((x & 0xffff) as i16 as i32 - (y & 0xffff) as i16 as i32).abs() <= 4
+                && ((x >> 16) as i16 as i32 - (y >> 16) as i16 as i32).abs() <= 4
+        };
+        (glam::Vec3::from_array(a.pos) - glam::Vec3::from_array(b.pos))
+            .abs()
+            .max_element()
+            <= pos_tol
+            && (0..3).all(|c| close(a.flux[c] as f64, b.flux[c] as f64, 1e-5, 0.0))
+            && dir_close(a.dir, b.dir)
+    };
+    let mut matched = 0;
+    'records: for c in cpu {
+        let k = c.pos.map(q);
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    if let Some(list) = index.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
+                        for &i in list {
+                            if !used[i] && twins(&gpu[i], c) {
+                                used[i] = true;
+                                matched += 1;
+                                continue 'records;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    matched
+}

@@ -46,7 +46,8 @@ impl Buffer {
             BufferKind::Storage => (
                 vk::BufferUsageFlags::STORAGE_BUFFER
                     | vk::BufferUsageFlags::TRANSFER_DST
-                    | vk::BufferUsageFlags::TRANSFER_SRC,
+                    | vk::BufferUsageFlags::TRANSFER_SRC
+                    | vk::BufferUsageFlags::INDIRECT_BUFFER,
                 MemoryLocation::GpuOnly,
             ),
             BufferKind::Readback => (vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu),

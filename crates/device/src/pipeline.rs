@@ -131,6 +131,31 @@ impl ComputePipeline {
         push: &[u8],
         groups: [u32; 3],
     ) -> Result<()> {
+        if groups.contains(&0) {
+            return Ok(());
+        }
+        self.bind(cmd, buffers, push)?;
+        unsafe { self.shared.device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]) };
+        Ok(())
+    }
+
+    /// Records a dispatch whose workgroup counts a kernel wrote: the `VkDispatchIndirectCommand` (three
+    /// u32) at byte `offset` of `args`, read when the dispatch runs (after a [`barrier`]).
+    pub fn dispatch_indirect(
+        &self,
+        cmd: vk::CommandBuffer,
+        buffers: &[&Buffer],
+        push: &[u8],
+        args: &Buffer,
+        offset: u64,
+    ) -> Result<()> {
+        self.bind(cmd, buffers, push)?;
+        unsafe { self.shared.device.cmd_dispatch_indirect(cmd, args.raw(), offset) };
+        Ok(())
+    }
+
+    /// Binds the pipeline, `buffers` at bindings 0.. and `push` as its push constants.
+    fn bind(&self, cmd: vk::CommandBuffer, buffers: &[&Buffer], push: &[u8]) -> Result<()> {
         if buffers.len() != self.bindings as usize {
             bail!(
                 "kernel {} takes {} buffers, got {}",
@@ -146,9 +171,6 @@ impl ComputePipeline {
                 self.push_size,
                 push.len()
             );
-        }
-        if groups.contains(&0) {
-            return Ok(());
         }
         let device = &self.shared.device;
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
@@ -183,7 +205,6 @@ impl ComputePipeline {
             if !push.is_empty() {
                 device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
             }
-            device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
         }
         Ok(())
     }
@@ -201,7 +222,7 @@ impl Drop for ComputePipeline {
 }
 
 /// Records a full memory barrier between commands: every earlier compute or transfer write becomes
-/// visible to every later compute, transfer or host access. Kernels here run strictly one after another,
+/// visible to every later compute, transfer, indirect-dispatch or host access. Kernels here run strictly one after another,
 /// so one kind of barrier serves all.
 pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer) {
     let mb = [vk::MemoryBarrier::default()
@@ -211,13 +232,17 @@ pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer) {
                 | vk::AccessFlags::SHADER_WRITE
                 | vk::AccessFlags::TRANSFER_READ
                 | vk::AccessFlags::TRANSFER_WRITE
-                | vk::AccessFlags::HOST_READ,
+                | vk::AccessFlags::HOST_READ
+                | vk::AccessFlags::INDIRECT_COMMAND_READ,
         )];
     unsafe {
         ctx.device().cmd_pipeline_barrier(
             cmd,
             vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
-            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::HOST,
+            vk::PipelineStageFlags::COMPUTE_SHADER
+                | vk::PipelineStageFlags::TRANSFER
+                | vk::PipelineStageFlags::HOST
+                | vk::PipelineStageFlags::DRAW_INDIRECT,
             vk::DependencyFlags::empty(),
             &mb,
             &[],

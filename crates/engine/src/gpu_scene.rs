@@ -6,6 +6,7 @@ use ppm_vk_kernels::layout::{
     self, BvhNode, Light, Material, Quad, RenderParams, Sphere, Triangle, LIGHT_QUAD, LIGHT_TRIANGLE,
 };
 use ppm_vk_kernels::lookup::SCAN_BLOCK;
+use ppm_vk_kernels::specialize::MAX_INLINE_PRIMITIVES;
 
 use crate::bvh::{self, BvhOptions, BvhStats, TriangleInput};
 use crate::error::{Error, Result};
@@ -24,6 +25,9 @@ pub struct GpuScene {
     pub bvh_nodes: Vec<BvhNode>,
     pub bvh_triangles: Vec<Triangle>,
     pub bvh_stats: BvhStats,
+    /// The kernels test `bvh_triangles` one by one, written into them as constants (a small mesh:
+    /// `specialize::MAX_INLINE_TRIANGLES`), and never traverse the BVH.
+    pub triangles_inline: bool,
     /// The starting search radius of every hit point (eq. 8, or the setting).
     pub initial_radius: f32,
     /// Total emitted power of all lights, per channel (W, un-normalised photon flux sums to this).
@@ -259,7 +263,13 @@ impl GpuScene {
             flux_fixed,
             ..Default::default()
         };
+        // Small meshes are compiled into the tracing kernels with the spheres and quads (specialize.rs).
+        let triangles_inline = settings.specialize
+            && !built.triangles.is_empty()
+            && built.triangles.len() <= settings.max_inline_triangles as usize
+            && spheres.len() + quads.len() <= MAX_INLINE_PRIMITIVES;
         let mut g = GpuScene {
+            triangles_inline,
             params,
             materials,
             spheres,
@@ -295,6 +305,17 @@ impl GpuScene {
     pub fn max_buckets(&self) -> u32 {
         self.fixed_buckets
             .unwrap_or_else(|| grid_buckets(f64::INFINITY, 1.0, self.params.photon_capacity))
+    }
+
+    /// Whether the tracing kernels traverse the BVH (the scene has triangles, not written out).
+    pub fn traverses_bvh(&self) -> bool {
+        self.params.num_triangles > 0 && !self.triangles_inline
+    }
+
+    /// Device bytes of the BVH's nodes and triangles.
+    pub fn bvh_bytes(&self) -> usize {
+        self.bvh_nodes.len() * std::mem::size_of::<BvhNode>()
+            + self.bvh_triangles.len() * std::mem::size_of::<Triangle>()
     }
 
     pub fn pixels(&self) -> u32 {

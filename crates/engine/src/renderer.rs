@@ -7,13 +7,13 @@ use std::time::Instant;
 
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
 use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers};
-use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, Triangle};
+use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, PhotonWork, Triangle};
 use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PathLimits, PhotonPush, SALT_EYE, SALT_PHOTON, SALT_PROBE};
 use ppm_vk_kernels::probe::{self, ProbePush, MODE_PAPER, MODE_SCALE_FREE};
 use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers, JITTER_RANDOM};
 use ppm_vk_kernels::resolve::{self, ResolvePush};
-use ppm_vk_kernels::specialize::{self, MAX_INLINE_PRIMITIVES};
+use ppm_vk_kernels::specialize::{self, SceneConstants, MAX_INLINE_PRIMITIVES};
 use ppm_vk_kernels::update::RadiusMax;
 use ppm_vk_kernels::update::{self, UpdatePush};
 use ppm_vk_kernels::{pipeline, pipeline_from, reflected};
@@ -92,6 +92,7 @@ struct Kernels {
     ray: ComputePipeline,
     probe: GridReader,
     photon: ComputePipeline,
+    photon_resume: ComputePipeline,
     lookup: Lookup,
     gather: GridReader,
     update: ComputePipeline,
@@ -139,6 +140,9 @@ pub struct Renderer {
     busy: Buffer,
     image: Buffer,
     counter: Buffer,
+    /// A BVH scene's photon work counters and suspended photons (photon.comp).
+    photon_work: Buffer,
+    suspended: Buffer,
     /// Each batch's record count, copied from `counter`, to detect overflow after the pass.
     batch_log: Buffer,
     grid: Grid,
@@ -332,15 +336,20 @@ impl Renderer {
         let mut gpu = GpuScene::new(scene, &settings, capacity)?;
         // Depth backstops and photons per thread that keep every loop inside the device's budget. The
         // intersection loops are counted as loops even where the specialised kernels unroll them.
-        let limits = if gpu.params.num_triangles > 0 {
+        let limits = if gpu.traverses_bvh() {
             PathLimits::with_bvh
         } else {
             PathLimits::new
         };
+        let inline_triangles = if gpu.triangles_inline {
+            gpu.params.num_triangles
+        } else {
+            0
+        };
         let budget = ctx.info().loop_budget;
         let limits = limits(
             budget,
-            gpu.params.num_spheres + gpu.params.num_quads,
+            gpu.params.num_spheres + gpu.params.num_quads + inline_triangles,
             // choose_emitter's binary search
             u32::BITS - gpu.params.num_lights.leading_zeros() + 1,
             settings.slots(),
@@ -401,6 +410,10 @@ impl Renderer {
                 capacity as u64 * Grid::bytes_per_record(),
             ),
             ("the BVH", bvh_bytes),
+            (
+                "the suspended photons",
+                photon::suspended_bytes(settings.photons_per_pass, limits.per_thread),
+            ),
         ];
         fits_device(&per_pixel, &others, max_range, ctx.info().memory_bytes, &advice)?;
 
@@ -416,6 +429,7 @@ impl Renderer {
                 ray: traced(&reflected::RAY)?,
                 probe: gather::with_group(ctx, &reflected::PROBE, group)?,
                 photon: traced(&reflected::PHOTON)?,
+                photon_resume: pipeline(ctx, &reflected::PHOTON_RESUME)?,
                 lookup: Lookup::new(ctx)?,
                 gather: gather::with_group(ctx, &reflected::GATHER, group)?,
                 update: pipeline(ctx, &reflected::UPDATE)?,
@@ -460,6 +474,11 @@ impl Renderer {
                 busy: storage("emission-sampled pixels", pixels * 4)?,
                 image: storage("image", pixels * 16)?,
                 counter: storage("photon counter", 4)?,
+                photon_work: storage("photon work", std::mem::size_of::<PhotonWork>() as u64)?,
+                suspended: storage(
+                    "suspended photons",
+                    photon::suspended_bytes(settings.photons_per_pass, limits.per_thread),
+                )?,
                 batch_log: storage("batch log", MAX_BATCHES as u64 * 4)?,
                 grid: Grid::new(ctx, gpu.max_buckets(), capacity)?,
                 r2_max: storage("largest radius", 8)?,
@@ -588,6 +607,50 @@ impl Renderer {
         self.profiler.read().device("the eye pass")
     }
 
+    /// Records the photon kernel `k` (the renderer's, or a variant of it) tracing photons `first..first +
+    /// count` of stream family `salt` into the grid's record buffer, its counters cleared first.
+    fn record_photons(
+        &self,
+        cmd: vk::CommandBuffer,
+        k: &ComputePipeline,
+        first: u64,
+        count: u32,
+        salt: u32,
+    ) -> anyhow::Result<()> {
+        self.counter.cmd_fill(cmd, 0);
+        self.photon_work.cmd_fill(cmd, 0);
+        barrier(&self.ctx, cmd);
+        let push = PhotonPush {
+            first,
+            count,
+            salt,
+            per_thread: self.limits.per_thread,
+            resume: 0,
+            reserve: self.limits.photon_reserve,
+            budget: self.limits.photon_first_budget,
+        };
+        let out = photon::PhotonOutputs {
+            photons: &self.grid.records,
+            counter: &self.counter,
+            cut: &self.cut,
+            work: &self.photon_work,
+            suspended: &self.suspended,
+        };
+        let scene = self.scene_buffers();
+        let bvh = self.gpu.traverses_bvh();
+        photon::record(
+            &self.ctx,
+            k,
+            &self.kernels.photon_resume,
+            cmd,
+            &scene,
+            &self.lights,
+            &out,
+            &push,
+            bvh,
+        )
+    }
+
     /// Records photon tracing, the grid build and what uses the grid (the gather, or the probe's first
     /// phase) for one batch of photons `first..first+count` (global indices).
     fn record_batch(
@@ -599,34 +662,15 @@ impl Renderer {
         use_: GridUse,
     ) -> anyhow::Result<()> {
         let ctx = &self.ctx;
-        let scene = self.scene_buffers();
         let hits = self.hit_buffers();
         let k = &self.kernels;
         let capacity = self.gpu.params.photon_capacity;
-        self.counter.cmd_fill(cmd, 0);
-        barrier(ctx, cmd);
         let salt = match use_ {
             GridUse::Gather => SALT_PHOTON,
             GridUse::Probe => SALT_PROBE,
         };
-        let push = PhotonPush {
-            first,
-            count,
-            salt,
-            per_thread: self.limits.per_thread,
-            pad0: 0,
-        };
         self.profiler.scope(cmd, "photon", || {
-            photon::record(
-                &k.photon,
-                cmd,
-                &scene,
-                &self.lights,
-                &self.grid.records,
-                &self.counter,
-                &self.cut,
-                &push,
-            )
+            self.record_photons(cmd, &k.photon, first, count, salt)
         })?;
         barrier(ctx, cmd);
         self.counter.cmd_copy(cmd, &self.batch_log, 0, log_index as u64 * 4, 4);
@@ -966,6 +1010,11 @@ impl Renderer {
         &self.gpu.bvh_stats
     }
 
+    /// Device bytes of the scene's BVH (nodes and triangles).
+    pub fn bvh_bytes(&self) -> usize {
+        self.gpu.bvh_bytes()
+    }
+
     /// Hit-point slots: pixels times hit points per pixel.
     pub fn hit_point_slots(&self) -> u32 {
         self.gpu.slots()
@@ -1047,13 +1096,6 @@ impl Renderer {
     fn photon_variants(&mut self, photons: u32) -> anyhow::Result<Vec<PhotonVariant>> {
         let saved: Vec<PathCounters> = self.ctx.download_prefix(&self.cut, 1)?;
         let photons = photons.min(self.batch); // one batch: the records must fit
-        let push = PhotonPush {
-            first: 0,
-            count: photons,
-            salt: SALT_PHOTON,
-            per_thread: self.limits.per_thread,
-            pad0: 0,
-        };
         let variant = |r: &Self, defines: &[(&str, &str)]| {
             tracing_pipeline(&r.ctx, &r.gpu, &r.settings, &reflected::PHOTON, defines)
         };
@@ -1062,12 +1104,8 @@ impl Renderer {
             r.ctx.upload(&r.cut, bytemuck::bytes_of(&PathCounters::default()))?;
             r.profiler.reset();
             r.ctx.run(|cmd| {
-                r.counter.cmd_fill(cmd, 0);
-                barrier(&r.ctx, cmd);
-                let scene = r.scene_buffers();
-                r.profiler.scope(cmd, "photon", || {
-                    photon::record(k, cmd, &scene, &r.lights, &r.grid.records, &r.counter, &r.cut, &push)
-                })
+                r.profiler
+                    .scope(cmd, "photon", || r.record_photons(cmd, k, 0, photons, SALT_PHOTON))
             })?;
             Ok(r.profiler.read()?.iter().map(|s| s.duration_ms).sum())
         };
@@ -1243,6 +1281,18 @@ impl Renderer {
     pub fn set_emitted(&mut self, emitted: u64) {
         self.emitted = emitted;
     }
+
+    /// Sets a BVH scene's photon threads' first-round budget and reserve (`PathLimits`), so that photons
+    /// are suspended and left to the resume round.
+    pub fn set_photon_round(&mut self, first_budget: u32, reserve: u32) {
+        self.limits.photon_first_budget = first_budget;
+        self.limits.photon_reserve = reserve;
+    }
+
+    /// The last photon batch's work counters (`PhotonWork`: photons started and suspended).
+    pub fn read_photon_work(&self) -> anyhow::Result<ppm_vk_kernels::layout::PhotonWork> {
+        Ok(self.ctx.download_prefix(&self.photon_work, 1)?[0])
+    }
 }
 
 /// Marks the 8 neighbours of every marked pixel of a `width` x `height` image (row-major, nonzero:
@@ -1273,11 +1323,15 @@ fn tracing_pipeline(
     k: &reflected::KernelInfo,
     defines: &[(&str, &str)],
 ) -> anyhow::Result<ComputePipeline> {
-    let inline = settings.specialize
-        && gpu.spheres.len() + gpu.quads.len() <= MAX_INLINE_PRIMITIVES
-        && gpu.params.num_triangles == 0;
+    let inline = settings.specialize && gpu.spheres.len() + gpu.quads.len() <= MAX_INLINE_PRIMITIVES;
     if inline {
-        let constants = specialize::scene_constants(&gpu.spheres, &gpu.quads, &gpu.lights);
+        let constants = specialize::scene_constants(&SceneConstants {
+            spheres: &gpu.spheres,
+            quads: &gpu.quads,
+            triangles: &gpu.bvh_triangles,
+            inline_triangles: gpu.triangles_inline,
+            lights: &gpu.lights,
+        });
         let defines = [&[("SCENE_CONSTANTS", "1")][..], defines].concat();
         pipeline_from(ctx, k, &specialize::compile_with(k, &defines, &constants)?)
     } else if defines.is_empty() {

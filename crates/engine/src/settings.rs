@@ -70,6 +70,11 @@ pub struct Settings {
     /// Compile the tracing kernels with the scene inlined as constants (faster; same results up to the
     /// last bit of a fused multiply-add). `false` uses the kernels as built.
     pub specialize: bool,
+    /// With `specialize`: meshes of at most this many triangles in all are compiled into the tracing
+    /// kernels with the spheres and quads and tested one by one, instead of through the BVH (the same
+    /// hits: the same watertight test). 0: always the BVH.
+    #[serde(default = "default_inline_triangles")]
+    pub max_inline_triangles: u32,
     /// Buckets of the photon grid's hash table (a power of two, at least 1024); `None` sizes it from the
     /// scene's surface area. Results do not depend on it; a small table makes grid cells share buckets,
     /// which the tests use to exercise that case.
@@ -97,10 +102,15 @@ impl Default for Settings {
             max_photon_depth: 4096,
             emission_samples: 16,
             specialize: true,
+            max_inline_triangles: default_inline_triangles(),
             grid_buckets: None,
             grid_cell: None,
         }
     }
+}
+
+fn default_inline_triangles() -> u32 {
+    ppm_vk_kernels::specialize::MAX_INLINE_TRIANGLES as u32
 }
 
 fn invalid(field: &'static str, message: String) -> Error {
@@ -112,6 +122,14 @@ impl Settings {
     pub fn validate(&self) -> Result<()> {
         if self.photons_per_pass == 0 {
             return Err(invalid("photons_per_pass", "must be at least 1".into()));
+        }
+        let most = ppm_vk_kernels::specialize::MAX_INLINE_TRIANGLES;
+        if self.max_inline_triangles as usize > most {
+            let got = self.max_inline_triangles;
+            return Err(invalid(
+                "max_inline_triangles",
+                format!("must be at most {most}, got {got}"),
+            ));
         }
         if !(self.alpha > 0.0 && self.alpha < 1.0) {
             return Err(invalid("alpha", format!("must be in (0, 1), got {}", self.alpha)));

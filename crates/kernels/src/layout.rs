@@ -252,6 +252,57 @@ gpu_struct!(PathCounters {
     pad0
 });
 
+/// A photon batch's work counters in a BVH scene (photon.comp, photon_resume.comp).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct PhotonWork {
+    /// Photons of the batch the threads have taken (may pass the batch's count).
+    pub started: u32,
+    /// Photons suspended for the resume round.
+    pub suspended: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    /// The resume round's workgroups: a `VkDispatchIndirectCommand` at [`PhotonWork::GROUPS_OFFSET`].
+    pub groups: [u32; 3],
+    pub pad2: u32,
+}
+gpu_struct!(PhotonWork {
+    started,
+    suspended,
+    pad0,
+    pad1,
+    groups,
+    pad2
+});
+
+impl PhotonWork {
+    pub const GROUPS_OFFSET: u64 = std::mem::offset_of!(PhotonWork, groups) as u64;
+}
+
+/// A photon suspended where its thread's loop budget ran out (photon.comp).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PhotonState {
+    pub state: u64,
+    pub inc: u64,
+    pub o: [f32; 3],
+    pub depth: u32,
+    pub d: [f32; 3],
+    pub pad0: u32,
+    pub flux: [f32; 3],
+    pub pad1: u32,
+}
+gpu_struct!(PhotonState {
+    state,
+    inc,
+    o,
+    depth,
+    d,
+    pad0,
+    flux,
+    pad1
+});
+
 /// `BvhNode::count_axis & 3` of a leaf (`BVH_LEAF` in bvh.glsl); 0-2 is an interior node's split axis.
 pub const BVH_LEAF: u32 = 3;
 

@@ -33,6 +33,7 @@ pub mod reflected {
         RAY,
         PROBE,
         PHOTON,
+        PHOTON_RESUME,
         GRID_COUNT,
         GRID_SCAN,
         GRID_OFFSETS,

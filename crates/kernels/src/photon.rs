@@ -4,6 +4,7 @@ use anyhow::{bail, Result};
 use bytemuck::{Pod, Zeroable};
 use ppm_vk_device::{vk, Buffer, ComputePipeline};
 
+use crate::layout::{PhotonState, PhotonWork};
 use crate::push_struct;
 use crate::ray::SceneBuffers;
 
@@ -26,9 +27,23 @@ pub struct PhotonPush {
     pub salt: u32,
     /// Photons per thread ([`PathLimits::per_thread`]).
     pub per_thread: u32,
-    pub pad0: u32,
+    /// 1: the resume round of a BVH scene's batch ([`record`]).
+    pub resume: u32,
+    /// BVH scenes: the least loop budget a thread starts a photon with ([`PathLimits::photon_reserve`]).
+    pub reserve: u32,
+    /// BVH scenes: a thread's loop budget in the first round ([`PathLimits::photon_first_budget`]); the
+    /// resume round's is `RenderParams::photon_bvh_budget`.
+    pub budget: u32,
 }
 push_struct!(PhotonPush, PHOTON);
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PhotonResumePush {
+    pub count: u32,
+    pub local_size: u32,
+}
+push_struct!(PhotonResumePush, PHOTON_RESUME);
 
 /// Surface interactions a photon path is allowed below which roulette alone ends paths for all practical
 /// purposes: a path cut there has survived roulette at up to this many diffuse surfaces, probability
@@ -49,10 +64,13 @@ pub const MIN_EYE_DEPTH: u32 = 64;
 /// iterations of one intersection, L of choosing a light), and an eye thread's at most
 /// `paths * ((eye_depth + 1) * (1 + P) + 2)`. Paths that reach a backstop are counted (`PathCounters`).
 ///
-/// With triangles, a BVH traversal takes a number of steps no bound fits well, so each thread gets the
-/// budget its other loops leave (`photon_bvh_budget`, `eye_bvh_budget`) and counts what its traversals
-/// take; one that would overrun stops and is counted (`PathCounters::traversal_cut`), and the renderer
-/// fails: never a silent miss. Such scenes trace one photon per thread, to leave each path the most.
+/// With triangles, a BVH traversal takes a number of steps no bound fits well, so the threads count what
+/// their loops take. A photon thread counts everything against `photon_bvh_budget` and starts photons
+/// while `photon_reserve` is left; a photon that runs out is suspended and finished, with the photons no
+/// thread started, in a resume round where each has a thread and a whole budget (photon.comp). An eye
+/// thread gets the budget its other loops leave (`eye_bvh_budget`). A traversal that overruns a whole
+/// budget stops and is counted (`PathCounters::traversal_cut`), and the renderer fails: never a silent
+/// miss.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PathLimits {
     pub per_thread: u32,
@@ -60,9 +78,15 @@ pub struct PathLimits {
     pub photon_depth: u32,
     /// Specular bounces of an eye path (`RenderParams::max_eye_depth`).
     pub eye_depth: u32,
-    /// BVH steps a photon thread / an eye thread may take in all (`u32::MAX`: unlimited).
+    /// BVH steps a photon thread / an eye thread may take in all (`u32::MAX`: unlimited). A photon thread
+    /// of a BVH scene counts its path steps against it too.
     pub photon_bvh_budget: u32,
     pub eye_bvh_budget: u32,
+    /// BVH scenes: the least of its budget a thread starts a photon with (0: no BVH).
+    pub photon_reserve: u32,
+    /// BVH scenes: a thread's budget in the first round of a batch, `photon_bvh_budget` but where a test
+    /// lowers it to send photons through the resume round.
+    pub photon_first_budget: u32,
     /// Emission samples one eye thread takes per dispatch; an eye pass that wants more runs the ray kernel
     /// again for the rest (`RayPush::chunk`).
     pub emission_per_dispatch: u32,
@@ -104,6 +128,8 @@ impl PathLimits {
                 eye_depth: eye_cap,
                 photon_bvh_budget: u32::MAX,
                 eye_bvh_budget: u32::MAX,
+                photon_reserve: 0,
+                photon_first_budget: u32::MAX,
                 emission_per_dispatch: emission,
             });
         };
@@ -140,6 +166,8 @@ impl PathLimits {
             eye_depth,
             photon_bvh_budget: u32::MAX,
             eye_bvh_budget: u32::MAX,
+            photon_reserve: 0,
+            photon_first_budget: u32::MAX,
             emission_per_dispatch,
         })
     }
@@ -168,7 +196,9 @@ impl PathLimits {
         let eye_paths = slots + emission_per_dispatch;
         let step = 1 + intersect_steps as u64;
         let total = budget as u64 - 1;
-        let photon_loops = |depth: u32| (depth as u64 + 1) * step + lights as u64 + 1;
+        // One photon path, as photon.comp counts it (PATH_STEP_LOOPS, LIGHT_LOOPS): the depth is the one
+        // at which a path of its own, in the resume round, still leaves MIN_BVH_BUDGET to its traversals.
+        let photon_loops = |depth: u32| (depth as u64 + 1) * (step + 2) + lights as u64 + 1;
         let eye_loops = |depth: u32| eye_paths.max(1) as u64 * ((depth as u64 + 1) * step + 2);
         let fit = |mut depth: u32, floor: u32, loops: &dyn Fn(u32) -> u64| -> Option<(u32, u32)> {
             loop {
@@ -188,7 +218,7 @@ impl PathLimits {
             &photon_loops,
         );
         let eye = fit(BVH_EYE_DEPTH.min(eye_cap), MIN_EYE_DEPTH.min(eye_cap), &eye_loops);
-        let (Some((photon_depth, photon_bvh_budget)), Some((eye_depth, eye_bvh_budget))) = (photon, eye) else {
+        let (Some((photon_depth, _)), Some((eye_depth, eye_bvh_budget))) = (photon, eye) else {
             bail!(
                 "the scene is too large for this device's loop budget ({budget} iterations per SIMD group): \
                  one ray intersection loops over {intersect_steps} primitives besides the triangle BVH, which \
@@ -197,36 +227,86 @@ impl PathLimits {
             );
         };
         Ok(PathLimits {
-            per_thread: 1,
+            per_thread: MAX_PER_THREAD,
             photon_depth,
             eye_depth,
-            photon_bvh_budget,
+            photon_bvh_budget: total as u32,
             eye_bvh_budget,
+            photon_reserve: PHOTON_RESERVE,
+            photon_first_budget: total as u32,
             emission_per_dispatch,
         })
     }
 }
 
-/// Traces `push.count` photons, appending their records to `photons` and counting them in `counter`
-/// (which must be zero before; records past the capacity are counted but not written), and counting
-/// paths cut at the depth backstop in `cut` (`PathCounters`).
+/// The least loop budget a photon thread of a BVH scene starts a photon with: as much as a whole path
+/// usually takes many times over (a path of 5 bounces through a million triangles takes about 300 steps),
+/// so that few photons are suspended, and a quarter of the budget, so that a thread gets through several.
+pub const PHOTON_RESERVE: u32 = MIN_BVH_BUDGET;
+
+/// What the photon kernel writes besides its records.
+pub struct PhotonOutputs<'a> {
+    /// The records (`Photon`, appended).
+    pub photons: &'a Buffer,
+    /// The records' count; zero before the batch. Records past the capacity are counted, not written.
+    pub counter: &'a Buffer,
+    /// Paths cut at the depth backstop and traversals cut short (`PathCounters`).
+    pub cut: &'a Buffer,
+    /// A BVH scene's work counters (`PhotonWork`); zero before the batch.
+    pub work: &'a Buffer,
+    /// The suspended photons (`PhotonState`), one per thread of the first round at most.
+    pub suspended: &'a Buffer,
+}
+
+/// Traces `push.count` photons: one dispatch, and in a scene with a BVH (`bvh`) the resume round after it
+/// (photon.comp): `resume` (photon_resume.comp) sizes it from the work counters, and it runs indirectly.
 #[allow(clippy::too_many_arguments)]
 pub fn record(
+    ctx: &ppm_vk_device::Context,
     k: &ComputePipeline,
+    resume: &ComputePipeline,
     cmd: vk::CommandBuffer,
     scene: &SceneBuffers,
     lights: &Buffer,
-    photons: &Buffer,
-    counter: &Buffer,
-    cut: &Buffer,
+    out: &PhotonOutputs,
     push: &PhotonPush,
+    bvh: bool,
 ) -> Result<()> {
+    let buffers = [
+        &scene.bindings()[..],
+        &[lights, out.photons, out.counter, out.cut, out.work, out.suspended],
+    ]
+    .concat();
+    let first = PhotonPush { resume: 0, ..*push };
     k.dispatch(
         cmd,
-        &[&scene.bindings()[..], &[lights, photons, counter, cut]].concat(),
-        bytemuck::bytes_of(push),
+        &buffers,
+        bytemuck::bytes_of(&first),
         push.count.div_ceil(push.per_thread.max(1)) as u64,
+    )?;
+    if !bvh {
+        return Ok(());
+    }
+    ppm_vk_device::barrier(ctx, cmd);
+    let args = PhotonResumePush {
+        count: push.count,
+        local_size: k.local_size(),
+    };
+    resume.dispatch_groups(cmd, &[out.work], bytemuck::bytes_of(&args), [1, 1, 1])?;
+    ppm_vk_device::barrier(ctx, cmd);
+    let second = PhotonPush { resume: 1, ..*push };
+    k.dispatch_indirect(
+        cmd,
+        &buffers,
+        bytemuck::bytes_of(&second),
+        out.work,
+        PhotonWork::GROUPS_OFFSET,
     )
+}
+
+/// Bytes of the suspended photons' buffer for batches of up to `photons` photons at `per_thread` each.
+pub fn suspended_bytes(photons: u32, per_thread: u32) -> u64 {
+    photons.div_ceil(per_thread.max(1)) as u64 * std::mem::size_of::<PhotonState>() as u64
 }
 
 #[cfg(test)]
@@ -307,11 +387,17 @@ mod tests {
         for (steps, lights, slots, emission) in [(0, 1, 1, 16), (10, 18, 4, 16), (60, 3, 8, 4)] {
             let l = PathLimits::with_bvh(Some(65535), steps, lights, slots, emission, 4096, 1024).unwrap();
             let step = 1 + steps as u64;
-            let photon = (l.photon_depth as u64 + 1) * step + lights as u64 + 1 + l.photon_bvh_budget as u64;
+            // A photon thread counts all its loops against the whole budget; one path of the backstop's
+            // depth on its own (the resume round) leaves its traversals MIN_BVH_BUDGET.
+            let path = (l.photon_depth as u64 + 1) * (step + 2) + lights as u64 + 1;
             let eye = l.eye_paths(slots) as u64 * ((l.eye_depth as u64 + 1) * step + 2) + l.eye_bvh_budget as u64;
-            assert!(photon <= 65534 && eye <= 65534, "{l:?}");
+            assert!(path + MIN_BVH_BUDGET as u64 <= 65534 && eye <= 65534, "{l:?}");
             assert!(
-                l.per_thread == 1 && l.photon_bvh_budget >= MIN_BVH_BUDGET && l.eye_bvh_budget >= MIN_BVH_BUDGET,
+                l.photon_bvh_budget == 65534 && l.photon_reserve == PHOTON_RESERVE,
+                "{l:?}"
+            );
+            assert!(
+                l.per_thread == MAX_PER_THREAD && l.eye_bvh_budget >= MIN_BVH_BUDGET,
                 "{l:?}"
             );
             assert!(l.photon_depth >= MIN_DEPTH && l.eye_depth >= MIN_EYE_DEPTH, "{l:?}");

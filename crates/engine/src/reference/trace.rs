@@ -56,7 +56,13 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
         best = t;
         found = Some((1, i));
     }
-    if !g.bvh_triangles.is_empty() {
+    if g.triangles_inline {
+        // Written into the kernels: every triangle in order, the first of equal t winning, as geometry.glsl.
+        if let Some(h) = super::bvh::brute_force(&g.bvh_triangles, o, d, tmin, best) {
+            best = h.t;
+            found = Some((2, h.triangle as usize));
+        }
+    } else if !g.bvh_triangles.is_empty() {
         // Unlimited budget: where the GPU's traversal is cut, the renderer fails instead.
         let tr = super::bvh::intersect(&g.bvh_nodes, &g.bvh_triangles, o, d, tmin, best, u32::MAX);
         if let Some(h) = tr.hit {
