@@ -6,8 +6,8 @@ mod common;
 
 use common::*;
 use glam::Vec3;
-use ppm_vk_engine::bvh::{self, meshes, Bvh, BvhOptions, BvhTracer, DeviceBvh, TriangleInput, MAX_DEPTH};
-use ppm_vk_engine::layout::{BvhNode, Triangle, BVH_LEAF};
+use ppm_vk_engine::bvh::{self, meshes, Bvh, BvhOptions, BvhTracer, DeviceBvh, TriangleInput, MAX_DEPTH, STACK};
+use ppm_vk_engine::layout::{BvhNode, Triangle};
 use ppm_vk_engine::reference::bvh::{brute_force, intersect, normal, Traversal};
 use ppm_vk_engine::reference::rng::Rng;
 use ppm_vk_kernels::bvh_trace::{TraceHit, TraceRay, MAX_BUDGET, NO_HIT};
@@ -23,7 +23,7 @@ fn ray(o: Vec3, d: Vec3) -> TraceRay {
 
 fn cpu(b: &Bvh, r: &TraceRay, budget: u32) -> Traversal {
     intersect(
-        &b.nodes,
+        &b.wide,
         &b.triangles,
         Vec3::from(r.origin),
         Vec3::from(r.dir),
@@ -219,6 +219,7 @@ fn bvh_gpu_overlapping_triangles_hit_exactly_or_fail() {
         (30_000, 1e-4),
         (60_000, 0.0),
         (60_000, 1e-3),
+        (80_000, 0.0),
     ] {
         let (mesh, rays) = stack(n, jitter);
         let b = built(&mesh);
@@ -275,7 +276,7 @@ fn bvh_gpu_loop_budget_at_the_bound() {
         (b, rays, s)
     };
     // The most identical triangles whose traversal fits the budget (steps grow with the count).
-    let (mut lo, mut hi) = (1000usize, 60_000usize);
+    let (mut lo, mut hi) = (1000usize, 80_000usize);
     assert!(steps_for(lo).2 <= MAX_BUDGET && steps_for(hi).2 > MAX_BUDGET);
     while hi - lo > 1 {
         let mid = (lo + hi) / 2;
@@ -309,82 +310,93 @@ fn bvh_gpu_loop_budget_at_the_bound() {
     assert_clean(&ctx);
 }
 
-/// A tree exactly MAX_DEPTH deep whose traversal fills the stack: a spine of interior nodes, each with a
-/// leaf of one triangle as its far child, the spine as its near one. Made by hand: SAH never goes so
-/// deep (see bvh_depth_limit_at_the_bound).
+/// A 4-wide tree whose traversal fills the stack exactly: a spine of `depth` nodes, each with the next
+/// spine node as its nearest child along +x and three leaves of one triangle each behind it; the last
+/// node has four leaves. Going down the spine pushes three leaves a level. Made by hand: a built tree of
+/// MAX_DEPTH binary levels needs far fewer entries (bvh_depth_limit_at_the_bound).
 fn spine(depth: u32) -> Bvh {
-    // Triangle k across the x axis at x = 2k + 0.5; the ray runs along +x through all of them.
-    let tri = |k: u32| {
-        let x = 2.0 * k as f32 + 0.5;
-        Triangle {
+    let end = 4.0 * depth as f32 + 4.0;
+    let across = |x: f32| ([x, -1.0, -1.0], [x, 2.0, 2.0]);
+    let mut wide = Vec::new();
+    let mut triangles = Vec::new();
+    for k in 0..depth {
+        let mut n = BvhNode::default();
+        let base = 4.0 * k as f32;
+        let last = k + 1 == depth;
+        let (lo, hi) = ([base + 0.5, -1.0, -1.0], [end, 2.0, 2.0]);
+        if last {
+            let x = base + 0.75;
+            n.set_child(0, across(x).0, across(x).1, BvhNode::leaf(triangles.len() as u32, 1));
+            triangles.push(x);
+        } else {
+            n.set_child(0, lo, hi, k + 1);
+        }
+        for slot in 1..4 {
+            let x = base + slot as f32;
+            n.set_child(slot, across(x).0, across(x).1, BvhNode::leaf(triangles.len() as u32, 1));
+            triangles.push(x);
+        }
+        wide.push(n);
+    }
+    let triangles = triangles
+        .iter()
+        .enumerate()
+        .map(|(i, &x)| Triangle {
             v0: [x, -1.0, -1.0],
             v1: [x, 2.0, -1.0],
             v2: [x, -1.0, 2.0],
-            source: k,
+            source: i as u32,
             ..Default::default()
-        }
-    };
-    let bounds = |from: u32, to: u32| ([2.0 * from as f32 + 0.5, -1.0, -1.0], [2.0 * to as f32 + 0.5, 2.0, 2.0]);
-    // Depth first: the spine's interior nodes 0..depth, its last leaf (triangle depth), then the leaves of
-    // triangles depth-1 .. 0 as each interior node's second child.
-    let mut nodes = Vec::new();
-    for k in 0..depth {
-        let (lo, hi) = bounds(k, depth);
-        nodes.push(BvhNode {
-            lo,
-            offset: 2 * depth - k,
-            hi,
-            count_axis: 0,
-        });
-    }
-    let mut triangles = Vec::new();
-    for k in (0..=depth).rev() {
-        let (lo, hi) = bounds(k, k);
-        nodes.push(BvhNode {
-            lo,
-            offset: triangles.len() as u32,
-            hi,
-            count_axis: 1 << 2 | BVH_LEAF,
-        });
-        triangles.push(tri(k));
-    }
+        })
+        .collect();
     Bvh {
-        nodes,
+        wide,
         triangles,
         ..Bvh::default()
     }
 }
 
 #[test]
-fn bvh_gpu_stack_at_max_depth() {
+fn bvh_gpu_stack_at_its_bound() {
     let ctx = ctx();
     let tracer = BvhTracer::new(&ctx).unwrap();
-    let b = spine(MAX_DEPTH);
-    b.validate(bvh::MAX_LEAF, MAX_DEPTH).unwrap();
-    assert!(
-        b.validate(bvh::MAX_LEAF, MAX_DEPTH - 1).is_err(),
-        "the spine should be exactly MAX_DEPTH deep"
+    let depth = STACK / 3;
+    let b = spine(depth);
+    b.validate_wide().unwrap();
+    assert_eq!(
+        bvh::stack_bound(&b.wide),
+        STACK,
+        "the spine should need exactly the whole stack"
     );
     let dev = DeviceBvh::new(&ctx, &b).unwrap();
-    // Along +x every interior node pushes its leaf and descends the spine: MAX_DEPTH entries at the bottom.
     let rays = vec![
         ray(Vec3::new(-1.0, 0.25, 0.25), Vec3::X),
-        ray(Vec3::new(200.0, 0.5, 0.1), -Vec3::X),
+        ray(Vec3::new(1000.0, 0.5, 0.1), -Vec3::X),
     ];
     let hits = tracer.trace(&ctx, &dev, &rays, MAX_BUDGET).unwrap();
     assert_gpu_matches_cpu(&b, &rays, &hits, MAX_BUDGET, "spine");
+    let x = |h: &TraceHit| b.triangles[h.triangle as usize].v0[0];
+    assert_eq!(x(&hits[0]), 1.0, "the nearest triangle along +x is the first");
     assert_eq!(
-        b.triangles[hits[0].triangle as usize].source, 0,
-        "the nearest triangle along +x is the first"
+        x(&hits[1]),
+        4.0 * (depth - 1) as f32 + 3.0,
+        "the nearest along -x is the last"
     );
-    assert_eq!(b.triangles[hits[1].triangle as usize].source, MAX_DEPTH);
-    // Every node visited and every triangle tested on the way down and back, the stack full at the bottom.
-    assert_eq!(hits[0].steps as usize, b.nodes.len() + b.triangles.len());
-    assert_eq!(cpu(&b, &rays[0], MAX_BUDGET).stack_peak, MAX_DEPTH);
+    // Along +x the stack is full at the bottom of the spine.
+    assert_eq!(cpu(&b, &rays[0], MAX_BUDGET).stack_peak, STACK);
     // One level more than the stack holds is refused before it reaches the GPU.
-    let err = DeviceBvh::new(&ctx, &spine(MAX_DEPTH + 1))
+    let err = DeviceBvh::new(&ctx, &spine(depth + 1))
         .err()
         .expect("a tree deeper than the stack");
-    assert!(format!("{err:#}").contains("depth"), "{err:#}");
+    assert!(format!("{err:#}").contains("stack entries"), "{err:#}");
+    // What makes STACK enough for every built tree: the wide tree's stack needs at most three entries per
+    // binary level, and build() keeps to MAX_DEPTH levels. A deep chain (39 levels) shows the bound.
+    let b = built(&bvh::meshes::growing_chain(100, 2.0));
+    println!("chain of 100: {:?}", b.stats);
+    assert!(
+        b.stats.depth > 32 && b.stats.stack_bound <= 3 * b.stats.depth,
+        "{:?}",
+        b.stats
+    );
     assert_clean(&ctx);
 }

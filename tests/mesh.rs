@@ -315,9 +315,9 @@ fn photons_suspended_or_left_over_finish_in_the_resume_round() {
     let ordinary = sorted_records(r.trace_and_gather(0, photons).unwrap());
     let work = r.read_photon_work().unwrap();
     println!("ordinary: {} records, {work:?}", ordinary.len());
-    // 600 loop iterations in the first round and none started below 300: a thread gets through a photon
+    // 200 loop iterations in the first round and none started below 100: a thread gets through a photon
     // or two, and many traversals (the glass sphere's 20480 facets) run out.
-    r.set_photon_round(600, 300);
+    r.set_photon_round(200, 100);
     let forced = sorted_records(r.trace_and_gather(0, photons).unwrap());
     let work = r.read_photon_work().unwrap();
     println!("forced: {} records, {work:?}", forced.len());

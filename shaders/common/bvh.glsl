@@ -15,11 +15,19 @@
 #define BVH_GLSL
 #extension GL_KHR_shader_subgroup_arithmetic : require
 
-// The deepest leaf of a built BVH is at most this far below the root (bvh::MAX_DEPTH: the builder falls
-// back to median splits to keep to it), so the traversal stack never holds more.
+// The deepest leaf of the binary tree the builder makes is at most this far below the root (bvh::MAX_DEPTH:
+// it falls back to median splits to keep to it). The 4-wide tree collapsed from it is no deeper, and its
+// traversal keeps at most three children of each node on its path on the stack, so BVH_STACK entries
+// always hold them.
 const uint BVH_MAX_DEPTH = 64u;
+const uint BVH_STACK = 3u * BVH_MAX_DEPTH;
 const uint BVH_NONE = 0xffffffffu;
-const uint BVH_LEAF = 3u; // BvhNode.count_axis & 3 of a leaf
+// BvhNode.child: a slot without a child (also: no reference to visit); a leaf, its triangle count less one
+// above BVH_COUNT_SHIFT and its first triangle below; anything else, an interior node's index.
+const uint BVH_EMPTY = 0xffffffffu;
+const uint BVH_LEAF = 0x80000000u;
+const uint BVH_COUNT_SHIFT = 29u;
+const uint BVH_FIRST_MASK = 0x1fffffffu;
 // lavapipe ends every loop of a SIMD group (8 lanes) once its loops have run this many iterations in all
 // (LP_MAX_TGSI_LOOP_ITERATIONS), silently.
 const uint BVH_LOOP_LIMIT = 65535u;
@@ -79,27 +87,13 @@ BvhRay bvh_ray(vec3 o, vec3 d) {
     return r;
 }
 
-// Whether the ray meets the box [lo, hi] within (tmin, tmax], conservatively.
-bool bvh_box_test(BvhRay r, vec3 lo, vec3 hi, float tmin, float tmax) {
-    precise vec3 t0 = (lo - r.o) * r.inv_d;
-    precise vec3 t1 = (hi - r.o) * r.inv_d;
-    vec3 tn = min(t0, t1);
-    vec3 tf = max(t0, t1);
-    if (r.any_parallel) {
-        bvec3 inside = bvec3(uvec3(greaterThanEqual(r.o, lo)) & uvec3(lessThanEqual(r.o, hi)));
-        vec3 entry = mix(vec3(BVH_HUGE), vec3(-BVH_HUGE), inside); // inside: from -inf to +inf; else never
-        tn = mix(tn, entry, r.parallel);
-        tf = mix(tf, -entry, r.parallel);
-    }
-    float near = max(max(tn.x, tn.y), max(tn.z, tmin));
-    precise float far = min(min(tf.x, tf.y), tf.z) * BVH_ROBUST;
-    return near <= min(far, tmax);
-}
-
 // The watertight test: the vertices relative to the origin, permuted so the ray runs along +z, sheared so
-// it is the z axis; then the 2D edge functions of the origin against each edge. Two-sided. An edge
-// function that comes out exactly 0 is recomputed in double (the products of two floats are exact there,
-// so its sign is exact), as the paper does. Hits with t in (tmin, tmax) only.
+// it is the z axis; then the 2D edge functions of the origin against each edge. Two-sided, and an edge
+// function of exactly 0 counts as inside. Two triangles sharing an edge see its two vertices transformed
+// to the same bits and compute its edge function from the same two products, in the other order: exactly
+// opposite values, so a ray through the edge is inside one of them at least (Woop et al.'s argument; their
+// recomputation of zeros in double, which only ever turns an accepted hit into a rejected one, is left out:
+// it cost every step on lavapipe, which runs both sides of a branch). Hits with t in (tmin, tmax) only.
 bool bvh_triangle_test(BvhRay r, vec3 v0, vec3 v1, vec3 v2, float tmin, float tmax, out float t, out vec2 bary) {
     precise vec3 a0 = v0 - r.o;
     precise vec3 b0 = v1 - r.o;
@@ -116,11 +110,6 @@ bool bvh_triangle_test(BvhRay r, vec3 v0, vec3 v1, vec3 v2, float tmin, float tm
     precise float u = cx * by - cy * bx;
     precise float v = ax * cy - ay * cx;
     precise float w = bx * ay - by * ax;
-    if (u == 0.0 || v == 0.0 || w == 0.0) {
-        u = float(double(cx) * double(by) - double(cy) * double(bx));
-        v = float(double(ax) * double(cy) - double(ay) * double(cx));
-        w = float(double(bx) * double(ay) - double(by) * double(ax));
-    }
     t = 0.0;
     bary = vec2(0.0);
     if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return false;
@@ -139,16 +128,52 @@ bool bvh_triangle_test(BvhRay r, vec3 v0, vec3 v1, vec3 v2, float tmin, float tm
     return true;
 }
 
+// One slab of the four boxes of a node: entry and exit distances along axis `k` (conservative: see
+// bvh_intersect). A ray parallel to the slab is inside it for every t (its origin within the slab, faces
+// included) or for none.
+void bvh_slab(BvhRay r, uint k, vec4 lo, vec4 hi, out vec4 near, out vec4 far) {
+    precise vec4 t0 = (lo - r.o[k]) * r.inv_d[k];
+    precise vec4 t1 = (hi - r.o[k]) * r.inv_d[k];
+    near = min(t0, t1);
+    far = max(t0, t1);
+    if (r.parallel[k]) {
+        bvec4 inside = bvec4(uvec4(greaterThanEqual(vec4(r.o[k]), lo)) & uvec4(lessThanEqual(vec4(r.o[k]), hi)));
+        near = mix(vec4(BVH_HUGE), vec4(-BVH_HUGE), inside);
+        far = -near;
+    }
+}
+
+// Orders two children of a node by entry distance, the nearer first (ties keep their order).
+void bvh_order(inout vec4 key, inout uvec4 ref, uint i, uint j) {
+    if (key[j] < key[i]) {
+        float kt = key[i];
+        key[i] = key[j];
+        key[j] = kt;
+        uint rt = ref[i];
+        ref[i] = ref[j];
+        ref[j] = rt;
+    }
+}
+
 // The nearest triangle hit by o + t d with t in (tmin, tmax); true if there is one. d need not be unit.
-// Nodes are visited depth first, the child on the side the ray comes from first (by the sign of d on the
-// node's split axis). One loop step is one node visit or one triangle test, and each lane stops after
-// `budget` steps with hit.cut set: its result is then not final and the caller must fail.
 //
-// The budget: the loop runs, for the SIMD group, as many steps as its longest lane plus one (the exit), so
-// one call costs the subgroup at most budget + 1 of lavapipe's BVH_LOOP_LIMIT iterations, which all loops
-// of an invocation share. A kernel with no other loops can pass BVH_LOOP_LIMIT - 1; one that calls this in
-// a loop passes what its subgroup has left, e.g. `left -= bvh_subgroup_cost(hit)` after each call made by
-// the whole subgroup together.
+// The 4-wide BVH, depth first, nearest child first: a node's four boxes are tested at once (the slab test
+// with its far distance widened by BVH_ROBUST, so rounding never loses a box the ray meets), the children
+// the ray enters sorted by entry distance; the nearest is visited next and the others pushed with their
+// distances, and a popped one is skipped if the ray enters it beyond the nearest hit found since.
+//
+// Each loop step does whatever this lane has to do: take the next reference from the stack if it has
+// none, visit it if it is a node, take its triangles if it is a leaf and the last leaf's are done, and test
+// one triangle if any is left. lavapipe runs a SIMD group's lanes in step and both sides of every branch,
+// so a step that does a node visit and a triangle test for the lanes that need either costs about what one
+// of them costs, and a lane need not wait for a leaf's triangles to go on down the tree.
+//
+// The budget: each lane stops after `budget` steps with hit.cut set (its result is then not final and the
+// caller must fail). The loop runs, for the SIMD group, as many steps as its longest lane plus one (the
+// exit), so one call costs the subgroup at most budget + 1 of lavapipe's BVH_LOOP_LIMIT iterations, which
+// all loops of an invocation share. A kernel with no other loops can pass BVH_LOOP_LIMIT - 1; one that
+// calls this in a loop passes what its subgroup has left, e.g. `left -= bvh_subgroup_cost(hit)` after each
+// call made by the whole subgroup together.
 bool bvh_intersect(vec3 o, vec3 d, float tmin, float tmax, uint budget, out BvhHit hit) {
     BvhRay r = bvh_ray(o, d);
     hit.t = tmax;
@@ -156,20 +181,51 @@ bool bvh_intersect(vec3 o, vec3 d, float tmin, float tmax, uint budget, out BvhH
     hit.bary = vec2(0.0);
     hit.steps = 0u;
     hit.cut = false;
-    uint stack[BVH_MAX_DEPTH];
+    uint stack[BVH_STACK];
+    float stack_t[BVH_STACK];
     uint sp = 0u;
-    uint node = 0u;               // the node to visit next; BVH_NONE: take one from the stack
+    uint next = 0u;               // the reference to visit (the root node first); BVH_EMPTY: none
     uint tri = 0u, tri_end = 0u;  // the current leaf's triangles still to test
     while (true) {
-        if (tri == tri_end && node == BVH_NONE) {
-            if (sp == 0u) break;
-            node = stack[--sp];
-        }
+        if (next == BVH_EMPTY && tri == tri_end && sp == 0u) break;
         if (hit.steps == budget) {
             hit.cut = true;
             break;
         }
         hit.steps++;
+        if (next == BVH_EMPTY && sp > 0u) {
+            sp--;
+            if (stack_t[sp] <= hit.t) next = stack[sp];
+        }
+        if ((next & BVH_LEAF) == 0u) {
+            BvhNode n = bvh_nodes[next];
+            vec4 nx, fx, ny, fy, nz, fz;
+            bvh_slab(r, 0u, n.lo_x, n.hi_x, nx, fx);
+            bvh_slab(r, 1u, n.lo_y, n.hi_y, ny, fy);
+            bvh_slab(r, 2u, n.lo_z, n.hi_z, nz, fz);
+            vec4 near = max(max(nx, ny), max(nz, vec4(tmin)));
+            precise vec4 far = min(min(fx, fy), fz) * BVH_ROBUST;
+            bvec4 enter = bvec4(uvec4(lessThanEqual(near, min(far, vec4(hit.t)))) &
+                                uvec4(notEqual(n.child, uvec4(BVH_EMPTY))));
+            vec4 key = mix(vec4(BVH_HUGE), near, enter);
+            uvec4 ref = n.child;
+            // A sorting network of four: entered children first, nearest first.
+            bvh_order(key, ref, 0u, 1u);
+            bvh_order(key, ref, 2u, 3u);
+            bvh_order(key, ref, 0u, 2u);
+            bvh_order(key, ref, 1u, 3u);
+            bvh_order(key, ref, 1u, 2u);
+            uint entered = uint(enter.x) + uint(enter.y) + uint(enter.z) + uint(enter.w);
+            if (entered > 3u) { stack[sp] = ref.w; stack_t[sp] = key.w; sp++; }
+            if (entered > 2u) { stack[sp] = ref.z; stack_t[sp] = key.z; sp++; }
+            if (entered > 1u) { stack[sp] = ref.y; stack_t[sp] = key.y; sp++; }
+            next = entered > 0u ? ref.x : BVH_EMPTY;
+        }
+        if (next != BVH_EMPTY && (next & BVH_LEAF) != 0u && tri == tri_end) {
+            tri = next & BVH_FIRST_MASK;
+            tri_end = tri + ((next >> BVH_COUNT_SHIFT) & 3u) + 1u;
+            next = BVH_EMPTY;
+        }
         if (tri != tri_end) {
             Triangle tr = bvh_triangles[tri];
             float t;
@@ -180,22 +236,6 @@ bool bvh_intersect(vec3 o, vec3 d, float tmin, float tmax, uint budget, out BvhH
                 hit.bary = bary;
             }
             tri++;
-            continue;
-        }
-        BvhNode n = bvh_nodes[node];
-        uint here = node;
-        node = BVH_NONE;
-        if (!bvh_box_test(r, n.lo, n.hi, tmin, hit.t)) continue;
-        uint axis = n.count_axis & 3u;
-        if (axis == BVH_LEAF) {
-            tri = n.offset;
-            tri_end = n.offset + (n.count_axis >> 2);
-        } else if (r.d[axis] < 0.0) {
-            stack[sp++] = here + 1u;
-            node = n.offset;
-        } else {
-            stack[sp++] = n.offset;
-            node = here + 1u;
         }
     }
     return hit.triangle != BVH_NONE;

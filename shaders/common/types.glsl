@@ -191,14 +191,18 @@ struct PhotonState {
     uint pad1;
 };
 
-// A node of the flattened BVH (crates/engine/src/bvh.rs), in depth-first order: an interior node's first
-// child is the node after it, its second child is at `offset`; a leaf holds triangles offset .. offset +
-// count - 1 of the leaf-ordered triangle buffer.
+// A node of the 4-wide BVH (crates/engine/src/bvh.rs collapses the binary SAH tree into it): the boxes of
+// its (up to) four children, axis by axis with one child per vector component, so one load and one run of
+// vector arithmetic test all four; and each child's reference: BVH_EMPTY, an interior node's index, or
+// BVH_LEAF | (count - 1) << BVH_COUNT_SHIFT | its first triangle in the leaf-ordered triangle buffer.
 struct BvhNode {
-    vec3 lo;
-    uint offset;     // interior: index of the second child; leaf: first triangle
-    vec3 hi;
-    uint count_axis; // count << 2 | axis: axis 0-2 is an interior node's split axis, 3 marks a leaf
+    vec4 lo_x;
+    vec4 hi_x;
+    vec4 lo_y;
+    vec4 hi_y;
+    vec4 lo_z;
+    vec4 hi_z;
+    uvec4 child;
 };
 
 // A triangle of the BVH, in leaf order. Its vertices as given, not a vertex and two edges: the watertight

@@ -275,7 +275,7 @@ impl GpuScene {
             spheres,
             quads,
             lights,
-            bvh_nodes: built.nodes,
+            bvh_nodes: built.wide,
             bvh_triangles: built.triangles,
             bvh_stats: built.stats,
             initial_radius,

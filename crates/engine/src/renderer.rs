@@ -370,7 +370,7 @@ impl Renderer {
         let slots = gpu.slots() as u64;
         let pixels = gpu.pixels() as u64;
         let tri_bytes = gpu.bvh_triangles.len() as u64 * std::mem::size_of::<Triangle>() as u64;
-        let node_bytes = gpu.bvh_nodes.len() as u64 * 32;
+        let node_bytes = std::mem::size_of_val(gpu.bvh_nodes.as_slice()) as u64;
         let bvh_bytes = tri_bytes + node_bytes;
         if tri_bytes.max(node_bytes) > max_range {
             let triangles = gpu.bvh_triangles.len();

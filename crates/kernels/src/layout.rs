@@ -303,45 +303,80 @@ gpu_struct!(PhotonState {
     pad1
 });
 
-/// `BvhNode::count_axis & 3` of a leaf (`BVH_LEAF` in bvh.glsl); 0-2 is an interior node's split axis.
-pub const BVH_LEAF: u32 = 3;
+/// `BvhNode::child` of a slot without a child.
+pub const BVH_EMPTY: u32 = u32::MAX;
+/// `BvhNode::child` of a leaf: this bit, its triangle count less one from [`BVH_COUNT_SHIFT`] and its first
+/// triangle below (bvh.glsl's constants of the same names).
+pub const BVH_LEAF: u32 = 1 << 31;
+pub const BVH_COUNT_SHIFT: u32 = 29;
+pub const BVH_FIRST_MASK: u32 = (1 << BVH_COUNT_SHIFT) - 1;
 
-/// A node of the flattened BVH, depth first: an interior node's first child is the next node, its second
-/// is at `offset`; a leaf holds the triangles `offset .. offset + count`.
+/// A node of the 4-wide BVH the kernels traverse (shaders/common/bvh.glsl): the boxes of up to four
+/// children, axis by axis with one child per vector component, and each child's reference
+/// ([`BVH_EMPTY`], an interior node's index, or a leaf, [`BvhNode::leaf`]). crates/engine/src/bvh.rs
+/// collapses the binary SAH tree into it.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {
-    pub lo: [f32; 3],
-    /// Interior: index of the second child; leaf: first triangle.
-    pub offset: u32,
-    pub hi: [f32; 3],
-    /// `count << 2 | axis`, axis [`BVH_LEAF`] for a leaf.
-    pub count_axis: u32,
+    pub lo_x: [f32; 4],
+    pub hi_x: [f32; 4],
+    pub lo_y: [f32; 4],
+    pub hi_y: [f32; 4],
+    pub lo_z: [f32; 4],
+    pub hi_z: [f32; 4],
+    pub child: [u32; 4],
 }
 gpu_struct!(BvhNode {
-    lo,
-    offset,
-    hi,
-    count_axis
+    lo_x,
+    hi_x,
+    lo_y,
+    hi_y,
+    lo_z,
+    hi_z,
+    child
 });
 
-impl BvhNode {
-    pub fn is_leaf(&self) -> bool {
-        self.count_axis & 3 == BVH_LEAF
-    }
-
-    /// Triangles of a leaf (0 for an interior node).
-    pub fn count(&self) -> u32 {
-        if self.is_leaf() {
-            self.count_axis >> 2
-        } else {
-            0
+impl Default for BvhNode {
+    /// A node without children.
+    fn default() -> BvhNode {
+        BvhNode {
+            lo_x: [0.0; 4],
+            hi_x: [0.0; 4],
+            lo_y: [0.0; 4],
+            hi_y: [0.0; 4],
+            lo_z: [0.0; 4],
+            hi_z: [0.0; 4],
+            child: [BVH_EMPTY; 4],
         }
     }
+}
 
-    /// Split axis of an interior node.
-    pub fn axis(&self) -> usize {
-        (self.count_axis & 3) as usize
+impl BvhNode {
+    /// The reference to a leaf of `count` (1..=4) triangles from `first` (below 2^29).
+    pub fn leaf(first: u32, count: u32) -> u32 {
+        debug_assert!((1..=4).contains(&count) && first <= BVH_FIRST_MASK);
+        BVH_LEAF | (count - 1) << BVH_COUNT_SHIFT | first
+    }
+
+    /// A leaf reference's (first triangle, count); `None` for an interior node or an empty slot.
+    pub fn leaf_range(child: u32) -> Option<(u32, u32)> {
+        (child != BVH_EMPTY && child & BVH_LEAF != 0)
+            .then(|| (child & BVH_FIRST_MASK, (child >> BVH_COUNT_SHIFT & 3) + 1))
+    }
+
+    /// Child `i`'s box.
+    pub fn child_box(&self, i: usize) -> ([f32; 3], [f32; 3]) {
+        (
+            [self.lo_x[i], self.lo_y[i], self.lo_z[i]],
+            [self.hi_x[i], self.hi_y[i], self.hi_z[i]],
+        )
+    }
+
+    /// Sets child `i`: its box and its reference.
+    pub fn set_child(&mut self, i: usize, lo: [f32; 3], hi: [f32; 3], child: u32) {
+        (self.lo_x[i], self.lo_y[i], self.lo_z[i]) = (lo[0], lo[1], lo[2]);
+        (self.hi_x[i], self.hi_y[i], self.hi_z[i]) = (hi[0], hi[1], hi[2]);
+        self.child[i] = child;
     }
 }
 

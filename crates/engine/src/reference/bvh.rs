@@ -4,7 +4,7 @@
 //! brute-force intersector over all triangles, the independent check of the traversal.
 
 use glam::{Vec2, Vec3};
-use ppm_vk_kernels::layout::{BvhNode, Triangle};
+use ppm_vk_kernels::layout::{BvhNode, Triangle, BVH_EMPTY, BVH_LEAF};
 
 use super::trace::v3;
 
@@ -62,31 +62,28 @@ impl BvhRay {
     }
 }
 
-/// Whether the ray meets the box [lo, hi] within (tmin, tmax], conservatively (`bvh_box_test`).
-pub fn box_test(r: &BvhRay, lo: Vec3, hi: Vec3, tmin: f32, tmax: f32) -> bool {
-    let t0 = (lo - r.o) * r.inv_d;
-    let t1 = (hi - r.o) * r.inv_d;
-    let mut tn = t0.min(t1);
-    let mut tf = t0.max(t1);
-    for k in 0..3 {
+/// One slab of a node's four boxes along axis `k` (`bvh_slab`): entry and exit distances per child; a ray
+/// parallel to the slab is inside it for every t (its origin within the slab, faces included) or none.
+fn slab(r: &BvhRay, k: usize, lo: [f32; 4], hi: [f32; 4]) -> ([f32; 4], [f32; 4]) {
+    let (mut near, mut far) = ([0f32; 4], [0f32; 4]);
+    for i in 0..4 {
+        let t0 = (lo[i] - r.o[k]) * r.inv_d[k];
+        let t1 = (hi[i] - r.o[k]) * r.inv_d[k];
+        (near[i], far[i]) = (t0.min(t1), t0.max(t1));
         if r.parallel[k] {
-            // Inside the slab (faces included) for every t, or for none.
-            let entry = if lo[k] <= r.o[k] && r.o[k] <= hi[k] {
+            near[i] = if lo[i] <= r.o[k] && r.o[k] <= hi[i] {
                 -HUGE
             } else {
                 HUGE
             };
-            tn[k] = entry;
-            tf[k] = -entry;
+            far[i] = -near[i];
         }
     }
-    let near = tn.x.max(tn.y).max(tn.z.max(tmin));
-    let far = tf.x.min(tf.y).min(tf.z) * ROBUST;
-    near <= far.min(tmax)
+    (near, far)
 }
 
 /// The watertight test (`bvh_triangle_test`): (t, barycentric weights of v1 and v2) for a hit with t in
-/// (tmin, tmax). Two-sided; an edge function of exactly 0 is recomputed in f64.
+/// (tmin, tmax). Two-sided; an edge function of exactly 0 counts as inside.
 pub fn triangle_test(r: &BvhRay, v0: Vec3, v1: Vec3, v2: Vec3, tmin: f32, tmax: f32) -> Option<(f32, Vec2)> {
     let [kx, ky, kz] = r.k;
     let (a0, b0, c0) = (v0 - r.o, v1 - r.o, v2 - r.o);
@@ -99,15 +96,9 @@ pub fn triangle_test(r: &BvhRay, v0: Vec3, v1: Vec3, v2: Vec3, tmin: f32, tmax: 
     let by = b.y - r.s.y * b.z;
     let cx = c.x - r.s.x * c.z;
     let cy = c.y - r.s.y * c.z;
-    let mut u = cx * by - cy * bx;
-    let mut v = ax * cy - ay * cx;
-    let mut w = bx * ay - by * ax;
-    if u == 0.0 || v == 0.0 || w == 0.0 {
-        let f = |p: f32, q: f32, s: f32, t: f32| (p as f64 * q as f64 - s as f64 * t as f64) as f32;
-        u = f(cx, by, cy, bx);
-        v = f(ax, cy, ay, cx);
-        w = f(bx, ay, by, ax);
-    }
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
     if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
         return None;
     }
@@ -149,8 +140,10 @@ pub struct Traversal {
     pub stack_peak: u32,
 }
 
-/// `bvh_intersect`: the nearest hit of o + t d, t in (tmin, tmax), through the flattened BVH, taking at
-/// most `budget` steps. Panics if the tree is deeper than its stack (the builder never makes one).
+/// `bvh_intersect`: the nearest hit of o + t d, t in (tmin, tmax), through the 4-wide BVH, taking at most
+/// `budget` steps, step for step as bvh.glsl (each step: a pop, a node visit, a leaf taken, a triangle
+/// tested, whichever this ray has to do). Panics if the stack overflows (`Bvh::validate_wide` refuses
+/// such a tree).
 pub fn intersect(
     nodes: &[BvhNode],
     tris: &[Triangle],
@@ -160,30 +153,64 @@ pub fn intersect(
     tmax: f32,
     budget: u32,
 ) -> Traversal {
-    const NONE: u32 = u32::MAX;
     let r = BvhRay::new(o, d);
     let mut best = tmax;
     let mut hit = None;
     let mut steps = 0u32;
     let mut cut = false;
-    let mut stack = [0u32; crate::bvh::MAX_DEPTH as usize];
+    let mut stack = [(0u32, 0f32); crate::bvh::STACK as usize];
     let mut sp = 0usize;
     let mut stack_peak = 0;
-    let mut node = 0u32;
+    let mut next = 0u32;
     let (mut tri, mut tri_end) = (0u32, 0u32);
     loop {
-        if tri == tri_end && node == NONE {
-            if sp == 0 {
-                break;
-            }
-            sp -= 1;
-            node = stack[sp];
+        if next == BVH_EMPTY && tri == tri_end && sp == 0 {
+            break;
         }
         if steps == budget {
             cut = true;
             break;
         }
         steps += 1;
+        if next == BVH_EMPTY && sp > 0 {
+            sp -= 1;
+            if stack[sp].1 <= best {
+                next = stack[sp].0;
+            }
+        }
+        if next & BVH_LEAF == 0 {
+            let n = &nodes[next as usize];
+            let (nx, fx) = slab(&r, 0, n.lo_x, n.hi_x);
+            let (ny, fy) = slab(&r, 1, n.lo_y, n.hi_y);
+            let (nz, fz) = slab(&r, 2, n.lo_z, n.hi_z);
+            let mut key = [0f32; 4];
+            let mut refs = n.child;
+            let mut entered = 0;
+            for i in 0..4 {
+                let near = nx[i].max(ny[i]).max(nz[i].max(tmin));
+                let far = fx[i].min(fy[i]).min(fz[i]) * ROBUST;
+                let enter = near <= far.min(best) && n.child[i] != BVH_EMPTY;
+                key[i] = if enter { near } else { HUGE };
+                entered += enter as usize;
+            }
+            // bvh_order's network: entered children first, nearest first, ties in slot order.
+            for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+                if key[j] < key[i] {
+                    key.swap(i, j);
+                    refs.swap(i, j);
+                }
+            }
+            for i in (1..entered).rev() {
+                stack[sp] = (refs[i], key[i]);
+                sp += 1;
+            }
+            next = if entered > 0 { refs[0] } else { BVH_EMPTY };
+            stack_peak = stack_peak.max(sp as u32);
+        }
+        if let (Some((first, count)), true) = (BvhNode::leaf_range(next), tri == tri_end) {
+            (tri, tri_end) = (first, first + count);
+            next = BVH_EMPTY;
+        }
         if tri != tri_end {
             let tr = &tris[tri as usize];
             if let Some((t, bary)) = triangle_test(&r, v3(tr.v0), v3(tr.v1), v3(tr.v2), tmin, best) {
@@ -191,27 +218,7 @@ pub fn intersect(
                 hit = Some(BvhHit { t, triangle: tri, bary });
             }
             tri += 1;
-            continue;
         }
-        let n = &nodes[node as usize];
-        let here = node;
-        node = NONE;
-        if !box_test(&r, v3(n.lo), v3(n.hi), tmin, best) {
-            continue;
-        }
-        if n.is_leaf() {
-            tri = n.offset;
-            tri_end = n.offset + n.count();
-        } else if r.d[n.axis()] < 0.0 {
-            stack[sp] = here + 1;
-            sp += 1;
-            node = n.offset;
-        } else {
-            stack[sp] = n.offset;
-            sp += 1;
-            node = here + 1;
-        }
-        stack_peak = stack_peak.max(sp as u32);
     }
     Traversal {
         hit,
