@@ -822,9 +822,8 @@ impl Bvh {
                         first + count <= self.triangles.len(),
                         "wide node {i}: a leaf past the triangles"
                     );
-                    for k in first..first + count {
+                    for (k, t) in self.triangles.iter().enumerate().skip(first).take(count) {
                         ensure!(!std::mem::replace(&mut seen[k], true), "triangle {k} in two leaves");
-                        let t = &self.triangles[k];
                         for v in [t.v0, t.v1, t.v2] {
                             ensure!(inside(lo, hi, v), "triangle {k} outside its box in wide node {i}");
                         }
