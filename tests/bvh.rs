@@ -48,6 +48,7 @@ fn assert_gpu_matches_cpu(b: &Bvh, rays: &[TraceRay], gpu: &[TraceHit], budget: 
         let c = cpu(b, r, budget);
         let ctx = format!("{what}, ray {i} {r:?}: GPU {g:?}, CPU {c:?}");
         assert_eq!(g.cut != 0, c.cut, "{ctx}");
+        assert_eq!(g.root_child, b.wide[0].child[0], "{ctx}");
         assert_eq!(g.steps, c.steps, "{ctx}");
         match c.hit {
             None => assert_eq!(g.triangle, NO_HIT, "{ctx}"),
@@ -320,23 +321,21 @@ fn spine(depth: u32) -> Bvh {
     let mut wide = Vec::new();
     let mut triangles = Vec::new();
     for k in 0..depth {
-        let mut n = BvhNode::default();
+        let mut children = Vec::new();
         let base = 4.0 * k as f32;
-        let last = k + 1 == depth;
-        let (lo, hi) = ([base + 0.5, -1.0, -1.0], [end, 2.0, 2.0]);
-        if last {
+        if k + 1 == depth {
             let x = base + 0.75;
-            n.set_child(0, across(x).0, across(x).1, BvhNode::leaf(triangles.len() as u32, 1));
+            children.push((across(x).0, across(x).1, BvhNode::leaf(triangles.len() as u32, 1)));
             triangles.push(x);
         } else {
-            n.set_child(0, lo, hi, k + 1);
+            children.push(([base + 0.5, -1.0, -1.0], [end, 2.0, 2.0], k + 1));
         }
         for slot in 1..4 {
             let x = base + slot as f32;
-            n.set_child(slot, across(x).0, across(x).1, BvhNode::leaf(triangles.len() as u32, 1));
+            children.push((across(x).0, across(x).1, BvhNode::leaf(triangles.len() as u32, 1)));
             triangles.push(x);
         }
-        wide.push(n);
+        wide.push(BvhNode::new(&children));
     }
     let triangles = triangles
         .iter()

@@ -108,10 +108,11 @@ fn run() -> Result<()> {
     for (name, stage, spv, info) in &kernels {
         writeln!(
             code,
-            "/// Kernel `shaders/{stage}/{name}.comp`.\npub const {}: KernelInfo = KernelInfo {{ name: {name:?}, stage: {stage:?}, source: \"{stage}/{name}.comp\", spirv: include_bytes!({:?}), bindings: &{:?}, push_size: {}, local_size: {} }};",
+            "/// Kernel `shaders/{stage}/{name}.comp`.\npub const {}: KernelInfo = KernelInfo {{ name: {name:?}, stage: {stage:?}, source: \"{stage}/{name}.comp\", spirv: include_bytes!({:?}), bindings: &{:?}, texel_bindings: {:#x}, push_size: {}, local_size: {} }};",
             name.to_uppercase(),
             spv.display().to_string(),
             info.bindings,
+            info.texel_bindings,
             info.push_size,
             info.local_size
         )?;
@@ -168,6 +169,8 @@ struct StructLayout {
 
 struct KernelReflection {
     bindings: Vec<String>,
+    /// Bit b: binding b is a uniform texel buffer (`uniform usamplerBuffer`), not a storage buffer.
+    texel_bindings: u32,
     push_size: u32,
     local_size: u32,
     structs: Vec<(String, StructLayout)>,
@@ -318,8 +321,8 @@ fn reflect(kernel: &str, m: &Module) -> Result<KernelReflection> {
             .unwrap_or_else(|| size_of(t, &types, &offsets, &strides, &constant));
         structs.push((sname.clone(), StructLayout { members, size }));
     }
-    // Storage buffers (set 0, bindings 0..n) and the push-constant block.
-    let mut binding_list: Vec<(u32, String)> = Vec::new();
+    // Storage buffers and uniform texel buffers (set 0, bindings 0..n) and the push-constant block.
+    let mut binding_list: Vec<(u32, String, bool)> = Vec::new();
     let mut push_size = 0;
     for i in &m.types_global_values {
         if i.class.opcode != Op::Variable {
@@ -345,18 +348,52 @@ fn reflect(kernel: &str, m: &Module) -> Result<KernelReflection> {
                 if class == StorageClass::Uniform {
                     bail!("{kernel}: binding {b}: use `buffer` (std430), not `uniform`");
                 }
-                binding_list.push((b, names.get(&pointee).cloned().unwrap_or_default()));
+                binding_list.push((b, names.get(&pointee).cloned().unwrap_or_default(), false));
+            }
+            StorageClass::UniformConstant => {
+                // A texel buffer: a sampled image of dimension Buffer.
+                let image = types
+                    .get(&pointee)
+                    .filter(|t| t.class.opcode == Op::TypeSampledImage)
+                    .and_then(|t| id(&t.operands[0]))
+                    .and_then(|i| types.get(&i));
+                match image.map(|t| &t.operands[1]) {
+                    Some(Operand::Dim(rspirv::spirv::Dim::DimBuffer)) => {}
+                    _ => bail!("{kernel}: only uniform texel buffers (samplerBuffer) among the uniform constants"),
+                }
+                let b = *bindings
+                    .get(&var)
+                    .ok_or_else(|| anyhow!("{kernel}: a texel buffer without a binding"))?;
+                if sets.get(&var).copied().unwrap_or(0) != 0 {
+                    bail!("{kernel}: only descriptor set 0 is used");
+                }
+                binding_list.push((b, names.get(&var).cloned().unwrap_or_default(), true));
             }
             StorageClass::PushConstant => push_size = size_of(pointee, &types, &offsets, &strides, &constant),
             _ => {}
         }
     }
     binding_list.sort();
-    for (k, (b, n)) in binding_list.iter().enumerate() {
+    // Two blocks may alias one binding (one buffer read as two types): one binding, named after the first.
+    // A texel buffer cannot share a binding with a block (different descriptor types).
+    for w in binding_list.windows(2) {
+        if w[0].0 == w[1].0 && w[0].2 != w[1].2 {
+            bail!(
+                "{kernel}: binding {} is both a texel buffer and a storage buffer",
+                w[0].0
+            );
+        }
+    }
+    binding_list.dedup_by_key(|(b, _, _)| *b);
+    for (k, (b, n, _)) in binding_list.iter().enumerate() {
         if *b != k as u32 {
             bail!("{kernel}: bindings must be 0..n without gaps; binding {b} ({n}) is at position {k}");
         }
     }
+    let texel_bindings = binding_list
+        .iter()
+        .filter(|(_, _, texel)| *texel)
+        .fold(0u32, |m, (b, _, _)| m | 1 << b);
     let mut local_size = 0;
     for e in &m.execution_modes {
         if let Operand::ExecutionMode(ExecutionMode::LocalSize) = e.operands[1] {
@@ -370,7 +407,8 @@ fn reflect(kernel: &str, m: &Module) -> Result<KernelReflection> {
         bail!("{kernel}: no literal local_size_x");
     }
     Ok(KernelReflection {
-        bindings: binding_list.into_iter().map(|(_, n)| n).collect(),
+        texel_bindings,
+        bindings: binding_list.into_iter().map(|(_, n, _)| n).collect(),
         push_size,
         local_size,
         structs,

@@ -1,7 +1,10 @@
 // Test kernel: the nearest triangle hit of each ray of a buffer, through shaders/common/bvh.glsl. It is how
-// the GLSL traversal is checked against the CPU reference (crates/engine/src/reference/bvh.rs), and it
-// references BvhNode and Triangle so that build.rs reflects their layouts.
+// the GLSL traversal is checked against the CPU reference (crates/engine/src/reference/bvh.rs). It also
+// binds the nodes and triangles a second time as storage buffers of typed records (bindings 4 and 5), so
+// that build.rs reflects the BvhNode and Triangle layouts the traversal's texel reads assume, and the
+// hit's normal and the root's first child, read that way, check those reads.
 #version 460
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 64) in;
 #include "types.glsl"
 #include "invocation.glsl"
@@ -22,13 +25,15 @@ struct TraceHit {
     uint cut;        // 1: stopped at the step budget, the hit is not final
     uint subgroup_cost; // bvh_subgroup_cost: the loop iterations this lane's subgroup spent
     uint subgroup_size;
-    uint pad0;
+    uint root_child; // the root's first child, read through the typed alias
 };
 
-layout(std430, binding = 0) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
-layout(std430, binding = 1) readonly buffer BvhTriangles { Triangle bvh_triangles[]; };
+layout(binding = 0) uniform usamplerBuffer bvh_node_texels;
+layout(binding = 1) uniform usamplerBuffer bvh_triangle_texels;
 layout(std430, binding = 2) readonly buffer Rays { TraceRay rays[]; };
 layout(std430, binding = 3) writeonly buffer Hits { TraceHit hits[]; };
+layout(std430, binding = 4) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
+layout(std430, binding = 5) readonly buffer BvhTriangles { Triangle bvh_triangles[]; };
 layout(push_constant) uniform TracePush {
     uint count;      // rays
     uint budget;     // steps each traversal may take (at most BVH_LOOP_LIMIT - 1: this kernel has no other loop)
@@ -50,6 +55,6 @@ void main() {
     out_hit.cut = h.cut ? 1u : 0u;
     out_hit.subgroup_cost = bvh_subgroup_cost(h);
     out_hit.subgroup_size = gl_SubgroupSize;
-    out_hit.pad0 = 0u;
+    out_hit.root_child = bvh_nodes[0].child[0];
     hits[i] = out_hit;
 }

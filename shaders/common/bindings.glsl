@@ -14,8 +14,10 @@
 layout(std430, binding = 1) readonly buffer Spheres { Sphere spheres[]; };
 layout(std430, binding = 2) readonly buffer Quads { Quad quads[]; };
 layout(std430, binding = 3) readonly buffer Materials { Material materials[]; };
-layout(std430, binding = 4) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
-layout(std430, binding = 5) readonly buffer BvhTriangles { Triangle bvh_triangles[]; };
+// The BVH's nodes (BvhNode) and triangles (Triangle) as 16-byte texels: bvh_node() and bvh_triangle()
+// in bvh.glsl read them.
+layout(binding = 4) uniform usamplerBuffer bvh_node_texels;
+layout(binding = 5) uniform usamplerBuffer bvh_triangle_texels;
 #ifdef SCENE_CONSTANTS
 #include "scene_constants.glsl"
 #define SPHERE(i) SCENE_SPHERES[i]
@@ -30,6 +32,6 @@ layout(std430, binding = 5) readonly buffer BvhTriangles { Triangle bvh_triangle
 #define NUM_INLINE_TRIANGLES 0u
 #define SPHERE(i) spheres[i]
 #define QUAD(i) quads[i]
-#define INLINE_TRIANGLE(i) bvh_triangles[i]
+#define INLINE_TRIANGLE(i) bvh_triangle(i)
 #endif
 #endif

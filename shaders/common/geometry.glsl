@@ -113,7 +113,7 @@ bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {
         BvhHit bh;
         uint had = bvh_left;
         if (bvh_intersect(o, d, tmin, hit.t, bvh_left, bh)) {
-            tri = bvh_triangles[bh.triangle];
+            tri = bvh_triangle(bh.triangle);
             hit.t = bh.t; found = true; kind = HIT_TRIANGLE;
             hit.material = tri.material;
         }

@@ -191,18 +191,22 @@ struct PhotonState {
     uint pad1;
 };
 
-// A node of the 4-wide BVH (crates/engine/src/bvh.rs collapses the binary SAH tree into it): the boxes of
-// its (up to) four children, axis by axis with one child per vector component, so one load and one run of
-// vector arithmetic test all four; and each child's reference: BVH_EMPTY, an interior node's index, or
-// BVH_LEAF | (count - 1) << BVH_COUNT_SHIFT | its first triangle in the leaf-ordered triangle buffer.
+// A node of the 4-wide BVH (crates/engine/src/bvh.rs collapses the binary SAH tree into it), 64 bytes:
+// the boxes of its (up to) four children quantized to 8 bits per bound (Ylitie, Karras and Laine 2017), and
+// each child's reference: BVH_EMPTY, an interior node's index, or BVH_LEAF | (count - 1) << BVH_COUNT_SHIFT
+// | its first triangle in the leaf-ordered triangle buffer. On each axis a bound is origin + q 2^e with q
+// a byte and e the axis's exponent: the product is exact and the host rounds q down for a lower bound and
+// up for an upper one, checking the sum as the kernels compute it, so a child's box always holds it.
 struct BvhNode {
-    vec4 lo_x;
-    vec4 hi_x;
-    vec4 lo_y;
-    vec4 hi_y;
-    vec4 lo_z;
-    vec4 hi_z;
-    uvec4 child;
+    float origin_x;
+    float origin_y;
+    float origin_z;
+    uint exponents;  // biased f32 exponents of the three axes' steps: x | y << 8 | z << 16
+    uvec2 qx;        // the children's lower bounds on x in steps, one byte each (child 0 lowest), then upper
+    uvec2 qy;
+    uvec2 qz;
+    uint child[4];
+    uvec2 pad;       // to 64 bytes: two 32-byte loads (bvh_node in bvh.glsl)
 };
 
 // A triangle of the BVH, in leaf order. Its vertices as given, not a vertex and two edges: the watertight

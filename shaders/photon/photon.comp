@@ -82,7 +82,7 @@ Emitter choose_emitter(float u) {
     Light light = lights[lo];
     vec3 flux = light.power / light.prob;
     if (light.kind == LIGHT_TRIANGLE) {
-        Triangle tr = bvh_triangles[light.index];
+        Triangle tr = bvh_triangle(light.index);
         return Emitter(tr.v0, tr.v1 - tr.v0, tr.v2 - tr.v0, bvh_normal(tr), flux, light.cdf, true);
     }
     Quad q = quads[light.index];

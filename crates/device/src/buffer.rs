@@ -27,7 +27,13 @@ pub struct Buffer {
     allocation: Option<Allocation>,
     size: u64,
     name: String,
+    /// A `Storage` buffer's view as 16-byte texels (R32G32B32A32_UINT), for kernels that read it as a
+    /// uniform texel buffer; `None` where it has more texels than the device allows in one view.
+    texels: Option<vk::BufferView>,
 }
+
+/// Bytes of one texel of a buffer's texel view (R32G32B32A32_UINT).
+pub const TEXEL_BYTES: u64 = 16;
 
 impl Buffer {
     /// A buffer of `size` bytes (at least 4: Vulkan forbids empty buffers, and an empty scene list is legal).
@@ -47,7 +53,8 @@ impl Buffer {
                 vk::BufferUsageFlags::STORAGE_BUFFER
                     | vk::BufferUsageFlags::TRANSFER_DST
                     | vk::BufferUsageFlags::TRANSFER_SRC
-                    | vk::BufferUsageFlags::INDIRECT_BUFFER,
+                    | vk::BufferUsageFlags::INDIRECT_BUFFER
+                    | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
                 MemoryLocation::GpuOnly,
             ),
             BufferKind::Readback => (vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu),
@@ -102,12 +109,37 @@ impl Buffer {
             }
             return Err(e).with_context(|| format!("binding memory of buffer {name:?}"));
         }
-        Ok(Buffer {
+        let mut buffer = Buffer {
             shared,
             raw,
             allocation: Some(allocation),
             size,
             name: name.to_string(),
+            texels: None,
+        };
+        let texels = size / TEXEL_BYTES;
+        if kind == BufferKind::Storage && texels > 0 && texels <= ctx.limits().max_texel_buffer_elements as u64 {
+            let info = vk::BufferViewCreateInfo::default()
+                .buffer(raw)
+                .format(vk::Format::R32G32B32A32_UINT)
+                .offset(0)
+                .range(texels * TEXEL_BYTES);
+            let view = unsafe { buffer.shared.device.create_buffer_view(&info, None) }
+                .with_context(|| format!("creating the texel view of buffer {name:?}"))?;
+            ctx.name_object(view, &format!("{name} texels"));
+            buffer.texels = Some(view);
+        }
+        Ok(buffer)
+    }
+
+    /// The buffer as 16-byte texels, for a kernel's uniform texel buffer binding.
+    pub fn texel_view(&self) -> Result<vk::BufferView> {
+        self.texels.ok_or_else(|| {
+            anyhow!(
+                "buffer {:?} ({} MiB) has no texel view: more texels than the device allows in one, or not a storage buffer",
+                self.name,
+                self.size >> 20
+            )
         })
     }
 
@@ -173,6 +205,9 @@ impl Buffer {
 
 impl Drop for Buffer {
     fn drop(&mut self) {
+        if let Some(view) = self.texels.take() {
+            unsafe { self.shared.device.destroy_buffer_view(view, None) };
+        }
         unsafe { self.shared.device.destroy_buffer(self.raw, None) };
         if let Some(a) = self.allocation.take() {
             if let Ok(mut alloc) = self.shared.allocator.lock() {

@@ -13,8 +13,10 @@ use crate::context::{Context, Shared};
 pub struct PipelineDesc<'a> {
     pub name: &'a str,
     pub spirv: &'a [u32],
-    /// Storage-buffer bindings 0..n of set 0, in order.
+    /// Buffer bindings 0..n of set 0, in order: storage buffers, but for those in `texel_bindings`.
     pub bindings: u32,
+    /// Bit b: binding b is a uniform texel buffer (the buffer's 16-byte texel view, `Buffer::texel_view`).
+    pub texel_bindings: u32,
     /// Size of the push-constant block in bytes (0 for none).
     pub push_size: u32,
     /// The kernel's local workgroup size (x only: every kernel here is one-dimensional).
@@ -29,6 +31,7 @@ pub struct ComputePipeline {
     layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
     bindings: u32,
+    texel_bindings: u32,
     push_size: u32,
     local_size: u32,
 }
@@ -40,9 +43,14 @@ impl ComputePipeline {
         let name = desc.name;
         let binding_infos: Vec<_> = (0..desc.bindings)
             .map(|b| {
+                let texel = desc.texel_bindings >> b & 1 != 0;
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)
-                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_type(if texel {
+                        vk::DescriptorType::UNIFORM_TEXEL_BUFFER
+                    } else {
+                        vk::DescriptorType::STORAGE_BUFFER
+                    })
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
@@ -61,6 +69,7 @@ impl ComputePipeline {
             layout: vk::PipelineLayout::null(),
             set_layout,
             bindings: desc.bindings,
+            texel_bindings: desc.texel_bindings,
             push_size: desc.push_size,
             local_size: desc.local_size,
         };
@@ -183,14 +192,29 @@ impl ComputePipeline {
                 }]
             })
             .collect();
-        let writes: Vec<vk::WriteDescriptorSet> = infos
+        let views: Vec<[vk::BufferView; 1]> = buffers
             .iter()
             .enumerate()
-            .map(|(i, info)| {
-                vk::WriteDescriptorSet::default()
-                    .dst_binding(i as u32)
-                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                    .buffer_info(info)
+            .map(|(i, b)| match self.texel_bindings >> i & 1 {
+                0 => Ok([vk::BufferView::null()]),
+                _ => b
+                    .texel_view()
+                    .map(|v| [v])
+                    .with_context(|| format!("kernel {}, binding {i}", self.name)),
+            })
+            .collect::<Result<_>>()?;
+        let writes: Vec<vk::WriteDescriptorSet> = infos
+            .iter()
+            .zip(&views)
+            .enumerate()
+            .map(|(i, (info, view))| {
+                let w = vk::WriteDescriptorSet::default().dst_binding(i as u32);
+                match self.texel_bindings >> i & 1 {
+                    0 => w.descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(info),
+                    _ => w
+                        .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
+                        .texel_buffer_view(view),
+                }
             })
             .collect();
         unsafe {

@@ -51,7 +51,9 @@ pub struct TraceHit {
     /// `bvh_subgroup_cost`: the loop iterations the traversal cost this lane's subgroup.
     pub subgroup_cost: u32,
     pub subgroup_size: u32,
-    pub pad0: u32,
+    /// The root's first child, read through the typed alias of the node buffer (checks the layout the
+    /// traversal's 64-bit reads assume).
+    pub root_child: u32,
 }
 gpu_struct!(TraceHit {
     normal,
@@ -62,7 +64,7 @@ gpu_struct!(TraceHit {
     cut,
     subgroup_cost,
     subgroup_size,
-    pad0
+    root_child
 });
 
 #[repr(C)]
@@ -92,7 +94,8 @@ pub fn record(
     }
     k.dispatch(
         cmd,
-        &[nodes, triangles, rays, hits],
+        // The nodes and triangles twice: as texels for the traversal, as typed records for the checks.
+        &[nodes, triangles, rays, hits, nodes, triangles],
         bytemuck::bytes_of(push),
         push.count as u64,
     )
@@ -114,7 +117,7 @@ mod tests {
             format!("const uint BVH_MAX_DEPTH = {MAX_DEPTH}u;"),
             format!("const uint BVH_LOOP_LIMIT = {LOOP_LIMIT}u;"),
             format!("const uint BVH_NONE = 0x{NO_HIT:x}u;"),
-            format!("const uint BVH_LEAF = {}u;", crate::layout::BVH_LEAF),
+            format!("const uint BVH_LEAF = 0x{:x}u;", crate::layout::BVH_LEAF),
         ] {
             assert!(glsl.lines().any(|l| l.starts_with(&line)), "bvh.glsl lacks `{line}`");
         }

@@ -311,47 +311,127 @@ pub const BVH_LEAF: u32 = 1 << 31;
 pub const BVH_COUNT_SHIFT: u32 = 29;
 pub const BVH_FIRST_MASK: u32 = (1 << BVH_COUNT_SHIFT) - 1;
 
-/// A node of the 4-wide BVH the kernels traverse (shaders/common/bvh.glsl): the boxes of up to four
-/// children, axis by axis with one child per vector component, and each child's reference
+/// A node of the 4-wide BVH the kernels traverse (shaders/common/bvh.glsl), 64 bytes: the boxes of up to
+/// four children, quantized to a byte per bound on a power-of-two step per axis, and each child's reference
 /// ([`BVH_EMPTY`], an interior node's index, or a leaf, [`BvhNode::leaf`]). crates/engine/src/bvh.rs
-/// collapses the binary SAH tree into it.
+/// collapses the binary SAH tree into it; [`BvhNode::new`] quantizes, [`BvhNode::child_boxes`] decodes as
+/// the kernels do.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {
-    pub lo_x: [f32; 4],
-    pub hi_x: [f32; 4],
-    pub lo_y: [f32; 4],
-    pub hi_y: [f32; 4],
-    pub lo_z: [f32; 4],
-    pub hi_z: [f32; 4],
+    pub origin_x: f32,
+    pub origin_y: f32,
+    pub origin_z: f32,
+    /// Biased f32 exponents of the three axes' steps: x | y << 8 | z << 16.
+    pub exponents: u32,
+    /// The children's lower bounds on x in steps above `origin_x`, a byte each (child 0 lowest), then the
+    /// upper bounds.
+    pub qx: [u32; 2],
+    pub qy: [u32; 2],
+    pub qz: [u32; 2],
     pub child: [u32; 4],
+    /// To 64 bytes: the kernels read a node in two 32-byte loads.
+    pub pad: [u32; 2],
 }
 gpu_struct!(BvhNode {
-    lo_x,
-    hi_x,
-    lo_y,
-    hi_y,
-    lo_z,
-    hi_z,
-    child
+    origin_x,
+    origin_y,
+    origin_z,
+    exponents,
+    qx,
+    qy,
+    qz,
+    child,
+    pad
 });
 
 impl Default for BvhNode {
     /// A node without children.
     fn default() -> BvhNode {
         BvhNode {
-            lo_x: [0.0; 4],
-            hi_x: [0.0; 4],
-            lo_y: [0.0; 4],
-            hi_y: [0.0; 4],
-            lo_z: [0.0; 4],
-            hi_z: [0.0; 4],
+            origin_x: 0.0,
+            origin_y: 0.0,
+            origin_z: 0.0,
+            exponents: 0,
+            qx: [0; 2],
+            qy: [0; 2],
+            qz: [0; 2],
             child: [BVH_EMPTY; 4],
+            pad: [0; 2],
         }
     }
 }
 
+/// A bound decoded as bvh.glsl's `bvh_axis` computes it: origin + q 2^(exponent - 127), in f32.
+fn decode(origin: f32, exponent: u32, q: u32) -> f32 {
+    origin + q as f32 * f32::from_bits(exponent << 23)
+}
+
+/// One axis of a node: the exponent and the bytes of its children's bounds, each lower bound decoding to
+/// at most the true one and each upper bound to at least it, checked as the kernels decode them.
+fn quantize_axis(origin: f32, top: f32, bounds: &[(f32, f32)]) -> (u32, [u32; 2]) {
+    // The smallest step that spans the node in 255 steps (f32 exponents 1..=254: normal, no overflow).
+    let extent = top as f64 - origin as f64;
+    let mut exponent = if extent > 0.0 {
+        ((extent / 255.0).log2().ceil() as i32 + 127).clamp(1, 254) as u32
+    } else {
+        1
+    };
+    'grow: loop {
+        let step = f32::from_bits(exponent << 23) as f64;
+        let mut q = [0u32; 2];
+        for (k, &(lo, hi)) in bounds.iter().enumerate() {
+            let mut l = (((lo as f64 - origin as f64) / step).floor().max(0.0) as u32).min(255);
+            while l > 0 && decode(origin, exponent, l) > lo {
+                l -= 1;
+            }
+            let mut h = (((hi as f64 - origin as f64) / step).ceil().max(0.0) as u32).clamp(l, 255);
+            while decode(origin, exponent, h) < hi {
+                if h == 255 {
+                    exponent += 1;
+                    continue 'grow;
+                }
+                h += 1;
+            }
+            q[0] |= l << (8 * k);
+            q[1] |= h << (8 * k);
+        }
+        return (exponent, q);
+    }
+}
+
 impl BvhNode {
+    /// The node of up to four children, each its box (lo, hi) and its reference; their boxes quantized
+    /// so that each decoded box holds the given one.
+    pub fn new(children: &[([f32; 3], [f32; 3], u32)]) -> BvhNode {
+        assert!(children.len() <= 4, "a BVH node has at most four children");
+        let mut n = BvhNode::default();
+        if children.is_empty() {
+            return n;
+        }
+        let mut origin = [f32::INFINITY; 3];
+        let mut top = [f32::NEG_INFINITY; 3];
+        for (lo, hi, _) in children {
+            for a in 0..3 {
+                origin[a] = origin[a].min(lo[a]);
+                top[a] = top[a].max(hi[a]);
+            }
+        }
+        (n.origin_x, n.origin_y, n.origin_z) = (origin[0], origin[1], origin[2]);
+        let mut q = [[0u32; 2]; 3];
+        for a in 0..3 {
+            let bounds: Vec<(f32, f32)> = children.iter().map(|(lo, hi, _)| (lo[a], hi[a])).collect();
+            let (e, qa) = quantize_axis(origin[a], top[a], &bounds);
+            n.exponents |= e << (8 * a);
+            q[a] = qa;
+        }
+        (n.qx, n.qy, n.qz) = (q[0], q[1], q[2]);
+        for (k, c) in children.iter().enumerate() {
+            n.child[k] = c.2;
+        }
+        n
+    }
+
     /// The reference to a leaf of `count` (1..=4) triangles from `first` (below 2^29).
     pub fn leaf(first: u32, count: u32) -> u32 {
         debug_assert!((1..=4).contains(&count) && first <= BVH_FIRST_MASK);
@@ -364,19 +444,20 @@ impl BvhNode {
             .then(|| (child & BVH_FIRST_MASK, (child >> BVH_COUNT_SHIFT & 3) + 1))
     }
 
-    /// Child `i`'s box.
-    pub fn child_box(&self, i: usize) -> ([f32; 3], [f32; 3]) {
-        (
-            [self.lo_x[i], self.lo_y[i], self.lo_z[i]],
-            [self.hi_x[i], self.hi_y[i], self.hi_z[i]],
-        )
-    }
-
-    /// Sets child `i`: its box and its reference.
-    pub fn set_child(&mut self, i: usize, lo: [f32; 3], hi: [f32; 3], child: u32) {
-        (self.lo_x[i], self.lo_y[i], self.lo_z[i]) = (lo[0], lo[1], lo[2]);
-        (self.hi_x[i], self.hi_y[i], self.hi_z[i]) = (hi[0], hi[1], hi[2]);
-        self.child[i] = child;
+    /// The children's boxes (lo, hi) as the kernels decode them (bvh.glsl's `bvh_axis`); an empty slot's
+    /// is meaningless.
+    pub fn child_boxes(&self) -> [([f32; 3], [f32; 3]); 4] {
+        let origin = [self.origin_x, self.origin_y, self.origin_z];
+        let q = [self.qx, self.qy, self.qz];
+        let mut out = [([0f32; 3], [0f32; 3]); 4];
+        for (k, b) in out.iter_mut().enumerate() {
+            for a in 0..3 {
+                let e = self.exponents >> (8 * a) & 0xff;
+                b.0[a] = decode(origin[a], e, q[a][0] >> (8 * k) & 0xff);
+                b.1[a] = decode(origin[a], e, q[a][1] >> (8 * k) & 0xff);
+            }
+        }
+        out
     }
 }
 

@@ -21,8 +21,10 @@ pub mod reflected {
         /// Its source file, relative to shaders/.
         pub source: &'static str,
         pub spirv: &'static [u8],
-        /// The names of its storage-buffer blocks, binding 0 first.
+        /// The names of its storage-buffer blocks and texel buffers, binding 0 first.
         pub bindings: &'static [&'static str],
+        /// Bit b: binding b is a uniform texel buffer (read with texelFetch), not a storage buffer.
+        pub texel_bindings: u32,
         pub push_size: u32,
         pub local_size: u32,
     }
@@ -75,6 +77,7 @@ pub fn pipeline_from(ctx: &Context, k: &reflected::KernelInfo, words: &[u32]) ->
             name: k.name,
             spirv: words,
             bindings: k.bindings.len() as u32,
+            texel_bindings: k.texel_bindings,
             push_size: k.push_size,
             local_size: k.local_size,
         },

@@ -96,7 +96,7 @@ pub struct PathLimits {
 /// path's weight after 256).
 const EYE_DEPTH: u32 = 256;
 /// Emission samples per eye thread and dispatch with a BVH, so each path keeps a share of the budget.
-const BVH_EMISSION_PER_DISPATCH: u32 = 4;
+const BVH_EMISSION_PER_DISPATCH: u32 = 16;
 
 /// Depths aimed at with a BVH: deep enough for roulette to end paths (0.95^512 < 4e-12), shallow enough to
 /// leave most of the loop budget to traversal.

@@ -62,24 +62,16 @@ impl BvhRay {
     }
 }
 
-/// One slab of a node's four boxes along axis `k` (`bvh_slab`): entry and exit distances per child; a ray
-/// parallel to the slab is inside it for every t (its origin within the slab, faces included) or none.
-fn slab(r: &BvhRay, k: usize, lo: [f32; 4], hi: [f32; 4]) -> ([f32; 4], [f32; 4]) {
-    let (mut near, mut far) = ([0f32; 4], [0f32; 4]);
-    for i in 0..4 {
-        let t0 = (lo[i] - r.o[k]) * r.inv_d[k];
-        let t1 = (hi[i] - r.o[k]) * r.inv_d[k];
-        (near[i], far[i]) = (t0.min(t1), t0.max(t1));
-        if r.parallel[k] {
-            near[i] = if lo[i] <= r.o[k] && r.o[k] <= hi[i] {
-                -HUGE
-            } else {
-                HUGE
-            };
-            far[i] = -near[i];
-        }
+/// One slab of a child's box along axis `k` (`bvh_slab`): entry and exit distances; a ray parallel to the
+/// slab is inside it for every t (its origin within the slab, faces included) or none.
+fn slab(r: &BvhRay, k: usize, lo: f32, hi: f32) -> (f32, f32) {
+    let t0 = (lo - r.o[k]) * r.inv_d[k];
+    let t1 = (hi - r.o[k]) * r.inv_d[k];
+    if r.parallel[k] {
+        let near = if lo <= r.o[k] && r.o[k] <= hi { -HUGE } else { HUGE };
+        return (near, -near);
     }
-    (near, far)
+    (t0.min(t1), t0.max(t1))
 }
 
 /// The watertight test (`bvh_triangle_test`): (t, barycentric weights of v1 and v2) for a hit with t in
@@ -180,15 +172,17 @@ pub fn intersect(
         }
         if next & BVH_LEAF == 0 {
             let n = &nodes[next as usize];
-            let (nx, fx) = slab(&r, 0, n.lo_x, n.hi_x);
-            let (ny, fy) = slab(&r, 1, n.lo_y, n.hi_y);
-            let (nz, fz) = slab(&r, 2, n.lo_z, n.hi_z);
+            let boxes = n.child_boxes();
             let mut key = [0f32; 4];
             let mut refs = n.child;
             let mut entered = 0;
             for i in 0..4 {
-                let near = nx[i].max(ny[i]).max(nz[i].max(tmin));
-                let far = fx[i].min(fy[i]).min(fz[i]) * ROBUST;
+                let (lo, hi) = boxes[i];
+                let (nx, fx) = slab(&r, 0, lo[0], hi[0]);
+                let (ny, fy) = slab(&r, 1, lo[1], hi[1]);
+                let (nz, fz) = slab(&r, 2, lo[2], hi[2]);
+                let near = nx.max(ny).max(nz.max(tmin));
+                let far = fx.min(fy).min(fz) * ROBUST;
                 let enter = near <= far.min(best) && n.child[i] != BVH_EMPTY;
                 key[i] = if enter { near } else { HUGE };
                 entered += enter as usize;
@@ -311,6 +305,38 @@ mod tests {
         assert_eq!(value("BVH_ROBUST"), ROBUST);
         assert_eq!(value("BVH_TINY"), TINY);
         assert_eq!(value("BVH_HUGE"), HUGE);
+        // The stack: lavapipe does not bound private arrays, so a GLSL stack smaller than the builder's
+        // bound would not show as a wrong hit there; it would on another device.
+        let line = |prefix: &str| glsl.lines().find(|l| l.starts_with(prefix)).unwrap();
+        assert_eq!(
+            line("const uint BVH_MAX_DEPTH = "),
+            format!("const uint BVH_MAX_DEPTH = {}u;", crate::bvh::MAX_DEPTH)
+        );
+        assert_eq!(
+            line("const uint BVH_STACK = "),
+            "const uint BVH_STACK = 3u * BVH_MAX_DEPTH;"
+        );
+        assert_eq!(crate::bvh::STACK, 3 * crate::bvh::MAX_DEPTH);
+        for (name, v) in [
+            ("BVH_EMPTY", ppm_vk_kernels::layout::BVH_EMPTY),
+            ("BVH_LEAF", ppm_vk_kernels::layout::BVH_LEAF),
+            ("BVH_COUNT_SHIFT", ppm_vk_kernels::layout::BVH_COUNT_SHIFT),
+            ("BVH_FIRST_MASK", ppm_vk_kernels::layout::BVH_FIRST_MASK),
+        ] {
+            let text = line(&format!("const uint {name} = "));
+            let lit = text
+                .split('=')
+                .nth(1)
+                .unwrap()
+                .trim()
+                .trim_end_matches(';')
+                .trim_end_matches('u');
+            let parsed = match lit.strip_prefix("0x") {
+                Some(hex) => u32::from_str_radix(hex, 16).unwrap(),
+                None => lit.parse().unwrap(),
+            };
+            assert_eq!(parsed, v, "{name}");
+        }
     }
 
     #[test]
