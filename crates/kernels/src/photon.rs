@@ -95,7 +95,7 @@ pub struct PathLimits {
 /// Specular bounces aimed at for an eye path without a BVH (a mirror of reflectance 0.95 keeps 2e-6 of a
 /// path's weight after 256).
 const EYE_DEPTH: u32 = 256;
-/// Emission samples per eye thread and dispatch with a BVH, so each path keeps a share of the budget.
+/// The most emission samples per eye thread and dispatch with a BVH (fewer where the budget needs it).
 const BVH_EMISSION_PER_DISPATCH: u32 = 16;
 
 /// Depths aimed at with a BVH: deep enough for roulette to end paths (0.95^512 < 4e-12), shallow enough to
@@ -192,14 +192,12 @@ impl PathLimits {
         let Some(budget) = budget else {
             return PathLimits::new(None, intersect_steps, lights, slots, emission, photon_cap, eye_cap);
         };
-        let emission_per_dispatch = emission.min(BVH_EMISSION_PER_DISPATCH);
-        let eye_paths = slots + emission_per_dispatch;
         let step = 1 + intersect_steps as u64;
         let total = budget as u64 - 1;
         // One photon path, as photon.comp counts it (PATH_STEP_LOOPS, LIGHT_LOOPS): the depth is the one
         // at which a path of its own, in the resume round, still leaves MIN_BVH_BUDGET to its traversals.
         let photon_loops = |depth: u32| (depth as u64 + 1) * (step + 2) + lights as u64 + 1;
-        let eye_loops = |depth: u32| eye_paths.max(1) as u64 * ((depth as u64 + 1) * step + 2);
+        let eye_loops = |paths: u32, depth: u32| paths.max(1) as u64 * ((depth as u64 + 1) * step + 2);
         let fit = |mut depth: u32, floor: u32, loops: &dyn Fn(u32) -> u64| -> Option<(u32, u32)> {
             loop {
                 let left = total.saturating_sub(loops(depth));
@@ -217,7 +215,19 @@ impl PathLimits {
             MIN_DEPTH.min(photon_cap),
             &photon_loops,
         );
-        let eye = fit(BVH_EYE_DEPTH.min(eye_cap), MIN_EYE_DEPTH.min(eye_cap), &eye_loops);
+        // As many emission samples in one dispatch as leave the eye paths their depth (halving them, then
+        // the depth): the fewer dispatches, the less an eye pass costs.
+        let mut emission_per_dispatch = emission.min(BVH_EMISSION_PER_DISPATCH);
+        let eye = loop {
+            let paths = slots + emission_per_dispatch;
+            let depth = BVH_EYE_DEPTH.min(eye_cap);
+            let fitted = fit(depth, depth, &|d| eye_loops(paths, d));
+            if fitted.is_some() || emission_per_dispatch <= 1 {
+                let floor = MIN_EYE_DEPTH.min(eye_cap);
+                break fitted.or_else(|| fit(depth, floor, &|d| eye_loops(paths, d)));
+            }
+            emission_per_dispatch /= 2;
+        };
         let (Some((photon_depth, _)), Some((eye_depth, eye_bvh_budget))) = (photon, eye) else {
             bail!(
                 "the scene is too large for this device's loop budget ({budget} iterations per SIMD group): \
@@ -384,8 +394,12 @@ mod tests {
 
     #[test]
     fn bvh_limits_leave_the_traversal_its_budget() {
-        for (steps, lights, slots, emission) in [(0, 1, 1, 16), (10, 18, 4, 16), (60, 3, 8, 4)] {
+        for (steps, lights, slots, emission) in [(0, 1, 1, 16), (10, 18, 4, 16), (60, 3, 8, 4), (60, 3, 8, 16)] {
             let l = PathLimits::with_bvh(Some(65535), steps, lights, slots, emission, 4096, 1024).unwrap();
+            assert!((1..=emission).contains(&l.emission_per_dispatch), "{l:?}");
+            if steps < 60 {
+                assert_eq!(l.emission_per_dispatch, emission, "a small scene takes them all at once: {l:?}");
+            }
             let step = 1 + steps as u64;
             // A photon thread counts all its loops against the whole budget; one path of the backstop's
             // depth on its own (the resume round) leaves its traversals MIN_BVH_BUDGET.
