@@ -13,11 +13,19 @@
 #include "params.glsl"
 layout(std430, binding = 1) readonly buffer Spheres { Sphere spheres[]; };
 layout(std430, binding = 2) readonly buffer Quads { Quad quads[]; };
-layout(std430, binding = 3) readonly buffer Materials { Material materials[]; };
+// The materials as 16-byte texels (color, surface | emission, ior): material() reads them. Texel fetches
+// are vector gathers on lavapipe, where a storage-buffer load is a loop over the lanes (bvh.glsl).
+layout(binding = 3) uniform usamplerBuffer material_texels;
 // The BVH's nodes (BvhNode) and triangles (Triangle) as 16-byte texels: bvh_node() and bvh_triangle()
 // in bvh.glsl read them.
 layout(binding = 4) uniform usamplerBuffer bvh_node_texels;
 layout(binding = 5) uniform usamplerBuffer bvh_triangle_texels;
+Material material(uint i) {
+    uvec4 a = texelFetch(material_texels, int(2u * i));
+    uvec4 b = texelFetch(material_texels, int(2u * i + 1u));
+    return Material(uintBitsToFloat(a.xyz), a.w, uintBitsToFloat(b.xyz), uintBitsToFloat(b.w));
+}
+
 #ifdef SCENE_CONSTANTS
 #include "scene_constants.glsl"
 #define SPHERE(i) SCENE_SPHERES[i]

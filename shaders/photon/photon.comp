@@ -221,7 +221,7 @@ void main() {
         o = offset_ray(h.pos, nf);
         continue;
 #endif
-        Material m = materials[h.material];
+        Material m = material(h.material);
         if (m.surface == SURFACE_DIFFUSE) {
             float p = max(m.color.r, max(m.color.g, m.color.b));
             if (p <= 0.0) { alive = false; continue; } // a black emitter absorbs

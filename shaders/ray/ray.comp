@@ -78,7 +78,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen) {
             if (bvh_spent) atomicAdd(cut.eye_paths, 1u);
             break;
         }
-        Material m = materials[h.material];
+        Material m = material(h.material);
         bool front = dot(d, h.normal) < 0.0;
         vec3 nf = front ? h.normal : -h.normal;
         if (m.surface == SURFACE_DIFFUSE) {
@@ -134,7 +134,7 @@ void main() {
                     if (bvh_spent) { atomicAdd(cut.eye_paths, 1u); sp = 0u; } // no budget for the rest
                     break;
                 }
-                Material m = materials[h.material];
+                Material m = material(h.material);
                 bool front = dot(r.d, h.normal) < 0.0;
                 vec3 nf = front ? h.normal : -h.normal;
                 if (m.surface == SURFACE_DIFFUSE) {

@@ -398,7 +398,10 @@ mod tests {
             let l = PathLimits::with_bvh(Some(65535), steps, lights, slots, emission, 4096, 1024).unwrap();
             assert!((1..=emission).contains(&l.emission_per_dispatch), "{l:?}");
             if steps < 60 {
-                assert_eq!(l.emission_per_dispatch, emission, "a small scene takes them all at once: {l:?}");
+                assert_eq!(
+                    l.emission_per_dispatch, emission,
+                    "a small scene takes them all at once: {l:?}"
+                );
             }
             let step = 1 + steps as u64;
             // A photon thread counts all its loops against the whole budget; one path of the backstop's
