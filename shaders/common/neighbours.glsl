@@ -2,8 +2,10 @@
 // (consecutive entries of the spatially sorted order, so usually neighbours on one surface) and tests each
 // photon it reads against all of them: on lavapipe every read from a storage buffer is a gather per lane,
 // and the group shares its reads. Calls the including kernel's `visit(j, flux, d2)` for each photon within
-// sqrt(q_r2[j]) of hit point j that arrives from the side it is seen from. Needs `sorted` (records grouped
-// by bucket, as photon_words), `cell_start` and `params` declared before it.
+// sqrt(q_r2[j]) of hit point j that arrives from the side it is seen from. Needs `sorted_texels` (records
+// grouped by bucket, two 16-byte texels each: position and cell key, flux and direction), `cell_start` and
+// `params` declared before it. The records are read as texels: a texel fetch is a vector gather on
+// lavapipe, where a storage-buffer load is a loop over the lanes (bvh.glsl).
 #ifndef NEIGHBOURS_GLSL
 #define NEIGHBOURS_GLSL
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -48,9 +50,9 @@ void visit_cell(uint key, uint select) {
     uint k = cell_start[h];
     count_steps(subgroupMax(end - k) + 1u);
     for (; k < end; k++) {
-        u64vec4 w = sorted[k]; // one load of the whole record (types.glsl: photon_words)
-        uint cell;
-        vec3 p = words_pos(w, cell);
+        uvec4 a = texelFetch(sorted_texels, int(2u * k));
+        uint cell = a.w;
+        vec3 p = uintBitsToFloat(a.xyz);
         float d2[GROUP];
         bool inside[GROUP];
         bool any_inside = false;
@@ -65,9 +67,9 @@ void visit_cell(uint key, uint select) {
         if (cell != key) continue;
         // The BRDF is zero for light arriving from behind the surface (../shared/paper/ALGORITHM.md); only the sign of
         // the dot product matters, so the direction needs no normalising.
-        uint packed_dir;
-        vec3 flux = words_flux(w, packed_dir);
-        vec3 dir = oct_decode_unnormalized(packed_dir);
+        uvec4 b = texelFetch(sorted_texels, int(2u * k + 1u));
+        vec3 flux = uintBitsToFloat(b.xyz);
+        vec3 dir = oct_decode_unnormalized(b.w);
         [[unroll]] for (uint j = 0u; j < GROUP; j++) {
             if (inside[j] && dot(dir, q_normal[j]) < 0.0) visit(j, flux, d2[j]);
         }

@@ -145,6 +145,11 @@ u64vec4 photon_words(Photon p) {
                    packUint2x32(uvec2(floatBitsToUint(p.flux.b), p.dir)));
 }
 
+// A Photon read as its two 16-byte texels (position, cell | flux, dir), back as its four words.
+u64vec4 texels_words(uvec4 a, uvec4 b) {
+    return u64vec4(packUint2x32(a.xy), packUint2x32(a.zw), packUint2x32(b.xy), packUint2x32(b.zw));
+}
+
 // The first two words: position and cell key.
 vec3 words_pos(u64vec4 w, out uint cell) {
     uvec2 a = unpackUint2x32(w.x), b = unpackUint2x32(w.y);

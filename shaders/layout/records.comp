@@ -8,8 +8,9 @@ layout(local_size_x = 1) in;
 layout(std430, binding = 0) buffer Materials { Material materials[]; };
 layout(std430, binding = 1) buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(std430, binding = 2) buffer BvhTriangles { Triangle bvh_triangles[]; };
+layout(std430, binding = 3) buffer Photons { Photon photons[]; };
 
 void main() {
     // Statically used, so that the compiler keeps the blocks and their layouts.
-    materials[0].surface = bvh_nodes[0].child[0] + bvh_triangles[0].material;
+    materials[0].surface = bvh_nodes[0].child[0] + bvh_triangles[0].material + photons[0].cell;
 }

@@ -5,7 +5,9 @@
 layout(local_size_x = 256) in;
 #include "types.glsl"
 #include "params.glsl"
-layout(std430, binding = 1) readonly buffer Photons { Photon photons[]; };
+// The records as texels (position, cell key | flux, direction): a texel fetch is a vector gather on
+// lavapipe, where a storage-buffer load is a loop over the lanes (bvh.glsl).
+layout(binding = 1) uniform usamplerBuffer photon_texels;
 layout(std430, binding = 2) readonly buffer Counter { uint photon_count; };
 layout(std430, binding = 3) buffer CellCount { uint cell_count[]; };
 layout(std430, binding = 4) writeonly buffer PartCount { uint part_count[]; }; // [chunk][partition]
@@ -22,7 +24,7 @@ void main() {
     for (uint p = t; p < pc.parts; p += 256u) hist[p] = 0u;
     barrier();
     for (uint i = first + t; i < end; i += 256u) {
-        uint h = grid_bucket(photons[i].cell);
+        uint h = grid_bucket(texelFetch(photon_texels, int(2u * i)).w); // Photon.cell
         atomicAdd(cell_count[h], 1u);
         atomicAdd(hist[h >> pc.shift], 1u);
     }

@@ -6,7 +6,8 @@
 layout(local_size_x = 256) in;
 #include "types.glsl"
 #include "params.glsl"
-layout(std430, binding = 1) readonly buffer Photons { u64vec4 photons[]; }; // Photon records (photon_words)
+// The records as texels (position, cell key | flux, direction), read as grid_count reads them.
+layout(binding = 1) uniform usamplerBuffer photon_texels;
 layout(std430, binding = 2) readonly buffer Counter { uint photon_count; };
 layout(std430, binding = 3) readonly buffer PartStart { uint part_start[]; }; // [chunk][partition]
 layout(std430, binding = 4) writeonly buffer Staging { u64vec4 staging[]; };
@@ -24,8 +25,9 @@ void main() {
     for (uint p = t; p < pc.parts; p += 256u) cursor[p] = part_start[row + p];
     barrier();
     for (uint i = first + t; i < end; i += 256u) {
-        u64vec4 w = photons[i];
-        uint h = grid_bucket(uint(w.y >> 32)); // Photon.cell: the high half of the second word
-        staging[atomicAdd(cursor[h >> pc.shift], 1u)] = w;
+        uvec4 a = texelFetch(photon_texels, int(2u * i));
+        uvec4 b = texelFetch(photon_texels, int(2u * i + 1u));
+        uint h = grid_bucket(a.w); // Photon.cell
+        staging[atomicAdd(cursor[h >> pc.shift], 1u)] = texels_words(a, b);
     }
 }

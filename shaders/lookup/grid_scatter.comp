@@ -8,7 +8,8 @@
 layout(local_size_x = 256) in;
 #include "types.glsl"
 #include "params.glsl"
-layout(std430, binding = 1) readonly buffer Staging { u64vec4 staging[]; };
+// The staged records as texels (position, cell key | flux, direction), as grid_count reads them.
+layout(binding = 1) uniform usamplerBuffer staging_texels;
 layout(std430, binding = 2) readonly buffer Counter { uint photon_count; };
 layout(std430, binding = 3) buffer CellCount { uint cell_count[]; };
 layout(std430, binding = 4) readonly buffer CellStart { uint cell_start[]; };
@@ -20,8 +21,9 @@ void main() {
     load_params();
     uint i = invocation_index();
     if (i >= min(photon_count, params.photon_capacity)) return;
-    u64vec4 w = staging[i];
-    uint h = grid_bucket(uint(w.y >> 32)); // Photon.cell: the high half of the second word
+    uvec4 a = texelFetch(staging_texels, int(2u * i));
+    uvec4 b = texelFetch(staging_texels, int(2u * i + 1u));
+    uint h = grid_bucket(a.w); // Photon.cell
     uint left = atomicAdd(cell_count[h], 0xffffffffu); // records of the bucket not yet placed, this one included
-    photons[cell_start[h] + left - 1u] = w;
+    photons[cell_start[h] + left - 1u] = texels_words(a, b);
 }

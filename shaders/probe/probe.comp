@@ -16,7 +16,8 @@ layout(local_size_x = 64) in;
 layout(std430, binding = 1) readonly buffer HitPoints { HitPoint hit_points[]; };
 layout(std430, binding = 2) buffer Stats { HitStats stats[]; };
 layout(std430, binding = 3) buffer Accum { PassAccum accum[]; };
-layout(std430, binding = 4) readonly buffer Sorted { u64vec4 sorted[]; }; // Photons grouped by bucket, as photon_words
+// Photons grouped by bucket, as texels: (position, cell key), (flux, direction) (neighbours.glsl).
+layout(binding = 4) uniform usamplerBuffer sorted_texels;
 layout(std430, binding = 5) readonly buffer CellStart { uint cell_start[]; };
 layout(std430, binding = 6) readonly buffer Order { uint order[]; };
 layout(std430, binding = 7) writeonly buffer Status { uint lookup_status; }; // 1: a lookup was cut short
