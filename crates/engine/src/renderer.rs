@@ -404,16 +404,18 @@ impl Renderer {
             gpu.params.height,
             settings.slots()
         );
+        // Only a BVH scene suspends photons (photon.comp); the others bind one entry's worth.
+        let suspended_bytes = match gpu.traverses_bvh() {
+            true => photon::suspended_bytes(settings.photons_per_pass, limits.per_thread),
+            false => std::mem::size_of::<ppm_vk_kernels::layout::PhotonState>() as u64,
+        };
         let others = [
             (
                 "the photon records, their staging copy and the grid build's counts",
                 capacity as u64 * Grid::bytes_per_record(),
             ),
             ("the BVH", bvh_bytes),
-            (
-                "the suspended photons",
-                photon::suspended_bytes(settings.photons_per_pass, limits.per_thread),
-            ),
+            ("the suspended photons", suspended_bytes),
         ];
         fits_device(&per_pixel, &others, max_range, ctx.info().memory_bytes, &advice)?;
 
@@ -475,10 +477,7 @@ impl Renderer {
                 image: storage("image", pixels * 16)?,
                 counter: storage("photon counter", 4)?,
                 photon_work: storage("photon work", std::mem::size_of::<PhotonWork>() as u64)?,
-                suspended: storage(
-                    "suspended photons",
-                    photon::suspended_bytes(settings.photons_per_pass, limits.per_thread),
-                )?,
+                suspended: storage("suspended photons", suspended_bytes)?,
                 batch_log: storage("batch log", MAX_BATCHES as u64 * 4)?,
                 grid: Grid::new(ctx, gpu.max_buckets(), capacity)?,
                 r2_max: storage("largest radius", 8)?,

@@ -369,18 +369,26 @@ fn decode(origin: f32, exponent: u32, q: u32) -> f32 {
 
 /// One axis of a node: the exponent and the bytes of its children's bounds, each lower bound decoding to
 /// at most the true one and each upper bound to at least it, checked as the kernels decode them.
-fn quantize_axis(origin: f32, top: f32, bounds: &[(f32, f32)]) -> (u32, [u32; 2]) {
-    // The smallest step that spans the node in 255 steps (f32 exponents 1..=254: normal, no overflow).
+fn quantize_axis(origin: f32, top: f32, bounds: impl Iterator<Item = (f32, f32)> + Clone) -> (u32, [u32; 2]) {
+    // The smallest step that spans the node in 255 steps (f32 exponents 1..=254: normal, no overflow),
+    // from the extent's own exponent: 2^e >= extent / 255.
     let extent = top as f64 - origin as f64;
     let mut exponent = if extent > 0.0 {
-        ((extent / 255.0).log2().ceil() as i32 + 127).clamp(1, 254) as u32
+        let need = extent / 255.0;
+        let e = ((need.to_bits() >> 52) & 0x7ff) as i32 - 1023; // floor(log2(need))
+        let e = if need > f64::from_bits(((e + 1023) as u64) << 52) {
+            e + 1
+        } else {
+            e
+        };
+        (e + 127).clamp(1, 254) as u32
     } else {
         1
     };
     'grow: loop {
         let step = f32::from_bits(exponent << 23) as f64;
         let mut q = [0u32; 2];
-        for (k, &(lo, hi)) in bounds.iter().enumerate() {
+        for (k, (lo, hi)) in bounds.clone().enumerate() {
             let mut l = (((lo as f64 - origin as f64) / step).floor().max(0.0) as u32).min(255);
             while l > 0 && decode(origin, exponent, l) > lo {
                 l -= 1;
@@ -420,8 +428,8 @@ impl BvhNode {
         (n.origin_x, n.origin_y, n.origin_z) = (origin[0], origin[1], origin[2]);
         let mut q = [[0u32; 2]; 3];
         for a in 0..3 {
-            let bounds: Vec<(f32, f32)> = children.iter().map(|(lo, hi, _)| (lo[a], hi[a])).collect();
-            let (e, qa) = quantize_axis(origin[a], top[a], &bounds);
+            let bounds = children.iter().map(|(lo, hi, _)| (lo[a], hi[a]));
+            let (e, qa) = quantize_axis(origin[a], top[a], bounds);
             n.exponents |= e << (8 * a);
             q[a] = qa;
         }
