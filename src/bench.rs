@@ -47,6 +47,9 @@ pub struct BenchArgs {
     /// Cone filter constant k >= 1, or `off`, as for `render`.
     #[arg(long, default_value = "off", value_parser = crate::parse_cone)]
     cone: Cone,
+    /// Direct light by light sampling or by the photons, as for `render`.
+    #[arg(long, value_enum, default_value_t = crate::DirectArg::Sample)]
+    direct: crate::DirectArg,
     /// Also time the photon kernel against variants of itself with parts removed, down to tracing only
     /// (its ceiling in this design), on each case's first batch.
     #[arg(long)]
@@ -114,6 +117,7 @@ struct BenchDoc {
     mode: Mode,
     probe: ProbeMode,
     cone_k: Option<f32>,
+    direct: ppm_vk_engine::DirectLight,
     warmup_passes: u32,
     measured_passes: u32,
     cases: Vec<CaseResult>,
@@ -317,6 +321,7 @@ fn measure(args: &BenchArgs, ctx: &Context, scene_path: &Path, scene: &Scene, ph
         mode: Mode::from(args.mode),
         probe: args.probe.into(),
         cone_k: args.cone.0,
+        direct: args.direct.into(),
         ..Settings::default()
     };
     ctx.reset_memory_peak();
@@ -454,6 +459,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         mode: Mode::from(args.mode),
         probe: args.probe.into(),
         cone_k: args.cone.0,
+        direct: args.direct.into(),
         warmup_passes: args.warmup,
         measured_passes: args.passes,
         cases: results,

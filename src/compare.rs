@@ -37,7 +37,8 @@ pub struct CompareArgs {
     #[arg(long, default_value_t = 10.0, value_parser = crate::parse_seconds)]
     time: f64,
     /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone". Words joined by
-    /// `+`: ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass).
+    /// `+`: ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass),
+    /// photons (direct light by the photons) or sample (by light sampling, the default), ls=N (light samples).
     #[arg(
         long,
         default_value = "ppm; ppm+probe; ppm+probe-sf; ppm+cone; ppm+probe+cone; ppm+probe-sf+cone"
@@ -96,15 +97,21 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
             "cone" => s.cone_k = Some(if value.is_some() { number("cone")? } else { 1.1 }),
             "beta" => s.probe_beta = number("beta")?,
             "alpha" => s.alpha = number("alpha")?,
-            "es" => {
-                let e = number("es")?;
+            "es" | "ls" => {
+                let e = number(key)?;
                 if !(e >= 0.0 && e.fract() == 0.0) {
-                    bail!("variant {name:?}: es (emission samples) must be a whole number, got {e}");
+                    bail!("variant {name:?}: {key} (emission or light samples) must be a whole number, got {e}");
                 }
-                s.emission_samples = e as u32;
+                match key {
+                    "es" => s.emission_samples = e as u32,
+                    _ => s.light_samples = e as u32,
+                }
             }
+            "photons" => s.direct = ppm_vk_engine::DirectLight::Photons,
+            "sample" => s.direct = ppm_vk_engine::DirectLight::Sample,
             other => bail!(
-                "variant {name:?}: unknown word {other:?} (ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A, es=N)"
+                "variant {name:?}: unknown word {other:?} (ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A, es=N, \
+                 ls=N, photons, sample)"
             ),
         }
     }

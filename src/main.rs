@@ -162,6 +162,16 @@ struct RenderArgs {
     #[arg(long, default_value_t = Settings::default().emission_samples,
           value_parser = clap::value_parser!(u32).range(0..=ppm_vk_engine::settings::MAX_EMISSION_SAMPLES as i64))]
     emission_samples: u32,
+    /// Direct light: `sample` sends a shadow ray to a light at each emission sample's first diffuse point
+    /// (light sampling; photons then leave no record where they first land), `photons` leaves it to the
+    /// photons (the paper's estimator).
+    #[arg(long, value_enum, default_value_t = DirectArg::Sample)]
+    direct: DirectArg,
+    /// With `--direct sample`: light-sampling paths per pixel and pass where the pilot saw no emitter
+    /// (pixels that see one take --emission-samples).
+    #[arg(long, default_value_t = Settings::default().light_samples,
+          value_parser = clap::value_parser!(u32).range(1..=ppm_vk_engine::settings::MAX_EMISSION_SAMPLES as i64))]
+    light_samples: u32,
     /// Photon probing (eq. 7-9): `paper` is eq. 9 as printed, `scale-free` is r' = r (1 + lambda / r^2).
     #[arg(long, value_enum, default_value_t = ProbeArg::Off)]
     probe: ProbeArg,
@@ -232,6 +242,21 @@ impl From<ModeArg> for Mode {
         match m {
             ModeArg::Ppm => Mode::Ppm,
             ModeArg::Sppm => Mode::Sppm,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum DirectArg {
+    Sample,
+    Photons,
+}
+
+impl From<DirectArg> for ppm_vk_engine::DirectLight {
+    fn from(d: DirectArg) -> ppm_vk_engine::DirectLight {
+        match d {
+            DirectArg::Sample => ppm_vk_engine::DirectLight::Sample,
+            DirectArg::Photons => ppm_vk_engine::DirectLight::Photons,
         }
     }
 }
@@ -518,6 +543,8 @@ fn render(args: RenderArgs) -> Result<Ended> {
         probe_photons: args.probe_photons,
         cone_k: args.cone.0,
         emission_samples: args.emission_samples,
+        direct: args.direct.into(),
+        light_samples: args.light_samples,
         ..Settings::default()
     };
     settings.validate()?;

@@ -15,7 +15,7 @@ use common::*;
 use glam::Vec3;
 use ppm_vk_engine::layout::{HitPoint, HitStats, PassAccum, Photon};
 use ppm_vk_engine::reference::{self, trace};
-use ppm_vk_engine::{Mode, ProbeMode, Renderer, Settings};
+use ppm_vk_engine::{DirectLight, Mode, ProbeMode, Renderer, Settings};
 use ppm_vk_kernels::photon::SALT_PHOTON;
 
 const RES: u32 = 32;
@@ -52,7 +52,7 @@ fn hit_points_agree(a: &HitPoint, b: &HitPoint, pos_tol: f32, weight_tol: f32) -
         && (wa - wb).abs().max_element() <= weight_tol * wa.abs().max_element().max(wb.abs().max_element())
 }
 
-fn ray_pass_matches_reference_case(specialize: bool) {
+fn ray_pass_matches_reference_case(specialize: bool, direct: DirectLight) {
     let ctx = ctx();
     let scene = cornell(RES, RES);
     let mut r = Renderer::new(
@@ -60,6 +60,7 @@ fn ray_pass_matches_reference_case(specialize: bool) {
         &scene,
         Settings {
             specialize,
+            direct,
             ..settings()
         },
     )
@@ -131,7 +132,8 @@ fn ray_pass_matches_reference_case(specialize: bool) {
 }
 
 /// The pilot eye pass (0) and eye pass 1 on the GPU against the CPU reference: the pixels the pilot marks,
-/// then pass 1's emission samples, their sum and count (all of them in marked pixels, one elsewhere).
+/// then pass 1's emission samples, their sum and count (all of them in marked pixels, elsewhere one, or
+/// with direct light sampled `light_samples`; each then with its shadow ray).
 /// Sums are the same throughput products in f32: 1e-4 relative (of at least 1) is ~1000 ulps of slack; a
 /// pixel may differ only where a path diverged at a threshold.
 fn emission_passes_match_reference(r: &mut Renderer) {
@@ -156,11 +158,12 @@ fn emission_passes_match_reference(r: &mut Renderer) {
         .map(|(a, b)| [0, 1, 2, 3].map(|c| a[c] - b[c]))
         .collect();
     let e = r.settings().emission_samples as f64;
+    let unmarked = r.settings().unmarked_samples() as f64;
     let hit = (r.settings().mode == Mode::Sppm) as u32 as f64; // SPPM's jittered hit path is a sample too
     for (i, d) in cpu.iter().enumerate() {
         assert_eq!(
             d[3],
-            if busy[i] != 0 { e } else { 1.0 } + hit,
+            if busy[i] != 0 { e } else { unmarked } + hit,
             "pixel {i}: CPU sample count"
         );
     }
@@ -178,16 +181,22 @@ fn emission_passes_match_reference(r: &mut Renderer) {
     );
 }
 
-/// With the scene compiled into the tracing kernels (the default).
+/// With the scene compiled into the tracing kernels (the default), direct light sampled (the default).
 #[test]
 fn ray_pass_matches_reference() {
-    ray_pass_matches_reference_case(true);
+    ray_pass_matches_reference_case(true, DirectLight::Sample);
 }
 
 /// The kernels as built, reading the scene from buffers.
 #[test]
 fn ray_pass_matches_reference_unspecialized() {
-    ray_pass_matches_reference_case(false);
+    ray_pass_matches_reference_case(false, DirectLight::Sample);
+}
+
+/// All light by photons (the paper's estimator): the emission samples carry no shadow ray.
+#[test]
+fn ray_pass_matches_reference_with_direct_light_by_photons() {
+    ray_pass_matches_reference_case(true, DirectLight::Photons);
 }
 
 /// Records per bucket `key`: (count, flux sum per channel).
@@ -793,6 +802,8 @@ fn photon_power() {
         &scene,
         Settings {
             max_photon_depth: 1,
+            // The photons keep their first landing (with direct light sampled it is the shadow rays').
+            direct: DirectLight::Photons,
             ..settings()
         },
     )
@@ -983,6 +994,13 @@ fn photon_records_match_reference_with_one_photon_per_thread() {
         assert!(pushes.len() > 1, "the eye pass was expected to need several dispatches");
     }
     emission_passes_match_reference(&mut r);
+    drop(r);
+    // The photons' whole paths, first landings included (the measured match below is for those).
+    let settings = Settings {
+        direct: DirectLight::Photons,
+        ..settings()
+    };
+    let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
     let gpu = r.trace_and_gather(0, PHOTONS).unwrap();
     let cpu = reference::photon_pass(r.gpu_scene(), 0, PHOTONS, SALT_PHOTON);
     let matched = match_records(&gpu, &cpu, 1e-4 * scene_extent(&scene));

@@ -211,3 +211,43 @@ fn checks_reject_a_broken_render() {
     let err = check_against_reference(&dim).expect_err("an image with the indirect estimate 10% low passed");
     println!("rejected as expected: {err}");
 }
+
+/// Direct light by light sampling (the default) and by the photons split the light reaching the eye
+/// differently (ray.comp: E S* D L through the shadow rays, or through the photons); both must give the
+/// reference's image. SPPM at RES x RES, 24 passes of 200k photons: the mean per channel within 0.25% of
+/// the reference's (a term counted twice or missed moves it by tens of percent: the direct light is about
+/// a third of the image), and the back wall's relMSE under the same bound as above.
+#[test]
+fn both_direct_light_modes_match_the_reference() {
+    let ctx = ctx();
+    let scene = load(CORNELL).with_resolution(RES, RES);
+    for direct in [ppm_vk_engine::DirectLight::Sample, ppm_vk_engine::DirectLight::Photons] {
+        let settings = Settings {
+            photons_per_pass: PHOTONS,
+            direct,
+            ..Settings::default()
+        };
+        let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
+        let mut records = 0;
+        for _ in 0..24 {
+            records += r.pass().unwrap().records;
+        }
+        let image = r.image().unwrap();
+        drop(r);
+        let s = score(&image).unwrap();
+        println!(
+            "{direct:?}: mean {:?} vs {:?}, back wall relMSE {:.5}, caustic {:.4}, {records} records",
+            s.mean, s.ref_mean, s.back_wall.rel_mse, s.caustic.rel_mse
+        );
+        for c in 0..3 {
+            let rel = s.mean[c] / s.ref_mean[c] - 1.0;
+            assert!(
+                rel.abs() < 0.0025,
+                "{direct:?}, channel {c}: mean {:+.3}% off the reference",
+                100.0 * rel
+            );
+        }
+        assert!(s.back_wall.rel_mse < BACK_WALL_REL_MSE, "{direct:?}: {s:?}");
+    }
+    assert_clean(&ctx);
+}

@@ -37,6 +37,7 @@ layout(std430, binding = 5) readonly buffer BvhTriangles { Triangle bvh_triangle
 layout(push_constant) uniform TracePush {
     uint count;      // rays
     uint budget;     // steps each traversal may take (at most BVH_LOOP_LIMIT - 1: this kernel has no other loop)
+    uint any_hit;    // 1: shadow rays, ended by the first hit found
 } pc;
 #include "bvh.glsl"
 
@@ -45,7 +46,7 @@ void main() {
     if (i >= pc.count) return;
     TraceRay ray = rays[i];
     BvhHit h;
-    bool found = bvh_intersect(ray.origin, ray.dir, ray.tmin, ray.tmax, pc.budget, h);
+    bool found = bvh_intersect(ray.origin, ray.dir, ray.tmin, ray.tmax, pc.budget, pc.any_hit != 0u, h);
     TraceHit out_hit;
     out_hit.normal = found ? bvh_normal(bvh_triangles[h.triangle]) : vec3(0.0);
     out_hit.t = h.t;

@@ -203,6 +203,7 @@ void bvh_order(inout vec4 key, inout uvec4 ref, uint i, uint j) {
 }
 
 // The nearest triangle hit by o + t d with t in (tmin, tmax); true if there is one. d need not be unit.
+// With `any_hit` (a shadow ray), the first hit found ends the traversal: whether there is one, not which.
 //
 // The 4-wide BVH, depth first, nearest child first: a node's four boxes are tested at once (the slab test
 // with its far distance widened by BVH_ROBUST, so rounding never loses a box the ray meets), the children
@@ -221,7 +222,7 @@ void bvh_order(inout vec4 key, inout uvec4 ref, uint i, uint j) {
 // all loops of an invocation share. A kernel with no other loops can pass BVH_LOOP_LIMIT - 1; one that
 // calls this in a loop passes what its subgroup has left, e.g. `left -= bvh_subgroup_cost(hit)` after each
 // call made by the whole subgroup together.
-bool bvh_intersect(vec3 o, vec3 d, float tmin, float tmax, uint budget, out BvhHit hit) {
+bool bvh_intersect(vec3 o, vec3 d, float tmin, float tmax, uint budget, bool any_hit, out BvhHit hit) {
     BvhRay r = bvh_ray(o, d);
     hit.t = tmax;
     hit.triangle = BVH_NONE;
@@ -280,6 +281,11 @@ bool bvh_intersect(vec3 o, vec3 d, float tmin, float tmax, uint budget, out BvhH
                 hit.t = t;
                 hit.triangle = tri;
                 hit.bary = bary;
+                if (any_hit) {
+                    next = BVH_EMPTY;
+                    sp = 0u;
+                    tri_end = tri + 1u;
+                }
             }
             tri++;
         }

@@ -61,7 +61,8 @@ const uint HIT_TRIANGLE = 2u; // hit.normal from the triangle's vertices, after 
 // the primitive's index is the loop's own. The tests run in a fixed order (spheres, quads, the triangles
 // written out, the BVH), each only accepting a hit nearer than the best so far: the CPU reference
 // (reference::trace::intersect_scene) keeps the same order, so equal distances resolve the same way.
-bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {
+// With `any_hit` (shadow rays, `occluded`) the BVH's traversal ends at the first hit it finds.
+bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit hit) {
     hit.t = tmax;
     bool found = false;
     uint kind = HIT_QUAD;
@@ -109,10 +110,11 @@ bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {
             }
         }
     }
-    if (NUM_TRIANGLES > 0u) {
+    // A shadow ray already stopped by an analytic primitive needs no traversal.
+    if (NUM_TRIANGLES > 0u && !(any_hit && found)) {
         BvhHit bh;
         uint had = bvh_left;
-        if (bvh_intersect(o, d, tmin, hit.t, bvh_left, bh)) {
+        if (bvh_intersect(o, d, tmin, hit.t, bvh_left, any_hit, bh)) {
             tri = bvh_triangle(bh.triangle);
             hit.t = bh.t; found = true; kind = HIT_TRIANGLE;
             hit.material = tri.material;
@@ -130,5 +132,16 @@ bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {
         if (kind == HIT_TRIANGLE) hit.normal = bvh_normal(tri);
     }
     return found;
+}
+
+bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {
+    return trace_scene(o, d, tmin, tmax, false, hit);
+}
+
+// Whether anything lies on o + t d for t in (0, tmax): a shadow ray. Like intersect_scene it may run out of
+// traversal steps (bvh_cut, bvh_spent): then it answers true and the caller must not use the answer.
+bool occluded(vec3 o, vec3 d, float tmax) {
+    Hit h;
+    return trace_scene(o, d, 0.0, tmax, true, h) || bvh_cut || bvh_spent;
 }
 #endif

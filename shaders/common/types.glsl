@@ -92,6 +92,8 @@ struct RenderParams {
     uint photon_bvh_budget; // BVH traversal steps one photon thread may take in all (PathLimits)
     uint eye_bvh_budget;    // the same for one eye thread
     uint lookup_limit;      // loop steps a subgroup's lookups may take (neighbours.glsl); 0xffffffff: no limit
+    uint direct_light;      // 1: direct light by light sampling at the eye paths (ray.comp), the photons
+                            // skipping their first diffuse record (photon.comp); 0: all by photons
 };
 
 // A diffuse point seen from a pixel (PPM pass 1). Fixed for the whole render.

@@ -34,6 +34,7 @@ layout(push_constant) uniform PhotonPush {
 #include "sampling.glsl"
 #include "grid.glsl"
 #include "invocation.glsl"
+#include "lights.glsl"
 
 // Variants that `ppm-vk bench` times against this kernel to show where a step's time goes
 // (Renderer::photon_breakdown); never rendered with. PHOTON_NO_STORE: the append reserves its slots but
@@ -54,41 +55,6 @@ void emit(Photon rec) {
 #endif
 #endif
 }
-
-// The light a photon leaves, for the uniform number u (the first of its stream): the first whose running
-// cdf exceeds u.
-#ifdef SCENE_INLINE_LIGHTS
-// The lights are constants: a chain of selects, unrolled, reads no memory (a dynamically indexed constant
-// array would be copied per invocation). A triangle's normal is computed from its edges as the buffer
-// path below computes it (bvh_normal), so both start photons from the same bits.
-Emitter choose_emitter(float u) {
-    Emitter e = SCENE_EMITTERS[0];
-    [[unroll]] for (uint i = 1u; i < NUM_LIGHTS; i++) {
-        if (u >= SCENE_EMITTERS[i - 1u].cdf) e = SCENE_EMITTERS[i];
-    }
-    if (e.triangle) e.normal = triangle_normal(e.edge_u, e.edge_v);
-    return e;
-}
-#else
-// Binary search for the first light whose cdf exceeds u (the same light as a linear scan: cdfs never
-// decrease), in ceil(log2 n) steps: scenes may have 100k emitting triangles.
-Emitter choose_emitter(float u) {
-    uint lo = 0u;
-    uint hi = params.num_lights - 1u;
-    while (lo < hi) {
-        uint mid = (lo + hi) / 2u;
-        if (u >= lights[mid].cdf) lo = mid + 1u; else hi = mid;
-    }
-    Light light = lights[lo];
-    vec3 flux = light.power / light.prob;
-    if (light.kind == LIGHT_TRIANGLE) {
-        Triangle tr = bvh_triangle(light.index);
-        return Emitter(tr.v0, tr.v1 - tr.v0, tr.v2 - tr.v0, bvh_normal(tr), flux, light.cdf, true);
-    }
-    Quad q = quads[light.index];
-    return Emitter(q.origin, q.edge_u, q.edge_v, q.normal, flux, light.cdf, false);
-}
-#endif
 
 // Loop iterations of one step of the path loop besides the BVH's: the step itself and the loops over the
 // spheres, quads and written-out triangles in intersect_scene (counted as loops even where they are
@@ -172,9 +138,7 @@ void main() {
             Emitter e = choose_emitter(rng_float(rng));
             float a = rng_float(rng);
             float b = rng_float(rng);
-            // A triangle: the unit square folded onto the half below its diagonal, uniform in area.
-            if (e.triangle && a + b > 1.0) { a = 1.0 - a; b = 1.0 - b; }
-            o = offset_ray(e.origin + a * e.edge_u + b * e.edge_v, e.normal);
+            o = offset_ray(emitter_point(e, a, b), e.normal);
             lobe = e.normal;
             pending = true;
             flux = e.flux;
@@ -225,7 +189,11 @@ void main() {
         if (m.surface == SURFACE_DIFFUSE) {
             float p = max(m.color.r, max(m.color.g, m.color.b));
             if (p <= 0.0) { alive = false; continue; } // a black emitter absorbs
-            emit(Photon(h.pos, grid_key(grid_cell(h.pos)), flux, oct_encode(d)));
+            // With direct light sampled at the eye paths (params.direct_light), light straight from an
+            // emitter to this first surface (paths L D ...) is the shadow rays' term (ray.comp): the photon
+            // leaves no record here. Its later records (L D D..., L S D... : everything after a bounce)
+            // are the photon estimate's, in both modes.
+            if (params.direct_light == 0u || depth > 1u) emit(Photon(h.pos, grid_key(grid_cell(h.pos)), flux, oct_encode(d)));
             // Russian roulette: survive with the largest albedo; flux *= albedo / p keeps every channel
             // unbiased (its expectation is flux * albedo), and never grows (albedo <= p per channel).
             if (rng_float(rng) >= p) { alive = false; continue; }

@@ -24,6 +24,19 @@
 // The pooled mean stays unbiased because every count is fixed before the samples it counts are drawn:
 // the marks depend on the pilot's samples only, which are not in the sum (pooling samples that had
 // chosen their own count would bias it).
+//
+// Direct light (params.direct_light, `--direct sample`): each of these paths also estimates (d), the light
+// that reaches the chain's first diffuse vertex straight from an emitter and is reflected towards the eye,
+// by sampling one light (in proportion to its power, a point uniform on it) with a shadow ray
+// (direct_light below); every pixel then takes pc.light_samples such paths, marked ones
+// pc.emission_samples. The photons leave no record where they first land straight from a light
+// (photon.comp), so the partition of the light reaching the eye, in path notation (E eye, S mirror or
+// glass, D diffuse, L emitter), is:
+//   E S* L           emission seen directly or through specular surfaces: term (a), these paths;
+//   E S* D L         light straight from an emitter to the first diffuse vertex: term (d), these paths'
+//                    shadow rays;
+//   E S* D (S|D)+ L  everything that bounced before reaching it: the photon estimate at the hit points.
+// With `--direct photons` (the paper's estimator) (d) stays with the photons and these paths take (a) only.
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_control_flow_attributes : require
@@ -35,21 +48,25 @@ layout(std430, binding = 6) writeonly buffer HitPoints { HitPoint hit_points[]; 
 layout(std430, binding = 7) buffer Direct { dvec4 direct[]; };
 layout(std430, binding = 8) buffer Cut { PathCounters cut; };
 layout(std430, binding = 9) buffer Busy { uint busy[]; }; // 1: the pilot saw emission here (or beside it)
+layout(std430, binding = 10) readonly buffer Lights { Light lights[]; };
 layout(push_constant) uniform RayPush {
     vec2 jitter;     // sample position inside the pixel, in [0,1)^2 (0.5, 0.5: the centre); negative:
                      // a random position per pixel (box filter)
     uint salt;       // random stream family of the hit-point path (the emission samples use SALT_EMISSION)
     uint pass;       // eye pass index: pixel p of pass k draws from stream k * pixels + p
-    uint emission_samples; // extra paths per pixel that only collect emission (term (a) above)
+    uint emission_samples; // extra paths per marked pixel and eye pass (term (a), and (d) below)
     uint trace_hits; // 0: only the emission samples (PPM's passes after the first keep their hit points)
     uint chunk;      // dispatch of this eye pass: the emission samples' streams are chunk << 48 | stream
     uint pilot;      // 1: eye pass 0, whose emission samples only set `busy`
+    uint light_samples; // the same paths per pixel the pilot did not mark
+    uint per_dispatch;  // paths per pixel one dispatch takes: dispatch k takes samples k * this onwards
 } pc;
 
 #include "rng.glsl"
 #include "geometry.glsl"
 #include "sampling.glsl"
 #include "invocation.glsl"
+#include "lights.glsl"
 
 const uint MAX_SLOTS = 8u;
 const uint SALT_EMISSION = 4u;
@@ -62,8 +79,32 @@ vec3 camera_ray(uint px, uint py, vec2 jitter) {
     return normalize(params.forward + sx * params.right + sy * params.up);
 }
 
-// One emission sample: the emission met along the specular chain from the eye through `jitter`.
-// `seen`: set if the path met the front of an emitter.
+// Term (d) at diffuse point p (nf the side its eye path arrives on, albedo its reflectance), one sample:
+// a light chosen in proportion to its power, a point y uniform on it, the shadow ray towards y. Its
+// estimate f_r Le G / pdf is (albedo / pi) Le (cos_p cos_y / d^2) (area / prob), and the light's flux
+// (power / prob, with power = Le area pi) gives Le area / prob = flux / pi. Emitters are one-sided.
+// A shadow ray that runs out of traversal steps answers "occluded"; the caller must then check bvh_spent
+// and bvh_cut and drop the sample (geometry.glsl: occluded).
+vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, inout Rng rng) {
+    Emitter e = choose_emitter(rng_float(rng));
+    float a = rng_float(rng);
+    float b = rng_float(rng);
+    vec3 o = offset_ray(p, nf);
+    vec3 y = offset_ray(emitter_point(e, a, b), e.normal); // short of the emitter, which the ray must not hit
+    vec3 w = y - o;
+    float d2 = dot(w, w);
+    float d = sqrt(d2);
+    w /= d;
+    float cos_p = dot(nf, w);
+    float cos_y = -dot(e.normal, w);
+    if (cos_p <= 0.0 || cos_y <= 0.0 || d2 <= 0.0) return vec3(0.0);
+    if (occluded(o, w, d)) return vec3(0.0);
+    return albedo * e.flux * (cos_p * cos_y / (PI * PI * d2));
+}
+
+// One emission sample: the emission met along the specular chain from the eye through `jitter`, and with
+// direct light sampled, term (d) at the chain's diffuse end. `seen`: set if the path met the front of an
+// emitter.
 vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen) {
     vec2 jitter = vec2(rng_float(rng), rng_float(rng));
     vec3 o = params.eye;
@@ -84,6 +125,8 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen) {
         if (m.surface == SURFACE_DIFFUSE) {
             vec3 e = front ? thr * m.emission : vec3(0.0); // emitters are one-sided
             if (max(e.r, max(e.g, e.b)) > 0.0) seen = true;
+            // The pilot's samples only mark pixels (their values are not summed): no shadow ray.
+            if (params.direct_light != 0u && pc.pilot == 0u) e += thr * direct_light(h.pos, nf, m.color, rng);
             return e;
         }
         if (m.surface == SURFACE_MIRROR) {
@@ -121,6 +164,9 @@ void main() {
         stack[sp++] = Pending(params.eye, camera_ray(px, py, jitter), vec3(1.0), 0u);
         uint slot = 0u;
         vec3 hit_emitted = vec3(0.0);
+        // A sample at a fixed point of the pixel (PPM's centre) would bias the box-filtered terms (a) and
+        // (d): it counts only when no random sample does.
+        bool hit_is_sample = pc.jitter.x < 0.0 || pc.emission_samples == 0u;
         uint base = pixel * params.hit_slots;
 
         while (sp > 0u) {
@@ -139,6 +185,8 @@ void main() {
                 vec3 nf = front ? h.normal : -h.normal;
                 if (m.surface == SURFACE_DIFFUSE) {
                     if (front) hit_emitted += r.thr * m.emission; // emitters are one-sided
+                    // Term (d) for this path, where it is one of the samples (below).
+                    if (params.direct_light != 0u && hit_is_sample) hit_emitted += r.thr * direct_light(h.pos, nf, m.color, rng);
                     if (max(m.color.r, max(m.color.g, m.color.b)) > 0.0 && slot < params.hit_slots) {
                         hit_points[base + slot] = HitPoint(h.pos, pixel, nf, 0u, r.thr * m.color / PI, 0u);
                         slot++;
@@ -179,9 +227,7 @@ void main() {
         for (; slot < params.hit_slots; slot++) {
             hit_points[base + slot] = HitPoint(vec3(0.0), 0xffffffffu, vec3(0.0), 0u, vec3(0.0), 0u);
         }
-        // A sample at a fixed point of the pixel (PPM's centre) would bias the box-filtered term (a):
-        // it counts only when no random sample does.
-        if ((pc.jitter.x < 0.0 || pc.emission_samples == 0u) && !bvh_spent && !bvh_cut) {
+        if (hit_is_sample && !bvh_spent && !bvh_cut) {
             emitted += dvec3(hit_emitted);
             samples++;
         }
@@ -190,8 +236,9 @@ void main() {
     Rng erng = rng_new(uint64_t(params.seed) | (uint64_t(SALT_EMISSION) << 32), (uint64_t(pc.chunk) << 48) | stream);
     // Only whole samples count: once long paths have spent the thread's BVH budget (bvh_spent, counted),
     // the remaining samples are not taken rather than taken as black.
-    uint want = pc.emission_samples;
-    if (pc.pilot == 0u && busy[pixel] == 0u) want = pc.chunk == 0u ? min(want, 1u) : 0u;
+    uint total = pc.pilot != 0u || busy[pixel] != 0u ? pc.emission_samples : pc.light_samples;
+    uint first = pc.chunk * pc.per_dispatch;
+    uint want = total > first ? min(total - first, pc.per_dispatch) : 0u;
     bool seen = false;
     for (uint s = 0u; s < want; s++) {
         if (bvh_spent || bvh_cut) break;

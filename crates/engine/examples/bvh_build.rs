@@ -72,6 +72,7 @@ fn trace_rays(b: &Bvh, n: usize) -> Result<()> {
     let push = TracePush {
         count: n as u32,
         budget: bvh_trace::MAX_BUDGET,
+        any_hit: 0,
     };
     let mut best = f64::INFINITY;
     for _ in 0..3 {

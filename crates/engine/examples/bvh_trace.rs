@@ -103,6 +103,7 @@ fn main() -> Result<()> {
         let push = TracePush {
             count: n as u32,
             budget,
+            any_hit: 0,
         };
         let mut best = f64::INFINITY;
         for _ in 0..3 {

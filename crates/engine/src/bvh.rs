@@ -1013,6 +1013,29 @@ impl BvhTracer {
         rays: &[TraceRay],
         budget: u32,
     ) -> Result<Vec<TraceHit>> {
+        self.dispatch(ctx, bvh, rays, budget, false)
+    }
+
+    /// Shadow rays: each traversal ends at the first hit it finds (any hit in (tmin, tmax), not the
+    /// nearest); records as [`BvhTracer::trace_unchecked`]'s.
+    pub fn trace_any_unchecked(
+        &self,
+        ctx: &Context,
+        bvh: &DeviceBvh,
+        rays: &[TraceRay],
+        budget: u32,
+    ) -> Result<Vec<TraceHit>> {
+        self.dispatch(ctx, bvh, rays, budget, true)
+    }
+
+    fn dispatch(
+        &self,
+        ctx: &Context,
+        bvh: &DeviceBvh,
+        rays: &[TraceRay],
+        budget: u32,
+        any_hit: bool,
+    ) -> Result<Vec<TraceHit>> {
         if rays.is_empty() {
             return Ok(Vec::new());
         }
@@ -1027,6 +1050,7 @@ impl BvhTracer {
         let push = TracePush {
             count: rays.len() as u32,
             budget,
+            any_hit: any_hit as u32,
         };
         ctx.run(|cmd| {
             bvh_trace::record(

@@ -261,6 +261,7 @@ impl GpuScene {
             photon_capacity,
             seed: settings.seed,
             flux_fixed,
+            direct_light: (settings.direct == crate::settings::DirectLight::Sample) as u32,
             ..Default::default()
         };
         // Small meshes are compiled into the tracing kernels with the spheres and quads (specialize.rs).

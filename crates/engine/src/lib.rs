@@ -59,7 +59,7 @@ pub use ppm_vk_kernels::layout::PathCounters;
 pub use ppm_vk_kernels::photon::PathLimits;
 pub use renderer::{spread_marks, CancelToken, PassStats, PhotonVariant, ProbeReport, Renderer};
 pub use scene::Scene;
-pub use settings::{Mode, ProbeMode, Settings};
+pub use settings::{DirectLight, Mode, ProbeMode, Settings};
 
 /// Opens a Vulkan device (see [`ContextOptions`]); a failure is [`Error::Device`].
 pub fn open_device(options: &ContextOptions) -> Result<Context> {

@@ -353,7 +353,7 @@ impl Renderer {
             // choose_emitter's binary search
             u32::BITS - gpu.params.num_lights.leading_zeros() + 1,
             settings.slots(),
-            settings.emission_samples,
+            settings.emission_samples.max(settings.unmarked_samples()),
             settings.max_photon_depth,
             settings.max_eye_depth,
         )
@@ -540,25 +540,24 @@ impl Renderer {
             Mode::Ppm => [0.5, 0.5],
             Mode::Sppm => JITTER_RANDOM,
         };
-        let total = self.settings.emission_samples;
+        let pilot = eye_pass == 0;
+        let (marked, unmarked) = (self.settings.emission_samples, self.settings.unmarked_samples());
+        // The pilot takes `marked` samples in every pixel (it only marks); other passes as many dispatches
+        // as the more numerous of the two counts needs.
+        let total = if pilot { marked } else { marked.max(unmarked) };
         let per = self.limits.emission_per_dispatch.max(1);
-        let push = |chunk: u32, samples: u32, hits: bool| RayPush {
+        let push = |chunk: u32| RayPush {
             jitter,
             salt: SALT_EYE,
             pass: eye_pass,
-            emission_samples: samples,
-            trace_hits: hits as u32,
+            emission_samples: marked,
+            trace_hits: (trace_hits && chunk == 0) as u32,
             chunk,
-            pilot: (eye_pass == 0) as u32,
+            pilot: pilot as u32,
+            light_samples: unmarked,
+            per_dispatch: per,
         };
-        let mut pushes = vec![push(0, total.min(per), trace_hits)];
-        let mut done = total.min(per);
-        while done < total {
-            let n = (total - done).min(per);
-            pushes.push(push(pushes.len() as u32, n, false));
-            done += n;
-        }
-        pushes
+        (0..total.div_ceil(per).max(1)).map(push).collect()
     }
 
     fn scene_buffers(&self) -> SceneBuffers<'_> {
@@ -589,12 +588,13 @@ impl Renderer {
         let pixels = self.gpu.pixels();
         let scene = self.scene_buffers();
         let (profiler, k) = (&self.profiler, &self.kernels);
-        let (hit_points, direct, cut, busy) = (&self.hit_points, &self.direct, &self.cut, &self.busy);
+        let (hit_points, direct, cut, busy, lights) =
+            (&self.hit_points, &self.direct, &self.cut, &self.busy, &self.lights);
         self.ctx
             .run(|cmd| {
                 profiler.scope(cmd, "ray", || {
                     for push in &pushes {
-                        ray::record(&k.ray, cmd, &scene, hit_points, direct, cut, busy, pixels, push)?;
+                        ray::record(&k.ray, cmd, &scene, hit_points, direct, cut, busy, lights, pixels, push)?;
                         barrier(&self.ctx, cmd); // the next dispatch adds to the same `direct`
                     }
                     Ok(())

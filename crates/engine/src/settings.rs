@@ -30,6 +30,18 @@ pub enum ProbeMode {
     ScaleFree,
 }
 
+/// How the light that reaches the eye paths' first diffuse points straight from an emitter is estimated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DirectLight {
+    /// By light sampling: each emission-sample path sends a shadow ray to a point of a light at its first
+    /// diffuse point (pbrt-v4's SPPM does the same), and photons leave no record where they first land
+    /// straight from a light; the photons estimate only the light that bounced on its way.
+    Sample,
+    /// By the photons, as all other light (the paper's estimator).
+    Photons,
+}
+
 /// How to render. `Settings::default()` is stochastic PPM (at equal time it had the lower whole-image error
 /// on the paper's scene from 10 s on: docs/accuracy.md, "What the numbers show") with the paper's other settings.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -67,6 +79,14 @@ pub struct Settings {
     /// and glass (ray.comp): the light's edges and its images get this many more samples than the photon
     /// estimate's one hit point per pixel. 0: only the hit-point path's own sample.
     pub emission_samples: u32,
+    /// Direct light by light sampling (the default) or by the photons.
+    #[serde(default = "default_direct")]
+    pub direct: DirectLight,
+    /// With `direct: Sample`, the light-sampling paths per pixel and eye pass in the pixels that do not take
+    /// `emission_samples` (those the pilot saw no emitter in): each samples the emission along its specular
+    /// chain and the direct light at its end.
+    #[serde(default = "default_light_samples")]
+    pub light_samples: u32,
     /// Compile the tracing kernels with the scene inlined as constants (faster; same results up to the
     /// last bit of a fused multiply-add). `false` uses the kernels as built.
     pub specialize: bool,
@@ -101,12 +121,22 @@ impl Default for Settings {
             max_eye_depth: 1024,
             max_photon_depth: 4096,
             emission_samples: 16,
+            direct: default_direct(),
+            light_samples: default_light_samples(),
             specialize: true,
             max_inline_triangles: default_inline_triangles(),
             grid_buckets: None,
             grid_cell: None,
         }
     }
+}
+
+fn default_direct() -> DirectLight {
+    DirectLight::Sample
+}
+
+fn default_light_samples() -> u32 {
+    4
 }
 
 fn default_inline_triangles() -> u32 {
@@ -118,6 +148,15 @@ fn invalid(field: &'static str, message: String) -> Error {
 }
 
 impl Settings {
+    /// Eye paths per pixel and eye pass, besides the hit points' own, in the pixels the pilot did not mark:
+    /// `light_samples` with direct light sampled, else one (the emission seen directly there, if any).
+    pub fn unmarked_samples(&self) -> u32 {
+        match self.direct {
+            DirectLight::Sample => self.light_samples,
+            DirectLight::Photons => self.emission_samples.min(1),
+        }
+    }
+
     /// Checks every setting's range; the error is [`Error::Settings`] naming the field.
     pub fn validate(&self) -> Result<()> {
         if self.photons_per_pass == 0 {
@@ -184,6 +223,15 @@ impl Settings {
                     "max_photon_depth"
                 },
                 "path depth limits must be at least 1".into(),
+            ));
+        }
+        if self.direct == DirectLight::Sample && !(1..=MAX_EMISSION_SAMPLES).contains(&self.light_samples) {
+            return Err(invalid(
+                "light_samples",
+                format!(
+                    "must be 1..={MAX_EMISSION_SAMPLES} when direct light is sampled, got {}",
+                    self.light_samples
+                ),
             ));
         }
         if self.emission_samples > MAX_EMISSION_SAMPLES {

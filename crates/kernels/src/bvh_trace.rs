@@ -73,6 +73,8 @@ pub struct TracePush {
     pub count: u32,
     /// Steps each traversal may take, at most [`MAX_BUDGET`].
     pub budget: u32,
+    /// 1: shadow rays, whose traversal ends at the first hit it finds (any hit, not the nearest).
+    pub any_hit: u32,
 }
 push_struct!(TracePush, BVH_TRACE);
 

@@ -131,6 +131,9 @@ pub struct RenderParams {
     /// Loop steps a subgroup's photon lookups may take before one may have been cut short by the
     /// device's loop budget (`lookup_limit`); `u32::MAX` where the device has none.
     pub lookup_limit: u32,
+    /// 1: direct light by light sampling at the eye paths, the photons leaving no record where they first
+    /// land straight from a light; 0: all light through the photons (the paper's estimator).
+    pub direct_light: u32,
 }
 gpu_struct!(RenderParams {
     eye,
@@ -158,7 +161,8 @@ gpu_struct!(RenderParams {
     num_triangles,
     photon_bvh_budget,
     eye_bvh_budget,
-    lookup_limit
+    lookup_limit,
+    direct_light
 });
 
 #[repr(C)]

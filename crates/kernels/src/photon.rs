@@ -62,7 +62,8 @@ pub const MIN_EYE_DEPTH: u32 = 64;
 /// in all (`DeviceInfo::loop_budget`). They are chosen so that no group can reach that budget: a photon
 /// thread's loop runs at most `per_thread * ((photon_depth + 1) * (1 + P) + L) + 1` iterations (P the
 /// iterations of one intersection, L of choosing a light), and an eye thread's at most
-/// `paths * ((eye_depth + 1) * (1 + P) + 2)`. Paths that reach a backstop are counted (`PathCounters`).
+/// `paths * ((eye_depth + 2) * (1 + P) + 2 + L)` (each path's last intersection and light choice are its
+/// shadow ray's, where direct light is sampled). Paths that reach a backstop are counted (`PathCounters`).
 ///
 /// With triangles, a BVH traversal takes a number of steps no bound fits well, so the threads count what
 /// their loops take. A photon thread counts everything against `photon_bvh_budget` and starts photons
@@ -143,12 +144,12 @@ impl PathLimits {
         // Eye threads: the hit-point paths and as many emission samples as fit at EYE_DEPTH; the rest of the
         // samples go to further dispatches. Where not even one sample fits, as deep as the paths allow.
         let eye_target = EYE_DEPTH.min(eye_cap);
-        let fit = budget / ((eye_target as u64 + 1) * step + 2);
+        let fit = budget / ((eye_target as u64 + 2) * step + 2 + lights as u64);
         let least = slots as u64 + emission.min(1) as u64;
         let (eye_depth, emission_per_dispatch) = if fit >= least {
             (eye_target, (fit - slots as u64).min(emission as u64) as u32)
         } else {
-            let depth = ((budget / least.max(1)).saturating_sub(2) / step).saturating_sub(1);
+            let depth = ((budget / least.max(1)).saturating_sub(2 + lights as u64) / step).saturating_sub(2);
             (depth.min(eye_cap as u64) as u32, emission.min(1))
         };
         if photon_depth < MIN_DEPTH.min(photon_cap) || eye_depth < MIN_EYE_DEPTH.min(eye_cap) {
@@ -197,7 +198,7 @@ impl PathLimits {
         // One photon path, as photon.comp counts it (PATH_STEP_LOOPS, LIGHT_LOOPS): the depth is the one
         // at which a path of its own, in the resume round, still leaves MIN_BVH_BUDGET to its traversals.
         let photon_loops = |depth: u32| (depth as u64 + 1) * (step + 2) + lights as u64 + 1;
-        let eye_loops = |paths: u32, depth: u32| paths.max(1) as u64 * ((depth as u64 + 1) * step + 2);
+        let eye_loops = |paths: u32, depth: u32| paths.max(1) as u64 * ((depth as u64 + 2) * step + 2 + lights as u64);
         let fit = |mut depth: u32, floor: u32, loops: &dyn Fn(u32) -> u64| -> Option<(u32, u32)> {
             loop {
                 let left = total.saturating_sub(loops(depth));
@@ -328,7 +329,7 @@ mod tests {
         let step = 1 + steps as u64;
         (
             l.per_thread as u64 * ((l.photon_depth as u64 + 1) * step + lights as u64) + 1,
-            l.eye_paths(slots) as u64 * ((l.eye_depth as u64 + 1) * step + 2),
+            l.eye_paths(slots) as u64 * ((l.eye_depth as u64 + 2) * step + 2 + lights as u64),
         )
     }
 
@@ -407,7 +408,8 @@ mod tests {
             // A photon thread counts all its loops against the whole budget; one path of the backstop's
             // depth on its own (the resume round) leaves its traversals MIN_BVH_BUDGET.
             let path = (l.photon_depth as u64 + 1) * (step + 2) + lights as u64 + 1;
-            let eye = l.eye_paths(slots) as u64 * ((l.eye_depth as u64 + 1) * step + 2) + l.eye_bvh_budget as u64;
+            let eye = l.eye_paths(slots) as u64 * ((l.eye_depth as u64 + 2) * step + 2 + lights as u64)
+                + l.eye_bvh_budget as u64;
             assert!(path + MIN_BVH_BUDGET as u64 <= 65534 && eye <= 65534, "{l:?}");
             assert!(
                 l.photon_bvh_budget == 65534 && l.photon_reserve == PHOTON_RESERVE,

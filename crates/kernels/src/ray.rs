@@ -15,7 +15,8 @@ pub struct RayPush {
     pub salt: u32,
     /// Eye pass index: pixel p of pass k draws from random stream k * pixels + p.
     pub pass: u32,
-    /// Paths per pixel that only collect the emission seen through mirrors and glass (ray.comp).
+    /// Paths per pixel (in the pixels the pilot marked) that collect the emission seen through mirrors and
+    /// glass (ray.comp), and with direct light sampled the direct light at their diffuse ends.
     pub emission_samples: u32,
     /// 1: trace the hit-point path; 0: only the emission samples.
     pub trace_hits: u32,
@@ -24,6 +25,11 @@ pub struct RayPush {
     pub chunk: u32,
     /// 1: eye pass 0, a pilot whose emission samples only mark the pixels that need them (ray.comp).
     pub pilot: u32,
+    /// Emission samples (with direct light sampled: light samples too) per pixel the pilot did not mark;
+    /// `emission_samples` is the count in the pixels it marked (and in the pilot's).
+    pub light_samples: u32,
+    /// Samples per pixel one dispatch takes: dispatch `chunk` takes samples `chunk * per_dispatch` on.
+    pub per_dispatch: u32,
 }
 
 /// `RayPush::jitter` for a random position in every pixel (SPPM's box filter).
@@ -67,12 +73,13 @@ pub fn record(
     direct: &Buffer,
     cut: &Buffer,
     busy: &Buffer,
+    lights: &Buffer,
     pixels: u32,
     push: &RayPush,
 ) -> Result<()> {
     k.dispatch(
         cmd,
-        &[&scene.bindings()[..], &[hit_points, direct, cut, busy]].concat(),
+        &[&scene.bindings()[..], &[hit_points, direct, cut, busy, lights]].concat(),
         bytemuck::bytes_of(push),
         pixels as u64,
     )

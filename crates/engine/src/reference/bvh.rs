@@ -145,6 +145,33 @@ pub fn intersect(
     tmax: f32,
     budget: u32,
 ) -> Traversal {
+    traverse(nodes, tris, o, d, tmin, tmax, budget, false)
+}
+
+/// `bvh_intersect` with `any_hit`: a shadow ray, ended by the first hit the traversal finds.
+pub fn intersect_any(
+    nodes: &[BvhNode],
+    tris: &[Triangle],
+    o: Vec3,
+    d: Vec3,
+    tmin: f32,
+    tmax: f32,
+    budget: u32,
+) -> Traversal {
+    traverse(nodes, tris, o, d, tmin, tmax, budget, true)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn traverse(
+    nodes: &[BvhNode],
+    tris: &[Triangle],
+    o: Vec3,
+    d: Vec3,
+    tmin: f32,
+    tmax: f32,
+    budget: u32,
+    any_hit: bool,
+) -> Traversal {
     let r = BvhRay::new(o, d);
     let mut best = tmax;
     let mut hit = None;
@@ -210,6 +237,9 @@ pub fn intersect(
             if let Some((t, bary)) = triangle_test(&r, v3(tr.v0), v3(tr.v1), v3(tr.v2), tmin, best) {
                 best = t;
                 hit = Some(BvhHit { t, triangle: tri, bary });
+                if any_hit {
+                    (next, sp, tri_end) = (BVH_EMPTY, 0, tri + 1);
+                }
             }
             tri += 1;
         }

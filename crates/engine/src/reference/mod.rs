@@ -29,10 +29,84 @@ fn camera_ray(g: &GpuScene, px: u32, py: u32, j: [f32; 2]) -> Vec3 {
     (v3(p.forward) + sx * v3(p.right) + sy * v3(p.up)).normalize()
 }
 
-/// One emission-only eye sample of ray.comp's `emission_sample`: the emission met along the specular chain
-/// through a random point of the pixel, one Fresnel branch chosen with probability f. `cut` counts a path
-/// ended at the depth backstop; `seen` is set if the path met an emitter's front.
-fn emission_sample(g: &GpuScene, px: u32, py: u32, rng: &mut Rng, cut: &mut u32, seen: &mut bool) -> Vec3 {
+/// A light as lights.glsl's `Emitter`: its parallelogram or triangle (origin, edges), front normal, and the
+/// flux a photon leaves it with (power / prob).
+pub struct Emitter {
+    pub origin: Vec3,
+    pub edge_u: Vec3,
+    pub edge_v: Vec3,
+    pub normal: Vec3,
+    pub flux: Vec3,
+    pub triangle: bool,
+}
+
+/// lights.glsl's `choose_emitter`: the first light whose running cdf exceeds u.
+pub fn choose_emitter(g: &GpuScene, u: f32) -> Emitter {
+    let mut li = 0usize;
+    while li + 1 < g.lights.len() && u >= g.lights[li].cdf {
+        li += 1;
+    }
+    let light = &g.lights[li];
+    let flux = v3(light.power) / light.prob;
+    if light.kind == LIGHT_TRIANGLE {
+        let t = &g.bvh_triangles[light.index as usize];
+        let (e1, e2) = (v3(t.v1) - v3(t.v0), v3(t.v2) - v3(t.v0));
+        return Emitter {
+            origin: v3(t.v0),
+            edge_u: e1,
+            edge_v: e2,
+            normal: bvh::normal(t),
+            flux,
+            triangle: true,
+        };
+    }
+    let q = &g.quads[light.index as usize];
+    Emitter {
+        origin: v3(q.origin),
+        edge_u: v3(q.edge_u),
+        edge_v: v3(q.edge_v),
+        normal: v3(q.normal),
+        flux,
+        triangle: false,
+    }
+}
+
+/// lights.glsl's `emitter_point`: uniform in the emitter's area for uniform (a, b).
+pub fn emitter_point(e: &Emitter, mut a: f32, mut b: f32) -> Vec3 {
+    if e.triangle && a + b > 1.0 {
+        (a, b) = (1.0 - a, 1.0 - b);
+    }
+    e.origin + a * e.edge_u + b * e.edge_v
+}
+
+/// ray.comp's `direct_light`: term (d) at diffuse point p, one light sample with its shadow ray.
+fn direct_light(g: &GpuScene, p: Vec3, nf: Vec3, albedo: Vec3, rng: &mut Rng) -> Vec3 {
+    let e = choose_emitter(g, rng.float());
+    let a = rng.float();
+    let b = rng.float();
+    let o = offset_ray(g, p, nf);
+    let y = offset_ray(g, emitter_point(&e, a, b), e.normal);
+    let mut w = y - o;
+    let d2 = w.dot(w);
+    let d = d2.sqrt();
+    w /= d;
+    let cos_p = nf.dot(w);
+    let cos_y = -e.normal.dot(w);
+    if cos_p <= 0.0 || cos_y <= 0.0 || d2 <= 0.0 {
+        return Vec3::ZERO;
+    }
+    if intersect_scene(g, o, w, 0.0, d).is_some() {
+        return Vec3::ZERO;
+    }
+    albedo * e.flux * (cos_p * cos_y / (PI * PI * d2))
+}
+
+/// One emission eye sample of ray.comp's `emission_sample`: the emission met along the specular chain
+/// through a random point of the pixel, one Fresnel branch chosen with probability f, and with direct light
+/// sampled (`RenderParams::direct_light`) term (d) at its diffuse end. `cut` counts a path ended at the
+/// depth backstop; `seen` is set if the path met an emitter's front.
+/// `light`: sample the direct light (false in the pilot, whose values are not summed).
+fn emission_sample(g: &GpuScene, px: u32, py: u32, light: bool, rng: &mut Rng, cut: &mut u32, seen: &mut bool) -> Vec3 {
     let j = [rng.float(), rng.float()];
     let mut o = v3(g.params.eye);
     let mut d = camera_ray(g, px, py, j);
@@ -45,8 +119,11 @@ fn emission_sample(g: &GpuScene, px: u32, py: u32, rng: &mut Rng, cut: &mut u32,
         let front = d.dot(h.normal) < 0.0;
         let nf = if front { h.normal } else { -h.normal };
         if m.surface == SURFACE_DIFFUSE {
-            let e = if front { thr * v3(m.emission) } else { Vec3::ZERO };
+            let mut e = if front { thr * v3(m.emission) } else { Vec3::ZERO };
             *seen |= e.max_element() > 0.0;
+            if light {
+                e += thr * direct_light(g, h.pos, nf, v3(m.color), rng);
+            }
             return e;
         }
         if m.surface == SURFACE_MIRROR {
@@ -128,6 +205,8 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
             let mut slot = 0usize;
             let mut hit_emitted = Vec3::ZERO;
             let base = pixel as usize * slots;
+            // A fixed point of the pixel counts only when no random sample does (ray.comp).
+            let hit_is_sample = push.jitter[0] < 0.0 || push.emission_samples == 0;
             while let Some((mut o, mut d, mut thr, mut depth)) = stack.pop() {
                 loop {
                     if depth >= p.max_eye_depth {
@@ -143,6 +222,9 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                     if m.surface == SURFACE_DIFFUSE {
                         if front {
                             hit_emitted += thr * v3(m.emission);
+                        }
+                        if p.direct_light != 0 && hit_is_sample {
+                            hit_emitted += thr * direct_light(g, h.pos, nf, v3(m.color), &mut rng);
                         }
                         let c = v3(m.color);
                         if c.max_element() > 0.0 && slot < slots {
@@ -192,8 +274,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                     ..Default::default()
                 };
             }
-            // A fixed point of the pixel counts only when no random sample does (ray.comp).
-            if push.jitter[0] < 0.0 || push.emission_samples == 0 {
+            if hit_is_sample {
                 emitted += hit_emitted.as_dvec3();
                 samples += 1;
             }
@@ -203,13 +284,17 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
             ((push.chunk as u64) << 48) | stream,
         );
         let pilot = push.pilot != 0;
-        let mut want = push.emission_samples;
-        if !pilot && busy[pixel as usize] == 0 {
-            want = if push.chunk == 0 { want.min(1) } else { 0 };
-        }
+        let total = if pilot || busy[pixel as usize] != 0 {
+            push.emission_samples
+        } else {
+            push.light_samples
+        };
+        let first = push.chunk * push.per_dispatch;
+        let want = total.saturating_sub(first).min(push.per_dispatch);
         let mut seen = false;
         for _ in 0..want {
-            let e = emission_sample(g, px, py, &mut rng, &mut out.cut, &mut seen);
+            let light = p.direct_light != 0 && !pilot;
+            let e = emission_sample(g, px, py, light, &mut rng, &mut out.cut, &mut seen);
             if !pilot {
                 emitted += e.as_dvec3();
                 samples += 1;
@@ -230,31 +315,15 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
 pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) -> bool {
     let p = &g.params;
     let mut rng = Rng::new(p.seed as u64 | ((salt as u64) << 32), index);
-    let u = rng.float();
-    let mut li = 0usize;
-    while li + 1 < g.lights.len() && u >= g.lights[li].cdf {
-        li += 1;
-    }
-    let light = &g.lights[li];
-    // The light's parallelogram or triangle: origin, edges, front normal (photon.comp's Emitter).
-    let (origin, eu, ev, normal, triangle) = if light.kind == LIGHT_TRIANGLE {
-        let t = &g.bvh_triangles[light.index as usize];
-        (v3(t.v0), v3(t.v1) - v3(t.v0), v3(t.v2) - v3(t.v0), bvh::normal(t), true)
-    } else {
-        let q = &g.quads[light.index as usize];
-        (v3(q.origin), v3(q.edge_u), v3(q.edge_v), v3(q.normal), false)
-    };
-    let mut a = rng.float();
-    let mut b = rng.float();
-    if triangle && a + b > 1.0 {
-        (a, b) = (1.0 - a, 1.0 - b);
-    }
-    let mut o = offset_ray(g, origin + a * eu + b * ev, normal);
+    let e = choose_emitter(g, rng.float());
+    let a = rng.float();
+    let b = rng.float();
+    let mut o = offset_ray(g, emitter_point(&e, a, b), e.normal);
     let u1 = rng.float();
     let u2 = rng.float();
-    let mut d = cosine_direction(normal, u1, u2);
-    let mut flux = v3(light.power) / light.prob;
-    for _ in 0..p.max_photon_depth {
+    let mut d = cosine_direction(e.normal, u1, u2);
+    let mut flux = e.flux;
+    for depth in 1..=p.max_photon_depth {
         let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
             return true;
         };
@@ -267,12 +336,15 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             if pr <= 0.0 {
                 return true;
             }
-            out.push(Photon {
-                pos: h.pos.to_array(),
-                cell: trace::grid_key(g, h.pos),
-                flux: flux.to_array(),
-                dir: oct_encode(d),
-            });
+            // photon.comp: with direct light sampled, no record where the photon first lands.
+            if p.direct_light == 0 || depth > 1 {
+                out.push(Photon {
+                    pos: h.pos.to_array(),
+                    cell: trace::grid_key(g, h.pos),
+                    flux: flux.to_array(),
+                    dir: oct_encode(d),
+                });
+            }
             if rng.float() >= pr {
                 return true;
             }
