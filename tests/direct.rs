@@ -83,8 +83,7 @@ fn photons_leave_their_first_landing_to_the_shadow_rays() {
             ..Settings::default()
         };
         let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
-        let mut gpu: Vec<[u32; 8]> = r.trace_and_gather(0, photons).unwrap().iter().map(key).collect();
-        gpu.sort_unstable();
+        let gpu = sorted_records(r.trace_and_gather(0, photons).unwrap());
         let cpu = ppm_vk_engine::reference::photon_pass(r.gpu_scene(), 0, photons, ppm_vk_kernels::photon::SALT_PHOTON);
         (gpu, cpu.len())
     };
@@ -114,17 +113,4 @@ fn photons_leave_their_first_landing_to_the_shadow_rays() {
     );
     assert!(close(all_cpu as f64, all.len() as f64, 5e-3, 0.0), "CPU {all_cpu}");
     assert_clean(&ctx);
-}
-
-fn key(p: &ppm_vk_engine::layout::Photon) -> [u32; 8] {
-    [
-        p.pos[0].to_bits(),
-        p.pos[1].to_bits(),
-        p.pos[2].to_bits(),
-        p.cell,
-        p.flux[0].to_bits(),
-        p.flux[1].to_bits(),
-        p.flux[2].to_bits(),
-        p.dir,
-    ]
 }

@@ -233,28 +233,6 @@ fn a_degenerate_bvh_stops_the_render_instead_of_losing_hits() {
     assert_clean(&ctx);
 }
 
-/// A batch's records in a fixed order (by their bits), to compare two runs that trace the same photons in
-/// a different order.
-fn sorted_records(mut records: Vec<ppm_vk_engine::layout::Photon>) -> Vec<[u32; 8]> {
-    let mut keys: Vec<[u32; 8]> = records
-        .drain(..)
-        .map(|p| {
-            [
-                p.pos[0].to_bits(),
-                p.pos[1].to_bits(),
-                p.pos[2].to_bits(),
-                p.cell,
-                p.flux[0].to_bits(),
-                p.flux[1].to_bits(),
-                p.flux[2].to_bits(),
-                p.dir,
-            ]
-        })
-        .collect();
-    keys.sort_unstable();
-    keys
-}
-
 /// A small mesh is written into the tracing kernels and tested triangle by triangle, with the BVH's
 /// watertight test: it must trace exactly what the BVH traces. cornell-mesh (14 triangles, three spheres)
 /// both ways: the same hit points from the eye pass and the same photon records, bit for bit, and those

@@ -121,3 +121,25 @@ pub fn match_records(
     }
     matched
 }
+
+/// A batch's records in a fixed order (by their bits), to compare two runs that trace the same photons in
+/// a different order.
+pub fn sorted_records(mut records: Vec<ppm_vk_engine::layout::Photon>) -> Vec<[u32; 8]> {
+    let mut keys: Vec<[u32; 8]> = records
+        .drain(..)
+        .map(|p| {
+            [
+                p.pos[0].to_bits(),
+                p.pos[1].to_bits(),
+                p.pos[2].to_bits(),
+                p.cell,
+                p.flux[0].to_bits(),
+                p.flux[1].to_bits(),
+                p.flux[2].to_bits(),
+                p.dir,
+            ]
+        })
+        .collect();
+    keys.sort_unstable();
+    keys
+}

@@ -276,6 +276,7 @@ impl Builder {
 
     /// Builds the subtree over `refs` (at `first` in the whole array), depth first into `out`; a second
     /// child's offset counts from the start of `out`. `spawn`: levels below this one that may still fork.
+    // The recursion's state (slices, offsets, the fork budget), each read at every level.
     #[allow(clippy::too_many_arguments)]
     fn build(
         &self,

@@ -44,6 +44,21 @@ fn arr(v: Vec3) -> [f32; 3] {
     v.to_array()
 }
 
+/// Writes the camera's basis and image size into `params` (ray.comp's camera_ray reads them).
+pub fn set_camera(params: &mut RenderParams, cam: &crate::scene::Camera) {
+    let forward = (cam.look_at - cam.eye).normalize();
+    let right = forward.cross(cam.up).normalize();
+    let up = right.cross(forward);
+    params.eye = arr(cam.eye);
+    params.tan_half_fov = (cam.vfov_deg.to_radians() * 0.5).tan();
+    params.right = arr(right);
+    params.aspect = cam.width as f32 / cam.height as f32;
+    params.up = arr(up);
+    params.width = cam.width;
+    params.forward = arr(forward);
+    params.height = cam.height;
+}
+
 /// Eq. 8: r = 2 (X + Y + Z) / (3 s), X, Y, Z the extents of the scene's bounding box, s the image size
 /// along one axis (the width).
 pub fn default_radius(scene: &Scene) -> f32 {
@@ -228,19 +243,7 @@ impl GpuScene {
             None => cell_size,
         };
         let surface_area = scene_surface_area(scene);
-        let cam = &scene.camera;
-        let forward = (cam.look_at - cam.eye).normalize();
-        let right = forward.cross(cam.up).normalize();
-        let up = right.cross(forward);
-        let params = RenderParams {
-            eye: arr(cam.eye),
-            tan_half_fov: (cam.vfov_deg.to_radians() * 0.5).tan(),
-            right: arr(right),
-            aspect: cam.width as f32 / cam.height as f32,
-            up: arr(up),
-            width: cam.width,
-            forward: arr(forward),
-            height: cam.height,
+        let mut params = RenderParams {
             num_spheres: spheres.len() as u32,
             num_quads: quads.len() as u32,
             num_lights: lights.len() as u32,
@@ -264,6 +267,7 @@ impl GpuScene {
             direct_light: (settings.direct == crate::settings::DirectLight::Sample) as u32,
             ..Default::default()
         };
+        set_camera(&mut params, &scene.camera);
         // Small meshes are compiled into the tracing kernels with the spheres and quads (specialize.rs).
         let triangles_inline = settings.specialize
             && !built.triangles.is_empty()

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
 use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers};
-use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, PhotonWork, Triangle};
+use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, PhotonWork, RenderParams, Triangle};
 use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PathLimits, PhotonPush, SALT_EYE, SALT_PHOTON, SALT_PROBE};
 use ppm_vk_kernels::probe::{self, ProbePush, MODE_PAPER, MODE_SCALE_FREE};
@@ -22,7 +22,7 @@ use crate::checkpoint::{self, Checkpoint};
 use crate::error::{DeviceContext as _, Error, Result};
 use crate::gpu_scene::{GpuScene, CELL_PER_RADIUS};
 use crate::image_io::RgbImage;
-use crate::scene::Scene;
+use crate::scene::{Camera, Scene};
 use crate::settings::{Mode, ProbeMode, Settings};
 
 /// Cancels [`Renderer::pass`] from another thread: clone it, give one clone to the renderer
@@ -159,6 +159,12 @@ pub struct Renderer {
     /// What a checkpoint records the render is of.
     scene_name: String,
     scene_sha256: String,
+    /// The scene's hash without its camera, and the camera: `set_camera` hashes them anew.
+    geometry_sha256: String,
+    camera: Camera,
+    /// The parameters a render starts from (the grid's cells adapt as it goes): `set_camera` restarts
+    /// from them.
+    start_params: RenderParams,
 }
 
 /// One variant of the photon kernel timed by [`Renderer::photon_breakdown`].
@@ -440,19 +446,14 @@ impl Renderer {
         };
         let kernels = pipelines().device("creating the compute pipelines")?;
         let storage = |name: &str, bytes: u64| Buffer::new(ctx, name, bytes, BufferKind::Storage);
-        let r2 = (gpu.initial_radius as f64).powi(2);
-        let stats_init = vec![
-            HitStats {
-                r2,
-                ..Default::default()
-            };
-            slots as usize
-        ];
         let buffers = || -> anyhow::Result<Renderer> {
             Ok(Renderer {
                 probe_report: None,
                 scene_name: scene.name.clone(),
                 scene_sha256: scene.content_sha256(),
+                geometry_sha256: scene.geometry_sha256(),
+                camera: scene.camera,
+                start_params: gpu.params,
                 cancel: CancelToken::new(),
                 params: ctx.buffer_from("params", &[gpu.params])?,
                 spheres: ctx.buffer_from("spheres", &gpu.spheres)?,
@@ -468,7 +469,7 @@ impl Renderer {
                 cut: ctx.buffer_from("path counters", &[PathCounters::default()])?,
                 limits,
                 hit_points: storage("hit points", slots * std::mem::size_of::<HitPoint>() as u64)?,
-                stats: ctx.buffer_from("hit stats", &stats_init)?,
+                stats: storage("hit stats", slots * std::mem::size_of::<HitStats>() as u64)?,
                 accum: storage("pass accumulators", slots * std::mem::size_of::<PassAccum>() as u64)?,
                 order: storage("hit-point order", slots * 4)?,
                 active: 0,
@@ -493,35 +494,90 @@ impl Renderer {
             })
         };
         let mut r = buffers().device("allocating the render's buffers")?;
+        r.start()?;
+        Ok(r)
+    }
+
+    /// Starts the render from nothing with the current camera: every statistic at its initial value
+    /// (eq. 8's radius, no photons), the emission sums and marks cleared, then the pilot eye pass (and its
+    /// marks) and the hit-point order. `prepare` ends with it; `set_camera` runs it again.
+    fn start(&mut self) -> Result<()> {
+        let what = "starting the render";
+        self.gpu.params = self.start_params;
+        self.ctx
+            .upload(&self.params, bytemuck::bytes_of(&self.gpu.params))
+            .device(what)?;
+        let r2 = (self.gpu.initial_radius as f64).powi(2);
+        let stats_init = vec![
+            HitStats {
+                r2,
+                ..Default::default()
+            };
+            self.gpu.slots() as usize
+        ];
+        self.ctx
+            .upload(&self.stats, bytemuck::cast_slice(&stats_init))
+            .device(what)?;
         drop(stats_init);
-        r.grid
-            .set_cells(r.gpu.params.grid_mask + 1)
-            .device("setting up the render")?;
-        r.ctx
+        self.ctx
+            .upload(&self.cut, bytemuck::bytes_of(&PathCounters::default()))
+            .device(what)?;
+        (self.passes, self.emitted, self.batch, self.probe_report) = (0, 0, self.settings.photons_per_pass, None);
+        self.grid.set_cells(self.gpu.params.grid_mask + 1).device(what)?;
+        self.ctx
             .run(|cmd| {
-                r.accum.cmd_fill(cmd, 0);
-                r.direct.cmd_fill(cmd, 0);
-                r.busy.cmd_fill(cmd, 0);
+                self.accum.cmd_fill(cmd, 0);
+                self.direct.cmd_fill(cmd, 0);
+                self.busy.cmd_fill(cmd, 0);
                 Ok(())
             })
-            .device("setting up the render")?;
-        r.ray_ms = r.ray_pass(0, true)?.iter().map(|s| s.duration_ms).sum();
-        r.path_counters()?;
-        let (width, height) = (r.gpu.params.width, r.gpu.params.height);
-        let mut busy: Vec<u32> = r.download(&r.busy, r.gpu.pixels(), "reading the pilot's marks")?;
+            .device(what)?;
+        self.ray_ms = self.ray_pass(0, true)?.iter().map(|s| s.duration_ms).sum();
+        self.path_counters()?;
+        let (width, height) = (self.gpu.params.width, self.gpu.params.height);
+        let mut busy: Vec<u32> = self.download(&self.busy, self.gpu.pixels(), "reading the pilot's marks")?;
         spread_marks(&mut busy, width, height);
-        r.ctx
-            .upload(&r.busy, bytemuck::cast_slice(&busy))
+        self.ctx
+            .upload(&self.busy, bytemuck::cast_slice(&busy))
             .device("writing the pilot's marks")?;
         // The gather walks the hit points in Morton order, so neighbouring threads read the same buckets.
         // PPM's hit points never move: order them by position once, on the host. SPPM's move every pass:
         // order the pixels by their screen position, which is nearly as coherent and never changes.
-        let order = match r.settings.mode {
-            Mode::Ppm => morton_order(&r.download(&r.hit_points, r.gpu.slots(), "reading the hit points")?),
-            Mode::Sppm => pixel_order(r.gpu.params.width, r.gpu.params.height),
+        let order = match self.settings.mode {
+            Mode::Ppm => morton_order(&self.download(&self.hit_points, self.gpu.slots(), "reading the hit points")?),
+            Mode::Sppm => pixel_order(self.gpu.params.width, self.gpu.params.height),
         };
-        r.set_order(order)?;
-        Ok(r)
+        self.set_order(order)
+    }
+
+    /// Moves the camera and starts the render again from its first pass, as a new [`Renderer`] of the
+    /// scene seen from `camera` would (the same image after the same passes, bit for bit), without
+    /// compiling kernels, building the BVH or uploading the scene again: for a viewer, or any embedder
+    /// that moves the view. The image size must stay (a new size needs a new renderer). The error is
+    /// [`Error::Scene`] naming the camera's field.
+    pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
+        camera.validate(&self.scene_name)?;
+        let (width, height) = (self.gpu.params.width, self.gpu.params.height);
+        if (camera.width, camera.height) != (width, height) {
+            let message = format!(
+                "must stay {width}x{height} for this renderer (a new resolution needs a new Renderer), got {}x{}",
+                camera.width, camera.height
+            );
+            return Err(Error::scene(&self.scene_name, 0, 0, "camera.resolution", message));
+        }
+        crate::gpu_scene::set_camera(&mut self.start_params, camera);
+        self.camera = *camera;
+        self.scene_sha256 = crate::scene::camera_sha256(camera, &self.geometry_sha256);
+        self.start()?;
+        if self.settings.probe != ProbeMode::Off {
+            self.probe_pass()?;
+        }
+        Ok(())
+    }
+
+    /// The camera the render is seen from (the scene's, or the last [`Renderer::set_camera`]'s).
+    pub fn camera(&self) -> &Camera {
+        &self.camera
     }
 
     /// The hit-point slots the gather and the update visit, in this order.

@@ -10,6 +10,7 @@
 pub mod layout;
 
 /// What build.rs reflected from each kernel's SPIR-V.
+// Generated code (build.rs writes it): its style is the generator's, not a reader's.
 #[allow(clippy::all)]
 pub mod reflected {
     /// A compiled kernel and its interface.

@@ -193,6 +193,7 @@ impl Lookup {
     /// `lookup/scatter`. Placing each record straight at its bucket's place, the way this build did before
     /// the split, took 130-260 ms for 2.8M records, and 41-48 ms with the same writes in order: the
     /// writes' cache misses were the cost (docs/performance.md).
+    // One argument per buffer the pass binds, in binding order (the reflected layout checks it).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,

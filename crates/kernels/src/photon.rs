@@ -112,6 +112,7 @@ impl PathLimits {
     /// scene intersection (primitives looped over, or 0 when unrolled); `lights`: iterations of choosing a
     /// light; `slots`: hit-point paths one eye thread traces; `emission`: emission samples per pixel and
     /// eye pass; `photon_cap` and `eye_cap`: the depths asked for (Settings).
+    // Each argument is one of the budget's independent inputs, named where PathLimits is built.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         budget: Option<u32>,
@@ -180,6 +181,7 @@ impl PathLimits {
 
     /// The limits of a scene with a triangle BVH: one photon per thread, and what the depths leave of the
     /// budget goes to traversal (see the struct). Arguments as [`PathLimits::new`].
+    // Each argument is one of the budget's independent inputs, named where PathLimits is built.
     #[allow(clippy::too_many_arguments)]
     pub fn with_bvh(
         budget: Option<u32>,
@@ -271,6 +273,7 @@ pub struct PhotonOutputs<'a> {
 
 /// Traces `push.count` photons: one dispatch, and in a scene with a BVH (`bvh`) the resume round after it
 /// (photon.comp): `resume` (photon_resume.comp) sizes it from the work counters, and it runs indirectly.
+// One argument per buffer the kernels bind, in binding order (the reflected layout checks it).
 #[allow(clippy::too_many_arguments)]
 pub fn record(
     ctx: &ppm_vk_device::Context,

@@ -64,6 +64,7 @@ impl SceneBuffers<'_> {
 /// Writes `hit_slots` hit points per pixel into `hit_points` (with `push.trace_hits`), adds the emission
 /// samples to `direct` (rgb, double) and their count to its w, and counts eye paths cut at the depth
 /// backstop in `cut`.
+// One argument per buffer the kernel binds, in binding order (the reflected layout checks it).
 #[allow(clippy::too_many_arguments)]
 pub fn record(
     k: &ComputePipeline,

@@ -17,6 +17,7 @@ pub struct ResolvePush {
 }
 push_struct!(ResolvePush, RESOLVE);
 
+// One argument per buffer the kernel binds, in binding order (the reflected layout checks it).
 #[allow(clippy::too_many_arguments)]
 pub fn record(
     k: &ComputePipeline,

@@ -161,6 +161,7 @@ pub fn intersect_any(
     traverse(nodes, tris, o, d, tmin, tmax, budget, true)
 }
 
+// Mirrors bvh.glsl's bvh_intersect argument for argument, so the twin reads line by line against it.
 #[allow(clippy::too_many_arguments)]
 fn traverse(
     nodes: &[BvhNode],

@@ -1173,6 +1173,8 @@ impl Builder {
 
     /// The quad `origin + s u + t v` (object space) placed by `m`; its front normal is `u x v` turned
     /// as Mitsuba turns normals (the inverse transpose), and flipped with `flip`.
+    // The element, its transform, its flip and the quad's corner, edges and material: a struct would
+    // only name them again.
     #[allow(clippy::too_many_arguments)]
     fn quad(&mut self, e: &Elem, m: &DAffine3, flip: bool, origin: [f64; 3], u: [f64; 3], v: [f64; 3], material: u32) {
         let (mut u, mut v) = (m.transform_vector3(u.into()), m.transform_vector3(v.into()));

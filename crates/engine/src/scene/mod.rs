@@ -393,24 +393,18 @@ impl Scene {
     /// (the scene's, materials', mesh paths) are left out: moving a scene's directory keeps its hash.
     /// Checkpoints use it to refuse resuming a render of another scene.
     pub fn content_sha256(&self) -> String {
+        camera_sha256(&self.camera, &self.geometry_sha256())
+    }
+
+    /// SHA-256 (hex) of everything [`Scene::content_sha256`] covers except the camera: what a renderer
+    /// keeps when only the camera moves ([`crate::Renderer::set_camera`]).
+    pub fn geometry_sha256(&self) -> String {
         use sha2::Digest;
         use std::fmt::Write as _;
-        /// Feeds `Debug` text straight into the hash (exact: floats print as their shortest round trip).
-        struct Feed<'a>(&'a mut sha2::Sha256);
-        impl fmt::Write for Feed<'_> {
-            fn write_str(&mut self, s: &str) -> fmt::Result {
-                self.0.update(s.as_bytes());
-                Ok(())
-            }
-        }
         let mut h = sha2::Sha256::new();
         let surfaces: Vec<(Surface, Vec3)> = self.materials.iter().map(|m| (m.surface, m.emission)).collect();
         // Writing into a hash cannot fail.
-        let _ = write!(
-            Feed(&mut h),
-            "{:?}",
-            (&self.camera, &surfaces, &self.spheres, &self.quads)
-        );
+        let _ = write!(Feed(&mut h), "{:?}", (&surfaces, &self.spheres, &self.quads));
         let floats =
             |v: &[Vec3]| -> Vec<u8> { v.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect() };
         for m in &self.meshes {
@@ -427,7 +421,7 @@ impl Scene {
             );
             h.update(m.materials.iter().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>());
         }
-        h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+        hex(h)
     }
 
     /// Triangles in all meshes.
@@ -612,6 +606,36 @@ fn unit_vec(v: Vec3, path: &str) -> Result<(), Invalid> {
             path,
             format!("every component must be in [0, 1], got {}", fmt_vec(v.to_array())),
         ))
+    }
+}
+
+/// Feeds `Debug` text straight into a hash (exact: floats print as their shortest round trip).
+struct Feed<'a>(&'a mut sha2::Sha256);
+
+impl fmt::Write for Feed<'_> {
+    fn write_str(&mut self, s: &str) -> fmt::Result {
+        sha2::Digest::update(self.0, s.as_bytes());
+        Ok(())
+    }
+}
+
+fn hex(h: sha2::Sha256) -> String {
+    sha2::Digest::finalize(h).iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// [`Scene::content_sha256`] from its camera and [`Scene::geometry_sha256`].
+pub(crate) fn camera_sha256(camera: &Camera, geometry_sha256: &str) -> String {
+    use std::fmt::Write as _;
+    let mut h = <sha2::Sha256 as sha2::Digest>::new();
+    let _ = write!(Feed(&mut h), "{camera:?}{geometry_sha256}");
+    hex(h)
+}
+
+impl Camera {
+    /// Checks the camera as [`Scene::validate`] does; the error is [`Error::Scene`] naming the field
+    /// (`camera.up`, ...), with `what` as its file.
+    pub fn validate(&self, what: &str) -> Result<()> {
+        check_camera(self).map_err(|e| Error::scene(what, 0, 0, e.path, e.message))
     }
 }
 
