@@ -114,3 +114,44 @@ fn photons_leave_their_first_landing_to_the_shadow_rays() {
     assert!(close(all_cpu as f64, all.len() as f64, 5e-3, 0.0), "CPU {all_cpu}");
     assert_clean(&ctx);
 }
+
+/// The pilot marks the pixels where one of its shadow rays reached a light (and their neighbours); the
+/// others take one light-sampling path a pass instead of `light_samples`: the umbra of the penumbra scene,
+/// and every pixel of a scene whose light faces away from all it lights directly, where shadow rays would
+/// add nothing. Unbiased as the emission marks are (the pilot's samples are not summed): the penumbra's
+/// mean is checked above with these counts.
+#[test]
+fn pixels_no_pilot_shadow_ray_lit_take_one_path() {
+    let ctx = ctx();
+    let scene = load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/penumbra.toml")).with_resolution(64, 64);
+    let mut away = scene.clone();
+    let light = away.quads.len() - 1;
+    let q = &mut away.quads[light];
+    (q.edge_u, q.edge_v) = (q.edge_v, q.edge_u); // the light now faces up, into the empty sky
+    let settings = Settings {
+        mode: Mode::Sppm,
+        photons_per_pass: 20_000,
+        ..Settings::default()
+    };
+    let light_samples = settings.light_samples as f64;
+    for (name, scene, lit_share) in [("penumbra", &scene, 0.5..1.0), ("light facing away", &away, 0.0..1e-9)] {
+        let mut r = Renderer::new(&ctx, scene, settings.clone()).unwrap();
+        let marks = r.read_busy().unwrap();
+        let lit = marks
+            .iter()
+            .filter(|&&m| m & ppm_vk_engine::reference::MARK_LIT != 0)
+            .count();
+        let share = lit as f64 / marks.len() as f64;
+        // Pass 1 uses the pilot's eye pass (its jittered hit-point path is a sample); pass 2 traces eye pass 1.
+        r.pass().unwrap();
+        r.pass().unwrap();
+        let counts: Vec<f64> = r.read_direct().unwrap().iter().map(|d| d[3]).collect();
+        let ones = counts.iter().filter(|&&c| c == 3.0).count(); // one path and two hit-point paths
+        let fulls = counts.iter().filter(|&&c| c == light_samples + 2.0).count();
+        println!("{name}: {lit} of {} pixels lit in the pilot; after a pass {ones} took one path, {fulls} took {light_samples}", marks.len());
+        assert!(lit_share.contains(&share), "{name}: {share} of the pixels lit");
+        assert_eq!(ones, marks.len() - lit, "{name}: the unlit pixels take one path");
+        assert_eq!(fulls, lit, "{name}: the lit pixels take light_samples paths");
+    }
+    assert_clean(&ctx);
+}

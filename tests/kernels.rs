@@ -144,8 +144,16 @@ fn emission_passes_match_reference(r: &mut Renderer) {
     ppm_vk_engine::spread_marks(&mut busy, g.params.width, g.params.height);
     let gpu_busy = r.read_busy().unwrap();
     let same = busy.iter().zip(&gpu_busy).filter(|(a, b)| a == b).count();
-    let marked = busy.iter().filter(|&&b| b != 0).count();
-    println!("pilot: {marked} of {pixels} pixels marked, GPU and CPU agree on {same}");
+    let marked = busy.iter().filter(|&&b| b & reference::MARK_EMISSION != 0).count();
+    let lit = busy.iter().filter(|&&b| b & reference::MARK_LIT != 0).count();
+    let sampled = r.settings().direct == DirectLight::Sample;
+    if sampled {
+        // Most of the box sees the light; the floor under the spheres is in their shadow.
+        assert!(lit > pixels / 2 && lit < pixels, "{lit} of {pixels} pixels lit");
+    } else {
+        assert_eq!(lit, 0, "no shadow rays without direct light sampled");
+    }
+    println!("pilot: {marked} of {pixels} pixels marked, {lit} lit, GPU and CPU agree on {same}");
     assert!(marked > 0 && marked < pixels, "{marked} of {pixels} pixels marked");
     assert!(same * 1000 >= pixels * 995, "marks agree on {same} of {pixels} pixels");
     let before = r.read_direct().unwrap();
@@ -157,13 +165,12 @@ fn emission_passes_match_reference(r: &mut Renderer) {
         .zip(&before)
         .map(|(a, b)| [0, 1, 2, 3].map(|c| a[c] - b[c]))
         .collect();
-    let e = r.settings().emission_samples as f64;
-    let unmarked = r.settings().unmarked_samples() as f64;
+    let (e, unmarked) = (r.settings().emission_samples, r.settings().unmarked_samples());
     let hit = (r.settings().mode == Mode::Sppm) as u32 as f64; // SPPM's jittered hit path is a sample too
     for (i, d) in cpu.iter().enumerate() {
         assert_eq!(
             d[3],
-            if busy[i] != 0 { e } else { unmarked } + hit,
+            reference::samples_for_mark(sampled, e, unmarked, busy[i]) as f64 + hit,
             "pixel {i}: CPU sample count"
         );
     }

@@ -119,7 +119,14 @@ fn cli_defines_reach_the_scene_or_are_refused() {
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{stderr}");
     assert!(stderr.contains("scene cornell-spheres: 16x16"), "{stderr}");
-    assert!(!stderr.contains("warning"), "{stderr}");
+    // No warning about the file or its parameters. The count of paths ended at a depth backstop is a
+    // warning of its own and depends on which rare paths a 16x16 pass draws (one eye path trapped in the
+    // glass sphere near its silhouette, in one build): it says nothing about the defines.
+    let about_the_file = stderr
+        .lines()
+        .filter(|l| l.contains("warning") && !l.contains("were ended there"))
+        .count();
+    assert_eq!(about_the_file, 0, "{stderr}");
     let _ = std::fs::remove_file(&out);
 
     let e = stderr_of(&["render", CORNELL, "-D", "res=16"]);

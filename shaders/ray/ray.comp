@@ -29,9 +29,10 @@
 // that reaches the chain's first diffuse vertex straight from an emitter and is reflected towards the eye,
 // by sampling one light (in proportion to its power, a point uniform on it) with a shadow ray
 // (direct_light below); every pixel then takes pc.light_samples such paths, marked ones
-// pc.emission_samples. The photons leave no record where they first land straight from a light
-// (photon.comp), so the partition of the light reaching the eye, in path notation (E eye, S mirror or
-// glass, D diffuse, L emitter), is:
+// pc.emission_samples, and those where none of the pilot's shadow rays reached a light (nor a
+// neighbour's) one: the pilot marks the lit pixels too, and its samples stay out of the sums. The photons
+// leave no record where they first land straight from a light (photon.comp), so the partition of the
+// light reaching the eye, in path notation (E eye, S mirror or glass, D diffuse, L emitter), is:
 //   E S* L           emission seen directly or through specular surfaces: term (a), these paths;
 //   E S* D L         light straight from an emitter to the first diffuse vertex: term (d), these paths'
 //                    shadow rays;
@@ -47,7 +48,11 @@ layout(local_size_x = 64) in;
 layout(std430, binding = 6) writeonly buffer HitPoints { HitPoint hit_points[]; };
 layout(std430, binding = 7) buffer Direct { dvec4 direct[]; };
 layout(std430, binding = 8) buffer Cut { PathCounters cut; };
-layout(std430, binding = 9) buffer Busy { uint busy[]; }; // 1: the pilot saw emission here (or beside it)
+// Per pixel, what the pilot saw here or beside: MARK_EMISSION, the front of an emitter; MARK_LIT, a light
+// through one of its shadow rays.
+layout(std430, binding = 9) buffer Busy { uint busy[]; };
+const uint MARK_EMISSION = 1u;
+const uint MARK_LIT = 2u;
 layout(std430, binding = 10) readonly buffer Lights { Light lights[]; };
 layout(push_constant) uniform RayPush {
     vec2 jitter;     // sample position inside the pixel, in [0,1)^2 (0.5, 0.5: the centre); negative:
@@ -104,8 +109,8 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, inout Rng rng) {
 
 // One emission sample: the emission met along the specular chain from the eye through `jitter`, and with
 // direct light sampled, term (d) at the chain's diffuse end. `seen`: set if the path met the front of an
-// emitter.
-vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen) {
+// emitter; `lit`: set if its shadow ray reached a light.
+vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout bool lit) {
     vec2 jitter = vec2(rng_float(rng), rng_float(rng));
     vec3 o = params.eye;
     vec3 d = camera_ray(px, py, jitter);
@@ -125,8 +130,11 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen) {
         if (m.surface == SURFACE_DIFFUSE) {
             vec3 e = front ? thr * m.emission : vec3(0.0); // emitters are one-sided
             if (max(e.r, max(e.g, e.b)) > 0.0) seen = true;
-            // The pilot's samples only mark pixels (their values are not summed): no shadow ray.
-            if (params.direct_light != 0u && pc.pilot == 0u) e += thr * direct_light(h.pos, nf, m.color, rng);
+            if (params.direct_light != 0u) {
+                vec3 l = direct_light(h.pos, nf, m.color, rng);
+                if (max(l.r, max(l.g, l.b)) > 0.0) lit = true;
+                e += thr * l;
+            }
             return e;
         }
         if (m.surface == SURFACE_MIRROR) {
@@ -186,7 +194,9 @@ void main() {
                 if (m.surface == SURFACE_DIFFUSE) {
                     if (front) hit_emitted += r.thr * m.emission; // emitters are one-sided
                     // Term (d) for this path, where it is one of the samples (below).
-                    if (params.direct_light != 0u && hit_is_sample) hit_emitted += r.thr * direct_light(h.pos, nf, m.color, rng);
+                    if (params.direct_light != 0u && hit_is_sample) {
+                        hit_emitted += r.thr * direct_light(h.pos, nf, m.color, rng);
+                    }
                     if (max(m.color.r, max(m.color.g, m.color.b)) > 0.0 && slot < params.hit_slots) {
                         hit_points[base + slot] = HitPoint(h.pos, pixel, nf, 0u, r.thr * m.color / PI, 0u);
                         slot++;
@@ -236,18 +246,26 @@ void main() {
     Rng erng = rng_new(uint64_t(params.seed) | (uint64_t(SALT_EMISSION) << 32), (uint64_t(pc.chunk) << 48) | stream);
     // Only whole samples count: once long paths have spent the thread's BVH budget (bvh_spent, counted),
     // the remaining samples are not taken rather than taken as black.
-    uint total = pc.pilot != 0u || busy[pixel] != 0u ? pc.emission_samples : pc.light_samples;
+    // How many (reference::samples_for_mark, the CPU twin's rule): all of them where the pilot saw
+    // emission; with direct light sampled, light_samples where one of its shadow rays reached a light and
+    // one where none did (in the umbra, or where no light is in direct view: the shadow rays there would
+    // add nothing); else light_samples.
+    uint mark = busy[pixel];
+    uint total = pc.light_samples;
+    if (pc.pilot != 0u || (mark & MARK_EMISSION) != 0u) total = pc.emission_samples;
+    else if (params.direct_light != 0u && pc.emission_samples > 0u && (mark & MARK_LIT) == 0u) total = min(total, 1u);
     uint first = pc.chunk * pc.per_dispatch;
     uint want = total > first ? min(total - first, pc.per_dispatch) : 0u;
     bool seen = false;
+    bool lit = false;
     for (uint s = 0u; s < want; s++) {
         if (bvh_spent || bvh_cut) break;
-        vec3 e = emission_sample(px, py, erng, seen);
+        vec3 e = emission_sample(px, py, erng, seen, lit);
         if (bvh_spent || bvh_cut) break;
         if (pc.pilot != 0u) continue;
         emitted += dvec3(e);
         samples++;
     }
-    if (pc.pilot != 0u && seen) busy[pixel] = 1u;
+    if (pc.pilot != 0u) busy[pixel] |= (seen ? MARK_EMISSION : 0u) | (lit ? MARK_LIT : 0u);
     if (samples > 0u) direct[pixel] += dvec4(emitted, double(samples));
 }

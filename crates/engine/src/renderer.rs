@@ -1357,13 +1357,17 @@ impl Renderer {
 /// estimate stays unbiased whatever they are (ray.comp); they only move where the samples go.
 pub fn spread_marks(marks: &mut [u32], width: u32, height: u32) {
     let (w, h) = (width as usize, height as usize);
-    // The pilot's own marks, taken before any is added: the spread does not chain.
-    let seeds: Vec<usize> = (0..marks.len()).filter(|&i| marks[i] != 0).collect();
-    for i in seeds {
+    // The pilot's own marks, taken before any is added: the spread does not chain. Each kind of mark
+    // (reference::MARK_EMISSION, MARK_LIT) spreads on its own.
+    let seeds: Vec<(usize, u32)> = (0..marks.len())
+        .filter(|&i| marks[i] != 0)
+        .map(|i| (i, marks[i]))
+        .collect();
+    for (i, mark) in seeds {
         let (x, y) = (i % w, i / w);
         for yy in y.saturating_sub(1)..=(y + 1).min(h - 1) {
             for xx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
-                marks[yy * w + xx] = 1;
+                marks[yy * w + xx] |= mark;
             }
         }
     }

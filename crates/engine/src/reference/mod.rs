@@ -104,9 +104,17 @@ fn direct_light(g: &GpuScene, p: Vec3, nf: Vec3, albedo: Vec3, rng: &mut Rng) ->
 /// One emission eye sample of ray.comp's `emission_sample`: the emission met along the specular chain
 /// through a random point of the pixel, one Fresnel branch chosen with probability f, and with direct light
 /// sampled (`RenderParams::direct_light`) term (d) at its diffuse end. `cut` counts a path ended at the
-/// depth backstop; `seen` is set if the path met an emitter's front.
-/// `light`: sample the direct light (false in the pilot, whose values are not summed).
-fn emission_sample(g: &GpuScene, px: u32, py: u32, light: bool, rng: &mut Rng, cut: &mut u32, seen: &mut bool) -> Vec3 {
+/// depth backstop; `seen` is set if the path met an emitter's front, `lit` if its shadow ray reached a
+/// light.
+fn emission_sample(
+    g: &GpuScene,
+    px: u32,
+    py: u32,
+    rng: &mut Rng,
+    cut: &mut u32,
+    seen: &mut bool,
+    lit: &mut bool,
+) -> Vec3 {
     let j = [rng.float(), rng.float()];
     let mut o = v3(g.params.eye);
     let mut d = camera_ray(g, px, py, j);
@@ -121,8 +129,10 @@ fn emission_sample(g: &GpuScene, px: u32, py: u32, light: bool, rng: &mut Rng, c
         if m.surface == SURFACE_DIFFUSE {
             let mut e = if front { thr * v3(m.emission) } else { Vec3::ZERO };
             *seen |= e.max_element() > 0.0;
-            if light {
-                e += thr * direct_light(g, h.pos, nf, v3(m.color), rng);
+            if g.params.direct_light != 0 {
+                let l = direct_light(g, h.pos, nf, v3(m.color), rng);
+                *lit |= l.max_element() > 0.0;
+                e += thr * l;
             }
             return e;
         }
@@ -150,6 +160,25 @@ pub struct EyePass {
 
 /// A whole eye pass: the ray kernel's dispatches `pushes` (`Renderer::ray_pushes`), hit points from the
 /// one that traces them, emission samples summed over all.
+/// A pilot mark (ray.comp's `busy`): the pilot saw the front of an emitter in the pixel or beside it.
+pub const MARK_EMISSION: u32 = 1;
+/// A pilot mark: one of the pilot's shadow rays reached a light, in the pixel or beside it.
+pub const MARK_LIT: u32 = 2;
+
+/// ray.comp's count of emission-sample paths a pixel takes per eye pass after the pilot, from its marks:
+/// `emission` where the pilot saw emission; with direct light sampled, `light` where a pilot shadow ray
+/// reached a light and one where none did (if the pilot took samples at all); else `light` (the renderer
+/// passes `Settings::unmarked_samples` there).
+pub fn samples_for_mark(direct_light: bool, emission: u32, light: u32, mark: u32) -> u32 {
+    if mark & MARK_EMISSION != 0 {
+        emission
+    } else if direct_light && emission > 0 && mark & MARK_LIT == 0 {
+        light.min(1)
+    } else {
+        light
+    }
+}
+
 /// `busy`: per pixel, whether the pilot marked it (ray.comp); the pilot pass (push.pilot) sets it.
 pub fn eye_pass(g: &GpuScene, pushes: &[RayPush], busy: &mut [u32]) -> EyePass {
     let mut out = EyePass {
@@ -284,24 +313,28 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
             ((push.chunk as u64) << 48) | stream,
         );
         let pilot = push.pilot != 0;
-        let total = if pilot || busy[pixel as usize] != 0 {
+        let total = if pilot {
             push.emission_samples
         } else {
-            push.light_samples
+            samples_for_mark(
+                p.direct_light != 0,
+                push.emission_samples,
+                push.light_samples,
+                busy[pixel as usize],
+            )
         };
         let first = push.chunk * push.per_dispatch;
         let want = total.saturating_sub(first).min(push.per_dispatch);
-        let mut seen = false;
+        let (mut seen, mut lit) = (false, false);
         for _ in 0..want {
-            let light = p.direct_light != 0 && !pilot;
-            let e = emission_sample(g, px, py, light, &mut rng, &mut out.cut, &mut seen);
+            let e = emission_sample(g, px, py, &mut rng, &mut out.cut, &mut seen, &mut lit);
             if !pilot {
                 emitted += e.as_dvec3();
                 samples += 1;
             }
         }
-        if pilot && seen {
-            busy[pixel as usize] = 1;
+        if pilot {
+            busy[pixel as usize] |= (seen as u32 * MARK_EMISSION) | (lit as u32 * MARK_LIT);
         }
         if samples > 0 {
             out.direct[pixel as usize] = [emitted.x, emitted.y, emitted.z, samples as f64];
