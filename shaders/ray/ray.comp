@@ -88,8 +88,8 @@ vec3 camera_ray(uint px, uint py, vec2 jitter) {
 // a light chosen in proportion to its power, a point y uniform on it, the shadow ray towards y. Its
 // estimate f_r Le G / pdf is (albedo / pi) Le (cos_p cos_y / d^2) (area / prob), and the light's flux
 // (power / prob, with power = Le area pi) gives Le area / prob = flux / pi. Emitters are one-sided.
-// A shadow ray that runs out of traversal steps answers "occluded"; the caller must then check bvh_spent
-// and bvh_cut and drop the sample (geometry.glsl: occluded).
+// A shadow ray that runs out of traversal steps answers "occluded": it is counted here, as an eye path is,
+// and the caller must then check bvh_spent and bvh_cut and drop the sample (geometry.glsl: occluded).
 vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, inout Rng rng) {
     Emitter e = choose_emitter(rng_float(rng));
     float a = rng_float(rng);
@@ -103,7 +103,13 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, inout Rng rng) {
     float cos_p = dot(nf, w);
     float cos_y = -dot(e.normal, w);
     if (cos_p <= 0.0 || cos_y <= 0.0 || d2 <= 0.0) return vec3(0.0);
-    if (occluded(o, w, d)) return vec3(0.0);
+    bool was_cut = bvh_cut;
+    bool was_spent = bvh_spent;
+    if (occluded(o, w, d)) {
+        if (bvh_cut && !was_cut) atomicAdd(cut.traversal_cut, 1u);
+        if (bvh_spent && !was_spent) atomicAdd(cut.eye_paths, 1u);
+        return vec3(0.0);
+    }
     return albedo * e.flux * (cos_p * cos_y / (PI * PI * d2));
 }
 
@@ -196,6 +202,7 @@ void main() {
                     // Term (d) for this path, where it is one of the samples (below).
                     if (params.direct_light != 0u && hit_is_sample) {
                         hit_emitted += r.thr * direct_light(h.pos, nf, m.color, rng);
+                        if (bvh_spent) sp = 0u; // counted there; no budget for the rest
                     }
                     if (max(m.color.r, max(m.color.g, m.color.b)) > 0.0 && slot < params.hit_slots) {
                         hit_points[base + slot] = HitPoint(h.pos, pixel, nf, 0u, r.thr * m.color / PI, 0u);
