@@ -27,16 +27,7 @@ fn main() -> Result<()> {
     }
     let path = path.context("usage: bvh_trace SCENE [--rays N]")?;
     let scene = Scene::load(&path)?;
-    let input: Vec<TriangleInput> = scene
-        .meshes
-        .iter()
-        .flat_map(|m| {
-            m.triangles().map(|t| TriangleInput {
-                v: t.p,
-                material: t.material,
-            })
-        })
-        .collect();
+    let input = TriangleInput::of_scene(&scene);
     if input.is_empty() {
         bail!("{path}: no triangles");
     }

@@ -89,6 +89,23 @@ pub struct TriangleInput {
     pub material: u32,
 }
 
+impl TriangleInput {
+    /// Every mesh triangle of `scene`, in mesh order (the meshes are already in world space): what the
+    /// scene's one BVH is built over.
+    pub fn of_scene(scene: &crate::scene::Scene) -> Vec<TriangleInput> {
+        scene
+            .meshes
+            .iter()
+            .flat_map(|m| {
+                m.triangles().map(|t| TriangleInput {
+                    v: t.p,
+                    material: t.material,
+                })
+            })
+            .collect()
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BvhOptions {
     /// Most triangles per leaf, 1..=[`MAX_LEAF`].

@@ -118,16 +118,7 @@ impl GpuScene {
             .collect();
 
         // Triangles: every mesh's, in one BVH (the meshes are already in world space).
-        let input: Vec<TriangleInput> = scene
-            .meshes
-            .iter()
-            .flat_map(|m| {
-                m.triangles().map(|t| TriangleInput {
-                    v: t.p,
-                    material: t.material,
-                })
-            })
-            .collect();
+        let input = TriangleInput::of_scene(scene);
         let built = bvh::build(&input, &BvhOptions::default())
             .map_err(|e| Error::scene(&scene.name, 0, 0, "", format!("building the BVH: {e:#}")))?;
         if !built.dropped.is_empty() {
