@@ -44,7 +44,7 @@ fn a_penumbra_matches_its_mitsuba_reference_in_both_modes() {
             e.rel_mse, e.rmse
         );
         // Sampled: 0.5% (measured 0.02%: the photons carry only the light that bounced, a tenth of the
-        // image). By photons: 2% (measured -0.8 to -1.2%, the most in blue, the occluder's colour): a disc
+        // image). By photons: 2% (measured -0.7 to -0.9%, the most in blue, the occluder's colour): a disc
         // at the occluder's edge reaches past it and finds no photons there, a bias that shrinks with the
         // radius; twice that is a term counted twice or missed anywhere on the floor.
         let tol = if direct == DirectLight::Sample { 0.005 } else { 0.02 };
