@@ -17,6 +17,7 @@ use ppm_vk_engine::{
 mod bench;
 mod compare;
 mod plot;
+mod view;
 
 #[derive(Parser)]
 #[command(name = "ppm-vk", version = concat!(env!("CARGO_PKG_VERSION"), " (", env!("PPM_VK_GIT_REV"), ")"))]
@@ -31,6 +32,8 @@ struct Cli {
 enum Command {
     /// Render a scene progressively and write the image.
     Render(RenderArgs),
+    /// Show a scene in a window as it renders; move the camera with the mouse (needs a display).
+    View(view::ViewArgs),
     /// List the Vulkan devices and whether each can run ppm-vk.
     Devices,
     /// Time each stage on a fixed set of cases; prints a table and writes JSON.
@@ -60,6 +63,11 @@ pub struct DeviceArgs {
 impl DeviceArgs {
     /// Opens the device, with the pipeline cache unless it is off; says so when a cache file was ignored.
     pub fn open(&self) -> Result<Context> {
+        self.open_for(None)
+    }
+
+    /// [`DeviceArgs::open`], also for presenting to windows of `present`'s display.
+    pub fn open_for(&self, present: Option<ppm_vk_engine::raw_window_handle::RawDisplayHandle>) -> Result<Context> {
         let pipeline_cache = match self.no_pipeline_cache {
             true => None,
             false => self.pipeline_cache.clone().or_else(default_cache_dir),
@@ -68,6 +76,7 @@ impl DeviceArgs {
             validation: self.validate,
             device: self.device.clone(),
             pipeline_cache,
+            present,
         })?;
         if let Some(note) = ctx.pipeline_cache_note() {
             eprintln!("note: {note}; it will be rewritten");
@@ -118,29 +127,17 @@ impl RegionArgs {
     }
 }
 
-#[derive(Args)]
-struct RenderArgs {
-    /// Scene file: TOML (see docs/scene-format.md) or Mitsuba 3 XML (.xml, see docs/mitsuba.md).
-    scene: PathBuf,
-    /// Override a Mitsuba scene's parameter: `-D name=value` sets what `$name` stands for (repeatable).
-    #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = ppm_vk_engine::scene::parse_define)]
-    pub defines: Vec<(String, String)>,
+/// How to render: the flags `render` and `view` share.
+#[derive(Args, Clone)]
+pub(crate) struct SettingsArgs {
     /// `sppm`: stochastic PPM, new hit points every pass at a random point of each pixel (anti-aliased, box
     /// filter; the lower error at equal time from 10 s on); `ppm`: hit points fixed at pixel centres.
     #[arg(long, value_enum, default_value_t = ModeArg::Sppm)]
     mode: ModeArg,
-    /// Photon passes the render has when done (default 100 unless --time is given); a resumed render
-    /// counts the passes of its checkpoint.
-    #[arg(long, conflicts_with = "time", value_parser = clap::value_parser!(u64).range(1..))]
-    passes: Option<u64>,
-    /// Render for this many seconds instead of a pass count: the passes' wall time, set-up (kernel
-    /// compilation, the BVH, the probe pass) excluded, as for `compare --time`. The last pass started in
-    /// time finishes.
-    #[arg(long, value_parser = parse_seconds)]
-    time: Option<f64>,
-    /// Photons emitted per pass.
-    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u32).range(1..))]
-    photons_per_pass: u32,
+    /// Photons emitted per pass [default: 1000000; `view`: 100000, so a frame comes every few tenths of a
+    /// second on a CPU device].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    photons_per_pass: Option<u32>,
     /// Fraction of new photons kept per pass (eq. 3, 6), in (0, 1).
     #[arg(long, default_value_t = 0.7, value_parser = parse_fraction)]
     alpha: f32,
@@ -184,6 +181,59 @@ struct RenderArgs {
     /// Cone filter (eq. 10-14): its constant k >= 1, or `off`.
     #[arg(long, default_value = "off", value_parser = parse_cone)]
     cone: Cone,
+}
+
+impl SettingsArgs {
+    /// The settings these flags give, checked; `photons_per_pass` where --photons-per-pass is not given.
+    pub fn settings(&self, photons_per_pass: u32) -> Result<Settings> {
+        let settings = Settings {
+            mode: self.mode.into(),
+            photons_per_pass: self.photons_per_pass.unwrap_or(photons_per_pass),
+            alpha: self.alpha,
+            seed: self.seed,
+            initial_radius: self.radius,
+            hit_slots: self.hit_slots,
+            probe: self.probe.into(),
+            probe_beta: self.beta,
+            probe_photons: self.probe_photons,
+            cone_k: self.cone.0,
+            emission_samples: self.emission_samples,
+            direct: self.direct.into(),
+            light_samples: self.light_samples,
+            ..Settings::default()
+        };
+        settings.validate()?;
+        Ok(settings)
+    }
+
+    /// The scene file (with `-D` defines) at --resolution, if given.
+    pub fn load_scene(&self, path: &std::path::Path, defines: &[(String, String)]) -> Result<Scene> {
+        let scene = load_scene(path, defines)?;
+        Ok(match self.resolution {
+            Some((w, h)) => scene.with_resolution(w, h),
+            None => scene,
+        })
+    }
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Scene file: TOML (see docs/scene-format.md) or Mitsuba 3 XML (.xml, see docs/mitsuba.md).
+    scene: PathBuf,
+    /// Override a Mitsuba scene's parameter: `-D name=value` sets what `$name` stands for (repeatable).
+    #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = ppm_vk_engine::scene::parse_define)]
+    pub defines: Vec<(String, String)>,
+    /// Photon passes the render has when done (default 100 unless --time is given); a resumed render
+    /// counts the passes of its checkpoint.
+    #[arg(long, conflicts_with = "time", value_parser = clap::value_parser!(u64).range(1..))]
+    passes: Option<u64>,
+    /// Render for this many seconds instead of a pass count: the passes' wall time, set-up (kernel
+    /// compilation, the BVH, the probe pass) excluded, as for `compare --time`. The last pass started in
+    /// time finishes.
+    #[arg(long, value_parser = parse_seconds)]
+    time: Option<f64>,
+    #[command(flatten)]
+    settings: SettingsArgs,
     /// Output image: .exr (linear HDR) or .png (tone-mapped sRGB). Default: `<scene name>.exr` and a
     /// `<scene name>.png` preview in the working directory.
     #[arg(long, short)]
@@ -377,6 +427,14 @@ fn main() {
             Ok(Ended::Signal(sig)) => std::process::exit(128 + sig),
             other => other.map(|_| ()),
         },
+        Command::View(args) => match view::run(args) {
+            Ok(view::Ended::Signal(sig)) => std::process::exit(128 + sig),
+            Ok(view::Ended::NoDisplay(why)) => {
+                eprintln!("error: {why}");
+                std::process::exit(view::EXIT_NO_DISPLAY);
+            }
+            other => other.map(|_| ()),
+        },
         Command::Devices => devices(),
         Command::Bench(args) => bench::run(args),
         Command::Compare(args) => compare::run(args),
@@ -447,7 +505,7 @@ enum Ended {
 
 /// The first SIGINT or SIGTERM is stored (its number) for the render loop to stop after the pass in flight;
 /// a second one exits at once, with 128 + its number.
-fn watch_signals() -> Result<Arc<AtomicUsize>> {
+pub(crate) fn watch_signals() -> Result<Arc<AtomicUsize>> {
     use signal_hook::consts::{SIGINT, SIGTERM};
     let first = Arc::new(AtomicUsize::new(0));
     let seen = Arc::new(AtomicBool::new(false));
@@ -471,7 +529,7 @@ fn watch_signals() -> Result<Arc<AtomicUsize>> {
 
 /// The images `render` writes: `--out`, else `<scene name>.exr` plus a `<scene name>.png` preview.
 /// Existing files are refused unless `--force`, before any work is done.
-fn outputs(out: &Option<PathBuf>, scene_name: &str, force: bool) -> Result<Vec<PathBuf>> {
+pub(crate) fn outputs(out: &Option<PathBuf>, scene_name: &str, force: bool) -> Result<Vec<PathBuf>> {
     let paths = match out {
         Some(out) => {
             let ext = out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
@@ -521,33 +579,14 @@ fn render(args: RenderArgs) -> Result<Ended> {
             bail!("--report {}: the extension must be .json or .csv", report.display());
         }
     }
-    let mut scene = load_scene(&args.scene, &args.defines)?;
-    if let Some((w, h)) = args.resolution {
-        scene = scene.with_resolution(w, h);
-    }
+    let scene = args.settings.load_scene(&args.scene, &args.defines)?;
     // A resumed render continues the image it wrote before: it may overwrite it.
     let out = outputs(&args.out, &scene.name, args.force || args.resume.is_some())?;
     let reference = match &args.reference {
         Some(p) => Some(Reference::load(p)?),
         None => None,
     };
-    let settings = Settings {
-        mode: args.mode.into(),
-        photons_per_pass: args.photons_per_pass,
-        alpha: args.alpha,
-        seed: args.seed,
-        initial_radius: args.radius,
-        hit_slots: args.hit_slots,
-        probe: args.probe.into(),
-        probe_beta: args.beta,
-        probe_photons: args.probe_photons,
-        cone_k: args.cone.0,
-        emission_samples: args.emission_samples,
-        direct: args.direct.into(),
-        light_samples: args.light_samples,
-        ..Settings::default()
-    };
-    settings.validate()?;
+    let settings = args.settings.settings(1_000_000)?;
     // A checkpoint that does not fit is refused here, before the device opens.
     let resumed = match &args.resume {
         Some(path) => {

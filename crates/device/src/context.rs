@@ -21,6 +21,10 @@ pub struct ContextOptions {
     /// Directory of the pipeline cache kept between runs (one file per device; see
     /// [`Context::save_pipeline_cache`]). `None`: no cache, every pipeline is compiled from scratch.
     pub pipeline_cache: Option<PathBuf>,
+    /// Open the device for presenting to windows of this display too (a viewer): the instance gets the
+    /// display's surface extensions and the device VK_KHR_swapchain (see [`crate::Swapchain`]). `None`:
+    /// compute only.
+    pub present: Option<raw_window_handle::RawDisplayHandle>,
 }
 
 /// What a physical device is, for listings and run reports.
@@ -73,6 +77,9 @@ struct Inner {
     shared: Arc<Shared>,
     queue: vk::Queue,
     queue_family: u32,
+    physical_device: vk::PhysicalDevice,
+    /// Whether the instance and device were made for presenting ([`ContextOptions::present`]).
+    presents: bool,
     command_pool: Mutex<vk::CommandPool>,
     info: DeviceInfo,
     limits: vk::PhysicalDeviceLimits,
@@ -227,7 +234,12 @@ fn load_entry() -> Result<ash::Entry> {
 
 /// An instance, with the validation layer if asked for, and with VK_EXT_debug_utils (object names, the
 /// validation messenger) whenever the layer or the driver offers it. Returns whether debug_utils is on.
-fn create_instance(entry: &ash::Entry, validation: bool) -> Result<(ash::Instance, bool)> {
+/// With `present`, also the surface extensions that display needs.
+fn create_instance(
+    entry: &ash::Entry,
+    validation: bool,
+    present: Option<raw_window_handle::RawDisplayHandle>,
+) -> Result<(ash::Instance, bool)> {
     let app = vk::ApplicationInfo::default()
         .application_name(c"ppm-vk")
         .engine_name(c"ppm-vk")
@@ -260,6 +272,23 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> Result<(ash::Instanc
     if debug_utils {
         exts.push(ash::ext::debug_utils::NAME.as_ptr());
     }
+    if let Some(display) = present {
+        let needed = ash_window::enumerate_required_extensions(display)
+            .context("this display has no Vulkan surface extension (only X11 and Wayland are supported)")?;
+        for &name in needed {
+            let name_c = unsafe { CStr::from_ptr(name) };
+            if !offered
+                .iter()
+                .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name_c))
+            {
+                bail!(
+                    "the Vulkan loader offers no {} here, so nothing can be shown in a window",
+                    name_c.to_string_lossy()
+                );
+            }
+        }
+        exts.extend_from_slice(needed);
+    }
     let info = vk::InstanceCreateInfo::default()
         .application_info(&app)
         .enabled_layer_names(&layers)
@@ -273,7 +302,7 @@ impl Context {
     /// Every physical device the loader sees, with what each lacks for ppm-vk.
     pub fn list_devices() -> Result<Vec<DeviceInfo>> {
         let entry = load_entry()?;
-        let (instance, _) = create_instance(&entry, false)?;
+        let (instance, _) = create_instance(&entry, false, None)?;
         let pds = unsafe { instance.enumerate_physical_devices() }.context("enumerating Vulkan devices");
         let out = pds.map(|pds| {
             pds.iter()
@@ -289,7 +318,7 @@ impl Context {
     /// then integrated, then any (lavapipe).
     pub fn new(options: &ContextOptions) -> Result<Context> {
         let entry = load_entry()?;
-        let (instance, debug_utils) = create_instance(&entry, options.validation)?;
+        let (instance, debug_utils) = create_instance(&entry, options.validation, options.present)?;
         // From here on, failure must destroy the instance: wrap the rest.
         match Self::open(entry.clone(), instance.clone(), debug_utils, options) {
             Ok(ctx) => Ok(ctx),
@@ -396,7 +425,22 @@ impl Context {
             .shader_int64(true)
             .shader_float64(true);
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default().host_query_reset(true);
-        let exts = [ash::khr::push_descriptor::NAME.as_ptr()];
+        let mut exts = vec![ash::khr::push_descriptor::NAME.as_ptr()];
+        if options.present.is_some() {
+            let offered = unsafe { instance.enumerate_device_extension_properties(pd) }
+                .context("listing the device's extensions")?;
+            let has = offered.iter().any(|e| {
+                e.extension_name_as_c_str()
+                    .is_ok_and(|n| n == ash::khr::swapchain::NAME)
+            });
+            if !has {
+                bail!(
+                    "device {} cannot present to a window (no VK_KHR_swapchain)",
+                    chosen.name
+                );
+            }
+            exts.push(ash::khr::swapchain::NAME.as_ptr());
+        }
         let info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
             .enabled_features(&features)
@@ -443,6 +487,8 @@ impl Context {
                 shared,
                 queue,
                 queue_family,
+                physical_device: pd,
+                presents: options.present.is_some(),
                 command_pool: Mutex::new(command_pool),
                 info: chosen,
                 limits: props.limits,
@@ -573,6 +619,34 @@ impl Context {
             Some(sink) => sink.lock().map(|v| v.clone()).unwrap_or_default(),
             None => Vec::new(),
         }
+    }
+
+    pub(crate) fn entry(&self) -> &ash::Entry {
+        &self.inner._entry
+    }
+
+    pub(crate) fn instance(&self) -> &ash::Instance {
+        &self.inner.instance
+    }
+
+    pub(crate) fn physical_device(&self) -> vk::PhysicalDevice {
+        self.inner.physical_device
+    }
+
+    /// Whether the context was opened for presenting ([`ContextOptions::present`]).
+    pub fn presents(&self) -> bool {
+        self.inner.presents
+    }
+
+    /// Runs `f` with the queue, which nothing else submits to meanwhile (queue access must be externally
+    /// synchronised: [`Context::run`] holds the same lock).
+    pub(crate) fn with_queue<T>(&self, f: impl FnOnce(vk::Queue) -> T) -> Result<T> {
+        let _pool = self
+            .inner
+            .command_pool
+            .lock()
+            .map_err(|_| anyhow!("command pool lock poisoned"))?;
+        Ok(f(self.inner.queue))
     }
 
     /// Records commands into a fresh command buffer, submits it and waits for the queue.

@@ -4,17 +4,21 @@
 //! ([`Buffer`]), compute pipelines whose bindings are pushed per dispatch ([`ComputePipeline`]),
 //! one-shot submission ([`Context::run`]) and named timestamp scopes ([`Profiler`]). Every Vulkan object it
 //! makes carries a debug name ([`Context::name_object`]), and pipelines come through a pipeline cache kept
-//! on disk between runs ([`ContextOptions::pipeline_cache`]).
+//! on disk between runs ([`ContextOptions::pipeline_cache`]). A viewer presents through a window's
+//! [`Swapchain`].
 
 mod buffer;
 mod context;
 mod pipeline;
 mod pipeline_cache;
 mod profiler;
+mod swapchain;
 
 pub use buffer::{Buffer, BufferKind};
 pub use context::{Context, ContextOptions, DeviceInfo, MemoryUsage};
 pub use pipeline::{barrier, ComputePipeline, PipelineDesc};
 pub use profiler::{Profiler, ScopeTiming};
+pub use raw_window_handle;
+pub use swapchain::{Presented, Swapchain};
 
 pub use ash::vk;

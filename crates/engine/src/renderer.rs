@@ -1044,6 +1044,11 @@ impl Renderer {
             .sum())
     }
 
+    /// The buffer [`Renderer::resolve`] writes the image to: linear RGBA f32 per pixel, rows top first.
+    pub(crate) fn image_buffer(&self) -> &Buffer {
+        &self.image
+    }
+
     /// The current image (resolves, then reads it back).
     pub fn image(&mut self) -> Result<RgbImage> {
         self.resolve()?;

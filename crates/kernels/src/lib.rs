@@ -2,7 +2,7 @@
 //! bindings. Knows nothing of scenes or files.
 //!
 //! One module per pipeline stage, in pipeline order: [`ray`] -> [`probe`] (once) -> [`photon`] -> [`lookup`]
-//! -> [`gather`] -> [`update`] -> [`resolve`]. Each kernel's storage-buffer count, push-constant size and workgroup size come from
+//! -> [`gather`] -> [`update`] -> [`resolve`], and for a window [`tonemap`]. Each kernel's storage-buffer count, push-constant size and workgroup size come from
 //! SPIR-V reflection ([`reflected`]); the records they share are in [`layout`], each checked at compile
 //! time against glslang's std430 offsets. [`bvh_trace`] is a test kernel of the BVH traversal
 //! (`shaders/common/bvh.glsl`), not a stage.
@@ -45,6 +45,7 @@ pub mod reflected {
         GATHER,
         UPDATE,
         RESOLVE,
+        TONEMAP,
         BVH_TRACE,
     ];
 }
@@ -57,6 +58,7 @@ pub mod probe;
 pub mod ray;
 pub mod resolve;
 pub mod specialize;
+pub mod tonemap;
 pub mod update;
 
 use anyhow::{Context as _, Result};
