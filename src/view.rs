@@ -126,7 +126,11 @@ pub fn run(args: ViewArgs) -> Result<Ended> {
         crate::outputs(&Some(out.clone()), "", true)?; // the extension, before the scene is read
     }
     let scene = args.settings.load_scene(&args.scene, &args.defines)?;
-    let settings = args.settings.settings(VIEW_PHOTONS_PER_PASS)?;
+    let settings = Settings {
+        // A camera change then waits for one stage of the pass in flight, not for its whole photon batch.
+        split_submissions: true,
+        ..args.settings.settings(VIEW_PHOTONS_PER_PASS)?
+    };
     let signal = watch_signals()?;
     let event_loop = match EventLoop::<Note>::with_user_event().build() {
         Ok(l) => l,
@@ -319,7 +323,13 @@ impl ApplicationHandler<Note> for App {
                     self.move_camera(dolly(&camera, steps));
                 }
             }
-            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+            // Synthetic presses are keys already down when the window got the focus: not the user's now.
+            WindowEvent::KeyboardInput {
+                event,
+                is_synthetic: false,
+                ..
+            } if event.state == ElementState::Pressed => {
+                let once = !event.repeat;
                 match event.logical_key.as_ref() {
                     Key::Named(NamedKey::Escape) => self.quit(event_loop),
                     Key::Named(NamedKey::Space) => self.send(Command::TogglePause),
@@ -333,8 +343,8 @@ impl ApplicationHandler<Note> for App {
                             self.exposure = (self.exposure - 0.5).max(-64.0);
                             self.send(Command::Exposure(self.exposure));
                         }
-                        "s" => self.send(Command::Save),
-                        "c" => {
+                        "s" if once => self.send(Command::Save),
+                        "c" if once => {
                             if let Some(camera) = &self.camera {
                                 print_camera(camera, &self.args.scene);
                             }
@@ -454,27 +464,37 @@ struct RenderThread {
 #[derive(Default)]
 struct Timings {
     frames: u32,
-    frames_since: Option<Instant>,
+    /// When the first and the latest frame were shown.
+    span: Option<(Instant, Instant)>,
     /// From a camera change's input to the first frame of the new view, in ms.
     latencies: Vec<f64>,
 }
 
 impl Timings {
+    fn frame(&mut self) {
+        let now = Instant::now();
+        self.frames += 1;
+        let first = self.span.map_or(now, |s| s.0);
+        self.span = Some((first, now));
+    }
+
     fn summary(&self) -> String {
-        let mut s = match self.frames_since {
-            Some(t) if self.frames > 1 => format!(
-                "view: {} frames in {:.1} s ({:.2} frames/s)",
-                self.frames,
-                t.elapsed().as_secs_f64(),
-                self.frames as f64 / t.elapsed().as_secs_f64()
-            ),
+        let mut s = match self.span {
+            Some((first, last)) if self.frames > 1 => {
+                let t = (last - first).as_secs_f64();
+                format!(
+                    "view: {} frames in {t:.1} s ({:.2} frames/s)",
+                    self.frames,
+                    (self.frames - 1) as f64 / t
+                )
+            }
             _ => format!("view: {} frames", self.frames),
         };
         if !self.latencies.is_empty() {
             let mut l = self.latencies.clone();
             l.sort_by(f64::total_cmp);
             s += &format!(
-                "; {} camera changes, camera change to its first frame: median {:.0} ms, max {:.0} ms",
+                "; {} camera changes, from the input to the new view's first frame: median {:.0} ms, max {:.0} ms",
                 l.len(),
                 l[l.len() / 2],
                 l[l.len() - 1]
@@ -503,6 +523,9 @@ impl RenderThread {
         let mut renderer = Renderer::new(&ctx, &self.scene, self.settings.clone())?;
         save_pipeline_cache(&ctx);
         renderer.set_cancel(self.cancel.clone());
+        let c = self.scene.camera;
+        let photons = renderer.settings().photons_per_pass;
+        eprintln!("view: rendering {}x{}, {photons} photons per pass", c.width, c.height);
         let size = window.inner_size();
         // SAFETY: the window outlives the presenter: this thread holds it, and drops the presenter first.
         let presenter = unsafe { Presenter::new(&ctx, display, handle, (size.width, size.height)) };
@@ -590,8 +613,7 @@ impl RenderThread {
             let done = renderer.passes() >= target;
             let shoot = done && self.args.screenshot.is_some();
             let frame = presenter.present(renderer, exposure, shoot, size)?;
-            timings.frames += 1;
-            timings.frames_since.get_or_insert_with(Instant::now);
+            timings.frame();
             if let (Some(at), true) = (moved, renderer.passes() > 0) {
                 timings.latencies.push(at.elapsed().as_secs_f64() * 1e3);
                 moved = None;

@@ -109,3 +109,66 @@ fn a_camera_the_renderer_cannot_take_is_refused_and_the_render_goes_on() {
     assert_eq!(r.passes(), 2);
     assert_clean(&ctx);
 }
+
+/// `Settings::split_submissions` (the viewer's: a batch's trace, lookup and gather each submitted on their
+/// own) renders the same image bit for bit, on an analytic scene and a BVH mesh scene, and a cancel between
+/// those submissions leaves the estimate as the passes before it left it.
+#[test]
+fn split_submissions_render_the_same_bits_and_cancel_between_stages() {
+    let ctx = ctx();
+    for scene in [
+        cornell(32, 32),
+        load("scenes/glass-on-table.toml").with_resolution(32, 32),
+    ] {
+        let settings = Settings {
+            photons_per_pass: 20_000,
+            ..Settings::default()
+        };
+        let split = Settings {
+            split_submissions: true,
+            ..settings.clone()
+        };
+        let mut whole = Renderer::new(&ctx, &scene, settings).unwrap();
+        let mut parts = Renderer::new(&ctx, &scene, split).unwrap();
+        for _ in 0..2 {
+            whole.pass().unwrap();
+            parts.pass().unwrap();
+        }
+        let bits = |r: &mut Renderer| -> Vec<[u32; 3]> {
+            r.image().unwrap().pixels.iter().map(|p| p.map(f32::to_bits)).collect()
+        };
+        assert!(
+            bits(&mut whole) == bits(&mut parts),
+            "{}: split submissions changed the image",
+            scene.name
+        );
+        // Cancelled from another thread, wherever in a pass that lands (before it, or between its stages):
+        // nothing of the cancelled pass stays, and the passes go on as a render without the cancel does.
+        for delay_ms in [3, 11, 29] {
+            let token = parts.cancel_token();
+            let canceller = std::thread::spawn(move || {
+                std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+                token.cancel();
+            });
+            loop {
+                match parts.pass() {
+                    Ok(_) => whole.pass().map(drop).unwrap(),
+                    Err(Error::Cancelled) => break,
+                    Err(e) => panic!("{e}"),
+                }
+            }
+            canceller.join().unwrap();
+            parts.cancel_token().reset();
+            let same = bits(&mut whole) == bits(&mut parts);
+            assert!(same, "{}: cancelled after {delay_ms} ms, the image differs", scene.name);
+        }
+        parts.pass().unwrap();
+        whole.pass().unwrap();
+        assert!(
+            bits(&mut whole) == bits(&mut parts),
+            "{}: a pass after the cancels",
+            scene.name
+        );
+    }
+    assert_clean(&ctx);
+}

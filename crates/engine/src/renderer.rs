@@ -136,6 +136,10 @@ pub struct Renderer {
     order: Buffer,
     active: u32,
     direct: Buffer,
+    /// `direct` and `cut` as the pass in flight found them: its eye pass adds to both, and a cancelled
+    /// pass puts them back.
+    direct_saved: Buffer,
+    cut_saved: Buffer,
     /// Per pixel, 1 where the pilot eye pass saw emission, or beside such a pixel (ray.comp).
     busy: Buffer,
     image: Buffer,
@@ -183,6 +187,37 @@ impl PhotonVariant {
     pub fn steps_per_second(&self) -> f64 {
         self.steps as f64 / (self.gpu_ms * 1e-3)
     }
+}
+
+/// Which stages of a photon batch one submission records ([`Settings::split_submissions`]).
+#[derive(Clone, Copy)]
+struct BatchStages {
+    trace: bool,
+    lookup: bool,
+    gather: bool,
+}
+
+impl BatchStages {
+    const ALL: BatchStages = BatchStages {
+        trace: true,
+        lookup: true,
+        gather: true,
+    };
+    const TRACE: BatchStages = BatchStages {
+        trace: true,
+        lookup: false,
+        gather: false,
+    };
+    const LOOKUP: BatchStages = BatchStages {
+        trace: false,
+        lookup: true,
+        gather: false,
+    };
+    const GATHER: BatchStages = BatchStages {
+        trace: false,
+        lookup: false,
+        gather: true,
+    };
 }
 
 /// What the batches of photons feed their grid to.
@@ -402,6 +437,7 @@ impl Renderer {
             ),
             ("the pass accumulators", slots * std::mem::size_of::<PassAccum>() as u64),
             ("the direct emission", pixels * 32),
+            ("the direct emission's copy (a cancelled pass restores it)", pixels * 32),
             ("the image", pixels * 16),
         ];
         let advice = format!(
@@ -474,6 +510,11 @@ impl Renderer {
                 order: storage("hit-point order", slots * 4)?,
                 active: 0,
                 direct: storage("direct emission", pixels * 32)?,
+                direct_saved: storage("direct emission before the pass", pixels * 32)?,
+                cut_saved: storage(
+                    "path counters before the pass",
+                    std::mem::size_of::<PathCounters>() as u64,
+                )?,
                 busy: storage("emission-sampled pixels", pixels * 4)?,
                 image: storage("image", pixels * 16)?,
                 counter: storage("photon counter", 4)?,
@@ -532,7 +573,7 @@ impl Renderer {
                 Ok(())
             })
             .device(what)?;
-        self.ray_ms = self.ray_pass(0, true)?.iter().map(|s| s.duration_ms).sum();
+        self.ray_ms = self.ray_pass(0, true, false)?.iter().map(|s| s.duration_ms).sum();
         self.path_counters()?;
         let (width, height) = (self.gpu.params.width, self.gpu.params.height);
         let mut busy: Vec<u32> = self.download(&self.busy, self.gpu.pixels(), "reading the pilot's marks")?;
@@ -638,7 +679,9 @@ impl Renderer {
 
     /// Pass 1, eye pass number `eye_pass`: PPM's one pass through pixel centres, or one of SPPM's, through
     /// a random point of each pixel; with `trace_hits` false only the emission samples (PPM's later passes).
-    fn ray_pass(&mut self, eye_pass: u32, trace_hits: bool) -> Result<Vec<ScopeTiming>> {
+    /// With `save`, the emission sums and path counters are first copied aside, for a cancelled pass to
+    /// put back (`drop_pass`).
+    fn ray_pass(&mut self, eye_pass: u32, trace_hits: bool, save: bool) -> Result<Vec<ScopeTiming>> {
         self.profiler.reset();
         let pushes = self.eye_pushes(eye_pass, trace_hits);
         let pixels = self.gpu.pixels();
@@ -648,6 +691,11 @@ impl Renderer {
             (&self.hit_points, &self.direct, &self.cut, &self.busy, &self.lights);
         self.ctx
             .run(|cmd| {
+                if save {
+                    direct.cmd_copy_to(cmd, &self.direct_saved, direct.size());
+                    cut.cmd_copy_to(cmd, &self.cut_saved, cut.size());
+                    barrier(&self.ctx, cmd);
+                }
                 profiler.scope(cmd, "ray", || {
                     for push in &pushes {
                         ray::record(&k.ray, cmd, &scene, hit_points, direct, cut, busy, lights, pixels, push)?;
@@ -715,6 +763,7 @@ impl Renderer {
         count: u32,
         log_index: u32,
         use_: GridUse,
+        stages: BatchStages,
     ) -> anyhow::Result<()> {
         let ctx = &self.ctx;
         let hits = self.hit_buffers();
@@ -724,21 +773,28 @@ impl Renderer {
             GridUse::Gather => SALT_PHOTON,
             GridUse::Probe => SALT_PROBE,
         };
-        self.profiler.scope(cmd, "photon", || {
-            self.record_photons(cmd, &k.photon, first, count, salt)
-        })?;
-        barrier(ctx, cmd);
-        self.counter.cmd_copy(cmd, &self.batch_log, 0, log_index as u64 * 4, 4);
-        k.lookup.record(
-            ctx,
-            cmd,
-            &self.profiler,
-            &self.params,
-            &self.counter,
-            &self.grid,
-            capacity,
-        )?;
-        barrier(ctx, cmd);
+        if stages.trace {
+            self.profiler.scope(cmd, "photon", || {
+                self.record_photons(cmd, &k.photon, first, count, salt)
+            })?;
+            barrier(ctx, cmd);
+            self.counter.cmd_copy(cmd, &self.batch_log, 0, log_index as u64 * 4, 4);
+        }
+        if stages.lookup {
+            k.lookup.record(
+                ctx,
+                cmd,
+                &self.profiler,
+                &self.params,
+                &self.counter,
+                &self.grid,
+                capacity,
+            )?;
+            barrier(ctx, cmd);
+        }
+        if !stages.gather {
+            return Ok(());
+        }
         match use_ {
             GridUse::Gather => {
                 let push = GatherPush {
@@ -801,15 +857,35 @@ impl Renderer {
             }
             self.profiler.reset();
             let batch = self.batch;
-            self.ctx
-                .run(|cmd| {
+            let split = self.settings.split_submissions && use_ == GridUse::Gather;
+            match split {
+                false => self
+                    .ctx
+                    .run(|cmd| {
+                        for b in 0..batches {
+                            let start = b * batch;
+                            let count = batch.min(total - start);
+                            self.record_batch(cmd, first + start as u64, count, b, use_, BatchStages::ALL)?;
+                        }
+                        Ok(())
+                    })
+                    .device("a photon pass")?,
+                true => {
                     for b in 0..batches {
                         let start = b * batch;
-                        self.record_batch(cmd, first + start as u64, batch.min(total - start), b, use_)?;
+                        let count = batch.min(total - start);
+                        for stages in [BatchStages::TRACE, BatchStages::LOOKUP, BatchStages::GATHER] {
+                            // The caller sees the cancel and drops what the batches summed.
+                            if self.cancel.is_cancelled() {
+                                return Ok((Vec::new(), 0, b));
+                            }
+                            self.ctx
+                                .run(|cmd| self.record_batch(cmd, first + start as u64, count, b, use_, stages))
+                                .device("a photon pass")?;
+                        }
                     }
-                    Ok(())
-                })
-                .device("a photon pass")?;
+                }
+            }
             let log: Vec<u32> = self
                 .ctx
                 .download_prefix(&self.batch_log, batches as usize)
@@ -953,24 +1029,21 @@ impl Renderer {
         // renderer was made with (and probed).
         // PPM keeps its hit points; an eye pass per photon pass adds emission samples (eye pass 0, in
         // `new`, was the pilot that only marks the pixels needing them: ray.comp).
+        let eye_pass = match self.settings.mode {
+            Mode::Sppm => (self.passes > 0).then_some((self.passes as u32, true)),
+            Mode::Ppm => (self.settings.emission_samples > 0).then_some((self.passes as u32 + 1, false)),
+        };
         let mut stages = Vec::new();
-        match self.settings.mode {
-            Mode::Sppm if self.passes > 0 => stages = self.ray_pass(self.passes as u32, true)?,
-            Mode::Ppm if self.settings.emission_samples > 0 => stages = self.ray_pass(self.passes as u32 + 1, false)?,
-            _ => {}
+        if let Some((index, trace_hits)) = eye_pass {
+            stages = self.ray_pass(index, trace_hits, true)?;
         }
-        self.check_cancel()?;
+        if self.cancel.is_cancelled() {
+            return Err(self.drop_pass(eye_pass.is_some()));
+        }
         let (batch_stages, records, batches) = self.run_batches(self.emitted, total, GridUse::Gather)?;
         stages.extend(batch_stages);
         if self.cancel.is_cancelled() {
-            // The batches' sums wait in the pass accumulators for the update: drop them.
-            self.ctx
-                .run(|cmd| {
-                    self.accum.cmd_fill(cmd, 0);
-                    Ok(())
-                })
-                .device("cancelling the photon pass")?;
-            return Err(Error::Cancelled);
+            return Err(self.drop_pass(eye_pass.is_some()));
         }
         // The update in its own submission, so an overflowed try above never touches the statistics.
         self.profiler.reset();
@@ -996,6 +1069,25 @@ impl Renderer {
             wall_ms: start.elapsed().as_secs_f64() * 1e3,
             stages,
         })
+    }
+
+    /// Undoes a cancelled pass: the photon batches' sums wait in the pass accumulators for the update, and
+    /// its eye pass (if it ran) added to the emission sums and path counters. Returns the error to give,
+    /// [`Error::Cancelled`] unless undoing failed.
+    fn drop_pass(&self, eye_pass: bool) -> Error {
+        let undone = self.ctx.run(|cmd| {
+            self.accum.cmd_fill(cmd, 0);
+            if eye_pass {
+                self.direct_saved.cmd_copy_to(cmd, &self.direct, self.direct.size());
+                self.cut_saved.cmd_copy_to(cmd, &self.cut, self.cut.size());
+            }
+            barrier(&self.ctx, cmd);
+            Ok(())
+        });
+        match undone.device("cancelling the photon pass") {
+            Ok(()) => Error::Cancelled,
+            Err(e) => e,
+        }
     }
 
     /// Makes `token` the one [`Renderer::pass`] checks (the renderer starts with one of its own).
@@ -1318,7 +1410,8 @@ impl Renderer {
 
     fn trace_batch(&mut self, first: u64, count: u32, use_: GridUse) -> anyhow::Result<Vec<Photon>> {
         self.profiler.reset();
-        self.ctx.run(|cmd| self.record_batch(cmd, first, count, 0, use_))?;
+        self.ctx
+            .run(|cmd| self.record_batch(cmd, first, count, 0, use_, BatchStages::ALL))?;
         let n: Vec<u32> = self.ctx.download_prefix(&self.counter, 1)?;
         self.check_lookups()?;
         self.path_counters()?;
