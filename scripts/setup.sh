@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Checks (and on Debian/Ubuntu installs) what building and running ppm-vk needs: a Rust toolchain, a C++
 # toolchain, the Vulkan loader, a Vulkan driver (lavapipe when there is no GPU), shaderc/glslang to compile
-# the kernels, and the validation layer the tests run under. Sourced by scripts/ppm-vk and scripts/test;
+# the kernels, the validation layer the tests run under, the X11/Wayland libraries `ppm-vk view` loads
+# when it opens a window, and Xvfb for the viewer's headless tests. Sourced by scripts/ppm-vk and scripts/test;
 # run it alone to check a machine. Exits non-zero with the exact command to run where it cannot fix things.
 set -euo pipefail
 
@@ -19,6 +20,14 @@ DEBIAN_PACKAGES=(
   "spirv-tools:SPIRV-Tools' static libraries"
   "g++:a C++ toolchain (shaderc is C++)"
   "pkg-config:library lookup"
+  "libx11-6:X11 client library (ppm-vk view's window, loaded at run time)"
+  "libx11-xcb1:X11/XCB glue (ppm-vk view)"
+  "libxcursor1:X11 cursors (ppm-vk view)"
+  "libxrandr2:X11 monitor sizes (ppm-vk view)"
+  "libxi6:X11 input devices (ppm-vk view)"
+  "libxkbcommon-x11-0:keyboard layouts on X11 (ppm-vk view)"
+  "libwayland-client0:Wayland client library (ppm-vk view on Wayland)"
+  "xvfb:a headless X server the viewer's tests open their windows on"
 )
 
 if ! command -v cargo >/dev/null 2>&1; then

@@ -789,6 +789,41 @@ mod tests {
         assert!(xml.contains(r#"<float name="fov" value="50.0"/>"#), "{xml}");
     }
 
+    /// The printed `<sensor>` in an XML scene gives back the camera (the loader goes through Mitsuba's
+    /// to_world matrix and a y field of view, so to within f32 rounding, not bit for bit).
+    #[test]
+    fn an_xml_scenes_printed_sensor_loads_as_the_same_camera() {
+        let c = Camera {
+            eye: Vec3::new(0.3, 1.2, 4.1),
+            look_at: Vec3::new(-0.2, 0.4, 0.1),
+            width: 48,
+            height: 32,
+            ..camera()
+        };
+        let sensor = camera_lines(&c, Path::new("s.xml"));
+        let xml = format!(
+            r#"<scene version="3.0.0">{sensor}
+            <shape type="rectangle"><bsdf type="diffuse"/><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+            </scene>"#
+        );
+        let path = std::env::temp_dir().join(format!("ppm-vk-sensor-{}.xml", std::process::id()));
+        std::fs::write(&path, xml).unwrap();
+        let loaded = Scene::load(&path).map(|s| s.camera);
+        std::fs::remove_file(&path).unwrap();
+        let l = loaded.unwrap();
+        assert_eq!((l.width, l.height), (48, 32));
+        assert!(
+            (l.vfov_deg - c.vfov_deg).abs() < 1e-4,
+            "{} against {}",
+            l.vfov_deg,
+            c.vfov_deg
+        );
+        assert!((l.eye - c.eye).length() < 1e-5, "{:?}", l.eye);
+        let (a, b) = ((l.look_at - l.eye).normalize(), (c.look_at - c.eye).normalize());
+        assert!((a - b).length() < 1e-5, "{a:?} against {b:?}");
+        assert!(l.up.normalize().dot(a).abs() < 1.0 - 1e-3);
+    }
+
     #[test]
     fn save_paths_never_overwrite_without_force() {
         let dir = std::env::temp_dir().join(format!("ppm-vk-save-paths-{}", std::process::id()));
