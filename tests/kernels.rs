@@ -15,6 +15,7 @@ use common::*;
 use glam::Vec3;
 use ppm_vk_engine::layout::{HitPoint, HitStats, PassAccum, Photon};
 use ppm_vk_engine::reference::{self, trace};
+use ppm_vk_engine::scene::Surface;
 use ppm_vk_engine::{DirectLight, Mode, ProbeMode, Renderer, Settings};
 use ppm_vk_kernels::photon::SALT_PHOTON;
 
@@ -52,9 +53,30 @@ fn hit_points_agree(a: &HitPoint, b: &HitPoint, pos_tol: f32, weight_tol: f32) -
         && (wa - wb).abs().max_element() <= weight_tol * wa.abs().max_element().max(wb.abs().max_element())
 }
 
+/// cornell-spheres with its mirror sphere of gold (Mitsuba's "Au", 90% specular_reflectance): a conductor's
+/// Fresnel term on the specular bounces of eye paths and photons.
+fn cornell_gold(w: u32, h: u32) -> ppm_vk_engine::Scene {
+    let mut scene = cornell(w, h);
+    let (eta, k) = ppm_vk_engine::scene::conductors::named("Au").unwrap();
+    let mirror = scene
+        .materials
+        .iter_mut()
+        .find(|m| matches!(m.surface, Surface::Mirror { .. }))
+        .expect("cornell-spheres has a mirror");
+    mirror.surface = Surface::Conductor {
+        reflectance: Vec3::splat(0.9),
+        eta,
+        k,
+    };
+    scene
+}
+
 fn ray_pass_matches_reference_case(specialize: bool, direct: DirectLight) {
+    ray_pass_matches_reference_on(cornell(RES, RES), specialize, direct);
+}
+
+fn ray_pass_matches_reference_on(scene: ppm_vk_engine::Scene, specialize: bool, direct: DirectLight) {
     let ctx = ctx();
-    let scene = cornell(RES, RES);
     let mut r = Renderer::new(
         &ctx,
         &scene,
@@ -200,6 +222,12 @@ fn ray_pass_matches_reference_unspecialized() {
     ray_pass_matches_reference_case(false, DirectLight::Sample);
 }
 
+/// A gold sphere where the mirror was: the conductor's Fresnel term along the eye paths.
+#[test]
+fn ray_pass_matches_reference_with_a_conductor() {
+    ray_pass_matches_reference_on(cornell_gold(RES, RES), true, DirectLight::Sample);
+}
+
 /// All light by photons (the paper's estimator): the emission samples carry no shadow ray.
 #[test]
 fn ray_pass_matches_reference_with_direct_light_by_photons() {
@@ -277,8 +305,13 @@ fn total_flux(records: &[Photon]) -> [f64; 3] {
 }
 
 fn photon_records_match_reference_case(specialize: bool) {
+    photon_records_match_reference_on(cornell(RES, RES), specialize, 1e-5);
+}
+
+/// `flux_rel`: how close a record's flux must be to its twin's (relative). 1e-5 where the flux is a product
+/// of constants (albedos, mirror reflectances); see the conductor's test for where it is not.
+fn photon_records_match_reference_on(scene: ppm_vk_engine::Scene, specialize: bool, flux_rel: f64) {
     let ctx = ctx();
-    let scene = cornell(RES, RES);
     let mut r = Renderer::new(
         &ctx,
         &scene,
@@ -363,7 +396,7 @@ fn photon_records_match_reference_case(specialize: bool) {
     // a few units of the 16-bit octahedral code. 99.5% of the CPU's records must have a GPU twin: measured
     // 99.80%; the rest are records at the end of long specular chains, where f32 rounding amplified
     // through glass moves a hit by more than 4e-4 (99.95% match within 4e-3).
-    let matched = match_records(&gpu, &cpu, 1e-4 * scene_extent(&scene));
+    let matched = match_records_within(&gpu, &cpu, 1e-4 * scene_extent(&scene), flux_rel);
     println!("records matched one to one: {matched} of {}", cpu.len());
     assert!(
         matched * 1000 >= cpu.len() * 995,
@@ -396,6 +429,16 @@ fn photon_records_match_reference() {
 #[test]
 fn photon_records_match_reference_unspecialized() {
     photon_records_match_reference_case(false);
+}
+
+/// A gold sphere where the mirror was: the conductor's Fresnel term on the photons' specular bounces. The
+/// flux now depends on the angle of incidence, and where that is grazing the Fresnel term changes fast: the
+/// f32 rounding of a hit on the sphere (which moves the twin's direction by up to the 4 code units the match
+/// allows) moves it by up to ~1e-3. Measured: 99.09% of records within 1e-5, 99.41% within 1e-4, 99.57%
+/// within 1e-3, which is the mirror scene's 99.57% at 1e-5: beyond 1e-3 nothing is left to explain.
+#[test]
+fn photon_records_match_reference_with_a_conductor() {
+    photon_records_match_reference_on(cornell_gold(RES, RES), true, 1e-3);
 }
 
 /// Compares the GPU's pass accumulators with a brute-force gather over the GPU's own records.

@@ -7,12 +7,19 @@
 const uint SURFACE_DIFFUSE = 0u;
 const uint SURFACE_MIRROR = 1u;
 const uint SURFACE_GLASS = 2u;
+const uint SURFACE_CONDUCTOR = 3u;
 
+// Four 16-byte texels; material() reads the first two, conductor_terms() the others (only conductors need
+// them, so every other surface costs two fetches).
 struct Material {
-    vec3 color;      // diffuse albedo or mirror reflectance
+    vec3 color;      // diffuse albedo, mirror reflectance, or a conductor's specular_reflectance
     uint surface;    // SURFACE_*
     vec3 emission;   // radiance leaving the front side (quads only)
     float ior;       // glass: index inside (outside is 1)
+    vec3 eta;        // conductor: real part of the complex index, per channel
+    uint pad0;
+    vec3 k;          // conductor: imaginary part (extinction), per channel
+    uint pad1;
 };
 
 struct Sphere {

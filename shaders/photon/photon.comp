@@ -32,6 +32,7 @@ layout(push_constant) uniform PhotonPush {
 #include "rng.glsl"
 #include "geometry.glsl"
 #include "sampling.glsl"
+#include "conductor.glsl"
 #include "grid.glsl"
 #include "invocation.glsl"
 #include "lights.glsl"
@@ -201,8 +202,8 @@ void main() {
             lobe = nf;
             pending = true;
             o = offset_ray(h.pos, nf);
-        } else if (m.surface == SURFACE_MIRROR) {
-            flux *= m.color;
+        } else if (is_reflector(m.surface)) {
+            flux *= reflector_weight(h.material, m, -dot(d, nf));
             d = reflect(d, nf);
             o = offset_ray(h.pos, nf);
         } else {

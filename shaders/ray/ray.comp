@@ -70,6 +70,7 @@ layout(push_constant) uniform RayPush {
 #include "rng.glsl"
 #include "geometry.glsl"
 #include "sampling.glsl"
+#include "conductor.glsl"
 #include "invocation.glsl"
 #include "lights.glsl"
 
@@ -143,8 +144,8 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             }
             return e;
         }
-        if (m.surface == SURFACE_MIRROR) {
-            thr *= m.color;
+        if (is_reflector(m.surface)) {
+            thr *= reflector_weight(h.material, m, -dot(d, nf));
             d = reflect(d, nf);
             o = offset_ray(h.pos, nf);
             continue;
@@ -211,8 +212,8 @@ void main() {
                     break;
                 }
                 r.depth++;
-                if (m.surface == SURFACE_MIRROR) {
-                    r.thr *= m.color;
+                if (is_reflector(m.surface)) {
+                    r.thr *= reflector_weight(h.material, m, -dot(r.d, nf));
                     r.d = reflect(r.d, nf);
                     r.o = offset_ray(h.pos, nf);
                     continue;

@@ -82,6 +82,16 @@ pub fn match_records(
     cpu: &[ppm_vk_engine::layout::Photon],
     pos_tol: f32,
 ) -> usize {
+    match_records_within(gpu, cpu, pos_tol, 1e-5)
+}
+
+/// [`match_records`] with flux within `flux_rel` relative.
+pub fn match_records_within(
+    gpu: &[ppm_vk_engine::layout::Photon],
+    cpu: &[ppm_vk_engine::layout::Photon],
+    pos_tol: f32,
+    flux_rel: f64,
+) -> usize {
     let q = |x: f32| (x / (4.0 * pos_tol)).floor() as i64;
     let mut index: std::collections::HashMap<[i64; 3], Vec<usize>> = std::collections::HashMap::new();
     for (i, p) in gpu.iter().enumerate() {
@@ -97,7 +107,7 @@ pub fn match_records(
             .abs()
             .max_element()
             <= pos_tol
-            && (0..3).all(|c| close(a.flux[c] as f64, b.flux[c] as f64, 1e-5, 0.0))
+            && (0..3).all(|c| close(a.flux[c] as f64, b.flux[c] as f64, flux_rel, 0.0))
             && dir_close(a.dir, b.dir)
     };
     let mut matched = 0;

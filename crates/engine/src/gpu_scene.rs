@@ -77,13 +77,21 @@ impl GpuScene {
                 let (color, surface, ior) = match m.surface {
                     Surface::Diffuse { albedo } => (albedo, layout::SURFACE_DIFFUSE, 1.0),
                     Surface::Mirror { reflectance } => (reflectance, layout::SURFACE_MIRROR, 1.0),
+                    Surface::Conductor { reflectance, .. } => (reflectance, layout::SURFACE_CONDUCTOR, 1.0),
                     Surface::Glass { ior } => (Vec3::ONE, layout::SURFACE_GLASS, ior),
+                };
+                let (eta, k) = match m.surface {
+                    Surface::Conductor { eta, k, .. } => (arr(eta), arr(k)),
+                    _ => ([0.0; 3], [0.0; 3]),
                 };
                 Material {
                     color: arr(color),
                     surface,
                     emission: arr(m.emission),
                     ior,
+                    eta,
+                    k,
+                    ..Default::default()
                 }
             })
             .collect();

@@ -8,6 +8,7 @@ use crate::gpu_struct;
 pub const SURFACE_DIFFUSE: u32 = 0;
 pub const SURFACE_MIRROR: u32 = 1;
 pub const SURFACE_GLASS: u32 = 2;
+pub const SURFACE_CONDUCTOR: u32 = 3;
 /// `HitPoint::pixel` of an empty slot.
 pub const EMPTY_SLOT: u32 = u32::MAX;
 /// The probe pass's fixed-point scale for d^2 / r^2 (2^30).
@@ -20,12 +21,21 @@ pub struct Material {
     pub surface: u32,
     pub emission: [f32; 3],
     pub ior: f32,
+    /// A conductor's complex index of refraction, eta + i k, per channel (zero for other surfaces).
+    pub eta: [f32; 3],
+    pub pad0: u32,
+    pub k: [f32; 3],
+    pub pad1: u32,
 }
 gpu_struct!(Material {
     color,
     surface,
     emission,
-    ior
+    ior,
+    eta,
+    pad0,
+    k,
+    pad1
 });
 
 #[repr(C)]

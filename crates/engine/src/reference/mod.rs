@@ -3,13 +3,12 @@
 //! multiply-add); sums and the progressive update are in f64. The tests run both on identical inputs.
 
 pub mod bvh;
+pub mod conductor;
 pub mod rng;
 pub mod trace;
 
 use glam::{DVec3, Vec3};
-use ppm_vk_kernels::layout::{
-    HitPoint, HitStats, PassAccum, Photon, EMPTY_SLOT, LIGHT_TRIANGLE, SURFACE_DIFFUSE, SURFACE_MIRROR,
-};
+use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon, EMPTY_SLOT, LIGHT_TRIANGLE, SURFACE_DIFFUSE};
 use ppm_vk_kernels::photon::SALT_EMISSION;
 use ppm_vk_kernels::ray::RayPush;
 
@@ -136,8 +135,8 @@ fn emission_sample(
             }
             return e;
         }
-        if m.surface == SURFACE_MIRROR {
-            thr *= v3(m.color);
+        if conductor::is_reflector(m.surface) {
+            thr *= conductor::reflector_weight(m, -d.dot(nf));
             d = reflect(d, nf);
             o = offset_ray(g, h.pos, nf);
             continue;
@@ -269,8 +268,8 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         break;
                     }
                     depth += 1;
-                    if m.surface == SURFACE_MIRROR {
-                        thr *= v3(m.color);
+                    if conductor::is_reflector(m.surface) {
+                        thr *= conductor::reflector_weight(m, -d.dot(nf));
                         d = reflect(d, nf);
                         o = offset_ray(g, h.pos, nf);
                         continue;
@@ -386,8 +385,8 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             let v2 = rng.float();
             d = cosine_direction(nf, v1, v2);
             o = offset_ray(g, h.pos, nf);
-        } else if m.surface == SURFACE_MIRROR {
-            flux *= v3(m.color);
+        } else if conductor::is_reflector(m.surface) {
+            flux *= conductor::reflector_weight(m, -d.dot(nf));
             d = reflect(d, nf);
             o = offset_ray(g, h.pos, nf);
         } else {

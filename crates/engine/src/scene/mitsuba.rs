@@ -18,6 +18,7 @@ use std::rc::Rc;
 use anyhow::{anyhow, bail, Result};
 use glam::{DAffine3, DMat3, DMat4, DVec3, DVec4, Vec3};
 
+use super::conductors;
 use super::obj::{self, RawMesh};
 use super::{Camera, Material, Mesh, ObjImport, Quad, Scene, Sphere, Surface, MAX_TRIANGLES};
 use crate::error::Error;
@@ -837,23 +838,35 @@ impl Builder {
                 });
             }
             kind @ ("conductor" | "roughconductor") => {
-                let material = props.string("material")?.unwrap_or("none");
-                if material != "none" || props.get("eta").is_some() || props.get("k").is_some() {
-                    return Err(e.err(format!(
-                        "only a perfect mirror is read (material=\"none\", colour from \
-                         specular_reflectance), not the metal \"{material}\" or eta/k"
-                    )));
-                }
+                // Mitsuba's conductor: a named metal (its RGB eta and k, scene/conductors.rs), or eta and
+                // k given (both default to the "none" material's: a perfect mirror).
+                let (none_eta, none_k) = conductors::named("none").expect("the default conductor");
+                let (eta, k) = match props.string("material")? {
+                    Some(name) => {
+                        if props.get("eta").is_some() || props.get("k").is_some() {
+                            return Err(e.err("give a material name or eta and k, not both (Mitsuba refuses this too)"));
+                        }
+                        conductors::named(name).ok_or_else(|| {
+                            let known: Vec<&str> = conductors::names().collect();
+                            e.err(format!(
+                                "unknown conductor material \"{name}\" (known: {})",
+                                known.join(", ")
+                            ))
+                        })?
+                    }
+                    None => (
+                        props.color("eta")?.unwrap_or(none_eta),
+                        props.color("k")?.unwrap_or(none_k),
+                    ),
+                };
                 if kind == "roughconductor" {
                     props.ignore(&["alpha", "alpha_u", "alpha_v", "distribution", "sample_visible"]);
                     self.warn(
                         e,
-                        "rough conductor rendered as a smooth mirror (ppm-vk has no glossy reflection)",
+                        "rough conductor rendered as a smooth conductor (ppm-vk has no glossy reflection yet)",
                     );
                 }
-                Surface::Mirror {
-                    reflectance: props.color("specular_reflectance")?.unwrap_or(Vec3::ONE),
-                }
+                Surface::conductor(props.color("specular_reflectance")?.unwrap_or(Vec3::ONE), eta, k)
             }
             kind @ ("dielectric" | "roughdielectric") => {
                 let ior = |name: &str, default: &str| -> Result<f64> {
@@ -1155,7 +1168,7 @@ impl Builder {
         props.finish()?;
         let one_sided = match bsdf.surface {
             Surface::Diffuse { albedo } => albedo != Vec3::ZERO,
-            Surface::Mirror { .. } => true,
+            Surface::Mirror { .. } | Surface::Conductor { .. } => true,
             Surface::Glass { .. } => false,
         };
         if closed == Closed::No && one_sided && !bsdf.two_sided {
@@ -1926,6 +1939,10 @@ mod tests {
         assert!(e.contains("scale"), "{e}");
     }
 
+    fn surface_of(s: &Scene, sphere: usize) -> Surface {
+        s.materials[s.spheres[sphere].material as usize].surface
+    }
+
     #[test]
     fn materials_conductor_dielectric_and_emitter() {
         let s = load_body(
@@ -1969,10 +1986,50 @@ mod tests {
             Surface::Mirror { reflectance: Vec3::ONE }
         );
         assert!(
-            s.warnings.len() == 1 && s.warnings[0].contains("rough conductor rendered as a smooth mirror"),
+            s.warnings.len() == 1 && s.warnings[0].contains("rough conductor rendered as a smooth conductor"),
             "{:?}",
             s.warnings
         );
+        // A named metal, and eta/k given as rgb or float: the conductor's Fresnel term.
+        let s = load_body(
+            r#"<shape type="sphere"><bsdf type="conductor"><string name="material" value="Au"/></bsdf></shape>
+               <shape type="sphere"><bsdf type="conductor"><rgb name="eta" value="0.2, 0.9, 1.1"/><float name="k" value="3"/>
+                 <rgb name="specular_reflectance" value="0.5"/></bsdf></shape>"#,
+        )
+        .unwrap();
+        let (eta, k) = conductors::named("Au").unwrap();
+        assert_eq!(
+            surface_of(&s, 0),
+            Surface::Conductor {
+                reflectance: Vec3::ONE,
+                eta,
+                k
+            }
+        );
+        assert_eq!(
+            surface_of(&s, 1),
+            Surface::Conductor {
+                reflectance: Vec3::splat(0.5),
+                eta: Vec3::new(0.2, 0.9, 1.1),
+                k: Vec3::splat(3.0)
+            }
+        );
+        for (body, said) in [
+            (
+                r#"<string name="material" value="Kryptonite"/>"#,
+                "unknown conductor material \"Kryptonite\"",
+            ),
+            (
+                r#"<string name="material" value="Au"/><float name="k" value="1"/>"#,
+                "not both",
+            ),
+        ] {
+            let e = load_body(&format!(
+                r#"<shape type="sphere"><bsdf type="conductor">{body}</bsdf></shape>"#
+            ));
+            let e = format!("{:#}", e.unwrap_err());
+            assert!(e.contains(said) && e.contains(r#"<bsdf type="conductor">"#), "{e}");
+        }
         // One-sided diffuse on an open shape: warned; on a closed one or twosided: not.
         let s = load_body(r#"<shape type="rectangle"><bsdf type="diffuse"/></shape><shape type="cube"><bsdf type="diffuse"/></shape>"#).unwrap();
         assert!(

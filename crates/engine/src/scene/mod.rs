@@ -7,6 +7,7 @@
 //! the same way; the TOML loader maps a failed check's field path (`sphere[1].radius`) back to the line
 //! and column it came from.
 
+pub mod conductors;
 pub mod demo;
 mod mitsuba;
 mod obj;
@@ -58,8 +59,24 @@ pub enum Surface {
     Diffuse { albedo: Vec3 },
     /// Perfect specular reflector; reflectance components in [0, 1].
     Mirror { reflectance: Vec3 },
+    /// Smooth conductor (Mitsuba's `conductor`): a specular reflector whose reflectance is `reflectance`
+    /// times the unpolarised Fresnel term of a metal of complex index `eta + i k` per RGB channel
+    /// (shaders/common/conductor.glsl, reference/conductor.rs).
+    Conductor { reflectance: Vec3, eta: Vec3, k: Vec3 },
     /// Smooth dielectric; `ior` is the index inside, the outside is 1.
     Glass { ior: f32 },
+}
+
+impl Surface {
+    /// A conductor of complex index `eta + i k`, or, for Mitsuba's default "none" (eta 0, k 1: a Fresnel
+    /// term of exactly 1 at every angle), the mirror it equals, which the kernels trace without the Fresnel
+    /// term.
+    pub fn conductor(reflectance: Vec3, eta: Vec3, k: Vec3) -> Surface {
+        match (eta, k) == conductors::named("none").expect("the default conductor") {
+            true => Surface::Mirror { reflectance },
+            false => Surface::Conductor { reflectance, eta, k },
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -697,6 +714,21 @@ fn check_material(m: &Material) -> Result<(), Invalid> {
     match m.surface {
         Surface::Diffuse { albedo } => unit_vec(albedo, &format!("{p}.diffuse"))?,
         Surface::Mirror { reflectance } => unit_vec(reflectance, &format!("{p}.mirror"))?,
+        Surface::Conductor { reflectance, eta, k } => {
+            unit_vec(reflectance, &format!("{p}.reflectance"))?;
+            for (name, v) in [("eta", eta), ("k", k)] {
+                let path = format!("{p}.conductor.{name}");
+                finite_vec(v, &path)?;
+                if v.cmplt(Vec3::ZERO).any() {
+                    let got = fmt_vec(v.to_array());
+                    return Err(invalid(path, format!("every component must be >= 0, got {got}")));
+                }
+            }
+            if (eta + k).cmple(Vec3::ZERO).any() {
+                let message = "eta and k are both 0 in a channel: no such metal (Mitsuba's default is eta 0, k 1)";
+                return Err(invalid(format!("{p}.conductor"), message.to_string()));
+            }
+        }
         Surface::Glass { ior } => {
             if !(ior.is_finite() && ior >= 1.0) {
                 return Err(invalid(

@@ -84,7 +84,27 @@ struct RawMaterial {
     diffuse: Option<Spanned<[f32; 3]>>,
     mirror: Option<Spanned<[f32; 3]>>,
     glass: Option<Spanned<f32>>,
+    conductor: Option<Spanned<RawConductor>>,
     emission: Option<Spanned<[f32; 3]>>,
+}
+
+/// `conductor = "Au"` (a metal Mitsuba names), or `conductor = { eta = [..], k = [..] }`, either with an
+/// optional `reflectance` (Mitsuba's specular_reflectance) in the table form:
+/// `conductor = { material = "Cu", reflectance = [0.9, 0.9, 0.9] }`.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum RawConductor {
+    Named(String),
+    Table(RawConductorTable),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawConductorTable {
+    material: Option<String>,
+    eta: Option<[f32; 3]>,
+    k: Option<[f32; 3]>,
+    reflectance: Option<[f32; 3]>,
 }
 
 #[derive(Deserialize)]
@@ -377,30 +397,32 @@ fn material(src: &Source, name: &str, m: &Spanned<RawMaterial>, spans: &mut Span
     if let Some(g) = &r.glass {
         spans.insert(format!("{p}.glass"), g.span());
     }
-    if let (Some(_), Some(g)) = (&r.mirror, &r.glass) {
-        return Err(src.error(
-            g.span(),
-            Some(&format!("{p}.glass")),
-            "a material cannot be both mirror and glass",
-        ));
+    if let Some(c) = &r.conductor {
+        spans.insert(format!("{p}.conductor"), c.span());
     }
-    if let (Some(_), Some(x)) = (
-        &r.diffuse,
-        r.mirror
-            .as_ref()
-            .map(|s| s.span())
-            .or(r.glass.as_ref().map(|s| s.span())),
-    ) {
-        return Err(src.error(x, Some(&p), "give exactly one of diffuse, mirror, glass"));
+    // Exactly one kind of surface: the second one written is the error.
+    let kinds = [
+        ("diffuse", r.diffuse.as_ref().map(|v| v.span())),
+        ("mirror", r.mirror.as_ref().map(|v| v.span())),
+        ("glass", r.glass.as_ref().map(|v| v.span())),
+        ("conductor", r.conductor.as_ref().map(|v| v.span())),
+    ];
+    let mut given = kinds.iter().filter_map(|(k, span)| span.clone().map(|s| (*k, s)));
+    if let (Some((a, _)), Some((b, span))) = (given.next(), given.next()) {
+        return Err(src.error(
+            span,
+            Some(&format!("{p}.{b}")),
+            format!("a material cannot be both {a} and {b}: give exactly one of diffuse, mirror, glass, conductor"),
+        ));
     }
     if let Some(e) = &r.emission {
         // Refused even when zero: the file says something the engine cannot do.
-        if r.mirror.is_some() || r.glass.is_some() {
+        if r.mirror.is_some() || r.glass.is_some() || r.conductor.is_some() {
             return Err(src.error(
                 e.span(),
                 Some(&format!("{p}.emission")),
                 "emission can only be combined with diffuse (or stand alone), \
-                 not with mirror or glass",
+                 not with mirror, glass or conductor",
             ));
         }
     }
@@ -410,6 +432,8 @@ fn material(src: &Source, name: &str, m: &Spanned<RawMaterial>, spans: &mut Span
         Surface::Mirror { reflectance: vec3(mr) }
     } else if let Some(g) = &r.glass {
         Surface::Glass { ior: *g.get_ref() }
+    } else if let Some(c) = &r.conductor {
+        conductor(src, &format!("{p}.conductor"), c)?
     } else if r.emission.is_some() {
         // A pure emitter reflects nothing.
         Surface::Diffuse { albedo: Vec3::ZERO }
@@ -417,7 +441,7 @@ fn material(src: &Source, name: &str, m: &Spanned<RawMaterial>, spans: &mut Span
         return Err(src.error(
             m.span(),
             Some(&p),
-            "needs one of diffuse, mirror, glass (or emission alone for a black emitter)",
+            "needs one of diffuse, mirror, glass, conductor (or emission alone for a black emitter)",
         ));
     };
     Ok(Material {
@@ -425,6 +449,32 @@ fn material(src: &Source, name: &str, m: &Spanned<RawMaterial>, spans: &mut Span
         surface,
         emission: r.emission.as_ref().map_or(Vec3::ZERO, vec3),
     })
+}
+
+/// A `conductor` entry: a named metal (Mitsuba's names and RGB values, scene/conductors.rs) or eta and k.
+fn conductor(src: &Source, p: &str, c: &Spanned<RawConductor>) -> Result<Surface> {
+    let fail = |message: String| src.error(c.span(), Some(p), message);
+    let named = |name: &str| {
+        crate::scene::conductors::named(name).ok_or_else(|| {
+            let known: Vec<&str> = crate::scene::conductors::names().collect();
+            fail(format!(
+                "unknown conductor \"{name}\" (Mitsuba's names: {})",
+                known.join(", ")
+            ))
+        })
+    };
+    let (material, eta, k, reflectance) = match c.get_ref() {
+        RawConductor::Named(name) => (Some(name.as_str()), None, None, None),
+        RawConductor::Table(t) => (t.material.as_deref(), t.eta, t.k, t.reflectance),
+    };
+    let (eta, k) = match (material, eta, k) {
+        (Some(name), None, None) => named(name)?,
+        (None, Some(eta), Some(k)) => (Vec3::from(eta), Vec3::from(k)),
+        (None, None, None) => named("none")?,
+        (Some(_), _, _) => return Err(fail("give a material name or eta and k, not both".into())),
+        (None, _, _) => return Err(fail("give both eta and k (or a material name)".into())),
+    };
+    Ok(Surface::conductor(reflectance.map_or(Vec3::ONE, Vec3::from), eta, k))
 }
 
 /// Reads `[[mesh]]` number `i` into `scene`: the OBJ file relative to `base`, its transform, and the
@@ -1050,7 +1100,12 @@ material = "light"
         );
         // Emission with a specular surface is refused; with diffuse it is fine.
         let text = BASE.replace("glass = 1.5", "glass = 1.5\nemission = [1.0, 1.0, 1.0]");
-        assert_err(&text, 15, "materials.glass.emission", "not with mirror or glass");
+        assert_err(
+            &text,
+            15,
+            "materials.glass.emission",
+            "not with mirror, glass or conductor",
+        );
         let text = BASE.replace(
             "diffuse = [0.5, 0.5, 0.5]",
             "diffuse = [0.5, 0.5, 0.5]\nemission = [1.0, 1.0, 1.0]",
@@ -1087,7 +1142,14 @@ material = "light"
         let text = BASE.replace("glass = 1.5", "glass = 1.5\nmirror = [0.9, 0.9, 0.9]");
         assert_err(&text, 14, "materials.glass.glass", "cannot be both mirror and glass");
         let text = BASE.replace("glass = 1.5", "glass = 1.5\ndiffuse = [0.9, 0.9, 0.9]");
-        assert_err(&text, 14, "materials.glass", "exactly one of diffuse, mirror, glass");
+        assert_err(
+            &text,
+            14,
+            "materials.glass.glass",
+            "exactly one of diffuse, mirror, glass, conductor",
+        );
+        let text = BASE.replace("glass = 1.5", "glass = 1.5\nconductor = \"Au\"");
+        assert_err(&text, 15, "materials.glass.conductor", "both glass and conductor");
         // A material with nothing in it.
         assert_err(
             &edit(14, ""),
@@ -1096,6 +1158,76 @@ material = "light"
             "needs one of diffuse, mirror, glass",
         );
         assert_err(&edit(14, "glass = 0.9"), 14, "materials.glass.glass", ">= 1");
+    }
+
+    #[test]
+    fn conductors_by_name_or_by_eta_and_k() {
+        let surface = |line: &str| {
+            let text = BASE.replace("glass = 1.5", line);
+            let s = Scene::parse(&text, "t.toml").unwrap_or_else(|e| panic!("{line}: {e}"));
+            s.materials.iter().find(|m| m.name == "glass").unwrap().surface
+        };
+        let (eta, k) = crate::scene::conductors::named("Au").unwrap();
+        assert_eq!(
+            surface("conductor = \"Au\""),
+            Surface::Conductor {
+                reflectance: Vec3::ONE,
+                eta,
+                k
+            }
+        );
+        assert_eq!(
+            surface("conductor = { material = \"Au\", reflectance = [0.5, 0.6, 0.7] }"),
+            Surface::Conductor {
+                reflectance: Vec3::new(0.5, 0.6, 0.7),
+                eta,
+                k
+            }
+        );
+        assert_eq!(
+            surface("conductor = { eta = [0.2, 0.3, 0.4], k = [3.0, 2.0, 1.0] }"),
+            Surface::Conductor {
+                reflectance: Vec3::ONE,
+                eta: Vec3::new(0.2, 0.3, 0.4),
+                k: Vec3::new(3.0, 2.0, 1.0)
+            }
+        );
+        // Mitsuba's default, "none", is exactly a mirror: it becomes one.
+        assert_eq!(surface("conductor = {}"), Surface::Mirror { reflectance: Vec3::ONE });
+        assert_eq!(
+            surface("conductor = \"none\""),
+            Surface::Mirror { reflectance: Vec3::ONE }
+        );
+        assert_err(
+            &edit(14, "conductor = \"Unobtainium\""),
+            14,
+            "materials.glass.conductor",
+            "unknown conductor \"Unobtainium\"",
+        );
+        assert_err(
+            &edit(14, "conductor = { eta = [1.0, 1.0, 1.0] }"),
+            14,
+            "materials.glass.conductor",
+            "both eta and k",
+        );
+        assert_err(
+            &edit(14, "conductor = { material = \"Au\", k = [1.0, 1.0, 1.0] }"),
+            14,
+            "materials.glass.conductor",
+            "not both",
+        );
+        assert_err(
+            &edit(14, "conductor = { eta = [1.0, -1.0, 1.0], k = [1.0, 1.0, 1.0] }"),
+            14,
+            "materials.glass.conductor.eta",
+            ">= 0",
+        );
+        assert_err(
+            &edit(14, "conductor = { eta = [0.0, 1.0, 1.0], k = [0.0, 1.0, 1.0] }"),
+            14,
+            "materials.glass.conductor",
+            "no such metal",
+        );
     }
 
     #[test]
