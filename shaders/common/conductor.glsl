@@ -5,6 +5,14 @@
 #ifndef CONDUCTOR_GLSL
 #define CONDUCTOR_GLSL
 
+// A kernel compiled for one scene (SCENE_CONSTANTS) knows whether it has conductors; without them the
+// Fresnel term's code is left out (lavapipe would run it under a mask on every mirror bounce).
+#ifdef SCENE_CONSTANTS
+#define HAS_CONDUCTORS SCENE_CONDUCTORS
+#else
+#define HAS_CONDUCTORS true
+#endif
+
 vec3 fresnel_conductor(float cos_i, vec3 eta, vec3 k) {
     float c2 = cos_i * cos_i;
     float s2 = 1.0 - c2;
@@ -21,13 +29,13 @@ vec3 fresnel_conductor(float cos_i, vec3 eta, vec3 k) {
 }
 
 bool is_reflector(uint surface) {
-    return surface == SURFACE_MIRROR || surface == SURFACE_CONDUCTOR;
+    return surface == SURFACE_MIRROR || (HAS_CONDUCTORS && surface == SURFACE_CONDUCTOR);
 }
 
 // What a specular bounce off material i (a reflector, `m` as material() read it) at incidence cos_i
 // leaves of the throughput or flux. Reciprocal: the same for the photons and the eye paths.
 vec3 reflector_weight(uint i, Material m, float cos_i) {
-    if (m.surface == SURFACE_MIRROR) return m.color;
+    if (!HAS_CONDUCTORS || m.surface == SURFACE_MIRROR) return m.color;
     vec3 eta, k;
     conductor_terms(i, eta, k);
     return m.color * fresnel_conductor(clamp(cos_i, 0.0, 1.0), eta, k);

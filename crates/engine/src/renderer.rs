@@ -1488,6 +1488,10 @@ fn tracing_pipeline(
             triangles: &gpu.bvh_triangles,
             inline_triangles: gpu.triangles_inline,
             lights: &gpu.lights,
+            conductors: gpu
+                .materials
+                .iter()
+                .any(|m| m.surface == ppm_vk_kernels::layout::SURFACE_CONDUCTOR),
         });
         let defines = [&[("SCENE_CONSTANTS", "1")][..], defines].concat();
         pipeline_from(ctx, k, &specialize::compile_with(k, &defines, &constants)?)

@@ -27,6 +27,9 @@ pub struct SceneConstants<'a> {
     /// Test `triangles` one by one (a small mesh) instead of traversing the BVH.
     pub inline_triangles: bool,
     pub lights: &'a [Light],
+    /// Whether any material is a conductor: without one, the kernels leave out the Fresnel term's code
+    /// (lavapipe runs both sides of a branch, so code a scene never takes still costs).
+    pub conductors: bool,
 }
 
 /// An f32 written so GLSL reads back exactly the same bits: nine significant digits name an f32 uniquely
@@ -63,6 +66,7 @@ pub fn scene_constants(c: &SceneConstants) -> String {
         quads.len()
     );
     let inline: &[Triangle] = if c.inline_triangles { c.triangles } else { &[] };
+    s += &format!("const bool SCENE_CONDUCTORS = {};\n", c.conductors);
     s += &format!(
         "const uint NUM_INLINE_TRIANGLES = {}u;\nconst bool SCENE_BVH = {};\n",
         inline.len(),

@@ -86,6 +86,11 @@ pub const FILES: &[DemoFile] = &[
         committed: false,
         make: glass_on_table_mtl,
     },
+    DemoFile {
+        name: "gold-ring.obj",
+        committed: false,
+        make: gold_ring_obj,
+    },
 ];
 
 /// `scenes/meshes` of this repository, where the demo scenes look for their meshes.
@@ -541,6 +546,39 @@ fn glass_on_table_mtl() -> String {
     )
 }
 
+/// A ring standing on its edge circle (axis vertical, base at y = 0): outer radius 0.1 m, wall 6 mm,
+/// height 4 cm, 192 segments (1536 triangles); its material comes from the scene (gold-ring.toml).
+fn gold_ring_obj() -> String {
+    use std::f64::consts::TAU;
+    let (outer, inner, height, n) = (0.1, 0.094, 0.04, 192u32);
+    let mut m = Model::default();
+    m.group("ring", None);
+    let at = |r: f64, y: f64, i: u32| {
+        let a = TAU * (i % n) as f64 / n as f64;
+        DVec3::new(r * a.cos(), y, r * a.sin())
+    };
+    let none = [NO_NORMAL; 3];
+    for i in 0..n {
+        let mid = TAU * (i as f64 + 0.5) / n as f64;
+        let radial = DVec3::new(mid.cos(), 0.0, mid.sin());
+        // (corner a at segment i, corner b at i + 1) for each of the four walls, and which way it faces.
+        let walls = [
+            (outer, outer, 0.0, height, radial),      // outside
+            (inner, inner, 0.0, height, -radial),     // inside, facing the axis
+            (inner, outer, height, height, DVec3::Y), // top
+            (inner, outer, 0.0, 0.0, -DVec3::Y),      // bottom
+        ];
+        for &(r0, r1, y0, y1, facing) in &walls {
+            let (p00, p10) = (at(r0, y0, i), at(r0, y0, i + 1));
+            let (p01, p11) = (at(r1, y1, i), at(r1, y1, i + 1));
+            let v = [p00, p10, p11, p01].map(|p| m.vertex(p));
+            m.face([v[0], v[1], v[2]], none, facing);
+            m.face([v[0], v[2], v[3]], none, facing);
+        }
+    }
+    m.write(None)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -765,6 +803,34 @@ mod tests {
             "rests 0.5 mm above the table: {torus_low}"
         );
         assert!(m.normals.is_some());
+        assert_eq!(s.lights().len(), 1);
+    }
+
+    #[test]
+    fn gold_ring_is_a_closed_gold_ring_standing_on_the_table() {
+        let s = demo_scene("gold-ring");
+        assert_eq!(s.triangle_count(), 192 * 8);
+        let m = &s.meshes[0];
+        let (eta, k) = crate::scene::conductors::named("Au").unwrap();
+        assert!(m.materials.iter().all(|&i| s.materials[i as usize].surface
+            == Surface::Conductor {
+                reflectance: Vec3::ONE,
+                eta,
+                k
+            }));
+        let lo = m.positions.iter().fold(Vec3::INFINITY, |a, p| a.min(*p));
+        let hi = m.positions.iter().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
+        assert!(lo.abs_diff_eq(Vec3::new(-0.1, 0.0, -0.1), 1e-6) && hi.abs_diff_eq(Vec3::new(0.1, 0.04, 0.1), 1e-6));
+        // Closed, and every face's front outward: each edge is used by two triangles, once each way.
+        let key = |p: Vec3| p.to_array().map(f32::to_bits);
+        let mut edges: HashMap<([u32; 3], [u32; 3]), i32> = HashMap::new();
+        for t in m.triangles() {
+            for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+                let (a, b) = (key(t.p[a]), key(t.p[b]));
+                *edges.entry((a.min(b), a.max(b))).or_default() += if a < b { 1 } else { -1 };
+            }
+        }
+        assert!(edges.values().all(|&n| n == 0), "closed and consistently wound");
         assert_eq!(s.lights().len(), 1);
     }
 
