@@ -1799,6 +1799,69 @@ mod tests {
         );
     }
 
+    /// Most published meshes are binary PLY: both byte orders, double positions, float normals, texture
+    /// coordinates (read past, not used yet) and an int index list give the mesh the ASCII file gives.
+    #[test]
+    fn binary_ply_in_both_byte_orders_reads_as_ascii() {
+        let dir = TempDir::new("mitsuba-ply");
+        let corners = [
+            [-1.0f64, -1.0, 0.0],
+            [1.0, -1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+        ];
+        let header = |format: &str| {
+            format!(
+                "ply\nformat {format} 1.0\ncomment written by a test\nelement vertex 4\nproperty double x\n\
+                 property double y\nproperty double z\nproperty float nx\nproperty float ny\nproperty float nz\n\
+                 property float u\nproperty float v\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+            )
+        };
+        for (format, big) in [("binary_little_endian", false), ("binary_big_endian", true)] {
+            let mut bytes = header(format).into_bytes();
+            let mut put = |b: &[u8]| {
+                let mut b = b.to_vec();
+                if big {
+                    b.reverse();
+                }
+                bytes.extend_from_slice(&b);
+            };
+            for (i, c) in corners.iter().enumerate() {
+                for x in c {
+                    put(&x.to_le_bytes());
+                }
+                for n in [0.0f32, 0.0, 1.0] {
+                    put(&n.to_le_bytes());
+                }
+                for t in [(i % 2) as f32, (i / 2) as f32] {
+                    put(&t.to_le_bytes());
+                }
+            }
+            put(&[4u8]); // the list's length (one byte: the same in either order)
+            for i in 0..4i32 {
+                put(&i.to_le_bytes());
+            }
+            std::fs::write(dir.0.join(format!("{format}.ply")), &bytes).unwrap();
+        }
+        write_square_meshes(&dir);
+        let mesh = |file: &str| {
+            let body = format!(r#"<shape type="ply"><string name="filename" value="{file}"/></shape>"#);
+            let s = load_in(&dir, &body, &[]).unwrap_or_else(|e| panic!("{file}: {e:#}"));
+            s.meshes[0].clone()
+        };
+        let ascii = mesh("sq.ply");
+        for format in ["binary_little_endian", "binary_big_endian"] {
+            let m = mesh(&format!("{format}.ply"));
+            assert_eq!(m.positions, ascii.positions, "{format}");
+            assert_eq!(m.indices, ascii.indices, "{format}");
+            assert_eq!(
+                m.normals.as_deref(),
+                Some(&[Vec3::Z; 4][..]),
+                "{format}: the normals are read"
+            );
+        }
+    }
+
     #[test]
     fn obj_and_ply_match_the_rectangle_with_to_world_and_flip() {
         let dir = TempDir::new("mitsuba-mesh");
