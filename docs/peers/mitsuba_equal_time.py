@@ -61,6 +61,7 @@ def main():
     p.add_argument("--csv", help="append seconds,rel_mse,label rows (the mean of the runs) for compare --peer")
     p.add_argument("--label", default="Mitsuba path")
     p.add_argument("--threads", type=int, default=0, help="Dr.Jit threads (0: all cores)")
+    p.add_argument("--res", type=int, help="the scene's $res parameter (its image width and height), if it has one")
     a = p.parse_args()
     if a.threads:
         import drjit as dr
@@ -73,7 +74,7 @@ def main():
     for r in a.region:
         name, box = r.split("=")
         regions.append((name, tuple(int(v) for v in box.split(","))))
-    scene = mi.load_file(a.scene)
+    scene = mi.load_file(a.scene, **({"res": a.res} if a.res else {}))
     # Calibration: time per sample per pixel from a short and a longer render (the fixed cost is the
     # kernel compilation and the image's development).
     render(scene, 4, 1000)  # the first call compiles
