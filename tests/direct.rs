@@ -31,12 +31,7 @@ fn a_penumbra_matches_its_mitsuba_reference_in_both_modes() {
             direct,
             ..Settings::default()
         };
-        let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
-        for _ in 0..16 {
-            r.pass().unwrap();
-        }
-        let image = r.image().unwrap();
-        drop(r);
+        let image = render(&ctx, &scene, settings, 16);
         let e = compare(&image, &reference, None, true).unwrap();
         let (mean, want) = (image.mean(), reference.at_resolution(128, 128).unwrap().image.mean());
         println!(

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use common::*;
 use ppm_vk_engine::metrics::{compare, Reference};
-use ppm_vk_engine::{Mode, Renderer, Scene, Settings};
+use ppm_vk_engine::{Mode, Scene, Settings};
 
 const REFERENCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/references");
 
@@ -25,12 +25,7 @@ fn a_gold_sphere_matches_its_mitsuba_reference() {
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     let reference = Reference::load(&Path::new(REFERENCES).join("cornell-gold.exr")).unwrap();
     let ctx = ctx();
-    let mut r = Renderer::new(&ctx, &scene, r_settings()).unwrap();
-    for _ in 0..16 {
-        r.pass().unwrap();
-    }
-    let image = r.image().unwrap();
-    drop(r);
+    let image = render(&ctx, &scene, r_settings(), 16);
     let e = compare(&image, &reference, None, true).unwrap();
     let (mean, want) = (image.mean(), reference.at_resolution(128, 128).unwrap().image.mean());
     println!("mean {mean:?} vs {want:?}, relMSE {:.5}, RMSE {:.4}", e.rel_mse, e.rmse);
@@ -51,11 +46,7 @@ fn a_gold_sphere_matches_its_mitsuba_reference() {
         &defines,
     )
     .unwrap_or_else(|e| panic!("{e:#}"));
-    let mut r = Renderer::new(&ctx, &mirror, r_settings()).unwrap();
-    for _ in 0..16 {
-        r.pass().unwrap();
-    }
-    let m = compare(&r.image().unwrap(), &reference, None, true).unwrap();
+    let m = compare(&render(&ctx, &mirror, r_settings(), 16), &reference, None, true).unwrap();
     println!("the mirror instead: relMSE {:.5}", m.rel_mse);
     assert!(
         m.rel_mse > BOUND,

@@ -71,6 +71,15 @@ pub fn furnace(w: u32, h: u32) -> Scene {
 }
 
 /// |a - b| <= rel * max(|a|, |b|) + abs.
+/// The image of `scene` after `passes` passes with `settings` (the renderer dropped before it returns).
+pub fn render(ctx: &Context, scene: &Scene, settings: ppm_vk_engine::Settings, passes: u32) -> ppm_vk_engine::RgbImage {
+    let mut r = ppm_vk_engine::Renderer::new(ctx, scene, settings).unwrap_or_else(|e| panic!("{e:#}"));
+    for _ in 0..passes {
+        r.pass().unwrap_or_else(|e| panic!("{e:#}"));
+    }
+    r.image().unwrap_or_else(|e| panic!("{e:#}"))
+}
+
 pub fn close(a: f64, b: f64, rel: f64, abs: f64) -> bool {
     (a - b).abs() <= rel * a.abs().max(b.abs()) + abs
 }

@@ -766,15 +766,7 @@ mod tests {
             "{hi}"
         );
         // Closed: each edge between two positions is used by exactly two triangles.
-        let key = |p: Vec3| p.to_array().map(f32::to_bits);
-        let mut edges: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::new();
-        for t in m.triangles() {
-            for (a, b) in [(0, 1), (1, 2), (2, 0)] {
-                let (a, b) = (key(t.p[a]), key(t.p[b]));
-                *edges.entry((a.min(b), a.max(b))).or_default() += 1;
-            }
-        }
-        assert!(edges.values().all(|&n| n == 2), "watertight");
+        assert!(edges(m).values().all(|&(n, _)| n == 2), "watertight");
         assert_eq!(s.bounds(), cornell_spheres().bounds());
     }
 
@@ -806,6 +798,21 @@ mod tests {
         assert_eq!(s.lights().len(), 1);
     }
 
+    /// Per edge between two positions (by their bits): the triangles that use it, and how many more run
+    /// along it one way than the other (0 where the two sides' windings agree).
+    fn edges(m: &crate::scene::Mesh) -> HashMap<([u32; 3], [u32; 3]), (u32, i32)> {
+        let key = |p: Vec3| p.to_array().map(f32::to_bits);
+        let mut edges: HashMap<([u32; 3], [u32; 3]), (u32, i32)> = HashMap::new();
+        for t in m.triangles() {
+            for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+                let (a, b) = (key(t.p[a]), key(t.p[b]));
+                let e = edges.entry((a.min(b), a.max(b))).or_default();
+                *e = (e.0 + 1, e.1 + if a < b { 1 } else { -1 });
+            }
+        }
+        edges
+    }
+
     #[test]
     fn gold_ring_is_a_closed_gold_ring_standing_on_the_table() {
         let s = demo_scene("gold-ring");
@@ -822,15 +829,7 @@ mod tests {
         let hi = m.positions.iter().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
         assert!(lo.abs_diff_eq(Vec3::new(-0.1, 0.0, -0.1), 1e-6) && hi.abs_diff_eq(Vec3::new(0.1, 0.04, 0.1), 1e-6));
         // Closed, and every face's front outward: each edge is used by two triangles, once each way.
-        let key = |p: Vec3| p.to_array().map(f32::to_bits);
-        let mut edges: HashMap<([u32; 3], [u32; 3]), i32> = HashMap::new();
-        for t in m.triangles() {
-            for (a, b) in [(0, 1), (1, 2), (2, 0)] {
-                let (a, b) = (key(t.p[a]), key(t.p[b]));
-                *edges.entry((a.min(b), a.max(b))).or_default() += if a < b { 1 } else { -1 };
-            }
-        }
-        assert!(edges.values().all(|&n| n == 0), "closed and consistently wound");
+        assert!(edges(m).values().all(|&e| e == (2, 0)), "closed and consistently wound");
         assert_eq!(s.lights().len(), 1);
     }
 
