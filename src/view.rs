@@ -108,14 +108,6 @@ enum Note {
 }
 
 pub fn run(args: ViewArgs) -> Result<Ended> {
-    // Neither variable: winit would fail with a message about connections; say what to do instead.
-    if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
-        return Ok(Ended::NoDisplay(
-            "no display: neither DISPLAY nor WAYLAND_DISPLAY is set, so no window can open; \
-             `ppm-vk render` renders to a file without one"
-                .into(),
-        ));
-    }
     if let Some(shot) = &args.screenshot {
         let png = shot.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
         if !png {
@@ -131,6 +123,15 @@ pub fn run(args: ViewArgs) -> Result<Ended> {
         split_submissions: true,
         ..args.settings.settings(VIEW_PHOTONS_PER_PASS)?
     };
+    // Bad input is reported first, then a missing display. Neither variable: winit would fail with a
+    // message about connections; say what to do instead.
+    if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
+        return Ok(Ended::NoDisplay(
+            "no display: neither DISPLAY nor WAYLAND_DISPLAY is set, so no window can open; \
+             `ppm-vk render` renders to a file without one"
+                .into(),
+        ));
+    }
     let signal = watch_signals()?;
     let event_loop = match EventLoop::<Note>::with_user_event().build() {
         Ok(l) => l,
@@ -141,6 +142,7 @@ pub fn run(args: ViewArgs) -> Result<Ended> {
         }
     };
     let proxy = event_loop.create_proxy();
+    let exposure = args.exposure;
     let mut app = App {
         args: Arc::new(args),
         scene: Arc::new(scene),
@@ -154,11 +156,10 @@ pub fn run(args: ViewArgs) -> Result<Ended> {
         drag: None,
         cursor: None,
         shift: false,
-        exposure: 0.0,
+        exposure,
         ended: None,
         quitting: false,
     };
-    app.exposure = app.args.exposure;
     event_loop
         .run_app(&mut app)
         .context("running the window's event loop")?;

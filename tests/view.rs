@@ -474,6 +474,16 @@ fn without_a_display_it_says_to_use_render_and_exits_2() {
         );
         assert!(!stderr.contains("panicked"), "{stderr}");
     }
+    // A bad scene is reported as such (exit 1) before the missing display.
+    let out = common::bin()
+        .args(["view", "no-such-scene.toml"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("no-such-scene.toml"), "{stderr}");
 }
 
 /// A measurement, not a test (run it with `--ignored --nocapture`; docs/performance.md, "The viewer"):
