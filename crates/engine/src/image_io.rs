@@ -257,7 +257,7 @@ impl RgbImage {
 
 /// A failed write as [`crate::Error::Io`]: the kind of the io error in the chain (if any) and the
 /// whole chain as its message (which step failed: creating, encoding, renaming).
-fn write_error(path: &Path, e: anyhow::Error) -> crate::Error {
+pub(crate) fn write_error(path: &Path, e: anyhow::Error) -> crate::Error {
     let kind = e
         .chain()
         .find_map(|c| c.downcast_ref::<std::io::Error>())

@@ -9,6 +9,7 @@ use ppm_vk_kernels::reflected;
 use ppm_vk_kernels::tonemap::{self, TonemapPush};
 
 use crate::error::DeviceContext as _;
+use crate::image_io::{write_atomically, write_error};
 use crate::{Error, Renderer, Result};
 
 /// A window's swapchain and the kernel that fills it from a [`Renderer`]'s image.
@@ -29,14 +30,14 @@ pub struct Frame {
 }
 
 impl Frame {
-    /// Writes the frame as an 8-bit RGBA PNG.
+    /// Writes the frame as an 8-bit RGBA PNG, atomically as every image ppm-vk writes.
     pub fn save_png(&self, path: impl AsRef<std::path::Path>) -> Result<()> {
         let path = path.as_ref();
-        let image = image::RgbaImage::from_raw(self.width, self.height, self.rgba.clone())
-            .ok_or_else(|| Error::io(path, std::io::Error::other("frame size and data disagree")))?;
-        image
-            .save_with_format(path, image::ImageFormat::Png)
-            .map_err(|e| Error::io(path, std::io::Error::other(e.to_string())))
+        let image =
+            image::ImageBuffer::<image::Rgba<u8>, &[u8]>::from_raw(self.width, self.height, self.rgba.as_slice())
+                .ok_or_else(|| Error::io(path, std::io::Error::other("frame size and data disagree")))?;
+        write_atomically(path, "png", |w| Ok(image.write_to(w, image::ImageFormat::Png)?))
+            .map_err(|e| write_error(path, e))
     }
 }
 

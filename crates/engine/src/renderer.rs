@@ -189,36 +189,16 @@ impl PhotonVariant {
     }
 }
 
-/// Which stages of a photon batch one submission records ([`Settings::split_submissions`]).
-#[derive(Clone, Copy)]
-struct BatchStages {
-    trace: bool,
-    lookup: bool,
-    gather: bool,
+/// The stages of a photon batch, in order; one submission records all of them, or one
+/// ([`Settings::split_submissions`]).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum BatchStage {
+    Trace,
+    Lookup,
+    Gather,
 }
 
-impl BatchStages {
-    const ALL: BatchStages = BatchStages {
-        trace: true,
-        lookup: true,
-        gather: true,
-    };
-    const TRACE: BatchStages = BatchStages {
-        trace: true,
-        lookup: false,
-        gather: false,
-    };
-    const LOOKUP: BatchStages = BatchStages {
-        trace: false,
-        lookup: true,
-        gather: false,
-    };
-    const GATHER: BatchStages = BatchStages {
-        trace: false,
-        lookup: false,
-        gather: true,
-    };
-}
+const ALL_STAGES: &[BatchStage] = &[BatchStage::Trace, BatchStage::Lookup, BatchStage::Gather];
 
 /// What the batches of photons feed their grid to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -763,7 +743,7 @@ impl Renderer {
         count: u32,
         log_index: u32,
         use_: GridUse,
-        stages: BatchStages,
+        stages: &[BatchStage],
     ) -> anyhow::Result<()> {
         let ctx = &self.ctx;
         let hits = self.hit_buffers();
@@ -773,14 +753,14 @@ impl Renderer {
             GridUse::Gather => SALT_PHOTON,
             GridUse::Probe => SALT_PROBE,
         };
-        if stages.trace {
+        if stages.contains(&BatchStage::Trace) {
             self.profiler.scope(cmd, "photon", || {
                 self.record_photons(cmd, &k.photon, first, count, salt)
             })?;
             barrier(ctx, cmd);
             self.counter.cmd_copy(cmd, &self.batch_log, 0, log_index as u64 * 4, 4);
         }
-        if stages.lookup {
+        if stages.contains(&BatchStage::Lookup) {
             k.lookup.record(
                 ctx,
                 cmd,
@@ -792,7 +772,7 @@ impl Renderer {
             )?;
             barrier(ctx, cmd);
         }
-        if !stages.gather {
+        if !stages.contains(&BatchStage::Gather) {
             return Ok(());
         }
         match use_ {
@@ -865,7 +845,7 @@ impl Renderer {
                         for b in 0..batches {
                             let start = b * batch;
                             let count = batch.min(total - start);
-                            self.record_batch(cmd, first + start as u64, count, b, use_, BatchStages::ALL)?;
+                            self.record_batch(cmd, first + start as u64, count, b, use_, ALL_STAGES)?;
                         }
                         Ok(())
                     })
@@ -874,13 +854,16 @@ impl Renderer {
                     for b in 0..batches {
                         let start = b * batch;
                         let count = batch.min(total - start);
-                        for stages in [BatchStages::TRACE, BatchStages::LOOKUP, BatchStages::GATHER] {
+                        for stage in ALL_STAGES {
                             // The caller sees the cancel and drops what the batches summed.
                             if self.cancel.is_cancelled() {
                                 return Ok((Vec::new(), 0, b));
                             }
                             self.ctx
-                                .run(|cmd| self.record_batch(cmd, first + start as u64, count, b, use_, stages))
+                                .run(|cmd| {
+                                    let stage = std::slice::from_ref(stage);
+                                    self.record_batch(cmd, first + start as u64, count, b, use_, stage)
+                                })
                                 .device("a photon pass")?;
                         }
                     }
@@ -1411,7 +1394,7 @@ impl Renderer {
     fn trace_batch(&mut self, first: u64, count: u32, use_: GridUse) -> anyhow::Result<Vec<Photon>> {
         self.profiler.reset();
         self.ctx
-            .run(|cmd| self.record_batch(cmd, first, count, 0, use_, BatchStages::ALL))?;
+            .run(|cmd| self.record_batch(cmd, first, count, 0, use_, ALL_STAGES))?;
         let n: Vec<u32> = self.ctx.download_prefix(&self.counter, 1)?;
         self.check_lookups()?;
         self.path_counters()?;

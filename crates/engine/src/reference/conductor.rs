@@ -50,19 +50,14 @@ mod tests {
     fn fresnel_matches_mitsubas_conductor() {
         let text = include_str!("../../../../scenes/references/conductor-fresnel.json");
         let json: serde_json::Value = serde_json::from_str(text).unwrap();
-        let rgb = |v: &serde_json::Value| -> Vec3 {
+        // A colour as the JSON writes it: a number, an [r, g, b] array, or Mitsuba's {"type": "rgb", "value": ..}.
+        fn rgb(v: &serde_json::Value) -> Vec3 {
             match v {
                 serde_json::Value::Number(n) => Vec3::splat(n.as_f64().unwrap() as f32),
-                serde_json::Value::Object(o) => rgb_of(&o["value"]),
-                other => panic!("{other}"),
-            }
-        };
-        fn rgb_of(v: &serde_json::Value) -> Vec3 {
-            match v {
                 serde_json::Value::Array(a) => {
                     Vec3::from_slice(&a.iter().map(|x| x.as_f64().unwrap() as f32).collect::<Vec<_>>())
                 }
-                serde_json::Value::Number(n) => Vec3::splat(n.as_f64().unwrap() as f32),
+                serde_json::Value::Object(o) => rgb(&o["value"]),
                 other => panic!("{other}"),
             }
         }
@@ -79,7 +74,7 @@ mod tests {
             let reflectance = bsdf.get("specular_reflectance").map_or(Vec3::ONE, rgb);
             for s in case["samples"].as_array().unwrap() {
                 let cos = s["cos"].as_f64().unwrap() as f32;
-                let want = rgb_of(&s["weight"]);
+                let want = rgb(&s["weight"]);
                 let got = reflectance * fresnel_conductor(cos, eta, k);
                 let err = (got - want).abs().max_element();
                 assert!(
