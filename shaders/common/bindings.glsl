@@ -20,17 +20,21 @@ layout(binding = 3) uniform usamplerBuffer material_texels;
 // in bvh.glsl read them.
 layout(binding = 4) uniform usamplerBuffer bvh_node_texels;
 layout(binding = 5) uniform usamplerBuffer bvh_triangle_texels;
-// Material i without its conductor terms (left zero: conductor_terms reads them where a conductor is hit).
+// Material i without its lobe terms (left zero: material_terms reads them where a surface needs them).
 Material material(uint i) {
     uvec4 a = texelFetch(material_texels, int(4u * i));
     uvec4 b = texelFetch(material_texels, int(4u * i + 1u));
     return Material(uintBitsToFloat(a.xyz), a.w, uintBitsToFloat(b.xyz), uintBitsToFloat(b.w), vec3(0.0), 0u,
                     vec3(0.0), 0u);
 }
-// Material i's complex index of refraction eta + i k (a conductor's).
-void conductor_terms(uint i, out vec3 eta, out vec3 k) {
-    eta = uintBitsToFloat(texelFetch(material_texels, int(4u * i + 2u)).xyz);
-    k = uintBitsToFloat(texelFetch(material_texels, int(4u * i + 3u)).xyz);
+// Material i's lobe terms (Material.lobe_a, lobe_b: what they hold depends on the surface).
+void material_terms(uint i, out vec3 a, out vec3 b) {
+    a = uintBitsToFloat(texelFetch(material_texels, int(4u * i + 2u)).xyz);
+    b = uintBitsToFloat(texelFetch(material_texels, int(4u * i + 3u)).xyz);
+}
+// Only lobe_a.
+vec3 material_term_a(uint i) {
+    return uintBitsToFloat(texelFetch(material_texels, int(4u * i + 2u)).xyz);
 }
 
 #ifdef SCENE_CONSTANTS

@@ -37,7 +37,7 @@ bool is_reflector(uint surface) {
 vec3 reflector_weight(uint i, Material m, float cos_i) {
     if (!HAS_CONDUCTORS || m.surface == SURFACE_MIRROR) return m.color;
     vec3 eta, k;
-    conductor_terms(i, eta, k);
+    material_terms(i, eta, k);
     return m.color * fresnel_conductor(clamp(cos_i, 0.0, 1.0), eta, k);
 }
 #endif

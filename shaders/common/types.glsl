@@ -8,17 +8,22 @@ const uint SURFACE_DIFFUSE = 0u;
 const uint SURFACE_MIRROR = 1u;
 const uint SURFACE_GLASS = 2u;
 const uint SURFACE_CONDUCTOR = 3u;
+const uint SURFACE_PLASTIC = 4u;  // Mitsuba's plastic: plastic.glsl
+const uint SURFACE_THIN = 5u;     // Mitsuba's thindielectric: thin_dielectric.glsl
 
-// Four 16-byte texels; material() reads the first two, conductor_terms() the others (only conductors need
-// them, so every other surface costs two fetches).
+// Four 16-byte texels; material() reads the first two, material_terms() the others (only conductors,
+// plastics and thin dielectrics need them, so every other surface costs two fetches).
 struct Material {
-    vec3 color;      // diffuse albedo, mirror reflectance, or a conductor's specular_reflectance
+    vec3 color;      // diffuse albedo, mirror reflectance, a conductor's or thin dielectric's
+                     // specular_reflectance, or a plastic's diffuse factor (plastic.glsl)
     uint surface;    // SURFACE_*
     vec3 emission;   // radiance leaving the front side (quads only)
-    float ior;       // glass: index inside (outside is 1)
-    vec3 eta;        // conductor: real part of the complex index, per channel
+    float ior;       // glass, plastic coat, thin dielectric: index inside over index outside
+    vec3 lobe_a;     // conductor: real part eta of the complex index, per channel; plastic: the coat's
+                     // specular_reflectance; thin dielectric: specular_transmittance
     uint pad0;
-    vec3 k;          // conductor: imaginary part (extinction), per channel
+    vec3 lobe_b;     // conductor: imaginary part k (extinction), per channel; plastic: x, the largest
+                     // weight its diffuse lobe gives (plastic.glsl)
     uint pad1;
 };
 

@@ -1,5 +1,6 @@
 // Pass 3, a photon pass: photons leave the lights in proportion to their power, bounce off mirrors and
-// through glass, and leave a record at every diffuse surface they reach, continuing by Russian roulette.
+// through glass, and leave a record at every diffuse surface (and plastic's diffuse base) they reach,
+// continuing by Russian roulette.
 // Records are appended to one buffer; the lanes of a subgroup that leave a record at the same step reserve
 // their slots with a single atomic (a global counter hit once per record is slow under contention). A
 // per-thread array of records, flushed once per path, measured slower on lavapipe: it lives in memory.
@@ -33,6 +34,8 @@ layout(push_constant) uniform PhotonPush {
 #include "geometry.glsl"
 #include "sampling.glsl"
 #include "conductor.glsl"
+#include "plastic.glsl"
+#include "thin_dielectric.glsl"
 #include "grid.glsl"
 #include "invocation.glsl"
 #include "lights.glsl"
@@ -206,6 +209,20 @@ void main() {
             flux *= reflector_weight(h.material, m, -dot(d, nf));
             d = reflect(d, nf);
             o = offset_ray(h.pos, nf);
+        } else if (HAS_PLASTICS && m.surface == SURFACE_PLASTIC) {
+            // The diffuse lobe's record carries the flux the coat lets in, times (1 - F(cos_i))
+            // (plastic.glsl); the first landing is skipped with direct light sampled, as on a diffuse
+            // surface (its shadow rays evaluate the plastic too).
+            float fi = coat_fresnel(-dot(d, nf), m.ior);
+            if ((params.direct_light == 0u || depth > 1u) && max3(m.color) > 0.0) {
+                emit(Photon(h.pos, grid_key(grid_cell(h.pos)), flux * (1.0 - fi), oct_encode(d)));
+            }
+            float u = rng_float(rng);
+            float u1 = rng_float(rng);
+            float u2 = rng_float(rng);
+            if (!plastic_scatter(h.material, m, fi, h.pos, nf, u, u1, u2, o, d, flux)) { alive = false; continue; }
+        } else if (HAS_THIN && m.surface == SURFACE_THIN) {
+            flux *= thin_branch(h.material, m, h.pos, nf, rng_float(rng), o, d);
         } else {
             glass_branch(h.pos, nf, front, m.ior, rng_float(rng), o, d);
         }

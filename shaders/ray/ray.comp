@@ -38,6 +38,8 @@
 //                    shadow rays;
 //   E S* D (S|D)+ L  everything that bounced before reaching it: the photon estimate at the hit points.
 // With `--direct photons` (the paper's estimator) (d) stays with the photons and these paths take (a) only.
+// A plastic is both an S (its coat's reflection) and a D (its base, plastic.glsl): an emission-sample path
+// takes the base's term (d) there and goes on along the coat, without choosing between them.
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_control_flow_attributes : require
@@ -71,6 +73,8 @@ layout(push_constant) uniform RayPush {
 #include "geometry.glsl"
 #include "sampling.glsl"
 #include "conductor.glsl"
+#include "plastic.glsl"
+#include "thin_dielectric.glsl"
 #include "invocation.glsl"
 #include "lights.glsl"
 
@@ -89,9 +93,11 @@ vec3 camera_ray(uint px, uint py, vec2 jitter) {
 // a light chosen in proportion to its power, a point y uniform on it, the shadow ray towards y. Its
 // estimate f_r Le G / pdf is (albedo / pi) Le (cos_p cos_y / d^2) (area / prob), and the light's flux
 // (power / prob, with power = Le area pi) gives Le area / prob = flux / pi. Emitters are one-sided.
+// coat_ior > 0: p is a plastic's diffuse base under a coat of that index, whose f_r also has the factor
+// (1 - F(cos_p)) of the light's direction (plastic.glsl); albedo then holds D (1 - F(cos_o)).
 // A shadow ray that runs out of traversal steps answers "occluded": it is counted here, as an eye path is,
 // and the caller must then check bvh_spent and bvh_cut and drop the sample (geometry.glsl: occluded).
-vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, inout Rng rng) {
+vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, float coat_ior, inout Rng rng) {
     Emitter e = choose_emitter(rng_float(rng));
     float a = rng_float(rng);
     float b = rng_float(rng);
@@ -111,7 +117,9 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, inout Rng rng) {
         if (bvh_spent && !was_spent) atomicAdd(cut.eye_paths, 1u);
         return vec3(0.0);
     }
-    return albedo * e.flux * (cos_p * cos_y / (PI * PI * d2));
+    vec3 l = albedo * e.flux * (cos_p * cos_y / (PI * PI * d2));
+    if (HAS_PLASTICS && coat_ior > 0.0) l *= 1.0 - coat_fresnel(cos_p, coat_ior);
+    return l;
 }
 
 // One emission sample: the emission met along the specular chain from the eye through `jitter`, and with
@@ -122,6 +130,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
     vec3 o = params.eye;
     vec3 d = camera_ray(px, py, jitter);
     vec3 thr = vec3(1.0);
+    vec3 sum = vec3(0.0); // term (d) at the plastics passed on the way
     for (uint depth = 0u;; depth++) {
         bvh_sync();
         if (depth >= params.max_eye_depth) { atomicAdd(cut.eye_paths, 1u); break; }
@@ -138,11 +147,11 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             vec3 e = front ? thr * m.emission : vec3(0.0); // emitters are one-sided
             if (max(e.r, max(e.g, e.b)) > 0.0) seen = true;
             if (params.direct_light != 0u) {
-                vec3 l = direct_light(h.pos, nf, m.color, rng);
+                vec3 l = direct_light(h.pos, nf, m.color, 0.0, rng);
                 if (max(l.r, max(l.g, l.b)) > 0.0) lit = true;
                 e += thr * l;
             }
-            return e;
+            return sum + e;
         }
         if (is_reflector(m.surface)) {
             thr *= reflector_weight(h.material, m, -dot(d, nf));
@@ -150,9 +159,29 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             o = offset_ray(h.pos, nf);
             continue;
         }
+        if (HAS_PLASTICS && m.surface == SURFACE_PLASTIC) {
+            // Both lobes, without a choice between them: the base's term (d) by its shadow ray here, and
+            // the path goes on along the coat's reflection (term (a) and (d) further along its chain).
+            // Plastic does not emit.
+            vec3 spec, diff;
+            plastic_lobes(h.material, m, -dot(d, nf), spec, diff);
+            if (params.direct_light != 0u) {
+                vec3 l = direct_light(h.pos, nf, diff, m.ior, rng);
+                if (max3(l) > 0.0) lit = true;
+                sum += thr * l;
+            }
+            thr *= spec;
+            d = reflect(d, nf);
+            o = offset_ray(h.pos, nf);
+            continue;
+        }
+        if (HAS_THIN && m.surface == SURFACE_THIN) {
+            thr *= thin_branch(h.material, m, h.pos, nf, rng_float(rng), o, d);
+            continue;
+        }
         glass_branch(h.pos, nf, front, m.ior, rng_float(rng), o, d);
     }
-    return vec3(0.0);
+    return sum;
 }
 
 void main() {
@@ -182,7 +211,7 @@ void main() {
         // A sample at a fixed point of the pixel (PPM's centre) would bias the box-filtered terms (a) and
         // (d): it counts only when no random sample does.
         bool hit_is_sample = pc.jitter.x < 0.0 || pc.emission_samples == 0u;
-        uint base = pixel * params.hit_slots;
+        uint base_slot = pixel * params.hit_slots;
 
         while (sp > 0u) {
             Pending r = stack[--sp];
@@ -202,16 +231,59 @@ void main() {
                     if (front) hit_emitted += r.thr * m.emission; // emitters are one-sided
                     // Term (d) for this path, where it is one of the samples (below).
                     if (params.direct_light != 0u && hit_is_sample) {
-                        hit_emitted += r.thr * direct_light(h.pos, nf, m.color, rng);
+                        hit_emitted += r.thr * direct_light(h.pos, nf, m.color, 0.0, rng);
                         if (bvh_spent) sp = 0u; // counted there; no budget for the rest
                     }
                     if (max(m.color.r, max(m.color.g, m.color.b)) > 0.0 && slot < params.hit_slots) {
-                        hit_points[base + slot] = HitPoint(h.pos, pixel, nf, 0u, r.thr * m.color / PI, 0u);
+                        hit_points[base_slot + slot] = HitPoint(h.pos, pixel, nf, 0u, r.thr * m.color / PI, 0u);
                         slot++;
                     }
                     break;
                 }
+                if (HAS_PLASTICS && m.surface == SURFACE_PLASTIC) {
+                    // Both lobes while the pixel has slots for the reflection's path and those pending
+                    // (the base's hit point, weighted D (1 - F(cos_o)) / pi, and the coat's reflection,
+                    // weighted ks F(cos_o)), else one, chosen in proportion to its largest weight.
+                    vec3 spec, diff;
+                    plastic_lobes(h.material, m, -dot(r.d, nf), spec, diff);
+                    bool base = true, coat = true;
+                    if (slot + sp + 1u >= params.hit_slots) {
+                        if (!(max3(spec) + max3(diff) > 0.0)) break;
+                        float ps = max3(spec) / (max3(spec) + max3(diff));
+                        coat = rng_float(rng) < ps;
+                        base = !coat;
+                        if (coat) spec /= ps; else diff /= 1.0 - ps;
+                    }
+                    if (base) {
+                        if (params.direct_light != 0u && hit_is_sample) {
+                            hit_emitted += r.thr * direct_light(h.pos, nf, diff, m.ior, rng);
+                            if (bvh_spent) sp = 0u;
+                        }
+                        if (max3(diff) > 0.0 && slot < params.hit_slots) {
+                            hit_points[base_slot + slot] = HitPoint(h.pos, pixel, nf, 0u, r.thr * diff / PI, 0u);
+                            slot++;
+                        }
+                        if (!coat || bvh_spent) break;
+                    }
+                    r.depth++;
+                    r.thr *= spec;
+                    r.d = reflect(r.d, nf);
+                    r.o = offset_ray(h.pos, nf);
+                    continue;
+                }
                 r.depth++;
+                if (HAS_THIN && m.surface == SURFACE_THIN) {
+                    // As glass: both branches while the pixel has slots, else one.
+                    float rr = thin_reflectance(-dot(r.d, nf), m.ior);
+                    if (rr < 1.0 && slot + sp + 1u < params.hit_slots) {
+                        stack[sp++] = Pending(offset_ray(h.pos, nf), reflect(r.d, nf), r.thr * (rr * m.color), r.depth);
+                        r.thr *= (1.0 - rr) * material_term_a(h.material);
+                        r.o = offset_ray(h.pos, -nf);
+                    } else {
+                        r.thr *= thin_branch(h.material, m, h.pos, nf, rng_float(rng), r.o, r.d);
+                    }
+                    continue;
+                }
                 if (is_reflector(m.surface)) {
                     r.thr *= reflector_weight(h.material, m, -dot(r.d, nf));
                     r.d = reflect(r.d, nf);
@@ -243,7 +315,7 @@ void main() {
             }
         }
         for (; slot < params.hit_slots; slot++) {
-            hit_points[base + slot] = HitPoint(vec3(0.0), 0xffffffffu, vec3(0.0), 0u, vec3(0.0), 0u);
+            hit_points[base_slot + slot] = HitPoint(vec3(0.0), 0xffffffffu, vec3(0.0), 0u, vec3(0.0), 0u);
         }
         if (hit_is_sample && !bvh_spent && !bvh_cut) {
             emitted += dvec3(hit_emitted);

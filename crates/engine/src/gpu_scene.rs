@@ -10,6 +10,7 @@ use ppm_vk_kernels::specialize::MAX_INLINE_PRIMITIVES;
 
 use crate::bvh::{self, BvhOptions, BvhStats, TriangleInput};
 use crate::error::{Error, Result};
+use crate::reference::plastic;
 use crate::scene::{Scene, Surface};
 use crate::settings::Settings;
 
@@ -79,9 +80,30 @@ impl GpuScene {
                     Surface::Mirror { reflectance } => (reflectance, layout::SURFACE_MIRROR, 1.0),
                     Surface::Conductor { reflectance, .. } => (reflectance, layout::SURFACE_CONDUCTOR, 1.0),
                     Surface::Glass { ior } => (Vec3::ONE, layout::SURFACE_GLASS, ior),
+                    Surface::Plastic {
+                        diffuse,
+                        ior,
+                        nonlinear,
+                        ..
+                    } => (
+                        plastic::diffuse_factor(diffuse, ior, nonlinear),
+                        layout::SURFACE_PLASTIC,
+                        ior,
+                    ),
+                    Surface::ThinDielectric { ior, reflectance, .. } => (reflectance, layout::SURFACE_THIN, ior),
                 };
-                let (eta, k) = match m.surface {
+                let (lobe_a, lobe_b) = match m.surface {
                     Surface::Conductor { eta, k, .. } => (arr(eta), arr(k)),
+                    Surface::Plastic {
+                        diffuse,
+                        specular,
+                        ior,
+                        nonlinear,
+                    } => (
+                        arr(specular),
+                        [plastic::diffuse_bound(diffuse, ior, nonlinear), 0.0, 0.0],
+                    ),
+                    Surface::ThinDielectric { transmittance, .. } => (arr(transmittance), [0.0; 3]),
                     _ => ([0.0; 3], [0.0; 3]),
                 };
                 Material {
@@ -89,8 +111,8 @@ impl GpuScene {
                     surface,
                     emission: arr(m.emission),
                     ior,
-                    eta,
-                    k,
+                    lobe_a,
+                    lobe_b,
                     ..Default::default()
                 }
             })

@@ -1471,10 +1471,7 @@ fn tracing_pipeline(
             triangles: &gpu.bvh_triangles,
             inline_triangles: gpu.triangles_inline,
             lights: &gpu.lights,
-            conductors: gpu
-                .materials
-                .iter()
-                .any(|m| m.surface == ppm_vk_kernels::layout::SURFACE_CONDUCTOR),
+            surfaces: gpu.materials.iter().fold(0, |bits, m| bits | 1 << m.surface),
         });
         let defines = [&[("SCENE_CONSTANTS", "1")][..], defines].concat();
         pipeline_from(ctx, k, &specialize::compile_with(k, &defines, &constants)?)

@@ -9,6 +9,8 @@ pub const SURFACE_DIFFUSE: u32 = 0;
 pub const SURFACE_MIRROR: u32 = 1;
 pub const SURFACE_GLASS: u32 = 2;
 pub const SURFACE_CONDUCTOR: u32 = 3;
+pub const SURFACE_PLASTIC: u32 = 4;
+pub const SURFACE_THIN: u32 = 5;
 /// `HitPoint::pixel` of an empty slot.
 pub const EMPTY_SLOT: u32 = u32::MAX;
 /// The probe pass's fixed-point scale for d^2 / r^2 (2^30).
@@ -21,10 +23,13 @@ pub struct Material {
     pub surface: u32,
     pub emission: [f32; 3],
     pub ior: f32,
-    /// A conductor's complex index of refraction, eta + i k, per channel (zero for other surfaces).
-    pub eta: [f32; 3],
+    /// The terms only some surfaces read (types.glsl says which): a conductor's complex index of
+    /// refraction eta + i k (`lobe_a`, `lobe_b`), a plastic's specular_reflectance (`lobe_a`) and the
+    /// bound of its diffuse weight (`lobe_b[0]`), a thin dielectric's specular_transmittance (`lobe_a`).
+    /// Zero for other surfaces.
+    pub lobe_a: [f32; 3],
     pub pad0: u32,
-    pub k: [f32; 3],
+    pub lobe_b: [f32; 3],
     pub pad1: u32,
 }
 gpu_struct!(Material {
@@ -32,9 +37,9 @@ gpu_struct!(Material {
     surface,
     emission,
     ior,
-    eta,
+    lobe_a,
     pad0,
-    k,
+    lobe_b,
     pad1
 });
 

@@ -6,7 +6,7 @@
 
 use anyhow::{anyhow, Context as _, Result};
 
-use crate::layout::{Light, Quad, Sphere, Triangle, LIGHT_TRIANGLE};
+use crate::layout::{Light, Quad, Sphere, Triangle, LIGHT_TRIANGLE, SURFACE_CONDUCTOR, SURFACE_PLASTIC, SURFACE_THIN};
 use crate::reflected::{KernelInfo, SOURCES};
 
 /// Scenes with more spheres and quads than this keep the buffer-reading kernels.
@@ -27,9 +27,10 @@ pub struct SceneConstants<'a> {
     /// Test `triangles` one by one (a small mesh) instead of traversing the BVH.
     pub inline_triangles: bool,
     pub lights: &'a [Light],
-    /// Whether any material is a conductor: without one, the kernels leave out the Fresnel term's code
-    /// (lavapipe runs both sides of a branch, so code a scene never takes still costs).
-    pub conductors: bool,
+    /// The surfaces the scene's materials use, as bits `1 << SURFACE_*`: the kernels leave out the code of
+    /// conductors, plastics and thin dielectrics where there are none (lavapipe runs both sides of a
+    /// branch, so code a scene never takes still costs).
+    pub surfaces: u32,
 }
 
 /// An f32 written so GLSL reads back exactly the same bits: nine significant digits name an f32 uniquely
@@ -66,7 +67,13 @@ pub fn scene_constants(c: &SceneConstants) -> String {
         quads.len()
     );
     let inline: &[Triangle] = if c.inline_triangles { c.triangles } else { &[] };
-    s += &format!("const bool SCENE_CONDUCTORS = {};\n", c.conductors);
+    let has = |surface: u32| c.surfaces & (1 << surface) != 0;
+    s += &format!(
+        "const bool SCENE_CONDUCTORS = {};\nconst bool SCENE_PLASTICS = {};\nconst bool SCENE_THIN = {};\n",
+        has(SURFACE_CONDUCTOR),
+        has(SURFACE_PLASTIC),
+        has(SURFACE_THIN)
+    );
     s += &format!(
         "const uint NUM_INLINE_TRIANGLES = {}u;\nconst bool SCENE_BVH = {};\n",
         inline.len(),

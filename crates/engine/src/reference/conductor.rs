@@ -35,7 +35,7 @@ pub fn is_reflector(surface: u32) -> bool {
 pub fn reflector_weight(m: &Material, cos_i: f32) -> Vec3 {
     match m.surface {
         SURFACE_MIRROR => v3(m.color),
-        _ => v3(m.color) * fresnel_conductor(cos_i.clamp(0.0, 1.0), v3(m.eta), v3(m.k)),
+        _ => v3(m.color) * fresnel_conductor(cos_i.clamp(0.0, 1.0), v3(m.lobe_a), v3(m.lobe_b)),
     }
 }
 

@@ -4,11 +4,16 @@
 
 pub mod bvh;
 pub mod conductor;
+pub mod plastic;
 pub mod rng;
+pub mod thin_dielectric;
 pub mod trace;
 
 use glam::{DVec3, Vec3};
-use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, Photon, EMPTY_SLOT, LIGHT_TRIANGLE, SURFACE_DIFFUSE};
+use ppm_vk_kernels::layout::{
+    HitPoint, HitStats, Material, PassAccum, Photon, EMPTY_SLOT, LIGHT_TRIANGLE, SURFACE_DIFFUSE, SURFACE_PLASTIC,
+    SURFACE_THIN,
+};
 use ppm_vk_kernels::photon::SALT_EMISSION;
 use ppm_vk_kernels::ray::RayPush;
 
@@ -78,8 +83,9 @@ pub fn emitter_point(e: &Emitter, mut a: f32, mut b: f32) -> Vec3 {
     e.origin + a * e.edge_u + b * e.edge_v
 }
 
-/// ray.comp's `direct_light`: term (d) at diffuse point p, one light sample with its shadow ray.
-fn direct_light(g: &GpuScene, p: Vec3, nf: Vec3, albedo: Vec3, rng: &mut Rng) -> Vec3 {
+/// ray.comp's `direct_light`: term (d) at diffuse point p, one light sample with its shadow ray;
+/// `coat_ior` > 0: p is a plastic's base under a coat of that index.
+fn direct_light(g: &GpuScene, p: Vec3, nf: Vec3, albedo: Vec3, coat_ior: f32, rng: &mut Rng) -> Vec3 {
     let e = choose_emitter(g, rng.float());
     let a = rng.float();
     let b = rng.float();
@@ -97,7 +103,46 @@ fn direct_light(g: &GpuScene, p: Vec3, nf: Vec3, albedo: Vec3, rng: &mut Rng) ->
     if intersect_scene(g, o, w, 0.0, d).is_some() {
         return Vec3::ZERO;
     }
-    albedo * e.flux * (cos_p * cos_y / (PI * PI * d2))
+    let l = albedo * e.flux * (cos_p * cos_y / (PI * PI * d2));
+    match coat_ior > 0.0 {
+        true => l * (1.0 - plastic::coat_fresnel(cos_p, coat_ior)),
+        false => l,
+    }
+}
+
+/// The probability ray.comp gives a plastic's coat (specular lobe `spec`) over its base (`diff`) when it
+/// takes one of them; `None` when both are black.
+fn coat_probability(spec: Vec3, diff: Vec3) -> Option<f32> {
+    let total = spec.max_element() + diff.max_element();
+    (total > 0.0).then(|| spec.max_element() / total)
+}
+
+/// photon.comp's `plastic_scatter` (plastic.glsl): the photon's new (origin, direction, weight) off plastic
+/// `m` where Fresnel reflects `fi`, or `None` where it is absorbed.
+fn plastic_scatter(
+    g: &GpuScene,
+    m: &Material,
+    fi: f32,
+    pos: Vec3,
+    nf: Vec3,
+    [u, u1, u2]: [f32; 3],
+    d: Vec3,
+) -> Option<(Vec3, Vec3, Vec3)> {
+    let ks = v3(m.lobe_a);
+    let bound = m.lobe_b[0];
+    let ps = ks.max_element() * fi;
+    let (d, w) = if u < ps {
+        (reflect(d, nf), ks / ks.max_element())
+    } else if u < ps + (1.0 - fi) * bound {
+        let d = cosine_direction(nf, u1, u2);
+        (
+            d,
+            v3(m.color) * ((1.0 - plastic::coat_fresnel(d.dot(nf), m.ior)) / bound),
+        )
+    } else {
+        return None;
+    };
+    Some((offset_ray(g, pos, nf), d, w))
 }
 
 /// One emission eye sample of ray.comp's `emission_sample`: the emission met along the specular chain
@@ -118,9 +163,11 @@ fn emission_sample(
     let mut o = v3(g.params.eye);
     let mut d = camera_ray(g, px, py, j);
     let mut thr = Vec3::ONE;
+    // Term (d) at the plastics passed on the way.
+    let mut sum = Vec3::ZERO;
     for _ in 0..g.params.max_eye_depth {
         let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
-            return Vec3::ZERO;
+            return sum;
         };
         let m = &g.materials[h.material as usize];
         let front = d.dot(h.normal) < 0.0;
@@ -129,11 +176,11 @@ fn emission_sample(
             let mut e = if front { thr * v3(m.emission) } else { Vec3::ZERO };
             *seen |= e.max_element() > 0.0;
             if g.params.direct_light != 0 {
-                let l = direct_light(g, h.pos, nf, v3(m.color), rng);
+                let l = direct_light(g, h.pos, nf, v3(m.color), 0.0, rng);
                 *lit |= l.max_element() > 0.0;
                 e += thr * l;
             }
-            return e;
+            return sum + e;
         }
         if conductor::is_reflector(m.surface) {
             thr *= conductor::reflector_weight(m, -d.dot(nf));
@@ -141,10 +188,29 @@ fn emission_sample(
             o = offset_ray(g, h.pos, nf);
             continue;
         }
+        if m.surface == SURFACE_PLASTIC {
+            // Both lobes: the base's term (d) here, the path on along the coat.
+            let (spec, diff) = plastic::lobes(m, -d.dot(nf));
+            if g.params.direct_light != 0 {
+                let l = direct_light(g, h.pos, nf, diff, m.ior, rng);
+                *lit |= l.max_element() > 0.0;
+                sum += thr * l;
+            }
+            thr *= spec;
+            d = reflect(d, nf);
+            o = offset_ray(g, h.pos, nf);
+            continue;
+        }
+        if m.surface == SURFACE_THIN {
+            let w;
+            (o, d, w) = thin_dielectric::branch(g, m, h.pos, nf, rng.float(), d);
+            thr *= w;
+            continue;
+        }
         (o, d) = glass_branch(g, h.pos, nf, front, m.ior, rng.float(), d);
     }
     *cut += 1;
-    Vec3::ZERO
+    sum
 }
 
 /// What one eye pass of `ray.comp` makes.
@@ -252,7 +318,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                             hit_emitted += thr * v3(m.emission);
                         }
                         if p.direct_light != 0 && hit_is_sample {
-                            hit_emitted += thr * direct_light(g, h.pos, nf, v3(m.color), &mut rng);
+                            hit_emitted += thr * direct_light(g, h.pos, nf, v3(m.color), 0.0, &mut rng);
                         }
                         let c = v3(m.color);
                         if c.max_element() > 0.0 && slot < slots {
@@ -267,7 +333,65 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         }
                         break;
                     }
+                    if m.surface == SURFACE_PLASTIC {
+                        // ray.comp: both lobes while there are slots, else one.
+                        let (mut spec, mut diff) = plastic::lobes(m, -d.dot(nf));
+                        let (mut on_base, mut coat) = (true, true);
+                        if slot + stack.len() + 1 >= slots {
+                            let Some(ps) = coat_probability(spec, diff) else {
+                                break;
+                            };
+                            coat = rng.float() < ps;
+                            on_base = !coat;
+                            if coat {
+                                spec /= ps;
+                            } else {
+                                diff /= 1.0 - ps;
+                            }
+                        }
+                        if on_base {
+                            if p.direct_light != 0 && hit_is_sample {
+                                hit_emitted += thr * direct_light(g, h.pos, nf, diff, m.ior, &mut rng);
+                            }
+                            if diff.max_element() > 0.0 && slot < slots {
+                                out.hits[base + slot] = HitPoint {
+                                    pos: h.pos.to_array(),
+                                    pixel,
+                                    normal: nf.to_array(),
+                                    weight: (thr * diff / PI).to_array(),
+                                    ..Default::default()
+                                };
+                                slot += 1;
+                            }
+                            if !coat {
+                                break;
+                            }
+                        }
+                        depth += 1;
+                        thr *= spec;
+                        d = reflect(d, nf);
+                        o = offset_ray(g, h.pos, nf);
+                        continue;
+                    }
                     depth += 1;
+                    if m.surface == SURFACE_THIN {
+                        let rr = thin_dielectric::reflectance(-d.dot(nf), m.ior);
+                        if rr < 1.0 && slot + stack.len() + 1 < slots {
+                            stack.push((
+                                offset_ray(g, h.pos, nf),
+                                reflect(d, nf),
+                                thr * (rr * v3(m.color)),
+                                depth,
+                            ));
+                            thr *= (1.0 - rr) * v3(m.lobe_a);
+                            o = offset_ray(g, h.pos, -nf);
+                        } else {
+                            let w;
+                            (o, d, w) = thin_dielectric::branch(g, m, h.pos, nf, rng.float(), d);
+                            thr *= w;
+                        }
+                        continue;
+                    }
                     if conductor::is_reflector(m.surface) {
                         thr *= conductor::reflector_weight(m, -d.dot(nf));
                         d = reflect(d, nf);
@@ -389,6 +513,26 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             flux *= conductor::reflector_weight(m, -d.dot(nf));
             d = reflect(d, nf);
             o = offset_ray(g, h.pos, nf);
+        } else if m.surface == SURFACE_PLASTIC {
+            let fi = plastic::coat_fresnel(-d.dot(nf), m.ior);
+            if (p.direct_light == 0 || depth > 1) && v3(m.color).max_element() > 0.0 {
+                out.push(Photon {
+                    pos: h.pos.to_array(),
+                    cell: trace::grid_key(g, h.pos),
+                    flux: (flux * (1.0 - fi)).to_array(),
+                    dir: oct_encode(d),
+                });
+            }
+            let u = [rng.float(), rng.float(), rng.float()];
+            let Some((o2, d2, w)) = plastic_scatter(g, m, fi, h.pos, nf, u, d) else {
+                return true;
+            };
+            (o, d) = (o2, d2);
+            flux *= w;
+        } else if m.surface == SURFACE_THIN {
+            let w;
+            (o, d, w) = thin_dielectric::branch(g, m, h.pos, nf, rng.float(), d);
+            flux *= w;
         } else {
             (o, d) = glass_branch(g, h.pos, nf, front, m.ior, rng.float(), d);
         }

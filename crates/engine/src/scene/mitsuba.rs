@@ -869,17 +869,7 @@ impl Builder {
                 Surface::conductor(props.color("specular_reflectance")?.unwrap_or(Vec3::ONE), eta, k)
             }
             kind @ ("dielectric" | "roughdielectric") => {
-                let ior = |name: &str, default: &str| -> Result<f64> {
-                    let Some(p) = props.get(name) else {
-                        return ior_named(e, default);
-                    };
-                    match p.tag.as_str() {
-                        "float" => number(p, p.required("value")?),
-                        "string" => ior_named(p, p.required("value")?),
-                        _ => Err(p.err("expected a <float> or a <string> (a material name)")),
-                    }
-                };
-                let (int, ext) = (ior("int_ior", "bk7")?, ior("ext_ior", "air")?);
+                let (int, ext) = (ior(e, &props, "int_ior", "bk7")?, ior(e, &props, "ext_ior", "air")?);
                 for name in ["specular_reflectance", "specular_transmittance"] {
                     if let Some(c) = props.color(name)? {
                         if c != Vec3::ONE {
@@ -914,16 +904,45 @@ impl Builder {
                 });
             }
             "thindielectric" => {
-                return Err(e.err(
-                    "a thin dielectric (a pane that reflects and lets light through without \
-                     bending it) has no counterpart among ppm-vk's materials; model the pane as \
-                     a closed dielectric shape",
-                ))
+                let (int, ext) = (ior(e, &props, "int_ior", "bk7")?, ior(e, &props, "ext_ior", "air")?);
+                let surface = Surface::ThinDielectric {
+                    ior: (int / ext) as f32,
+                    reflectance: props.color("specular_reflectance")?.unwrap_or(Vec3::ONE),
+                    transmittance: props.color("specular_transmittance")?.unwrap_or(Vec3::ONE),
+                };
+                props.finish()?;
+                // Mitsuba's thin dielectric is the same from both sides.
+                return Ok(Bsdf {
+                    surface,
+                    two_sided: true,
+                    id,
+                });
+            }
+            kind @ ("plastic" | "roughplastic") => {
+                let (int, ext) = (
+                    ior(e, &props, "int_ior", "polypropylene")?,
+                    ior(e, &props, "ext_ior", "air")?,
+                );
+                let diffuse = props.color("diffuse_reflectance")?.unwrap_or(Vec3::splat(0.5));
+                let specular = props.color("specular_reflectance")?.unwrap_or(Vec3::ONE);
+                let nonlinear = props.boolean("nonlinear")?;
+                if kind == "roughplastic" {
+                    props.ignore(&["alpha", "distribution", "sample_visible"]);
+                    self.warn(
+                        e,
+                        "rough plastic rendered as smooth plastic (ppm-vk has no glossy reflection yet)",
+                    );
+                }
+                let (surface, lowered) = Surface::plastic(diffuse, specular, (int / ext) as f32, nonlinear);
+                if let Some(message) = lowered {
+                    self.warn(e, message);
+                }
+                surface
             }
             _ => {
                 return Err(e.err(
                     "unsupported bsdf (read: diffuse, twosided, conductor, roughconductor, \
-                     dielectric, roughdielectric)",
+                     dielectric, roughdielectric, thindielectric, plastic, roughplastic)",
                 ))
             }
         };
@@ -1030,10 +1049,11 @@ impl Builder {
         if emission.max_element() > 0.0 && !matches!(bsdf.surface, Surface::Diffuse { .. }) {
             return Err(emitter_at.err(format!(
                 "an area emitter on a {} surface: ppm-vk lights are diffuse (or black) only",
-                if matches!(bsdf.surface, Surface::Glass { .. }) {
-                    "dielectric"
-                } else {
-                    "conductor"
+                match bsdf.surface {
+                    Surface::Glass { .. } => "dielectric",
+                    Surface::Plastic { .. } => "plastic",
+                    Surface::ThinDielectric { .. } => "thin dielectric",
+                    _ => "conductor",
                 }
             )));
         }
@@ -1168,8 +1188,8 @@ impl Builder {
         props.finish()?;
         let one_sided = match bsdf.surface {
             Surface::Diffuse { albedo } => albedo != Vec3::ZERO,
-            Surface::Mirror { .. } | Surface::Conductor { .. } => true,
-            Surface::Glass { .. } => false,
+            Surface::Mirror { .. } | Surface::Conductor { .. } | Surface::Plastic { .. } => true,
+            Surface::Glass { .. } | Surface::ThinDielectric { .. } => false,
         };
         if closed == Closed::No && one_sided && !bsdf.two_sided {
             self.warn(
@@ -1409,6 +1429,19 @@ fn fov_x(props: &Props, aspect: f64, e: &Elem) -> Result<f64> {
         }
     };
     Ok(x)
+}
+
+/// A bsdf's index of refraction `name` (int_ior, ext_ior): a <float>, a <string> naming a material, or
+/// Mitsuba's `default` when absent.
+fn ior(e: &Elem, props: &Props, name: &str, default: &str) -> Result<f64> {
+    let Some(p) = props.get(name) else {
+        return ior_named(e, default);
+    };
+    match p.tag.as_str() {
+        "float" => number(p, p.required("value")?),
+        "string" => ior_named(p, p.required("value")?),
+        _ => Err(p.err("expected a <float> or a <string> (a material name)")),
+    }
 }
 
 fn ior_named(e: &Elem, name: &str) -> Result<f64> {

@@ -21,6 +21,7 @@ use glam::{DVec3, Vec3};
 pub use mitsuba::{parse_define, DISK_SEGMENTS, MAX_INCLUDE_DEPTH, MAX_NESTING};
 
 use crate::error::{Error, Result};
+use crate::reference::plastic;
 
 pub use obj::ObjImport;
 
@@ -65,6 +66,23 @@ pub enum Surface {
     Conductor { reflectance: Vec3, eta: Vec3, k: Vec3 },
     /// Smooth dielectric; `ior` is the index inside, the outside is 1.
     Glass { ior: f32 },
+    /// Mitsuba's `plastic` (reference/plastic.rs): a diffuse base of reflectance `diffuse` under a smooth
+    /// dielectric coat of relative index `ior` (inside over outside) whose mirror reflection is `specular`
+    /// times its Fresnel term; `nonlinear` darkens and saturates the base as light bounces between it and
+    /// the coat. Its diffuse reflectance is bounded by [`plastic::max_diffuse_reflectance`].
+    Plastic {
+        diffuse: Vec3,
+        specular: Vec3,
+        ior: f32,
+        nonlinear: bool,
+    },
+    /// Mitsuba's `thindielectric` (reference/thin_dielectric.rs): a pane of relative index `ior` that
+    /// reflects (times `reflectance`) or lets light through without bending it (times `transmittance`).
+    ThinDielectric {
+        ior: f32,
+        reflectance: Vec3,
+        transmittance: Vec3,
+    },
 }
 
 impl Surface {
@@ -76,6 +94,28 @@ impl Surface {
             true => Surface::Mirror { reflectance },
             false => Surface::Conductor { reflectance, eta, k },
         }
+    }
+
+    /// A plastic, its diffuse reflectance lowered where a channel exceeds what a photon can scatter
+    /// without gaining flux ([`plastic::max_diffuse_reflectance`], 0.93-0.95 for common coats); the
+    /// message says so, for the loader to warn with.
+    pub fn plastic(diffuse: Vec3, specular: Vec3, ior: f32, nonlinear: bool) -> (Surface, Option<String>) {
+        let most = plastic::max_diffuse_reflectance(ior, nonlinear);
+        let kept = diffuse.min(Vec3::splat(most));
+        let warning = (kept != diffuse).then(|| {
+            format!(
+                "diffuse_reflectance {} lowered to at most {most:.4} per channel: above it a photon's \
+                 diffuse bounce off this coat (index {ior}) would gain flux (docs/scene-format.md, plastic)",
+                fmt_vec(diffuse.to_array())
+            )
+        });
+        let surface = Surface::Plastic {
+            diffuse: kept,
+            specular,
+            ior,
+            nonlinear,
+        };
+        (surface, warning)
     }
 }
 
@@ -701,6 +741,16 @@ fn check_camera(c: &Camera) -> Result<(), Invalid> {
     Ok(())
 }
 
+fn positive_ior(ior: f32, path: &str) -> Result<(), Invalid> {
+    match ior.is_finite() && ior > 0.0 {
+        true => Ok(()),
+        false => Err(invalid(
+            path.to_string(),
+            format!("relative index of refraction must be finite and > 0, got {ior}"),
+        )),
+    }
+}
+
 fn check_material(m: &Material) -> Result<(), Invalid> {
     let p = format!("materials.{}", m.name);
     let ep = format!("{p}.emission");
@@ -736,6 +786,37 @@ fn check_material(m: &Material) -> Result<(), Invalid> {
                     format!("index of refraction must be finite and >= 1, got {ior}"),
                 ));
             }
+        }
+        Surface::Plastic {
+            diffuse,
+            specular,
+            ior,
+            nonlinear,
+        } => {
+            positive_ior(ior, &format!("{p}.plastic.ior"))?;
+            unit_vec(specular, &format!("{p}.plastic.specular"))?;
+            let path = format!("{p}.plastic.diffuse");
+            unit_vec(diffuse, &path)?;
+            let most = plastic::max_diffuse_reflectance(ior, nonlinear);
+            if diffuse.max_element() > most {
+                return Err(invalid(
+                    path,
+                    format!(
+                        "at most {most:.4} per channel for a coat of index {ior} (above it a photon's diffuse \
+                         bounce would gain flux), got {}",
+                        fmt_vec(diffuse.to_array())
+                    ),
+                ));
+            }
+        }
+        Surface::ThinDielectric {
+            ior,
+            reflectance,
+            transmittance,
+        } => {
+            positive_ior(ior, &format!("{p}.thin.ior"))?;
+            unit_vec(reflectance, &format!("{p}.thin.reflectance"))?;
+            unit_vec(transmittance, &format!("{p}.thin.transmittance"))?;
         }
     }
     if m.is_light() && !matches!(m.surface, Surface::Diffuse { .. }) {

@@ -85,7 +85,29 @@ struct RawMaterial {
     mirror: Option<Spanned<[f32; 3]>>,
     glass: Option<Spanned<f32>>,
     conductor: Option<Spanned<RawConductor>>,
+    plastic: Option<Spanned<RawPlastic>>,
+    thin: Option<Spanned<RawThin>>,
     emission: Option<Spanned<[f32; 3]>>,
+}
+
+/// `plastic = { diffuse = [..], specular = [..], ior = 1.49, nonlinear = false }`: Mitsuba's plastic
+/// (diffuse_reflectance, specular_reflectance, int_ior / ext_ior, nonlinear), with its defaults.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPlastic {
+    diffuse: Option<[f32; 3]>,
+    specular: Option<[f32; 3]>,
+    ior: Option<f32>,
+    nonlinear: Option<bool>,
+}
+
+/// `thin = { ior = 1.5, reflectance = [..], transmittance = [..] }`: Mitsuba's thindielectric.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawThin {
+    ior: Option<f32>,
+    reflectance: Option<[f32; 3]>,
+    transmittance: Option<[f32; 3]>,
 }
 
 /// `conductor = "Au"` (a metal Mitsuba names), or `conductor = { eta = [..], k = [..] }`, either with an
@@ -400,29 +422,40 @@ fn material(src: &Source, name: &str, m: &Spanned<RawMaterial>, spans: &mut Span
     if let Some(c) = &r.conductor {
         spans.insert(format!("{p}.conductor"), c.span());
     }
+    if let Some(c) = &r.plastic {
+        spans.insert(format!("{p}.plastic"), c.span());
+    }
+    if let Some(c) = &r.thin {
+        spans.insert(format!("{p}.thin"), c.span());
+    }
     // Exactly one kind of surface: the second one written is the error.
     let kinds = [
         ("diffuse", r.diffuse.as_ref().map(|v| v.span())),
         ("mirror", r.mirror.as_ref().map(|v| v.span())),
         ("glass", r.glass.as_ref().map(|v| v.span())),
         ("conductor", r.conductor.as_ref().map(|v| v.span())),
+        ("plastic", r.plastic.as_ref().map(|v| v.span())),
+        ("thin", r.thin.as_ref().map(|v| v.span())),
     ];
     let mut given = kinds.iter().filter_map(|(k, span)| span.clone().map(|s| (*k, s)));
     if let (Some((a, _)), Some((b, span))) = (given.next(), given.next()) {
         return Err(src.error(
             span,
             Some(&format!("{p}.{b}")),
-            format!("a material cannot be both {a} and {b}: give exactly one of diffuse, mirror, glass, conductor"),
+            format!(
+                "a material cannot be both {a} and {b}: give exactly one of diffuse, mirror, glass, conductor, \
+                 plastic, thin"
+            ),
         ));
     }
     if let Some(e) = &r.emission {
         // Refused even when zero: the file says something the engine cannot do.
-        if r.mirror.is_some() || r.glass.is_some() || r.conductor.is_some() {
+        if r.diffuse.is_none() && kinds.iter().any(|(_, span)| span.is_some()) {
             return Err(src.error(
                 e.span(),
                 Some(&format!("{p}.emission")),
                 "emission can only be combined with diffuse (or stand alone), \
-                 not with mirror, glass or conductor",
+                 not with mirror, glass, conductor, plastic or thin",
             ));
         }
     }
@@ -434,6 +467,21 @@ fn material(src: &Source, name: &str, m: &Spanned<RawMaterial>, spans: &mut Span
         Surface::Glass { ior: *g.get_ref() }
     } else if let Some(c) = &r.conductor {
         conductor(src, &format!("{p}.conductor"), c)?
+    } else if let Some(c) = &r.plastic {
+        let c = c.get_ref();
+        Surface::Plastic {
+            diffuse: c.diffuse.map_or(Vec3::splat(0.5), Vec3::from),
+            specular: c.specular.map_or(Vec3::ONE, Vec3::from),
+            ior: c.ior.unwrap_or(PLASTIC_IOR),
+            nonlinear: c.nonlinear.unwrap_or(false),
+        }
+    } else if let Some(t) = &r.thin {
+        let t = t.get_ref();
+        Surface::ThinDielectric {
+            ior: t.ior.unwrap_or(THIN_IOR),
+            reflectance: t.reflectance.map_or(Vec3::ONE, Vec3::from),
+            transmittance: t.transmittance.map_or(Vec3::ONE, Vec3::from),
+        }
     } else if r.emission.is_some() {
         // A pure emitter reflects nothing.
         Surface::Diffuse { albedo: Vec3::ZERO }
@@ -441,7 +489,7 @@ fn material(src: &Source, name: &str, m: &Spanned<RawMaterial>, spans: &mut Span
         return Err(src.error(
             m.span(),
             Some(&p),
-            "needs one of diffuse, mirror, glass, conductor (or emission alone for a black emitter)",
+            "needs one of diffuse, mirror, glass, conductor, plastic, thin (or emission alone for a black emitter)",
         ));
     };
     Ok(Material {
@@ -450,6 +498,11 @@ fn material(src: &Source, name: &str, m: &Spanned<RawMaterial>, spans: &mut Span
         emission: r.emission.as_ref().map_or(Vec3::ZERO, vec3),
     })
 }
+
+/// Mitsuba's default plastic coat: polypropylene (1.49) in air (1.000277).
+const PLASTIC_IOR: f32 = 1.49 / 1.000277;
+/// Mitsuba's default thin dielectric: BK7 (1.5046) in air.
+const THIN_IOR: f32 = 1.5046 / 1.000277;
 
 /// A `conductor` entry: a named metal (Mitsuba's names and RGB values, scene/conductors.rs) or eta and k.
 fn conductor(src: &Source, p: &str, c: &Spanned<RawConductor>) -> Result<Surface> {

@@ -1,0 +1,196 @@
+//! CPU twin of shaders/common/plastic.glsl: Mitsuba's `plastic`, a diffuse base under a smooth dielectric
+//! coat. Its BSDF is a specular lobe, `specular_reflectance` times the coat's Fresnel term F(cos_i), and a
+//! diffuse lobe `D (1 - F(cos_i)) (1 - F(cos_o)) / pi` whose factor D = diffuse_reflectance / (1 - fdr_int)
+//! / eta^2 (`nonlinear`: diffuse_reflectance / (1 - diffuse_reflectance fdr_int) / eta^2) counts the light
+//! the coat reflects back into the base (fdr_int, the coat's diffuse reflectance from inside). The diffuse
+//! lobe is a product of a term of the incoming and one of the outgoing direction, which is what lets the
+//! photon estimate carry it without evaluating a BSDF per photon: a photon leaves its record with its flux
+//! times (1 - F(cos_i)), and the hit point weighs what it gathers by D (1 - F(cos_o)) / pi. Checked
+//! against Mitsuba's own plastic in the tests below.
+
+use glam::Vec3;
+use ppm_vk_kernels::layout::Material;
+
+use super::trace::{fresnel_dielectric, v3};
+
+/// Mitsuba's `fresnel_diffuse_reflectance`: the hemispherical average of the Fresnel reflectance for a
+/// relative index `eta`, by the fits Mitsuba uses (Egan and Hilgeman 1973 below 1, d'Eon and Irving 2011
+/// above, a polynomial in 1 / eta).
+pub fn fresnel_diffuse_reflectance(eta: f32) -> f32 {
+    if eta < 1.0 {
+        0.0636 / eta + eta * (eta * -1.4399 + 0.7099) + 0.6681
+    } else {
+        let c = [0.919317, -3.4793, 6.75335, -7.80989, 4.98554, -1.36881];
+        c.iter().rev().fold(0.0, |acc, &x| acc / eta + x)
+    }
+}
+
+/// The coat's Fresnel reflectance for light arriving from outside at incidence `cos_i`, `ior` the
+/// index inside over the index outside.
+pub fn coat_fresnel(cos_i: f32, ior: f32) -> f32 {
+    fresnel_dielectric(cos_i.clamp(0.0, 1.0), 1.0 / ior).0
+}
+
+/// The diffuse lobe's factor D per channel (`Material::color` of a plastic).
+pub fn diffuse_factor(diffuse: Vec3, ior: f32, nonlinear: bool) -> Vec3 {
+    let fdr_int = fresnel_diffuse_reflectance(1.0 / ior);
+    let inner = if nonlinear {
+        Vec3::ONE - diffuse * fdr_int
+    } else {
+        Vec3::splat(1.0 - fdr_int)
+    };
+    diffuse / inner / (ior * ior)
+}
+
+/// The largest weight a cosine-sampled diffuse bounce gives: max D (1 - F(1)), F smallest at normal
+/// incidence (`Material::lobe_b[0]`). The photons choose the diffuse lobe with (1 - F(cos_i)) times this.
+pub fn diffuse_bound(diffuse: Vec3, ior: f32, nonlinear: bool) -> f32 {
+    diffuse_factor(diffuse, ior, nonlinear).max_element() * (1.0 - coat_fresnel(1.0, ior))
+}
+
+/// The largest diffuse_reflectance per channel for which [`diffuse_bound`] stays at most 1, so that no
+/// photon leaves a plastic with more flux than it arrived with (the fixed-point sums rely on it). Mitsuba's
+/// model allows more (up to 1): above this the per-sample weight of a cosine-sampled bounce exceeds 1
+/// although the albedo does not.
+pub fn max_diffuse_reflectance(ior: f32, nonlinear: bool) -> f32 {
+    let fdr_int = fresnel_diffuse_reflectance(1.0 / ior);
+    // D (1 - F0) = 1, with D = rd / inner / ior^2.
+    let c = ior * ior / (1.0 - coat_fresnel(1.0, ior));
+    let rd = if nonlinear {
+        c / (1.0 + c * fdr_int)
+    } else {
+        c * (1.0 - fdr_int)
+    };
+    rd.min(1.0)
+}
+
+/// plastic.glsl's `plastic_lobes`: seen from (or lit from) incidence `cos_o`, the specular lobe's weight
+/// specular_reflectance F(cos_o) and the diffuse lobe's D (1 - F(cos_o)), whose f_r is that over pi times
+/// (1 - F) of the other direction.
+pub fn lobes(m: &Material, cos_o: f32) -> (Vec3, Vec3) {
+    let f = coat_fresnel(cos_o, m.ior);
+    (v3(m.lobe_a) * f, v3(m.color) * (1.0 - f))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reference::trace::PI;
+
+    fn json() -> serde_json::Value {
+        let text = include_str!("../../../../scenes/references/coated-bsdfs.json");
+        serde_json::from_str(text).unwrap()
+    }
+
+    fn rgb(v: &serde_json::Value) -> Vec3 {
+        match v {
+            serde_json::Value::Number(n) => Vec3::splat(n.as_f64().unwrap() as f32),
+            serde_json::Value::Array(a) => {
+                Vec3::from_slice(&a.iter().map(|x| x.as_f64().unwrap() as f32).collect::<Vec<_>>())
+            }
+            serde_json::Value::Object(o) => rgb(&o["value"]),
+            _ => panic!("not a colour: {v}"),
+        }
+    }
+
+    /// A case of coated-bsdfs.json as the material the kernels read.
+    fn material(case: &serde_json::Value) -> (Material, Vec3, f32, bool) {
+        let diffuse = case.get("diffuse_reflectance").map_or(Vec3::splat(0.5), rgb);
+        let specular = case.get("specular_reflectance").map_or(Vec3::ONE, rgb);
+        let int = case.get("int_ior").map_or(1.49, |v| v.as_f64().unwrap() as f32);
+        let ext = case.get("ext_ior").map_or(1.000277, |v| v.as_f64().unwrap() as f32);
+        let nonlinear = case.get("nonlinear").is_some_and(|v| v.as_bool().unwrap());
+        let ior = int / ext;
+        let m = Material {
+            color: diffuse_factor(diffuse, ior, nonlinear).to_array(),
+            ior,
+            lobe_a: specular.to_array(),
+            lobe_b: [diffuse_bound(diffuse, ior, nonlinear), 0.0, 0.0],
+            ..Default::default()
+        };
+        (m, diffuse, ior, nonlinear)
+    }
+
+    #[test]
+    fn diffuse_fresnel_fits_match_mitsubas() {
+        for row in json()["fresnel_diffuse_reflectance"].as_array().unwrap() {
+            let eta = row["eta"].as_f64().unwrap() as f32;
+            let want = row["fdr"].as_f64().unwrap() as f32;
+            let got = fresnel_diffuse_reflectance(eta);
+            assert!((got - want).abs() < 1e-5, "eta {eta}: {got} against Mitsuba's {want}");
+        }
+    }
+
+    /// Mitsuba's plastic at 7 x 7 (incident, outgoing) cosines in 4 cases: the specular lobe's weight, the
+    /// BSDF's value (times cos_o), and the diffuse lobe's directional albedo, Mitsuba's eval integrated
+    /// over the hemisphere, against ours in closed form: D (1 - F(cos_i)) (1 - fdr_ext') with
+    /// 1 - fdr_ext' = 2 int (1 - F(mu)) mu dmu, integrated here by the same midpoint rule.
+    #[test]
+    fn plastic_matches_mitsubas() {
+        let mut worst = [0f32; 3];
+        for case in json()["plastic"].as_array().unwrap() {
+            let (m, _, ior, _) = material(&case["bsdf"]);
+            let n = 4096;
+            let escape: f32 = (0..n)
+                .map(|k| {
+                    let mu = (k as f32 + 0.5) / n as f32;
+                    2.0 * (1.0 - coat_fresnel(mu, ior)) * mu / n as f32
+                })
+                .sum();
+            for s in case["samples"].as_array().unwrap() {
+                let cos_i = s["cos"].as_f64().unwrap() as f32;
+                let (spec, diff) = lobes(&m, cos_i);
+                let rel = |a: Vec3, b: Vec3| ((a - b).abs() / b.max(Vec3::splat(1e-6))).max_element();
+                let e = rel(spec, rgb(&s["specular"]));
+                worst[0] = worst[0].max(e);
+                assert!(
+                    e < 1e-4,
+                    "{}: specular at cos {cos_i}: {spec} against {}",
+                    case["bsdf"],
+                    s["specular"]
+                );
+                for ev in s["eval"].as_array().unwrap() {
+                    let cos_o = ev["cos_o"].as_f64().unwrap() as f32;
+                    let ours = diff * (1.0 - coat_fresnel(cos_o, ior)) / PI * cos_o;
+                    let e = rel(ours, rgb(&ev["value"]));
+                    worst[1] = worst[1].max(e);
+                    assert!(
+                        e < 1e-4,
+                        "{}: eval at ({cos_i}, {cos_o}): {ours} against {}",
+                        case["bsdf"],
+                        ev["value"]
+                    );
+                }
+                let albedo = diff * escape;
+                let e = rel(albedo, rgb(&s["diffuse_albedo"]));
+                worst[2] = worst[2].max(e);
+                assert!(
+                    e < 1e-4,
+                    "{}: albedo at {cos_i}: {albedo} against {}",
+                    case["bsdf"],
+                    s["diffuse_albedo"]
+                );
+            }
+        }
+        println!(
+            "largest relative differences: specular {:.2e}, eval {:.2e}, albedo {:.2e}",
+            worst[0], worst[1], worst[2]
+        );
+    }
+
+    /// The bound the photons rely on: no cosine-sampled diffuse bounce weighs more than diffuse_bound, and
+    /// at max_diffuse_reflectance the bound is 1.
+    #[test]
+    fn the_diffuse_bound_holds() {
+        for (ior, nonlinear) in [(1.49, false), (1.5, true), (1.2, false), (2.5, true)] {
+            let rd = max_diffuse_reflectance(ior, nonlinear);
+            let b = diffuse_bound(Vec3::splat(rd), ior, nonlinear);
+            assert!((b - 1.0).abs() < 1e-4 || rd == 1.0, "ior {ior}: bound {b} at {rd}");
+            let d = diffuse_factor(Vec3::splat(rd), ior, nonlinear).x;
+            for k in 0..=100 {
+                let w = d * (1.0 - coat_fresnel(k as f32 / 100.0, ior));
+                assert!(w <= b * (1.0 + 1e-6), "weight {w} above the bound {b}");
+            }
+        }
+    }
+}
