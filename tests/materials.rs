@@ -151,7 +151,8 @@ fn plastic_and_a_thin_pane_match_their_mitsuba_reference() {
 /// against Mitsuba's plastic (reference::plastic's tests).
 #[test]
 fn plastic_under_a_square_light_matches_its_closed_form() {
-    use ppm_vk_engine::reference::plastic::{coat_fresnel, diffuse_factor};
+    use ppm_vk_engine::reference::plastic::coat_fresnel;
+    use ppm_vk_engine::scene::plastic::diffuse_factor;
     use ppm_vk_engine::DirectLight;
     let scene = Scene::parse(
         &OPEN_FLOOR.replace("diffuse = [0.5, 0.5, 0.5]", "plastic = { diffuse = [0.5, 0.5, 0.5] }"),

@@ -10,8 +10,7 @@ use ppm_vk_kernels::specialize::MAX_INLINE_PRIMITIVES;
 
 use crate::bvh::{self, BvhOptions, BvhStats, TriangleInput};
 use crate::error::{Error, Result};
-use crate::reference::plastic;
-use crate::scene::{Scene, Surface};
+use crate::scene::{plastic, Scene, Surface};
 use crate::settings::Settings;
 
 /// Flattened scene plus the constants of one render.

@@ -2126,6 +2126,68 @@ mod tests {
             let e = format!("{:#}", e.unwrap_err());
             assert!(e.contains(said) && e.contains(r#"<bsdf type="conductor">"#), "{e}");
         }
+        // Plastic and thin dielectric with Mitsuba's defaults (polypropylene and BK7 in air), and given;
+        // rough plastic renders smooth with a warning, and a diffuse_reflectance above the photons' bound is
+        // lowered with one.
+        let s = load_body(
+            r#"<shape type="sphere"><bsdf type="plastic"/></shape>
+               <shape type="sphere"><bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.1, 0.2, 0.3"/>
+                 <float name="specular_reflectance" value="0.5"/><float name="int_ior" value="1.6"/>
+                 <float name="ext_ior" value="1.25"/><boolean name="nonlinear" value="true"/></bsdf></shape>
+               <shape type="sphere"><bsdf type="thindielectric"/></shape>
+               <shape type="sphere"><bsdf type="thindielectric"><string name="int_ior" value="water"/>
+                 <rgb name="specular_reflectance" value="0.5"/><rgb name="specular_transmittance" value="0.9, 0.8, 0.7"/></bsdf></shape>"#,
+        )
+        .unwrap();
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        assert_eq!(
+            surface_of(&s, 0),
+            Surface::Plastic {
+                diffuse: Vec3::splat(0.5),
+                specular: Vec3::ONE,
+                ior: (1.49f64 / 1.000277) as f32,
+                nonlinear: false
+            }
+        );
+        assert_eq!(
+            surface_of(&s, 1),
+            Surface::Plastic {
+                diffuse: Vec3::new(0.1, 0.2, 0.3),
+                specular: Vec3::splat(0.5),
+                ior: 1.28,
+                nonlinear: true
+            }
+        );
+        assert_eq!(
+            surface_of(&s, 2),
+            Surface::ThinDielectric {
+                ior: (1.5046f64 / 1.000277) as f32,
+                reflectance: Vec3::ONE,
+                transmittance: Vec3::ONE
+            }
+        );
+        assert_eq!(
+            surface_of(&s, 3),
+            Surface::ThinDielectric {
+                ior: (1.333f64 / 1.000277) as f32,
+                reflectance: Vec3::splat(0.5),
+                transmittance: Vec3::new(0.9, 0.8, 0.7)
+            }
+        );
+        let s = load_body(
+            r#"<shape type="sphere"><bsdf type="roughplastic"><float name="alpha" value="0.2"/>
+                 <rgb name="diffuse_reflectance" value="0.99, 0.5, 0.2"/></bsdf></shape>"#,
+        )
+        .unwrap();
+        assert!(
+            s.warnings.len() == 2
+                && s.warnings[0].contains("rough plastic rendered as smooth plastic")
+                && s.warnings[1].contains("diffuse_reflectance [0.99, 0.5, 0.2] lowered"),
+            "{:?}",
+            s.warnings
+        );
+        let most = crate::scene::plastic::max_diffuse_reflectance((1.49f64 / 1.000277) as f32, false);
+        assert!(matches!(surface_of(&s, 0), Surface::Plastic { diffuse, .. } if diffuse == Vec3::new(most, 0.5, 0.2)));
         // One-sided diffuse on an open shape: warned; on a closed one or twosided: not.
         let s = load_body(r#"<shape type="rectangle"><bsdf type="diffuse"/></shape><shape type="cube"><bsdf type="diffuse"/></shape>"#).unwrap();
         assert!(
@@ -2172,16 +2234,28 @@ mod tests {
                 "undefined parameter $r",
             ),
             (
-                "\n<shape type=\"cube\"><bsdf type=\"thindielectric\"/></shape>",
-                r#"<bsdf type="thindielectric">"#,
+                "\n<shape type=\"cube\"><bsdf type=\"principled\"/></shape>",
+                r#"<bsdf type="principled">"#,
                 13,
-                "thin dielectric",
+                "unsupported bsdf",
             ),
             (
-                r#"<shape type="cube"><bsdf type="plastic"/></shape>"#,
-                r#"<bsdf type="plastic">"#,
+                r#"<shape type="cube"><bsdf type="plastic"/><emitter type="area"/></shape>"#,
+                r#"<emitter type="area">"#,
                 12,
-                "unsupported bsdf",
+                "an area emitter on a plastic surface",
+            ),
+            (
+                r#"<shape type="cube"><bsdf type="plastic"><string name="int_ior" value="unobtainium"/></bsdf></shape>"#,
+                r#"<string name="int_ior">"#,
+                12,
+                "unknown index of refraction \"unobtainium\"",
+            ),
+            (
+                r#"<shape type="cube"><bsdf type="thindielectric"><boolean name="nonlinear" value="true"/></bsdf></shape>"#,
+                r#"<boolean name="nonlinear">"#,
+                12,
+                "parameter not read by ppm-vk",
             ),
             (
                 r#"<shape type="cube"><bsdf type="diffuse"><texture name="reflectance" type="bitmap"/></bsdf></shape>"#,

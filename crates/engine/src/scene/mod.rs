@@ -11,6 +11,7 @@ pub mod conductors;
 pub mod demo;
 mod mitsuba;
 mod obj;
+pub mod plastic;
 mod toml;
 
 use std::fmt;
@@ -21,7 +22,6 @@ use glam::{DVec3, Vec3};
 pub use mitsuba::{parse_define, DISK_SEGMENTS, MAX_INCLUDE_DEPTH, MAX_NESTING};
 
 use crate::error::{Error, Result};
-use crate::reference::plastic;
 
 pub use obj::ObjImport;
 

@@ -1157,7 +1157,7 @@ material = "light"
             &text,
             15,
             "materials.glass.emission",
-            "not with mirror, glass or conductor",
+            "not with mirror, glass, conductor, plastic or thin",
         );
         let text = BASE.replace(
             "diffuse = [0.5, 0.5, 0.5]",
@@ -1211,6 +1211,80 @@ material = "light"
             "needs one of diffuse, mirror, glass",
         );
         assert_err(&edit(14, "glass = 0.9"), 14, "materials.glass.glass", ">= 1");
+    }
+
+    #[test]
+    fn plastics_and_thin_dielectrics() {
+        let surface = |line: &str| {
+            let text = BASE.replace("glass = 1.5", line);
+            let s = Scene::parse(&text, "t.toml").unwrap_or_else(|e| panic!("{line}: {e}"));
+            s.materials.iter().find(|m| m.name == "glass").unwrap().surface
+        };
+        assert_eq!(
+            surface("plastic = {}"),
+            Surface::Plastic {
+                diffuse: Vec3::splat(0.5),
+                specular: Vec3::ONE,
+                ior: PLASTIC_IOR,
+                nonlinear: false
+            }
+        );
+        assert_eq!(
+            surface("plastic = { diffuse = [0.1, 0.2, 0.3], specular = [0.5, 0.5, 0.5], ior = 1.6, nonlinear = true }"),
+            Surface::Plastic {
+                diffuse: Vec3::new(0.1, 0.2, 0.3),
+                specular: Vec3::splat(0.5),
+                ior: 1.6,
+                nonlinear: true
+            }
+        );
+        assert_eq!(
+            surface("thin = {}"),
+            Surface::ThinDielectric {
+                ior: THIN_IOR,
+                reflectance: Vec3::ONE,
+                transmittance: Vec3::ONE
+            }
+        );
+        assert_eq!(
+            surface("thin = { ior = 1.33, reflectance = [0.5, 0.5, 0.5], transmittance = [0.9, 0.8, 0.7] }"),
+            Surface::ThinDielectric {
+                ior: 1.33,
+                reflectance: Vec3::splat(0.5),
+                transmittance: Vec3::new(0.9, 0.8, 0.7)
+            }
+        );
+        // Errors name the line and the field.
+        assert_err(
+            &edit(14, "plastic = { ior = -1.5 }"),
+            14,
+            "materials.glass.plastic.ior",
+            "> 0",
+        );
+        assert_err(
+            &edit(14, "plastic = { diffuse = [0.99, 0.5, 0.5] }"),
+            14,
+            "materials.glass.plastic.diffuse",
+            "at most 0.9",
+        );
+        assert_err(
+            &edit(14, "thin = { transmittance = [1.5, 0.5, 0.5] }"),
+            14,
+            "materials.glass.thin.transmittance",
+            "",
+        );
+        assert_err(
+            &edit(14, "thin = { roughness = 0.1 }"),
+            14,
+            "materials.glass.thin.roughness",
+            "unknown field",
+        );
+        assert_err(
+            &BASE.replace("glass = 1.5", "plastic = {}\nemission = [1.0, 1.0, 1.0]"),
+            15,
+            "materials.glass.emission",
+            "not with mirror, glass, conductor, plastic or thin",
+        );
     }
 
     #[test]
