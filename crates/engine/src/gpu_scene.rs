@@ -224,7 +224,8 @@ impl GpuScene {
         }
 
         // No photon carries more flux than it leaves its light with (roulette divides by the largest
-        // albedo, mirrors and glass never amplify), so this bounds one photon's share of a fixed-point sum.
+        // albedo, mirrors, glass and thin panes never amplify, a plastic's branches weigh at most 1:
+        // plastic.glsl), so this bounds one photon's share of a fixed-point sum.
         let max_flux = lights
             .iter()
             .flat_map(|l| l.power.map(|p| p as f64 / l.prob as f64))
