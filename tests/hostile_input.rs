@@ -60,6 +60,7 @@ fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
                 "scenes/cornell-mesh.toml",
                 "scenes/glass-on-table.toml",
                 "scenes/furnace.toml",
+                "scenes/gold-ring.toml",
             ],
         ),
         (
@@ -67,7 +68,14 @@ fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
             load_obj,
             vec!["scenes/meshes/cornell-box.obj", "scenes/meshes/furnace-sphere.obj"],
         ),
-        ("xml", load_xml, vec!["../shared/reference/cornell-spheres.xml"]),
+        (
+            "xml",
+            load_xml,
+            vec![
+                "../shared/reference/cornell-spheres.xml",
+                "scenes/references/cornell-coated.xml",
+            ],
+        ),
     ]
 }
 
