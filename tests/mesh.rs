@@ -155,6 +155,7 @@ fn a_hundred_thousand_emitting_triangles_light_like_their_quad() {
         name: "tiled light".into(),
         positions: Vec::new(),
         normals: None,
+        uvs: None,
         indices: Vec::new(),
         materials: Vec::new(),
     };
@@ -202,6 +203,7 @@ fn a_degenerate_bvh_stops_the_render_instead_of_losing_hits() {
         name: "stack".into(),
         positions: Vec::new(),
         normals: None,
+        uvs: None,
         indices: Vec::new(),
         materials: Vec::new(),
     };

@@ -719,6 +719,7 @@ impl Builder {
                     height: 0,
                 },
                 materials: Vec::new(),
+                textures: Vec::new(),
                 spheres: Vec::new(),
                 quads: Vec::new(),
                 meshes: Vec::new(),
@@ -961,6 +962,7 @@ impl Builder {
             name: name.to_string(),
             surface: bsdf.surface,
             emission,
+            texture: None,
         };
         let mut candidate = name.to_string();
         for n in 2.. {

@@ -12,6 +12,7 @@ pub mod demo;
 mod mitsuba;
 mod obj;
 pub mod plastic;
+pub mod texture;
 mod toml;
 
 use std::fmt;
@@ -126,6 +127,9 @@ pub struct Material {
     pub surface: Surface,
     /// Emitted radiance (linear RGB); zero means the material is not a light.
     pub emission: Vec3,
+    /// Index into `Scene::textures`: the texture the diffuse reflectance (a diffuse surface's albedo, a
+    /// plastic's base) is read from at each point, instead of the surface's constant.
+    pub texture: Option<u32>,
 }
 
 impl Material {
@@ -176,6 +180,9 @@ pub struct Mesh {
     /// Unit shading normals, one per position, when the OBJ gives one for every vertex. Only shading:
     /// the front side is always the winding's.
     pub normals: Option<Vec<Vec3>>,
+    /// Texture coordinates, one per position, when the file gives them for every vertex (Mitsuba's
+    /// convention: v grows downwards in the image, so an OBJ's `vt` is flipped).
+    pub uvs: Option<Vec<glam::Vec2>>,
     /// Triangles as indices into `positions`.
     pub indices: Vec<[u32; 3]>,
     /// Material of each triangle (index into `Scene::materials`); as long as `indices`.
@@ -220,6 +227,7 @@ impl Mesh {
             name: name.into(),
             positions,
             normals: None,
+            uvs: None,
             indices,
             materials,
         }
@@ -261,6 +269,8 @@ pub struct Scene {
     pub quads: Vec<Quad>,
     /// Triangle meshes, in world space.
     pub meshes: Vec<Mesh>,
+    /// The textures materials read (`Material::texture`).
+    pub textures: Vec<texture::Texture>,
     /// Parts of the image scored on their own against a reference (`[[region]]` in a TOML scene); a
     /// Mitsuba scene has none.
     pub regions: Vec<ImageRegion>,
@@ -958,11 +968,13 @@ mod tests {
                         albedo: Vec3::splat(0.5),
                     },
                     emission: Vec3::ZERO,
+                    texture: None,
                 },
                 Material {
                     name: "lamp".into(),
                     surface: Surface::Diffuse { albedo: Vec3::ZERO },
                     emission: Vec3::splat(5.0),
+                    texture: None,
                 },
             ],
             spheres: vec![],
@@ -984,6 +996,7 @@ mod tests {
                 vec![[0, 1, 2], [0, 2, 3]],
                 1,
             )],
+            textures: vec![],
             regions: vec![],
             warnings: vec![],
         }

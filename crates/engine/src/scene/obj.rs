@@ -337,6 +337,7 @@ pub(super) fn add_mesh(scene: &mut Scene, raw: RawMesh, transform: &DAffine3, fl
         name: shown,
         positions: kept.iter().map(|&i| positions[i as usize]).collect(),
         normals,
+        uvs: None,
         indices,
         materials,
     });
@@ -691,6 +692,7 @@ fn convert(m: &tobj::Material, name: String, mtl: &str) -> Result<(Material, Vec
             name,
             surface,
             emission,
+            texture: None,
         },
         notes,
     ))
@@ -720,10 +722,12 @@ mod tests {
                     albedo: Vec3::splat(0.5),
                 },
                 emission: Vec3::ZERO,
+                texture: None,
             }],
             spheres: vec![],
             quads: vec![],
             meshes: vec![],
+            textures: vec![],
             regions: vec![],
             warnings: vec![],
         }

@@ -364,6 +364,7 @@ fn build(src: &Source, raw: RawScene, base: &Path) -> Result<Scene> {
         spheres,
         quads,
         meshes: Vec::new(),
+        textures: Vec::new(),
         regions,
         warnings: Vec::new(),
     };
@@ -496,6 +497,7 @@ fn material(src: &Source, name: &str, m: &Spanned<RawMaterial>, spans: &mut Span
         name: name.to_string(),
         surface,
         emission: r.emission.as_ref().map_or(Vec3::ZERO, vec3),
+        texture: None,
     })
 }
 
