@@ -144,3 +144,26 @@ fn scene_hash_covers_mesh_content() {
         .for_each(|m| m.name = format!("elsewhere:{}", m.name));
     assert_eq!(scene.content_sha256(), renamed.content_sha256());
 }
+
+/// ... and textures and texture coordinates: one pixel of an image, or one vertex's texture coordinate.
+#[test]
+fn scene_hash_covers_textures() {
+    use ppm_vk_engine::scene::texture::Pattern;
+    let xml = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/references/cornell-textured.xml");
+    let scene = ppm_vk_engine::Scene::load_with(xml, &[("res".to_string(), "32".to_string())]).unwrap();
+    let mut repainted = scene.clone();
+    let bitmap = repainted.textures.iter_mut().find_map(|t| match &mut t.pattern {
+        Pattern::Bitmap { pixels, .. } => Some(pixels),
+        _ => None,
+    });
+    bitmap.expect("a bitmap texture")[0].x += 1e-3;
+    assert_ne!(scene.content_sha256(), repainted.content_sha256());
+    let mut shifted = scene.clone();
+    let uvs = shifted
+        .meshes
+        .iter_mut()
+        .find_map(|m| m.uvs.as_mut())
+        .expect("texture coordinates");
+    uvs[0].x += 1e-3;
+    assert_ne!(scene.content_sha256(), shifted.content_sha256());
+}

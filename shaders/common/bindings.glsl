@@ -1,4 +1,4 @@
-// Scene bindings shared by the kernels that trace rays (ray, photon): always bindings 0-5, in this order
+// Scene bindings shared by the kernels that trace rays (ray, photon): always bindings 0-7, in this order
 // (4 and 5: the triangle BVH, crates/engine/src/bvh.rs; one empty leaf in scenes without meshes).
 // The intersection loops read the scene through SPHERE(i), QUAD(i), INLINE_TRIANGLE(i), NUM_SPHERES,
 // NUM_QUADS and NUM_INLINE_TRIANGLES, and traverse the BVH when NUM_TRIANGLES > 0. Built as shipped, they
@@ -20,12 +20,27 @@ layout(binding = 3) uniform usamplerBuffer material_texels;
 // in bvh.glsl read them.
 layout(binding = 4) uniform usamplerBuffer bvh_node_texels;
 layout(binding = 5) uniform usamplerBuffer bvh_triangle_texels;
+// The textures (texture.glsl: each a header of TEXTURE_HEADER texels, then a bitmap's pixels), and the
+// texture coordinates of the BVH's triangles in leaf order, two texels each (u0 v0 u1 v1 | u2 v2): one
+// zeroed texel each in a scene without textures.
+layout(binding = 6) uniform usamplerBuffer texture_texels;
+layout(binding = 7) uniform usamplerBuffer triangle_uv_texels;
+
+// A kernel compiled for one scene knows whether any material has a texture; without one, the texture
+// index is not even read.
+#ifdef SCENE_CONSTANTS
+#include "scene_constants.glsl"
+#define HAS_TEXTURES SCENE_TEXTURES
+#else
+#define HAS_TEXTURES true
+#endif
 // Material i without its lobe terms (left zero: material_terms reads them where a surface needs them).
 Material material(uint i) {
     uvec4 a = texelFetch(material_texels, int(4u * i));
     uvec4 b = texelFetch(material_texels, int(4u * i + 1u));
-    return Material(uintBitsToFloat(a.xyz), a.w, uintBitsToFloat(b.xyz), uintBitsToFloat(b.w), vec3(0.0), 0u,
-                    vec3(0.0), 0u);
+    uint texture = HAS_TEXTURES ? texelFetch(material_texels, int(4u * i + 2u)).w : 0u;
+    return Material(uintBitsToFloat(a.xyz), a.w, uintBitsToFloat(b.xyz), uintBitsToFloat(b.w), vec3(0.0),
+                    texture, vec3(0.0), 0u);
 }
 // Material i's lobe terms (Material.lobe_a, lobe_b: what they hold depends on the surface).
 void material_terms(uint i, out vec3 a, out vec3 b) {
@@ -38,7 +53,6 @@ vec3 material_term_a(uint i) {
 }
 
 #ifdef SCENE_CONSTANTS
-#include "scene_constants.glsl"
 #define SPHERE(i) SCENE_SPHERES[i]
 #define QUAD(i) SCENE_QUADS[i]
 #define INLINE_TRIANGLE(i) SCENE_TRIANGLES[i]

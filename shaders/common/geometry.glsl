@@ -51,6 +51,10 @@ struct Hit {
     vec3 pos;
     vec3 normal;     // geometric normal: outward for spheres, the front normal for quads and triangles
     uint material;
+    uint kind;       // HIT_*
+    uint prim;       // a triangle's index in the BVH's leaf order
+    vec2 local;      // a quad's planar coordinates (its texture coordinates), a triangle's barycentric
+                     // weights of v1 and v2 (texture.glsl's surface_uv reads them)
 };
 
 const uint HIT_QUAD = 0u;     // hit.normal set in the loop
@@ -66,6 +70,8 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit h
     hit.t = tmax;
     bool found = false;
     uint kind = HIT_QUAD;
+    hit.local = vec2(0.0);
+    hit.prim = 0u;
     vec3 center = vec3(0.0);
     float inv_radius = 0.0;
     Triangle tri = Triangle(vec3(0.0), 0u, vec3(0.0), 0u, vec3(0.0), 0u);
@@ -96,6 +102,7 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit h
         if (a < 0.0 || a > 1.0 || b < 0.0 || b > 1.0) continue;
         hit.t = t; found = true; kind = HIT_QUAD;
         hit.normal = q.normal; hit.material = q.material;
+        hit.local = vec2(a, b);
     }
     // A small mesh's triangles, written out (specialize.rs): each tested, with the BVH's watertight test.
     if (NUM_INLINE_TRIANGLES > 0u) {
@@ -107,6 +114,7 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit h
             if (bvh_triangle_test(br, tr.v0, tr.v1, tr.v2, tmin, hit.t, t, bary)) {
                 hit.t = t; found = true; kind = HIT_TRIANGLE;
                 tri = tr; hit.material = tr.material;
+                hit.prim = i; hit.local = bary;
             }
         }
     }
@@ -118,6 +126,7 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit h
             tri = bvh_triangle(bh.triangle);
             hit.t = bh.t; found = true; kind = HIT_TRIANGLE;
             hit.material = tri.material;
+            hit.prim = bh.triangle; hit.local = bh.bary;
         }
         // bvh_left is a budget, not a count of loop iterations: unlimited devices pass 0xffffffff.
         if (bvh_left != 0xffffffffu) bvh_left -= min(bvh_left, bvh_subgroup_cost(bh));
@@ -126,6 +135,7 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit h
             return false;
         }
     }
+    hit.kind = kind;
     if (found) {
         hit.pos = o + hit.t * d;
         if (kind == HIT_SPHERE) hit.normal = (hit.pos - center) * inv_radius;

@@ -21,11 +21,21 @@ struct Material {
     float ior;       // glass, plastic coat, thin dielectric: index inside over index outside
     vec3 lobe_a;     // conductor: real part eta of the complex index, per channel; plastic: the coat's
                      // specular_reflectance; thin dielectric: specular_transmittance
-    uint pad0;
+    uint texture;    // 0: none; else 1 + the texel of its texture's header (texture.glsl), whose value is
+                     // the diffuse albedo (diffuse) or diffuse_reflectance (plastic) at each point
     vec3 lobe_b;     // conductor: imaginary part k (extinction), per channel; plastic: x, the largest
-                     // weight its diffuse lobe gives (plastic.glsl)
+                     // weight its diffuse lobe gives (plastic.glsl), y its fdr_int and z 1 if nonlinear
+                     // (what turns a texture's diffuse_reflectance into its diffuse factor)
     uint pad1;
 };
+
+const uint TEXTURE_BITMAP = 0u;
+const uint TEXTURE_CHECKERBOARD = 1u;
+const uint FILTER_BILINEAR = 0u;
+const uint FILTER_NEAREST = 1u;
+const uint WRAP_REPEAT = 0u;
+const uint WRAP_MIRROR = 1u;
+const uint WRAP_CLAMP = 2u;
 
 struct Sphere {
     vec3 center;

@@ -13,12 +13,12 @@ layout(local_size_x = 64) in;
 
 #include "types.glsl"
 #include "bindings.glsl"
-layout(std430, binding = 6) readonly buffer Lights { Light lights[]; };
-layout(std430, binding = 7) writeonly buffer Photons { u64vec4 photons[]; }; // Photon records (photon_words)
-layout(std430, binding = 8) buffer Counter { uint photon_count; };
-layout(std430, binding = 9) buffer Cut { PathCounters cut; };
-layout(std430, binding = 10) buffer Work { PhotonWork work; };
-layout(std430, binding = 11) buffer Suspended { PhotonState suspended[]; };
+layout(std430, binding = 8) readonly buffer Lights { Light lights[]; };
+layout(std430, binding = 9) writeonly buffer Photons { u64vec4 photons[]; }; // Photon records (photon_words)
+layout(std430, binding = 10) buffer Counter { uint photon_count; };
+layout(std430, binding = 11) buffer Cut { PathCounters cut; };
+layout(std430, binding = 12) buffer Work { PhotonWork work; };
+layout(std430, binding = 13) buffer Suspended { PhotonState suspended[]; };
 layout(push_constant) uniform PhotonPush {
     uint64_t first;  // global index of this batch's first photon: its random stream
     uint count;      // photons in this batch
@@ -36,6 +36,7 @@ layout(push_constant) uniform PhotonPush {
 #include "conductor.glsl"
 #include "plastic.glsl"
 #include "thin_dielectric.glsl"
+#include "texture.glsl"
 #include "grid.glsl"
 #include "invocation.glsl"
 #include "lights.glsl"
@@ -190,6 +191,7 @@ void main() {
         continue;
 #endif
         Material m = material(h.material);
+        apply_texture(m, h);
         if (m.surface == SURFACE_DIFFUSE) {
             float p = max(m.color.r, max(m.color.g, m.color.b));
             if (p <= 0.0) { alive = false; continue; } // a black emitter absorbs

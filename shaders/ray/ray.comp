@@ -47,15 +47,15 @@ layout(local_size_x = 64) in;
 
 #include "types.glsl"
 #include "bindings.glsl"
-layout(std430, binding = 6) writeonly buffer HitPoints { HitPoint hit_points[]; };
-layout(std430, binding = 7) buffer Direct { dvec4 direct[]; };
-layout(std430, binding = 8) buffer Cut { PathCounters cut; };
+layout(std430, binding = 8) writeonly buffer HitPoints { HitPoint hit_points[]; };
+layout(std430, binding = 9) buffer Direct { dvec4 direct[]; };
+layout(std430, binding = 10) buffer Cut { PathCounters cut; };
 // Per pixel, what the pilot saw here or beside: MARK_EMISSION, the front of an emitter; MARK_LIT, a light
 // through one of its shadow rays.
-layout(std430, binding = 9) buffer Busy { uint busy[]; };
+layout(std430, binding = 11) buffer Busy { uint busy[]; };
 const uint MARK_EMISSION = 1u;
 const uint MARK_LIT = 2u;
-layout(std430, binding = 10) readonly buffer Lights { Light lights[]; };
+layout(std430, binding = 12) readonly buffer Lights { Light lights[]; };
 layout(push_constant) uniform RayPush {
     vec2 jitter;     // sample position inside the pixel, in [0,1)^2 (0.5, 0.5: the centre); negative:
                      // a random position per pixel (box filter)
@@ -75,6 +75,7 @@ layout(push_constant) uniform RayPush {
 #include "conductor.glsl"
 #include "plastic.glsl"
 #include "thin_dielectric.glsl"
+#include "texture.glsl"
 #include "invocation.glsl"
 #include "lights.glsl"
 
@@ -141,6 +142,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             break;
         }
         Material m = material(h.material);
+        apply_texture(m, h);
         bool front = dot(d, h.normal) < 0.0;
         vec3 nf = front ? h.normal : -h.normal;
         if (m.surface == SURFACE_DIFFUSE) {
@@ -225,6 +227,7 @@ void main() {
                     break;
                 }
                 Material m = material(h.material);
+                apply_texture(m, h);
                 bool front = dot(r.d, h.normal) < 0.0;
                 vec3 nf = front ? h.normal : -h.normal;
                 if (m.surface == SURFACE_DIFFUSE) {

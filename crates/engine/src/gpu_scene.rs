@@ -25,6 +25,11 @@ pub struct GpuScene {
     pub bvh_nodes: Vec<BvhNode>,
     pub bvh_triangles: Vec<Triangle>,
     pub bvh_stats: BvhStats,
+    /// The textures as texels (texture.glsl): one zeroed texel without textures.
+    pub textures: Vec<[u32; 4]>,
+    /// The texture coordinates of `bvh_triangles`, two texels each (u0 v0 u1 v1 | u2 v2 0 0); one zeroed
+    /// texel where no textured material is on a mesh.
+    pub triangle_uvs: Vec<[f32; 4]>,
     /// The kernels test `bvh_triangles` one by one, written into them as constants (a small mesh:
     /// `specialize::MAX_INLINE_TRIANGLES`), and never traverse the BVH.
     pub triangles_inline: bool,
@@ -59,6 +64,72 @@ pub fn set_camera(params: &mut RenderParams, cam: &crate::scene::Camera) {
     params.height = cam.height;
 }
 
+/// `textures` as texels (texture.glsl's layout) and the texel of each one's header.
+pub fn texture_texels(textures: &[crate::scene::texture::Texture]) -> (Vec<[u32; 4]>, Vec<u32>) {
+    use crate::scene::texture::{Filter, Pattern, Wrap};
+    let bits = |v: Vec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits(), 0];
+    let mut texels = Vec::new();
+    let mut at = Vec::new();
+    for t in textures {
+        let h = texels.len() as u32;
+        at.push(h);
+        let filter = match t.filter {
+            Filter::Bilinear => layout::FILTER_BILINEAR,
+            Filter::Nearest => layout::FILTER_NEAREST,
+        };
+        let wrap = match t.wrap {
+            Wrap::Repeat => layout::WRAP_REPEAT,
+            Wrap::Mirror => layout::WRAP_MIRROR,
+            Wrap::Clamp => layout::WRAP_CLAMP,
+        };
+        let m = t.to_uv;
+        let rows = [bits(Vec3::new(m[0], m[1], m[2])), bits(Vec3::new(m[3], m[4], m[5]))];
+        match &t.pattern {
+            Pattern::Bitmap { width, height, pixels } => {
+                let first = h + layout::TEXTURE_HEADER;
+                texels.push([layout::TEXTURE_BITMAP | filter << 4 | wrap << 8, *width, *height, first]);
+                texels.extend(rows);
+                texels.extend([[0; 4], [0; 4]]);
+                texels.extend(pixels.iter().map(|p| bits(*p)));
+            }
+            Pattern::Checkerboard { color0, color1 } => {
+                texels.push([layout::TEXTURE_CHECKERBOARD | filter << 4 | wrap << 8, 0, 0, 0]);
+                texels.extend(rows);
+                texels.extend([bits(*color0), bits(*color1)]);
+            }
+        }
+    }
+    if texels.is_empty() {
+        texels.push([0; 4]);
+    }
+    (texels, at)
+}
+
+/// The texture coordinates of `triangles` (leaf order; `source` indexes the scene's triangles in mesh
+/// order), two texels each, where a mesh has them (zero where not); one zeroed texel if none has.
+fn triangle_uv_texels(scene: &Scene, triangles: &[Triangle]) -> Vec<[f32; 4]> {
+    if scene.meshes.iter().all(|m| m.uvs.is_none()) {
+        return vec![[0.0; 4]];
+    }
+    let by_source: Vec<[glam::Vec2; 3]> = scene
+        .meshes
+        .iter()
+        .flat_map(|m| {
+            m.indices.iter().map(move |t| match &m.uvs {
+                Some(uv) => t.map(|i| uv[i as usize]),
+                None => [glam::Vec2::ZERO; 3],
+            })
+        })
+        .collect();
+    triangles
+        .iter()
+        .flat_map(|t| {
+            let [a, b, c] = by_source[t.source as usize];
+            [[a.x, a.y, b.x, b.y], [c.x, c.y, 0.0, 0.0]]
+        })
+        .collect()
+}
+
 /// Eq. 8: r = 2 (X + Y + Z) / (3 s), X, Y, Z the extents of the scene's bounding box, s the image size
 /// along one axis (the width).
 pub fn default_radius(scene: &Scene) -> f32 {
@@ -70,6 +141,7 @@ pub fn default_radius(scene: &Scene) -> f32 {
 impl GpuScene {
     /// `photon_capacity` sizes the photon batch buffers (see `Renderer`).
     pub fn new(scene: &Scene, settings: &Settings, photon_capacity: u32) -> Result<GpuScene> {
+        let (textures, texture_at) = texture_texels(&scene.textures);
         let materials: Vec<Material> = scene
             .materials
             .iter()
@@ -100,7 +172,11 @@ impl GpuScene {
                         nonlinear,
                     } => (
                         arr(specular),
-                        [plastic::diffuse_bound(diffuse, ior, nonlinear), 0.0, 0.0],
+                        [
+                            plastic::diffuse_bound(diffuse, ior, nonlinear),
+                            plastic::fresnel_diffuse_reflectance(1.0 / ior),
+                            nonlinear as u32 as f32,
+                        ],
                     ),
                     Surface::ThinDielectric { transmittance, .. } => (arr(transmittance), [0.0; 3]),
                     _ => ([0.0; 3], [0.0; 3]),
@@ -112,6 +188,7 @@ impl GpuScene {
                     ior,
                     lobe_a,
                     lobe_b,
+                    texture: m.texture.map_or(0, |t| texture_at[t as usize] + 1),
                     ..Default::default()
                 }
             })
@@ -294,7 +371,10 @@ impl GpuScene {
             && !built.triangles.is_empty()
             && built.triangles.len() <= settings.max_inline_triangles as usize
             && spheres.len() + quads.len() <= MAX_INLINE_PRIMITIVES;
+        let triangle_uvs = triangle_uv_texels(scene, &built.triangles);
         let mut g = GpuScene {
+            textures,
+            triangle_uvs,
             triangles_inline,
             params,
             materials,

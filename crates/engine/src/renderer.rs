@@ -126,6 +126,9 @@ pub struct Renderer {
     lights: Buffer,
     bvh_nodes: Buffer,
     bvh_triangles: Buffer,
+    /// The textures and the triangles' texture coordinates, as texels (texture.glsl).
+    textures: Buffer,
+    triangle_uvs: Buffer,
     /// `PathCounters`: paths cut at the depth backstops, over the whole render.
     cut: Buffer,
     limits: PathLimits,
@@ -437,9 +440,28 @@ impl Renderer {
                 capacity as u64 * Grid::bytes_per_record(),
             ),
             ("the BVH", bvh_bytes),
+            (
+                "the textures",
+                (gpu.textures.len() * 16 + gpu.triangle_uvs.len() * 16) as u64,
+            ),
             ("the suspended photons", suspended_bytes),
         ];
         fits_device(&per_pixel, &others, max_range, ctx.info().memory_bytes, &advice)?;
+        // The kernels read the textures as texels: each buffer within the device's texel buffer.
+        let max_texels = ctx.limits().max_texel_buffer_elements as u64;
+        for (what, texels) in [
+            ("the textures", gpu.textures.len()),
+            ("the triangles' texture coordinates", gpu.triangle_uvs.len()),
+        ] {
+            if texels as u64 > max_texels {
+                return Err(Error::limit(
+                    format!("{what} ({texels} texels of 16 bytes)"),
+                    Some(texels as u64),
+                    max_texels,
+                    "smaller or fewer texture images",
+                ));
+            }
+        }
 
         let traced = |k: &reflected::KernelInfo| tracing_pipeline(ctx, &gpu, &settings, k, &[]);
         // Hit points per gather thread (measured, shaders/common/neighbours.glsl): two share their photon
@@ -482,6 +504,8 @@ impl Renderer {
                     true => ctx.buffer_from("BVH triangles", &[Triangle::default()])?,
                     false => ctx.buffer_from("BVH triangles", &gpu.bvh_triangles)?,
                 },
+                textures: ctx.buffer_from("textures", &gpu.textures)?,
+                triangle_uvs: ctx.buffer_from("triangle texture coordinates", &gpu.triangle_uvs)?,
                 cut: ctx.buffer_from("path counters", &[PathCounters::default()])?,
                 limits,
                 hit_points: storage("hit points", slots * std::mem::size_of::<HitPoint>() as u64)?,
@@ -645,6 +669,8 @@ impl Renderer {
             materials: &self.materials,
             bvh_nodes: &self.bvh_nodes,
             bvh_triangles: &self.bvh_triangles,
+            textures: &self.textures,
+            triangle_uvs: &self.triangle_uvs,
         }
     }
 
@@ -1472,6 +1498,7 @@ fn tracing_pipeline(
             inline_triangles: gpu.triangles_inline,
             lights: &gpu.lights,
             surfaces: gpu.materials.iter().fold(0, |bits, m| bits | 1 << m.surface),
+            textures: gpu.materials.iter().any(|m| m.texture != 0),
         });
         let defines = [&[("SCENE_CONSTANTS", "1")][..], defines].concat();
         pipeline_from(ctx, k, &specialize::compile_with(k, &defines, &constants)?)

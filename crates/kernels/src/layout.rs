@@ -28,7 +28,10 @@ pub struct Material {
     /// bound of its diffuse weight (`lobe_b[0]`), a thin dielectric's specular_transmittance (`lobe_a`).
     /// Zero for other surfaces.
     pub lobe_a: [f32; 3],
-    pub pad0: u32,
+    /// 0: no texture; else 1 + the texel of its texture's header in the texture buffer (texture.glsl).
+    pub texture: u32,
+    /// See `lobe_a`; a plastic's `lobe_b[1]` and `lobe_b[2]` hold its fdr_int and 1 if nonlinear, which
+    /// turn a texture's diffuse_reflectance into its diffuse factor.
     pub lobe_b: [f32; 3],
     pub pad1: u32,
 }
@@ -38,10 +41,21 @@ gpu_struct!(Material {
     emission,
     ior,
     lobe_a,
-    pad0,
+    texture,
     lobe_b,
     pad1
 });
+
+/// A texture's kind, filter and wrap mode in its header (texture.glsl).
+pub const TEXTURE_BITMAP: u32 = 0;
+pub const TEXTURE_CHECKERBOARD: u32 = 1;
+pub const FILTER_BILINEAR: u32 = 0;
+pub const FILTER_NEAREST: u32 = 1;
+pub const WRAP_REPEAT: u32 = 0;
+pub const WRAP_MIRROR: u32 = 1;
+pub const WRAP_CLAMP: u32 = 2;
+/// Texels of a texture's header, before a bitmap's pixels.
+pub const TEXTURE_HEADER: u32 = 5;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -36,7 +36,7 @@ pub struct RayPush {
 pub const JITTER_RANDOM: [f32; 2] = [-1.0, -1.0];
 push_struct!(RayPush, RAY);
 
-/// The scene as the tracing kernels see it (bindings 0-5 of `ray` and `photon`).
+/// The scene as the tracing kernels see it (bindings 0-7 of `ray` and `photon`).
 pub struct SceneBuffers<'a> {
     pub params: &'a Buffer,
     pub spheres: &'a Buffer,
@@ -45,11 +45,14 @@ pub struct SceneBuffers<'a> {
     /// The triangle BVH (`BvhNode`, `Triangle`); one empty leaf without meshes.
     pub bvh_nodes: &'a Buffer,
     pub bvh_triangles: &'a Buffer,
+    /// The textures and the triangles' texture coordinates (texture.glsl); a zeroed texel each without.
+    pub textures: &'a Buffer,
+    pub triangle_uvs: &'a Buffer,
 }
 
 impl SceneBuffers<'_> {
-    /// Bindings 0-5 in order.
-    pub fn bindings(&self) -> [&Buffer; 6] {
+    /// Bindings 0-7 in order.
+    pub fn bindings(&self) -> [&Buffer; 8] {
         [
             self.params,
             self.spheres,
@@ -57,6 +60,8 @@ impl SceneBuffers<'_> {
             self.materials,
             self.bvh_nodes,
             self.bvh_triangles,
+            self.textures,
+            self.triangle_uvs,
         ]
     }
 }

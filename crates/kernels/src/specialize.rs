@@ -31,6 +31,8 @@ pub struct SceneConstants<'a> {
     /// conductors, plastics and thin dielectrics where there are none (lavapipe runs both sides of a
     /// branch, so code a scene never takes still costs).
     pub surfaces: u32,
+    /// Whether any material has a texture: without one the kernels do not read the texture index.
+    pub textures: bool,
 }
 
 /// An f32 written so GLSL reads back exactly the same bits: nine significant digits name an f32 uniquely
@@ -74,6 +76,7 @@ pub fn scene_constants(c: &SceneConstants) -> String {
         has(SURFACE_PLASTIC),
         has(SURFACE_THIN)
     );
+    s += &format!("const bool SCENE_TEXTURES = {};\n", c.textures);
     s += &format!(
         "const uint NUM_INLINE_TRIANGLES = {}u;\nconst bool SCENE_BVH = {};\n",
         inline.len(),

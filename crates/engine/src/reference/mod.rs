@@ -6,6 +6,7 @@ pub mod bvh;
 pub mod conductor;
 pub mod plastic;
 pub mod rng;
+pub mod texture;
 pub mod thin_dielectric;
 pub mod trace;
 
@@ -169,7 +170,7 @@ fn emission_sample(
         let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
             return sum;
         };
-        let m = &g.materials[h.material as usize];
+        let m = &texture::apply(g, &g.materials[h.material as usize], h.uv);
         let front = d.dot(h.normal) < 0.0;
         let nf = if front { h.normal } else { -h.normal };
         if m.surface == SURFACE_DIFFUSE {
@@ -310,7 +311,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                     let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
                         break;
                     };
-                    let m = &g.materials[h.material as usize];
+                    let m = &texture::apply(g, &g.materials[h.material as usize], h.uv);
                     let front = d.dot(h.normal) < 0.0;
                     let nf = if front { h.normal } else { -h.normal };
                     if m.surface == SURFACE_DIFFUSE {
@@ -483,7 +484,7 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
         let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
             return true;
         };
-        let m = &g.materials[h.material as usize];
+        let m = &texture::apply(g, &g.materials[h.material as usize], h.uv);
         let front = d.dot(h.normal) < 0.0;
         let nf = if front { h.normal } else { -h.normal };
         if m.surface == SURFACE_DIFFUSE {

@@ -14,11 +14,15 @@ pub struct Hit {
     pub pos: Vec3,
     pub normal: Vec3,
     pub material: u32,
+    /// Texture coordinates (texture.glsl's `surface_uv`).
+    pub uv: Vec2,
 }
 
 pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
     let mut best = tmax;
     let mut found: Option<(u32, usize)> = None;
+    // A quad's planar coordinates, a triangle's barycentric weights of v1 and v2.
+    let mut local = Vec2::ZERO;
     for (i, s) in g.spheres.iter().enumerate() {
         let oc = o - v3(s.center);
         let b = oc.dot(d);
@@ -55,12 +59,14 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
         }
         best = t;
         found = Some((1, i));
+        local = Vec2::new(a, b);
     }
     if g.triangles_inline {
         // Written into the kernels: every triangle in order, the first of equal t winning, as geometry.glsl.
         if let Some(h) = super::bvh::brute_force(&g.bvh_triangles, o, d, tmin, best) {
             best = h.t;
             found = Some((2, h.triangle as usize));
+            local = h.bary;
         }
     } else if !g.bvh_triangles.is_empty() {
         // Unlimited budget: where the GPU's traversal is cut, the renderer fails instead.
@@ -68,6 +74,7 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
         if let Some(h) = tr.hit {
             best = h.t;
             found = Some((2, h.triangle as usize));
+            local = h.bary;
         }
     }
     let (kind, i) = found?;
@@ -75,23 +82,42 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
     Some(match kind {
         0 => {
             let s = &g.spheres[i];
+            let normal = (pos - v3(s.center)) * (1.0 / s.radius);
+            // Longitude and colatitude about the world's axes.
+            let mut phi = normal.y.atan2(normal.x);
+            if phi < 0.0 {
+                phi += 2.0 * PI;
+            }
             Hit {
                 pos,
-                normal: (pos - v3(s.center)) * (1.0 / s.radius),
+                normal,
                 material: s.material,
+                uv: Vec2::new(phi * (0.5 / PI), normal.z.clamp(-1.0, 1.0).acos() * (1.0 / PI)),
             }
         }
         1 => Hit {
             pos,
             normal: v3(g.quads[i].normal),
             material: g.quads[i].material,
+            uv: local,
         },
         _ => {
             let t = &g.bvh_triangles[i];
+            // Interpolated from the vertices' (texture.glsl's surface_uv); zero where no mesh has them.
+            let uv = match g.triangle_uvs.get(2 * i + 1) {
+                Some(c) => {
+                    let a = g.triangle_uvs[2 * i];
+                    (1.0 - local.x - local.y) * Vec2::new(a[0], a[1])
+                        + local.x * Vec2::new(a[2], a[3])
+                        + local.y * Vec2::new(c[0], c[1])
+                }
+                None => Vec2::ZERO,
+            };
             Hit {
                 pos,
                 normal: super::bvh::normal(t),
                 material: t.material,
+                uv,
             }
         }
     })

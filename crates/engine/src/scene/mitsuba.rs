@@ -16,10 +16,11 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 use anyhow::{anyhow, bail, Result};
-use glam::{DAffine3, DMat3, DMat4, DVec3, DVec4, Vec3};
+use glam::{DAffine3, DMat3, DMat4, DVec3, DVec4, Vec2, Vec3};
 
 use super::conductors;
 use super::obj::{self, RawMesh};
+use super::texture::{self, Filter, Pattern, Texture, Wrap};
 use super::{Camera, Material, Mesh, ObjImport, Quad, Scene, Sphere, Surface, MAX_TRIANGLES};
 use crate::error::Error;
 
@@ -423,7 +424,10 @@ impl<'a> Props<'a> {
         let mut items = Vec::new();
         let mut objects = Vec::new();
         for c in &owner.children {
-            if PROPERTY_TAGS.contains(&c.tag.as_str()) && c.attr("name").is_some() {
+            // In a bsdf, a named `ref` is a parameter (a top-level texture); in a shape, `<ref id=".."
+            // name="bsdf"/>` stays the shape's bsdf.
+            let parameter = PROPERTY_TAGS.contains(&c.tag.as_str()) || (c.tag == "ref" && owner.tag == "bsdf");
+            if parameter && c.attr("name").is_some() {
                 items.push((c, Cell::new(false)));
             } else {
                 objects.push(c);
@@ -468,8 +472,12 @@ impl<'a> Props<'a> {
     }
 
     fn boolean(&self, name: &str) -> Result<bool> {
+        self.boolean_or(name, false)
+    }
+
+    fn boolean_or(&self, name: &str, default: bool) -> Result<bool> {
         let Some(e) = self.get(name) else {
-            return Ok(false);
+            return Ok(default);
         };
         expect_tag(e, &["boolean"])?;
         match e.required("value")? {
@@ -505,8 +513,8 @@ impl<'a> Props<'a> {
     /// Refuses the properties nothing read.
     fn finish(&self) -> Result<()> {
         match self.items.iter().find(|(_, used)| !used.get()) {
-            Some((e, _)) if e.tag == "texture" => {
-                Err(e.err("textures are not supported (only constant colours: rgb, float, spectrum)"))
+            Some((e, _)) if e.tag == "texture" || e.tag == "ref" => {
+                Err(e.err(texture_refused(e.attr("name").unwrap_or_default())))
             }
             Some((e, _)) => Err(e.err(format!(
                 "parameter not read by ppm-vk for {} (see docs/mitsuba.md)",
@@ -582,9 +590,17 @@ fn color(e: &Elem) -> Result<Vec3> {
             }
             Ok(Vec3::splat(number(e, v)? as f32))
         }
-        "texture" => Err(e.err("textures are not supported (only constant colours: rgb, float, spectrum)")),
+        "texture" | "ref" => Err(e.err(texture_refused(e.attr("name").unwrap_or_default()))),
         _ => Err(e.err("expected a colour: <rgb>, <float> or <spectrum>")),
     }
+}
+
+/// Why a texture on parameter `name` is refused.
+fn texture_refused(name: &str) -> String {
+    format!(
+        "a texture on {name} is not supported: only diffuse reflectance (diffuse reflectance, plastic \
+         diffuse_reflectance) reads textures"
+    )
 }
 
 /// A `<transform>`: its steps in document order, each applied after the ones before (M = step * M).
@@ -658,6 +674,25 @@ struct Bsdf {
     /// Wrapped in `twosided` (or, for a dielectric, two-sided by nature).
     two_sided: bool,
     id: Option<String>,
+    /// The texture its diffuse reflectance is read from (the surface's constant is then the texture's
+    /// largest value in each channel).
+    texture: Option<Rc<Tex>>,
+}
+
+/// A texture with the element it was read from (to locate what a later check finds wrong with it).
+#[derive(Debug)]
+struct Tex {
+    texture: Texture,
+    at: Elem,
+}
+
+/// Whether two bsdfs read the same texture (or neither reads one).
+fn same_texture(a: &Option<Rc<Tex>>, b: &Option<Rc<Tex>>) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some(a), Some(b)) => Rc::ptr_eq(a, b) || a.texture == b.texture,
+        _ => false,
+    }
 }
 
 /// Indices of the refraction of Mitsuba's named materials (`int_ior="bk7"`), from its documentation.
@@ -692,6 +727,8 @@ struct Builder {
     scene: Scene,
     root: Elem,
     bsdfs: HashMap<String, Bsdf>,
+    /// Top-level textures by id (`<ref id=".." name="reflectance"/>` in a bsdf reads them).
+    textures: HashMap<String, Rc<Tex>>,
     /// Field path prefix (`quad[3]`, `materials.white`, `camera`) -> the element it came from.
     origins: HashMap<String, Elem>,
     sensor: Option<Elem>,
@@ -728,6 +765,7 @@ impl Builder {
             },
             root,
             bsdfs: HashMap::new(),
+            textures: HashMap::new(),
             origins: HashMap::new(),
             sensor: None,
             shapes: 0,
@@ -755,7 +793,7 @@ impl Builder {
             "bsdf" => {
                 let b = self.bsdf(e)?;
                 match &b.id {
-                    Some(id) if self.bsdfs.contains_key(id) => {
+                    Some(id) if self.bsdfs.contains_key(id) || self.textures.contains_key(id) => {
                         return Err(e.err(format!(
                             "the id \"{id}\" is already taken (ids are unique, as in Mitsuba)"
                         )));
@@ -772,7 +810,20 @@ impl Builder {
                 "only area emitters inside a shape are supported (no point, spot, directional, \
                  constant or environment lights)",
             )),
-            "texture" => Err(e.err("textures are not supported")),
+            "texture" => {
+                let Some(id) = e.attr("id") else {
+                    self.warn(e, "a top-level texture without an id cannot be used: ignored");
+                    return Ok(());
+                };
+                if self.bsdfs.contains_key(id) || self.textures.contains_key(id) {
+                    return Err(e.err(format!(
+                        "the id \"{id}\" is already taken (ids are unique, as in Mitsuba)"
+                    )));
+                }
+                let t = self.texture(e)?;
+                self.textures.insert(id.to_string(), Rc::new(t));
+                Ok(())
+            }
             "medium" => Err(e.err("participating media are not supported")),
             _ => Err(e.err("not supported here (see docs/mitsuba.md for the subset read)")),
         }
@@ -809,16 +860,19 @@ impl Builder {
                 return Err(n.err(format!("a bsdf nested in {} is not supported", e.what())));
             }
         }
+        let mut texture = None;
         let surface = match e.kind() {
-            "diffuse" => Surface::Diffuse {
-                albedo: props.color("reflectance")?.unwrap_or(Vec3::splat(0.5)),
-            },
+            "diffuse" => {
+                let (albedo, t) = self.reflectance(&props, "reflectance")?;
+                texture = t;
+                Surface::Diffuse { albedo }
+            }
             "twosided" => {
                 let inner = match nested[..] {
                     [one] => self.bsdf(one)?,
                     [a, b] => {
                         let (x, y) = (self.bsdf(a)?, self.bsdf(b)?);
-                        if x.surface != y.surface {
+                        if x.surface != y.surface || !same_texture(&x.texture, &y.texture) {
                             return Err(b.err(
                                 "a different bsdf on the back side is not supported (ppm-vk \
                                  surfaces are the same on both sides)",
@@ -902,6 +956,7 @@ impl Builder {
                     surface,
                     two_sided: true,
                     id,
+                    texture: None,
                 });
             }
             "thindielectric" => {
@@ -917,6 +972,7 @@ impl Builder {
                     surface,
                     two_sided: true,
                     id,
+                    texture: None,
                 });
             }
             kind @ ("plastic" | "roughplastic") => {
@@ -924,9 +980,36 @@ impl Builder {
                     ior(e, &props, "int_ior", "polypropylene")?,
                     ior(e, &props, "ext_ior", "air")?,
                 );
-                let diffuse = props.color("diffuse_reflectance")?.unwrap_or(Vec3::splat(0.5));
+                let (mut diffuse, t) = self.reflectance(&props, "diffuse_reflectance")?;
                 let specular = props.color("specular_reflectance")?.unwrap_or(Vec3::ONE);
                 let nonlinear = props.boolean("nonlinear")?;
+                texture = t;
+                // A texture above the photons' bound is lowered per pixel, as Surface::plastic lowers a
+                // constant (which then stays within it).
+                let most = super::plastic::max_diffuse_reflectance((int / ext) as f32, nonlinear);
+                if let Some(t) = &texture {
+                    if let Some((lowered, n)) = t.texture.lowered(most) {
+                        let what = match lowered.pattern {
+                            Pattern::Bitmap { .. } => "pixels",
+                            Pattern::Checkerboard { .. } => "colours",
+                        };
+                        self.warn(
+                            e,
+                            format!(
+                                "diffuse_reflectance texture \"{}\": {n} {what} lowered to at most {most:.4} per \
+                                 channel: above it a photon's diffuse bounce off this coat (index {}) would gain \
+                                 flux (docs/scene-format.md, plastic)",
+                                t.texture.name,
+                                (int / ext) as f32
+                            ),
+                        );
+                        diffuse = lowered.max();
+                        texture = Some(Rc::new(Tex {
+                            texture: lowered,
+                            at: t.at.clone(),
+                        }));
+                    }
+                }
                 if kind == "roughplastic" {
                     props.ignore(&["alpha", "distribution", "sample_visible"]);
                     self.warn(
@@ -952,17 +1035,114 @@ impl Builder {
             surface,
             two_sided: false,
             id,
+            texture,
         })
+    }
+
+    /// A diffuse reflectance parameter (`reflectance`, `diffuse_reflectance`; Mitsuba's default 0.5): a
+    /// colour, or a texture (nested, or a `ref` to a top-level one) whose values are reflectances, with
+    /// its largest value in each channel.
+    fn reflectance(&self, props: &Props, name: &str) -> Result<(Vec3, Option<Rc<Tex>>)> {
+        let Some(p) = props.get(name) else {
+            return Ok((Vec3::splat(0.5), None));
+        };
+        let t = match p.tag.as_str() {
+            "texture" => Rc::new(self.texture(p)?),
+            "ref" => {
+                let id = p.required("id")?;
+                self.textures.get(id).cloned().ok_or_else(|| {
+                    let mut known: Vec<&str> = self.textures.keys().map(String::as_str).collect();
+                    known.sort();
+                    let known = if known.is_empty() {
+                        "none".to_string()
+                    } else {
+                        known.join(", ")
+                    };
+                    p.err(format!(
+                        "no texture with id \"{id}\" defined before it (known: {known})"
+                    ))
+                })?
+            }
+            _ => return Ok((color(p)?, None)),
+        };
+        if let Some(bad) = t.texture.out_of_range() {
+            return Err(t.at.err(format!(
+                "{}: {bad}: a reflectance texture's values must be in [0, 1]",
+                t.texture.name
+            )));
+        }
+        Ok((t.texture.max(), Some(t)))
+    }
+
+    /// A `<texture>`: Mitsuba's `bitmap` (its image read here, relative to the scene file) or
+    /// `checkerboard`.
+    fn texture(&self, e: &Elem) -> Result<Tex> {
+        let (props, objects) = Props::of(e);
+        if let Some(o) = objects.first() {
+            return Err(o.err(format!("not expected inside {}", e.what())));
+        }
+        let to_uv = texture::uv_map_from_affine(&props.transform("to_uv")?);
+        let choice = |name: &str, default: &str, known: &[&str]| -> Result<String> {
+            let v = props.string(name)?.unwrap_or(default);
+            if known.contains(&v) {
+                Ok(v.to_string())
+            } else {
+                Err(props
+                    .get(name)
+                    .unwrap()
+                    .err(format!("\"{v}\": expected {}", known.join(", "))))
+            }
+        };
+        let texture = match e.kind() {
+            "bitmap" => {
+                let path = self.file(e, &props)?;
+                let filter = match choice("filter_type", "bilinear", &["bilinear", "nearest"])?.as_str() {
+                    "nearest" => Filter::Nearest,
+                    _ => Filter::Bilinear,
+                };
+                let wrap = match choice("wrap_mode", "repeat", &["repeat", "mirror", "clamp"])?.as_str() {
+                    "mirror" => Wrap::Mirror,
+                    "clamp" => Wrap::Clamp,
+                    _ => Wrap::Repeat,
+                };
+                let raw = props.boolean("raw")?;
+                // How Mitsuba stores the pixels (half or single precision) and whether it uses the GPU's
+                // texture units: not what the image holds.
+                choice("format", "auto", &["auto", "variant", "fp16"])?;
+                props.ignore(&["accel"]);
+                props.finish()?;
+                let shown = path.display().to_string();
+                Texture::bitmap(&path, &shown, raw, filter, wrap, to_uv).map_err(|m| e.err(format!("{shown}: {m}")))?
+            }
+            "checkerboard" => {
+                let color0 = props.color("color0")?.unwrap_or(Vec3::splat(0.4));
+                let color1 = props.color("color1")?.unwrap_or(Vec3::splat(0.2));
+                props.finish()?;
+                Texture {
+                    name: "checkerboard".into(),
+                    pattern: Pattern::Checkerboard { color0, color1 },
+                    filter: Filter::Bilinear,
+                    wrap: Wrap::Repeat,
+                    to_uv,
+                }
+            }
+            _ => return Err(e.err("unsupported texture (read: bitmap, checkerboard)")),
+        };
+        Ok(Tex { texture, at: e.clone() })
     }
 
     /// Index of the scene material for `bsdf` with `emission`, named `name` (made on first use; the
     /// same name for different contents gets a suffix).
     fn material(&mut self, name: &str, bsdf: &Bsdf, emission: Vec3, e: &Elem) -> u32 {
+        let texture = bsdf
+            .texture
+            .as_ref()
+            .map(|t| texture::intern(&mut self.scene.textures, std::borrow::Cow::Borrowed(&t.texture)));
         let wanted = Material {
             name: name.to_string(),
             surface: bsdf.surface,
             emission,
-            texture: None,
+            texture,
         };
         let mut candidate = name.to_string();
         for n in 2.. {
@@ -981,6 +1161,10 @@ impl Builder {
             }
         }
         self.origins.insert(format!("materials.{candidate}"), e.clone());
+        if let Some(t) = &bsdf.texture {
+            self.origins
+                .insert(format!("materials.{candidate}.texture"), t.at.clone());
+        }
         self.scene.materials.push(Material {
             name: candidate,
             ..wanted
@@ -1043,6 +1227,7 @@ impl Builder {
                 },
                 two_sided: false,
                 id: None,
+                texture: None,
             },
             e,
         ));
@@ -1063,10 +1248,53 @@ impl Builder {
             (Some(id), false) => id.clone(),
             _ => shape_name,
         };
-        let material = self.material(&name, &bsdf, emission, bsdf_at);
         let to_world = props.transform("to_world")?;
         let flip = props.boolean("flip_normals")?;
+        let textured = bsdf.texture.is_some();
+        if textured && matches!(e.kind(), "cube" | "disk") {
+            return Err(bsdf_at.err(format!(
+                "texture coordinates of a {} are not supported yet (textures are read on rectangles, spheres, \
+                 and OBJ and PLY meshes with texture coordinates)",
+                e.kind()
+            )));
+        }
+        // A rectangle's quad has Mitsuba's uv as its coordinates along edge_u and edge_v. A mirroring
+        // to_world or flip_normals turns its front side around by swapping the edges, which would swap
+        // u and v: a textured one instead runs its first edge backwards from the corner (1, -1), so that
+        // its coordinates are (1 - u, v), and its texture's to_uv takes them back to (u, v) first.
+        let turned = (to_world.matrix3.determinant() < 0.0) != flip;
+        let backwards = e.kind() == "rectangle" && turned && textured;
+        let material = match (&bsdf.texture, backwards) {
+            (Some(t), true) => {
+                let mirrored = Texture {
+                    to_uv: texture::compose_uv(t.texture.to_uv, [-1.0, 0.0, 1.0, 0.0, 1.0, 0.0]),
+                    ..t.texture.clone()
+                };
+                let turned_bsdf = Bsdf {
+                    texture: Some(Rc::new(Tex {
+                        texture: mirrored,
+                        at: t.at.clone(),
+                    })),
+                    ..bsdf.clone()
+                };
+                self.material(&name, &turned_bsdf, emission, bsdf_at)
+            }
+            _ => self.material(&name, &bsdf, emission, bsdf_at),
+        };
         let closed = match e.kind() {
+            "rectangle" if backwards => {
+                // quad() swaps the edges of a turned quad: edge_u = -x, edge_v = +y from (1, -1).
+                self.quad(
+                    e,
+                    &to_world,
+                    flip,
+                    [1.0, -1.0, 0.0],
+                    [0.0, 2.0, 0.0],
+                    [-2.0, 0.0, 0.0],
+                    material,
+                );
+                Closed::No
+            }
             "rectangle" => {
                 self.quad(
                     e,
@@ -1119,6 +1347,7 @@ impl Builder {
                     positions,
                     normals: None,
                     partial_normals: false,
+                    uvs: None,
                     triangles,
                 };
                 self.mesh(e, raw, &to_world, flip)?;
@@ -1142,6 +1371,14 @@ impl Builder {
                 if flip && matches!(bsdf.surface, Surface::Glass { .. }) {
                     return Err(e.err("flip_normals on a dielectric sphere (its inside outside) is not supported"));
                 }
+                // Mitsuba's sphere uv is taken in its object axes, the engine's along the world's.
+                let axes = m.matrix3 * (1.0 / s2.sqrt()) - DMat3::IDENTITY;
+                if textured && axes.to_cols_array().iter().any(|x| x.abs() > 1e-6) {
+                    return Err(e.err(
+                        "a textured sphere whose to_world rotates or mirrors it is not supported (its texture \
+                         coordinates are taken along the world's axes)",
+                    ));
+                }
                 self.origins
                     .insert(format!("sphere[{}]", self.scene.spheres.len()), e.clone());
                 self.scene.spheres.push(Sphere {
@@ -1153,7 +1390,7 @@ impl Builder {
             }
             "obj" => {
                 let path = self.file(e, &props)?;
-                props.ignore(&["flip_tex_coords"]);
+                let flip_tex_coords = props.boolean_or("flip_tex_coords", true)?;
                 let i = obj::import(
                     &mut self.scene,
                     &path,
@@ -1162,8 +1399,16 @@ impl Builder {
                         material: Some(material),
                     },
                     MAX_TRIANGLES,
+                    flip_tex_coords,
                 )
                 .map_err(|err| e.err(format!("{err:#}")))?;
+                if textured && self.scene.meshes[i].uvs.is_none() {
+                    return Err(e.err(format!(
+                        "{}: no texture coordinates (a vt on every face corner), which the texture of {} needs",
+                        path.display(),
+                        bsdf_at.what()
+                    )));
+                }
                 self.origins.insert(format!("mesh[{i}]"), e.clone());
                 let m = &mut self.scene.meshes[i];
                 if flip {
@@ -1181,6 +1426,14 @@ impl Builder {
                 let mut raw = read_ply(&path, material).map_err(|err| e.err(format!("{err:#}")))?;
                 if face_normals {
                     raw.normals = None;
+                }
+                if textured && raw.uvs.is_none() {
+                    return Err(e.err(format!(
+                        "{}: no texture coordinates (float or double vertex properties u and v, texture_u and \
+                         texture_v, or s and t), which the texture of {} needs",
+                        path.display(),
+                        bsdf_at.what()
+                    )));
                 }
                 let i = self.mesh(e, raw, &to_world, flip)?;
                 closed(&self.scene.meshes[i])
@@ -1506,6 +1759,20 @@ fn read_ply(path: &Path, material: u32) -> Result<RawMesh> {
     let has_normals = vertices
         .first()
         .is_some_and(|v| ["nx", "ny", "nz"].iter().all(|k| v.contains_key(*k)));
+    // Texture coordinates under the names Mitsuba reads, in its order, not flipped (as Mitsuba). Only
+    // float and double ones: Mitsuba would rescale integer ones.
+    let float = |p: Option<&Property>| match p {
+        Some(Property::Float(v)) => Some(f64::from(*v)),
+        Some(Property::Double(v)) => Some(*v),
+        _ => None,
+    };
+    let uv_names = vertices.first().and_then(|v| {
+        [("u", "v"), ("texture_u", "texture_v"), ("s", "t")]
+            .into_iter()
+            .find(|(a, b)| v.contains_key(*a) && v.contains_key(*b))
+            .filter(|(a, b)| float(v.get(*a)).is_some() && float(v.get(*b)).is_some())
+    });
+    let mut uvs = Vec::with_capacity(if uv_names.is_some() { vertices.len() } else { 0 });
     for (k, v) in vertices.iter().enumerate() {
         let get = |name: &str| -> Result<f64> {
             let x = v
@@ -1521,6 +1788,10 @@ fn read_ply(path: &Path, material: u32) -> Result<RawMesh> {
         positions.push(DVec3::new(get("x")?, get("y")?, get("z")?));
         if has_normals {
             normals.push(DVec3::new(get("nx")?, get("ny")?, get("nz")?));
+        }
+        if let Some((a, b)) = uv_names {
+            let uv = |name: &str| float(v.get(name)).ok_or_else(|| anyhow!("{shown}: vertex {k} has no number {name}"));
+            uvs.push(Vec2::new(uv(a)? as f32, uv(b)? as f32));
         }
     }
     let faces = ply
@@ -1566,6 +1837,7 @@ fn read_ply(path: &Path, material: u32) -> Result<RawMesh> {
         positions,
         normals: has_normals.then_some(normals),
         partial_normals: false,
+        uvs: uv_names.map(|_| uvs),
         triangles,
     })
 }
@@ -2260,10 +2532,10 @@ mod tests {
                 "parameter not read by ppm-vk",
             ),
             (
-                r#"<shape type="cube"><bsdf type="diffuse"><texture name="reflectance" type="bitmap"/></bsdf></shape>"#,
-                r#"<texture type="bitmap" name="reflectance">"#,
+                r#"<shape type="cube"><bsdf type="conductor"><texture name="specular_reflectance" type="checkerboard"/></bsdf></shape>"#,
+                r#"<texture type="checkerboard" name="specular_reflectance">"#,
                 12,
-                "textures are not supported",
+                "a texture on specular_reflectance is not supported: only diffuse reflectance",
             ),
             (
                 r#"<emitter type="envmap"/>"#,
@@ -2379,5 +2651,475 @@ mod tests {
         assert_eq!(parse_define("v=a=b"), Ok(("v".into(), "a=b".into())));
         assert!(parse_define("spp").is_err());
         assert!(parse_define("$spp=1").is_err());
+    }
+
+    /// Writes `name` (a 2 x 2 PNG: red, green over blue, white) into `dir`.
+    fn write_texture(dir: &TempDir, name: &str) {
+        let rgb = [255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255];
+        texture::write_png(&dir.0.join(name), 2, 2, &rgb);
+    }
+
+    fn material_of_quad(s: &Scene, quad: usize) -> &Material {
+        &s.materials[s.quads[quad].material as usize]
+    }
+
+    /// The texture coordinates a quad gives world point `p`: its coordinates along edge_u and edge_v,
+    /// through its material's texture's to_uv.
+    fn quad_uv(s: &Scene, q: &Quad, p: Vec3) -> Vec2 {
+        let (u, v, d) = (q.edge_u, q.edge_v, p - q.origin);
+        // The dual basis of (u, v) in their plane.
+        let n = u.cross(v);
+        let (a, b) = (
+            d.dot(v.cross(n)) / u.dot(v.cross(n)),
+            d.dot(u.cross(n)) / v.dot(u.cross(n)),
+        );
+        let m = s.textures[s.materials[q.material as usize].texture.unwrap() as usize].to_uv;
+        Vec2::new(m[0] * a + m[1] * b + m[2], m[3] * a + m[4] * b + m[5])
+    }
+
+    #[test]
+    fn bitmap_and_checkerboard_textures_on_diffuse_and_plastic() {
+        let dir = TempDir::new("mitsuba-tex");
+        std::fs::create_dir_all(dir.0.join("tex")).unwrap();
+        write_texture(&dir, "tex/rgbw.png");
+        let s = load_in(
+            &dir,
+            r#"<shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">
+                 <string name="filename" value="tex/rgbw.png"/></texture></bsdf></shape>
+               <shape type="rectangle"><bsdf type="twosided"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">
+                 <string name="filename" value="tex/rgbw.png"/><string name="filter_type" value="nearest"/>
+                 <string name="wrap_mode" value="clamp"/><boolean name="raw" value="true"/>
+                 <string name="format" value="fp16"/><boolean name="accel" value="false"/>
+                 <transform name="to_uv"><scale x="2" y="3"/><translate x="0.5"/></transform></texture></bsdf></bsdf></shape>
+               <shape type="sphere"><bsdf type="plastic"><texture type="checkerboard" name="diffuse_reflectance">
+                 <rgb name="color0" value="0.1, 0.2, 0.3"/></texture></bsdf></shape>
+               <shape type="sphere"><transform name="to_world"><scale value="2"/><translate x="3"/></transform>
+                 <bsdf type="diffuse"><texture type="checkerboard" name="reflectance"/></bsdf></shape>"#,
+            &[],
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        // One texture for each distinct (image, parameters): three, the checkerboards differing in colour.
+        assert_eq!(
+            s.textures.len(),
+            4,
+            "{:?}",
+            s.textures.iter().map(|t| &t.name).collect::<Vec<_>>()
+        );
+        let m = material_of_quad(&s, 1);
+        let t = &s.textures[m.texture.unwrap() as usize];
+        assert!(t.name.ends_with("tex/rgbw.png"), "{}", t.name);
+        assert_eq!(
+            (t.filter, t.wrap, t.to_uv),
+            (Filter::Bilinear, Wrap::Repeat, texture::IDENTITY_UV)
+        );
+        assert_eq!(
+            t.pattern,
+            Pattern::Bitmap {
+                width: 2,
+                height: 2,
+                pixels: vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE]
+            },
+            "top row first"
+        );
+        // The constant is the texture's largest value in each channel.
+        assert_eq!(m.surface, Surface::Diffuse { albedo: Vec3::ONE });
+        let t2 = &s.textures[material_of_quad(&s, 2).texture.unwrap() as usize];
+        assert_eq!((t2.filter, t2.wrap), (Filter::Nearest, Wrap::Clamp));
+        assert_eq!(t2.to_uv, [2.0, 0.0, 0.5, 0.0, 3.0, 0.0]);
+        assert_ne!(
+            material_of_quad(&s, 1),
+            material_of_quad(&s, 2),
+            "different textures, different materials"
+        );
+        let plastic = &s.materials[s.spheres[0].material as usize];
+        let board = &s.textures[plastic.texture.unwrap() as usize];
+        assert_eq!(
+            board.pattern,
+            Pattern::Checkerboard {
+                color0: Vec3::new(0.1, 0.2, 0.3),
+                color1: Vec3::splat(0.2)
+            }
+        );
+        assert!(matches!(plastic.surface, Surface::Plastic { diffuse, .. } if diffuse == Vec3::new(0.2, 0.2, 0.3)));
+        // Mitsuba's defaults, on a sphere scaled and moved (not rotated).
+        let grey = &s.materials[s.spheres[1].material as usize];
+        assert_eq!(
+            s.textures[grey.texture.unwrap() as usize].pattern,
+            Pattern::Checkerboard {
+                color0: Vec3::splat(0.4),
+                color1: Vec3::splat(0.2)
+            }
+        );
+        assert_eq!(
+            grey.surface,
+            Surface::Diffuse {
+                albedo: Vec3::splat(0.4)
+            }
+        );
+        s.validate().unwrap();
+
+        // A top-level texture, referenced twice: one texture, one material; a plastic above the photons'
+        // bound is lowered per pixel, with a warning, in a copy of its own.
+        let s = load_in(
+            &dir,
+            r#"<texture type="bitmap" id="wood"><string name="filename" value="tex/rgbw.png"/></texture>
+               <bsdf type="diffuse" id="a"><ref name="reflectance" id="wood"/></bsdf>
+               <shape type="rectangle"><ref id="a"/></shape>
+               <shape type="rectangle"><bsdf type="diffuse" id="a2"><ref id="wood" name="reflectance"/></bsdf></shape>
+               <shape type="rectangle"><bsdf type="twosided"><bsdf type="roughplastic"><ref name="diffuse_reflectance" id="wood"/></bsdf></bsdf></shape>"#,
+            &[],
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        let (a, a2, p) = (
+            material_of_quad(&s, 1),
+            material_of_quad(&s, 2),
+            material_of_quad(&s, 3),
+        );
+        assert_eq!(a.texture, a2.texture);
+        assert_ne!(p.texture, a.texture);
+        assert_eq!(s.textures.len(), 2);
+        let most = crate::scene::plastic::max_diffuse_reflectance((1.49f64 / 1.000277) as f32, false);
+        assert_eq!(s.textures[p.texture.unwrap() as usize].max(), Vec3::splat(most));
+        assert!(matches!(p.surface, Surface::Plastic { diffuse, .. } if diffuse == Vec3::splat(most)));
+        assert!(
+            s.warnings
+                .iter()
+                .any(|w| w.contains("rgbw.png\": 4 pixels lowered to at most 0.9")),
+            "{:?}",
+            s.warnings
+        );
+        s.validate().unwrap();
+    }
+
+    #[test]
+    fn a_textured_rectangle_has_mitsubas_uv_turned_or_not() {
+        let dir = TempDir::new("mitsuba-tex-rect");
+        write_texture(&dir, "t.png");
+        // Mitsuba 3.9.1: the local point (0.3, -0.6, 0) of a rectangle has uv (0.65, 0.2) whatever to_world
+        // and flip_normals do; its world position, and the side its area emitter lights, for each.
+        let cases: &[(&str, &str, Vec3, Vec3)] = &[
+            ("", "false", Vec3::new(0.3, -0.6, 0.0), Vec3::Z),
+            ("", "true", Vec3::new(0.3, -0.6, 0.0), Vec3::NEG_Z),
+            (r#"<scale x="-1"/>"#, "false", Vec3::new(-0.3, -0.6, 0.0), Vec3::Z),
+            (r#"<scale x="-1"/>"#, "true", Vec3::new(-0.3, -0.6, 0.0), Vec3::NEG_Z),
+            (
+                r#"<scale x="2" y="-3"/><rotate x="1" angle="-90"/><translate y="1"/>"#,
+                "false",
+                Vec3::new(0.6, 1.0, -1.8),
+                Vec3::Y,
+            ),
+        ];
+        for (transform, flip, p, normal) in cases {
+            let s = load_in(
+                &dir,
+                &format!(
+                    r#"<shape type="rectangle"><transform name="to_world">{transform}</transform>
+                       <boolean name="flip_normals" value="{flip}"/>
+                       <bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="t.png"/>
+                         <transform name="to_uv"><scale x="2"/><translate y="0.25"/></transform></texture></bsdf></shape>"#
+                ),
+                &[],
+            )
+            .unwrap_or_else(|e| panic!("{e:#}"));
+            let q = s.quads[1];
+            let uv = quad_uv(&s, &q, *p);
+            // Mitsuba's uv through the texture's own to_uv: (2 u, v + 0.25).
+            let want = Vec2::new(2.0 * 0.65, 0.2 + 0.25);
+            assert!(
+                uv.distance(want) < 1e-5,
+                "{transform} flip {flip}: uv {uv}, want {want}"
+            );
+            assert!(
+                q.normal().distance(*normal) < 1e-5,
+                "{transform} flip {flip}: normal {}",
+                q.normal()
+            );
+            s.validate().unwrap();
+        }
+    }
+
+    #[test]
+    fn textured_meshes_need_texture_coordinates() {
+        let dir = TempDir::new("mitsuba-tex-mesh");
+        write_texture(&dir, "t.png");
+        let tex = r#"<bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="t.png"/></texture></bsdf>"#;
+        dir.write(
+            "uv.obj",
+            "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nvt 0.1 0.2\nvt 0.9 0.2\nvt 0.9 0.8\nf 1/1 2/2 3/3\n",
+        );
+        // Mitsuba flips an OBJ's v unless flip_tex_coords is false.
+        for (flag, want) in [
+            ("", [Vec2::new(0.1, 0.8), Vec2::new(0.9, 0.8), Vec2::new(0.9, 0.2)]),
+            (
+                r#"<boolean name="flip_tex_coords" value="true"/>"#,
+                [Vec2::new(0.1, 0.8), Vec2::new(0.9, 0.8), Vec2::new(0.9, 0.2)],
+            ),
+            (
+                r#"<boolean name="flip_tex_coords" value="false"/>"#,
+                [Vec2::new(0.1, 0.2), Vec2::new(0.9, 0.2), Vec2::new(0.9, 0.8)],
+            ),
+        ] {
+            let s = load_in(
+                &dir,
+                &format!(r#"<shape type="obj"><string name="filename" value="uv.obj"/>{flag}{tex}</shape>"#),
+                &[],
+            )
+            .unwrap_or_else(|e| panic!("{e:#}"));
+            let m = &s.meshes[0];
+            let got: Vec<Vec2> = m.indices[0]
+                .iter()
+                .map(|&i| m.uvs.as_ref().unwrap()[i as usize])
+                .collect();
+            assert!(
+                got.iter().zip(want).all(|(g, w)| g.distance(w) < 1e-6),
+                "{flag}: {got:?}"
+            );
+            assert!(s.materials[m.materials[0] as usize].texture.is_some());
+        }
+        // PLY: s and t, not flipped (Mitsuba's ply reader does not).
+        dir.write(
+            "st.ply",
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+             property float s\nproperty float t\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+             -1 -1 0 0.1 0.2\n1 -1 0 0.9 0.2\n1 1 0 0.9 0.8\n3 0 1 2\n",
+        );
+        let s = load_in(
+            &dir,
+            &format!(r#"<shape type="ply"><string name="filename" value="st.ply"/>{tex}</shape>"#),
+            &[],
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        assert_eq!(
+            s.meshes[0].uvs.as_deref(),
+            Some(&[Vec2::new(0.1, 0.2), Vec2::new(0.9, 0.2), Vec2::new(0.9, 0.8)][..])
+        );
+        // Without texture coordinates: refused, the file named.
+        write_square_meshes(&dir);
+        for kind in ["obj", "ply"] {
+            let e = format!(
+                "{:#}",
+                load_in(
+                    &dir,
+                    &format!(r#"<shape type="{kind}"><string name="filename" value="sq.{kind}"/>{tex}</shape>"#),
+                    &[]
+                )
+                .unwrap_err()
+            );
+            assert!(
+                e.contains(&format!("scene.xml:12:1: <shape type=\"{kind}\">: "))
+                    && e.contains(&format!("sq.{kind}: no texture coordinates")),
+                "{e}"
+            );
+        }
+    }
+
+    #[test]
+    fn texture_errors_name_the_file_and_line() {
+        let dir = TempDir::new("mitsuba-tex-err");
+        write_texture(&dir, "t.png");
+        dir.write("corrupt.png", "\u{89}PNG\r\n\u{1a}\nthis is not a PNG");
+        // A valid PNG header (signature, IHDR) claiming 100000 x 1 pixels, then an empty IDAT and IEND.
+        let chunk = |kind: &[u8], data: &[u8]| -> Vec<u8> {
+            let mut c = (data.len() as u32).to_be_bytes().to_vec();
+            c.extend_from_slice(kind);
+            c.extend_from_slice(data);
+            // CRC-32 of the chunk's type and data.
+            let mut crc = !0u32;
+            for &b in &c[4..] {
+                crc ^= u32::from(b);
+                for _ in 0..8 {
+                    crc = if crc & 1 != 0 {
+                        0xEDB8_8320 ^ (crc >> 1)
+                    } else {
+                        crc >> 1
+                    };
+                }
+            }
+            c.extend_from_slice(&(!crc).to_be_bytes());
+            c
+        };
+        let mut ihdr = 100_000u32.to_be_bytes().to_vec();
+        ihdr.extend_from_slice(&1u32.to_be_bytes());
+        ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
+        let mut huge = b"\x89PNG\r\n\x1a\n".to_vec();
+        huge.extend(chunk(b"IHDR", &ihdr));
+        huge.extend(chunk(b"IDAT", &[]));
+        huge.extend(chunk(b"IEND", &[]));
+        std::fs::write(dir.0.join("huge.png"), &huge).unwrap();
+        // An EXR with a value above 1.
+        image::Rgb32FImage::from_raw(1, 1, vec![1.5, 0.5, 0.5])
+            .unwrap()
+            .save(dir.0.join("bright.exr"))
+            .unwrap();
+        let bitmap = |file: &str| {
+            format!(
+                r#"<shape type="rectangle"><bsdf type="diffuse">
+<texture type="bitmap" name="reflectance"><string name="filename" value="{file}"/></texture></bsdf></shape>"#
+            )
+        };
+        let diffuse =
+            |texture: &str| format!(r#"<shape type="rectangle"><bsdf type="diffuse">{texture}</bsdf></shape>"#);
+        let tex = r#"<texture type="bitmap" name="reflectance"><string name="filename" value="t.png"/></texture>"#;
+        // (body, the element named, its line, what is said)
+        let cases: Vec<(String, &str, usize, &str)> = vec![
+            (bitmap("missing.png"), r#"<texture type="bitmap" name="reflectance">"#, 13, "missing.png: cannot open the image"),
+            (bitmap("corrupt.png"), r#"<texture type="bitmap" name="reflectance">"#, 13, "corrupt.png: not a readable PNG"),
+            (bitmap("huge.png"), r#"<texture type="bitmap" name="reflectance">"#, 13, "huge.png: image of 100000 x 1 pixels"),
+            (
+                bitmap("bright.exr"),
+                r#"<texture type="bitmap" name="reflectance">"#,
+                13,
+                "bright.exr: pixel (0, 0) (column, row from the top) is [1.5, 0.5, 0.5]: a reflectance texture's values must be in [0, 1]",
+            ),
+            (
+                diffuse(r#"<texture type="mesh_attribute" name="reflectance"/>"#),
+                r#"<texture type="mesh_attribute" name="reflectance">"#,
+                12,
+                "unsupported texture (read: bitmap, checkerboard)",
+            ),
+            (
+                diffuse(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="t.png"/><string name="filter_type" value="cubic"/></texture>"#),
+                r#"<string name="filter_type">"#,
+                12,
+                "\"cubic\": expected bilinear, nearest",
+            ),
+            (
+                diffuse(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="t.png"/><float name="gamma" value="2.2"/></texture>"#),
+                r#"<float name="gamma">"#,
+                12,
+                "parameter not read by ppm-vk for <texture type=\"bitmap\" name=\"reflectance\">",
+            ),
+            (
+                diffuse(r#"<texture type="checkerboard" name="reflectance"><texture type="checkerboard" name="color0"/></texture>"#),
+                r#"<texture type="checkerboard" name="color0">"#,
+                12,
+                "a texture on color0 is not supported",
+            ),
+            (diffuse(r#"<ref name="reflectance" id="nothing"/>"#), r#"<ref id="nothing" name="reflectance">"#, 12, "no texture with id \"nothing\""),
+            (
+                format!(r#"<shape type="rectangle"><bsdf type="conductor">{}</bsdf></shape>"#, tex.replace("reflectance", "eta")),
+                r#"<texture type="bitmap" name="eta">"#,
+                12,
+                "a texture on eta is not supported: only diffuse reflectance",
+            ),
+            (
+                format!(r#"<shape type="rectangle"><bsdf type="plastic">{}</bsdf></shape>"#, tex.replace("reflectance", "specular_reflectance")),
+                r#"<texture type="bitmap" name="specular_reflectance">"#,
+                12,
+                "a texture on specular_reflectance is not supported",
+            ),
+            (
+                format!(r#"<shape type="rectangle"><emitter type="area">{}</emitter></shape>"#, tex.replace("reflectance", "radiance")),
+                r#"<texture type="bitmap" name="radiance">"#,
+                12,
+                "a texture on radiance is not supported",
+            ),
+            (
+                format!(r#"<shape type="cube"><bsdf type="diffuse">{tex}</bsdf></shape>"#),
+                r#"<bsdf type="diffuse">"#,
+                12,
+                "texture coordinates of a cube are not supported yet",
+            ),
+            (
+                format!(r#"<shape type="disk"><bsdf type="diffuse">{tex}</bsdf></shape>"#),
+                r#"<bsdf type="diffuse">"#,
+                12,
+                "texture coordinates of a disk are not supported yet",
+            ),
+            (
+                format!(r#"<shape type="sphere"><transform name="to_world"><rotate x="1" angle="30"/></transform><bsdf type="diffuse">{tex}</bsdf></shape>"#),
+                r#"<shape type="sphere">"#,
+                12,
+                "a textured sphere whose to_world rotates or mirrors it",
+            ),
+            (
+                format!(r#"<shape type="sphere"><transform name="to_world"><scale value="-1"/></transform><bsdf type="diffuse">{tex}</bsdf></shape>"#),
+                r#"<shape type="sphere">"#,
+                12,
+                "rotates or mirrors",
+            ),
+            (
+                r#"<texture type="bitmap" id="a"><string name="filename" value="t.png"/></texture><bsdf type="diffuse" id="a"/>"#.to_string(),
+                r#"<bsdf type="diffuse" id="a">"#,
+                12,
+                "the id \"a\" is already taken",
+            ),
+        ];
+        for (body, element, line, says) in &cases {
+            let e = match load_in(&dir, body, &[]) {
+                Ok(_) => panic!("expected an error for {body}"),
+                Err(e) => format!("{e:#}"),
+            };
+            assert!(
+                e.contains(&format!("scene.xml:{line}:")),
+                "{e} should be at line {line}"
+            );
+            assert!(e.contains(element), "{e} should name {element}");
+            assert!(e.contains(says), "{e} should say {says}");
+        }
+    }
+
+    #[test]
+    fn ply_texture_coordinates_under_each_name_and_type() {
+        let dir = TempDir::new("mitsuba-ply-uv");
+        let uv = [[0.1f64, 0.2], [0.9, 0.2], [0.9, 0.8]];
+        let want: Vec<Vec2> = uv.iter().map(|t| Vec2::new(t[0] as f32, t[1] as f32)).collect();
+        let body = |file: &str| format!(r#"<shape type="ply"><string name="filename" value="{file}"/></shape>"#);
+        // ASCII, each name Mitsuba reads; texture_s/texture_t Mitsuba 3.9 ignores ("can't start with postfix").
+        for (a, b, read) in [
+            ("u", "v", true),
+            ("texture_u", "texture_v", true),
+            ("s", "t", true),
+            ("texture_s", "texture_t", false),
+        ] {
+            let mut text = format!(
+                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+                 property float {a}\nproperty float {b}\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+            );
+            for (p, t) in [[-1, -1], [1, -1], [1, 1]].iter().zip(uv) {
+                text += &format!("{} {} 0 {} {}\n", p[0], p[1], t[0], t[1]);
+            }
+            text += "3 0 1 2\n";
+            dir.write("a.ply", &text);
+            let s = load_in(&dir, &body("a.ply"), &[]).unwrap_or_else(|e| panic!("{a}: {e:#}"));
+            assert_eq!(s.meshes[0].uvs.as_deref(), read.then_some(&want[..]), "{a} {b}");
+        }
+        // Binary, both byte orders, float and double; integer ones are not read (Mitsuba rescales them).
+        for (format, big) in [("binary_little_endian", false), ("binary_big_endian", true)] {
+            for kind in ["float", "double", "uchar"] {
+                let mut bytes = format!(
+                    "ply\nformat {format} 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+                     property {kind} u\nproperty {kind} v\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                )
+                .into_bytes();
+                let mut put = |b: &[u8]| {
+                    let mut b = b.to_vec();
+                    if big {
+                        b.reverse();
+                    }
+                    bytes.extend_from_slice(&b);
+                };
+                for (p, t) in [[-1.0f32, -1.0], [1.0, -1.0], [1.0, 1.0]].iter().zip(uv) {
+                    for x in [p[0], p[1], 0.0] {
+                        put(&x.to_le_bytes());
+                    }
+                    for x in t {
+                        match kind {
+                            "float" => put(&(x as f32).to_le_bytes()),
+                            "double" => put(&x.to_le_bytes()),
+                            _ => put(&[(x * 255.0) as u8]),
+                        }
+                    }
+                }
+                put(&[3u8]);
+                for i in 0..3i32 {
+                    put(&i.to_le_bytes());
+                }
+                std::fs::write(dir.0.join("b.ply"), &bytes).unwrap();
+                let s = load_in(&dir, &body("b.ply"), &[]).unwrap_or_else(|e| panic!("{format} {kind}: {e:#}"));
+                let expected = (kind != "uchar").then_some(&want[..]);
+                assert_eq!(s.meshes[0].uvs.as_deref(), expected, "{format} {kind}");
+            }
+        }
     }
 }

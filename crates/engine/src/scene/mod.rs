@@ -393,7 +393,7 @@ impl Scene {
     /// error is [`Error::Scene`] with no file of its own: its message starts with the OBJ or MTL file
     /// and the line there.
     pub fn import_obj(&mut self, path: impl AsRef<Path>, import: &ObjImport) -> Result<usize> {
-        obj::import(self, path.as_ref(), import, MAX_TRIANGLES)
+        obj::import(self, path.as_ref(), import, MAX_TRIANGLES, true)
             .map_err(|e| Error::scene("", 0, 0, "", format!("{e:#}")))
     }
 
@@ -469,15 +469,37 @@ impl Scene {
         use sha2::Digest;
         use std::fmt::Write as _;
         let mut h = sha2::Sha256::new();
-        let surfaces: Vec<(Surface, Vec3)> = self.materials.iter().map(|m| (m.surface, m.emission)).collect();
-        // Writing into a hash cannot fail.
-        let _ = write!(Feed(&mut h), "{:?}", (&surfaces, &self.spheres, &self.quads));
         let floats =
             |v: &[Vec3]| -> Vec<u8> { v.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect() };
+        let surfaces: Vec<(Surface, Vec3, Option<u32>)> = self
+            .materials
+            .iter()
+            .map(|m| (m.surface, m.emission, m.texture))
+            .collect();
+        // Writing into a hash cannot fail.
+        let _ = write!(Feed(&mut h), "{:?}", (&surfaces, &self.spheres, &self.quads));
+        for t in &self.textures {
+            let _ = write!(Feed(&mut h), "{:?}", (t.filter, t.wrap, t.to_uv));
+            match &t.pattern {
+                texture::Pattern::Bitmap { width, height, pixels } => {
+                    h.update([width.to_le_bytes(), height.to_le_bytes()].concat());
+                    h.update(floats(pixels));
+                }
+                texture::Pattern::Checkerboard { color0, color1 } => h.update(floats(&[*color0, *color1])),
+            }
+        }
         for m in &self.meshes {
             h.update((m.positions.len() as u64).to_le_bytes());
             h.update(floats(&m.positions));
             h.update(floats(m.normals.as_deref().unwrap_or(&[])));
+            let uvs = m.uvs.as_deref().unwrap_or(&[]);
+            h.update((uvs.len() as u64).to_le_bytes());
+            h.update(
+                uvs.iter()
+                    .flat_map(|p| p.to_array())
+                    .flat_map(f32::to_le_bytes)
+                    .collect::<Vec<u8>>(),
+            );
             h.update((m.indices.len() as u64).to_le_bytes());
             h.update(
                 m.indices
@@ -534,18 +556,72 @@ impl Scene {
     }
 
     /// Checks everything the renderer relies on: finite values, camera, material ranges (emission only
-    /// on diffuse surfaces), sphere radii, non-degenerate quads and triangles, indices in range, at
-    /// most [`MAX_TRIANGLES`], no emitting sphere, and at least one light (an emitting quad or mesh
-    /// triangle). The error is [`Error::Scene`] with the field's path, the scene's name as its `file`
+    /// on diffuse surfaces), textures (values in [0, 1], read by diffuse and plastic surfaces only, on
+    /// meshes only with texture coordinates), sphere radii, non-degenerate quads and triangles, indices
+    /// in range, at most [`MAX_TRIANGLES`], no emitting sphere, and at least one light (an emitting quad
+    /// or mesh triangle). The error is [`Error::Scene`] with the field's path, the scene's name as its `file`
     /// and no line (a loader that knows where the field was written locates it instead).
     pub fn validate(&self) -> Result<()> {
         self.check()
             .map_err(|e| Error::scene(&self.name, 0, 0, e.path, e.message))
     }
 
+    /// Textures: each material's in range, on a diffuse or plastic surface whose constant is at least the
+    /// texture's largest value in each channel (loaders set it to [`texture::Texture::max`], the bound the
+    /// photons use), and every texture's values reflectances (`materials.NAME.texture` names the first
+    /// material reading a bad one, `textures[i]` one that none reads).
+    fn check_textures(&self) -> Result<(), Invalid> {
+        for (i, t) in self.textures.iter().enumerate() {
+            if let Err(message) = t.check() {
+                let path = self
+                    .materials
+                    .iter()
+                    .find(|m| m.texture == Some(i as u32))
+                    .map_or_else(|| format!("textures[{i}]"), |m| format!("materials.{}.texture", m.name));
+                return Err(invalid(path, format!("texture \"{}\": {message}", t.name)));
+            }
+        }
+        for m in &self.materials {
+            let Some(t) = m.texture else { continue };
+            let p = format!("materials.{}.texture", m.name);
+            let Some(texture) = self.textures.get(t as usize) else {
+                return Err(invalid(
+                    p,
+                    format!("texture index {t} out of range ({} textures)", self.textures.len()),
+                ));
+            };
+            let constant = match m.surface {
+                Surface::Diffuse { albedo } => albedo,
+                Surface::Plastic { diffuse, .. } => diffuse,
+                _ => {
+                    return Err(invalid(
+                        p,
+                        "a texture gives a diffuse reflectance: only diffuse and plastic surfaces read one",
+                    ))
+                }
+            };
+            let most = texture.max();
+            if most.cmpgt(constant).any() {
+                return Err(invalid(
+                    p,
+                    format!(
+                        "the surface's constant reflectance {} is below the largest value of texture \"{}\", {} \
+                         (it must bound the texture: set it to Texture::max())",
+                        fmt_vec(constant.to_array()),
+                        texture.name,
+                        fmt_vec(most.to_array())
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// [`Scene::validate`] with the field path kept apart, for loaders that can locate it.
     pub(crate) fn check(&self) -> Result<(), Invalid> {
         check_camera(&self.camera)?;
+        // Textures first: a bad pixel is named rather than the constant it made.
+        self.check_textures()?;
         for m in &self.materials {
             check_material(m)?;
         }
@@ -584,7 +660,21 @@ impl Scene {
             material(&format!("quad[{i}].material"), q.material)?;
         }
         for (i, m) in self.meshes.iter().enumerate() {
-            check_mesh(m, &format!("mesh[{i}]"), self.materials.len())?;
+            let p = format!("mesh[{i}]");
+            check_mesh(m, &p, self.materials.len())?;
+            if m.uvs.is_none() {
+                let textured = m.materials.iter().map(|&k| &self.materials[k as usize]);
+                if let Some(t) = textured.clone().find(|t| t.texture.is_some()) {
+                    return Err(invalid(
+                        p,
+                        format!(
+                            "{}: material \"{}\" reads a texture, but the mesh has no texture coordinates \
+                             (one per vertex)",
+                            m.name, t.name
+                        ),
+                    ));
+                }
+            }
         }
         for (i, r) in self.regions.iter().enumerate() {
             r.check(&format!("region[{i}]"))?;
@@ -895,6 +985,18 @@ fn check_mesh(m: &Mesh, p: &str, num_materials: usize) -> Result<(), Invalid> {
             ));
         }
     }
+    if let Some(uv) = &m.uvs {
+        if uv.len() != m.positions.len() {
+            return fail(format!(
+                "{} texture coordinates for {} vertices",
+                uv.len(),
+                m.positions.len()
+            ));
+        }
+        if let Some(k) = uv.iter().position(|v| !v.is_finite()) {
+            return fail(format!("texture coordinate {k} is not finite: {}", uv[k]));
+        }
+    }
     let nv = m.positions.len();
     for (t, (tri, &mat)) in m.indices.iter().zip(&m.materials).enumerate() {
         if let Some(&i) = tri.iter().find(|&&i| i as usize >= nv) {
@@ -1079,6 +1181,118 @@ mod tests {
             let full = format!("{:#}", s.validate().unwrap_err());
             assert!(full.starts_with("scene code: mesh[0]: lamp: "), "{full}");
         }
+    }
+
+    /// [`small_scene`] with a 2 x 1 texture on "white" (the floor quad) and texture coordinates on the
+    /// lamp mesh.
+    fn textured_scene() -> Scene {
+        let mut s = small_scene();
+        s.textures.push(texture::Texture {
+            name: "t.png".into(),
+            pattern: texture::Pattern::Bitmap {
+                width: 2,
+                height: 1,
+                pixels: vec![Vec3::splat(0.25), Vec3::new(0.5, 0.75, 0.5)],
+            },
+            filter: texture::Filter::Bilinear,
+            wrap: texture::Wrap::Repeat,
+            to_uv: texture::IDENTITY_UV,
+        });
+        s.materials[0].texture = Some(0);
+        s.materials[0].surface = Surface::Diffuse {
+            albedo: s.textures[0].max(),
+        };
+        s.meshes[0].uvs = Some(vec![glam::Vec2::ZERO; 4]);
+        s
+    }
+
+    #[test]
+    fn validate_checks_textures_and_texture_coordinates() {
+        textured_scene().validate().expect("valid");
+        type Edit = fn(&mut Scene);
+        let cases: Vec<(Edit, &str, &str)> = vec![
+            (
+                |s| s.materials[0].texture = Some(3),
+                "materials.white.texture",
+                "texture index 3 out of range (1 textures)",
+            ),
+            (
+                |s| {
+                    s.materials[0].surface = Surface::Mirror {
+                        reflectance: Vec3::ONE,
+                    }
+                },
+                "materials.white.texture",
+                "only diffuse and plastic surfaces read one",
+            ),
+            (
+                |s| {
+                    s.materials[0].surface = Surface::Diffuse {
+                        albedo: Vec3::splat(0.5),
+                    }
+                },
+                "materials.white.texture",
+                "the surface's constant reflectance [0.5, 0.5, 0.5] is below the largest value of texture \"t.png\", [0.5, 0.75, 0.5]",
+            ),
+            (
+                |s| {
+                    if let texture::Pattern::Bitmap { pixels, .. } = &mut s.textures[0].pattern {
+                        pixels[1].y = f32::NAN;
+                    }
+                },
+                "materials.white.texture",
+                "texture \"t.png\": pixel (1, 0) (column, row from the top) is [0.5, NaN, 0.5]",
+            ),
+            (
+                |s| {
+                    if let texture::Pattern::Bitmap { pixels, .. } = &mut s.textures[0].pattern {
+                        pixels[0] = Vec3::splat(1.5);
+                    }
+                    s.materials[0].surface = Surface::Diffuse { albedo: Vec3::splat(1.5) };
+                },
+                "materials.white.texture",
+                "pixel (0, 0) (column, row from the top) is [1.5, 1.5, 1.5]: a reflectance must be finite and in [0, 1]",
+            ),
+            (
+                |s| {
+                    s.materials[0].texture = None;
+                    s.textures[0].to_uv[2] = f32::INFINITY;
+                },
+                "textures[0]",
+                "to_uv [1.0, 0.0, inf, 0.0, 1.0, 0.0] is not finite",
+            ),
+            (
+                |s| s.meshes[0].uvs = Some(vec![glam::Vec2::ZERO; 3]),
+                "mesh[0]",
+                "lamp: 3 texture coordinates for 4 vertices",
+            ),
+            (
+                |s| s.meshes[0].uvs.as_mut().unwrap()[2].x = f32::NAN,
+                "mesh[0]",
+                "lamp: texture coordinate 2 is not finite",
+            ),
+            (
+                |s| {
+                    s.meshes[0].uvs = None;
+                    s.materials[1].texture = Some(0);
+                    s.materials[1].surface = s.materials[0].surface;
+                },
+                "mesh[0]",
+                "lamp: material \"lamp\" reads a texture, but the mesh has no texture coordinates",
+            ),
+        ];
+        for (edit, path, needle) in cases {
+            let mut s = textured_scene();
+            edit(&mut s);
+            let e = check_err(&s);
+            assert_eq!(e.path, path, "{e}");
+            assert!(e.message.contains(needle), "{e} should contain {needle:?}");
+        }
+        // A plastic reads one too, within its bound.
+        let mut s = textured_scene();
+        let (surface, _) = Surface::plastic(s.textures[0].max(), Vec3::ONE, 1.5, false);
+        s.materials[0].surface = surface;
+        s.validate().expect("a textured plastic");
     }
 
     #[test]

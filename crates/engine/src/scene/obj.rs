@@ -12,8 +12,9 @@ use std::panic::AssertUnwindSafe;
 use std::path::Path;
 
 use anyhow::{anyhow, bail, Result};
-use glam::{DAffine3, DVec3, Vec3};
+use glam::{DAffine3, DVec3, Vec2, Vec3};
 
+use super::texture::{self, Filter, Texture, Wrap};
 use super::{demo, fmt_vec, Material, Mesh, Scene, Surface, Triangle};
 
 /// How [`Scene::import_obj`] places and dresses an OBJ.
@@ -41,7 +42,16 @@ const DEFAULT_KD: f32 = 0.8;
 /// Index of refraction of a glass MTL material without Ni.
 const DEFAULT_IOR: f32 = 1.5;
 
-pub(super) fn import(scene: &mut Scene, path: &Path, import: &ObjImport, max_triangles: usize) -> Result<usize> {
+/// Imports the OBJ at `path` (see [`Scene::import_obj`]); `flip_tex_coords` turns its `vt` upside down
+/// (v' = 1 - v) into Mitsuba's convention, where v grows downwards in the image, as Mitsuba's OBJ
+/// reader does by default.
+pub(super) fn import(
+    scene: &mut Scene,
+    path: &Path,
+    import: &ObjImport,
+    max_triangles: usize,
+    flip_tex_coords: bool,
+) -> Result<usize> {
     let shown = path.display().to_string();
     let text = super::read_bounded(path, super::MAX_MESH_BYTES, "OBJ file").map_err(|e| {
         let hint = if demo::is_generated(path) {
@@ -138,6 +148,10 @@ pub(super) fn import(scene: &mut Scene, path: &Path, import: &ObjImport, max_tri
         }
     }
 
+    // Whether every vertex has a (finite) texture coordinate: an MTL's map_Kd needs them.
+    let uvs_complete = models.iter().filter(|m| !m.mesh.indices.is_empty()).all(|m| {
+        m.mesh.texcoords.len() / 2 == m.mesh.positions.len() / 3 && m.mesh.texcoords.iter().all(|x| x.is_finite())
+    });
     // tobj material index -> scene material index, made on first use.
     let mut index_of: HashMap<usize, u32> = HashMap::new();
     let mut warnings = Vec::new();
@@ -156,7 +170,24 @@ pub(super) fn import(scene: &mut Scene, path: &Path, import: &ObjImport, max_tri
             .get(id)
             .ok_or_else(|| anyhow!("{shown}: object {object}: material {id} out of range"))?;
         let mtl = mtl_of.get(&m.name).map_or("MTL", String::as_str);
-        let (mat, notes) = convert(m, format!("{shown}:{}", m.name), mtl)?;
+        let (mut mat, mut notes) = convert(m, format!("{shown}:{}", m.name), mtl)?;
+        if let (Surface::Diffuse { albedo }, Some(map)) = (mat.surface, &m.diffuse_texture) {
+            // A map that cannot be used (a missing image is common in exported files) leaves Kd alone.
+            let map_kd = match uvs_complete {
+                true => diffuse_map(map, mtl, m.diffuse.is_some().then_some(albedo)),
+                false => Err("the OBJ has no texture coordinates (vt) on every face corner".into()),
+            };
+            match map_kd {
+                Ok((t, more)) => {
+                    // Without Kd the image alone is the colour: no 0.8 was assumed.
+                    notes.retain(|n| !n.starts_with("no Kd"));
+                    notes.extend(more);
+                    mat.surface = Surface::Diffuse { albedo: t.max() };
+                    mat.texture = Some(texture::intern(&mut scene.textures, std::borrow::Cow::Owned(t)));
+                }
+                Err(e) => notes.push(format!("map_Kd {map} ignored ({e}): the constant Kd is used")),
+            }
+        }
         let k = match scene.materials.iter().position(|x| x.name == mat.name) {
             // The same OBJ imported again: one material (and its warning) serves both.
             Some(i) if scene.materials[i] == mat => i,
@@ -183,8 +214,10 @@ pub(super) fn import(scene: &mut Scene, path: &Path, import: &ObjImport, max_tri
 
     let mut positions: Vec<DVec3> = Vec::new();
     let mut normals: Vec<DVec3> = Vec::new();
-    // Whether every vertex came with a normal, and whether any did.
-    let (mut all_normals, mut any_normals) = (true, false);
+    let mut uvs: Vec<Vec2> = Vec::new();
+    // Whether every vertex came with a normal, and whether any did; whether every one has a texture
+    // coordinate.
+    let (mut all_normals, mut any_normals, mut all_uvs) = (true, false, true);
     let mut triangles: Vec<([u32; 3], u32)> = Vec::new();
     for model in &models {
         let m = &model.mesh;
@@ -203,6 +236,12 @@ pub(super) fn import(scene: &mut Scene, path: &Path, import: &ObjImport, max_tri
             any_normals |= !m.normals.is_empty();
             all_normals = false;
         }
+        if m.texcoords.len() / 2 == m.positions.len() / 3 {
+            let v = |t: f32| if flip_tex_coords { 1.0 - t } else { t };
+            uvs.extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], v(t[1]))));
+        } else {
+            all_uvs = false;
+        }
         for t in m.indices.chunks_exact(3) {
             triangles.push(([t[0] + base, t[1] + base, t[2] + base], material));
         }
@@ -218,6 +257,7 @@ pub(super) fn import(scene: &mut Scene, path: &Path, import: &ObjImport, max_tri
         positions,
         normals: (all_normals && any_normals).then_some(normals),
         partial_normals: any_normals && !all_normals,
+        uvs: all_uvs.then_some(uvs),
         triangles,
     };
     scene.warnings.extend(warnings);
@@ -233,6 +273,9 @@ pub(super) struct RawMesh {
     pub normals: Option<Vec<DVec3>>,
     /// Some vertices had a normal and some not (they are all dropped, with a warning).
     pub partial_normals: bool,
+    /// Texture coordinates in Mitsuba's convention (v grows downwards in the image), one per position
+    /// when every vertex has one.
+    pub uvs: Option<Vec<Vec2>>,
     /// Counter-clockwise seen from the front, with their material (an index into `Scene::materials`).
     pub triangles: Vec<([u32; 3], u32)>,
 }
@@ -240,7 +283,8 @@ pub(super) struct RawMesh {
 /// Places `raw` in the scene by `transform` (its inverse transpose for normals) and appends it to
 /// `scene.meshes`; returns its index. A mirroring transform reverses the winding so that the front
 /// side stays the one the file meant; `flip` turns every triangle (and normal) around on top of that.
-/// Degenerate triangles are dropped with a warning, and the vertices only they used with them.
+/// Degenerate triangles are dropped with a warning, and the vertices only they used with them (texture
+/// coordinates follow their vertices; ones that are not finite are dropped with a warning).
 pub(super) fn add_mesh(scene: &mut Scene, raw: RawMesh, transform: &DAffine3, flip: bool) -> Result<usize> {
     let shown = raw.name;
     let mut warnings = Vec::new();
@@ -333,11 +377,24 @@ pub(super) fn add_mesh(scene: &mut Scene, raw: RawMesh, transform: &DAffine3, fl
         }
         None
     };
+    let uvs = raw.uvs.and_then(|uvs| {
+        let uv: Vec<Vec2> = kept.iter().map(|&i| uvs[i as usize]).collect();
+        match uv.iter().position(|t| !t.is_finite()) {
+            None => Some(uv),
+            Some(k) => {
+                warnings.push(format!(
+                    "{shown}: texture coordinates dropped: coordinate {k} is not finite ({})",
+                    uv[k]
+                ));
+                None
+            }
+        }
+    });
     scene.meshes.push(Mesh {
         name: shown,
         positions: kept.iter().map(|&i| positions[i as usize]).collect(),
         normals,
-        uvs: None,
+        uvs,
         indices,
         materials,
     });
@@ -561,6 +618,80 @@ fn read_mtl(path: &Path, mtllib_at: &str) -> Result<tobj::MTLLoadResult> {
     Ok(tobj::load_mtl_buf(&mut text.as_bytes()))
 }
 
+/// An MTL's `map_Kd` (the rest of its line: options, then the image file, relative to the MTL's folder)
+/// as a texture: sRGB-encoded unless the image holds floats, bilinear, repeating (`-clamp on`: clamped),
+/// `-s` and `-o` (scale and offset of the OBJ's texture coordinates) made its `to_uv`. `kd`, when the MTL
+/// gives Kd, multiplies it, as the format says. Also returns notes on the options it ignores.
+fn diffuse_map(spec: &str, mtl: &str, kd: Option<Vec3>) -> Result<(Texture, Vec<String>), String> {
+    let words: Vec<&str> = spec.split_whitespace().collect();
+    let (mut scale, mut offset, mut wrap) = ([1.0f32, 1.0], [0.0f32, 0.0], Wrap::Repeat);
+    let mut notes = Vec::new();
+    let mut i = 0;
+    while i < words.len() && words[i].starts_with('-') {
+        let option = words[i];
+        i += 1;
+        // How many words the option takes: numbers (at least one) or one word.
+        let numbers: Vec<f32> = words[i..]
+            .iter()
+            .take(3)
+            .map_while(|w| w.parse::<f32>().ok().filter(|x| x.is_finite()))
+            .collect();
+        match option {
+            "-s" | "-o" | "-t" | "-mm" => {
+                let n = if option == "-mm" {
+                    numbers.len().min(2)
+                } else {
+                    numbers.len()
+                };
+                if n == 0 {
+                    return Err(format!("option {option} needs numbers"));
+                }
+                match option {
+                    "-s" => scale = [numbers[0], numbers.get(1).copied().unwrap_or(1.0)],
+                    "-o" => offset = [numbers[0], numbers.get(1).copied().unwrap_or(0.0)],
+                    _ => notes.push(format!("map_Kd option {option} ignored")),
+                }
+                i += n;
+            }
+            "-clamp" | "-blendu" | "-blendv" | "-cc" | "-imfchan" | "-bm" | "-boost" | "-texres" => {
+                let Some(&value) = words.get(i) else {
+                    return Err(format!("option {option} needs a value"));
+                };
+                match (option, value) {
+                    ("-clamp", "on") => wrap = Wrap::Clamp,
+                    ("-clamp", "off") => {}
+                    ("-clamp", _) => return Err(format!("-clamp {value}: expected on or off")),
+                    _ => notes.push(format!("map_Kd option {option} {value} ignored")),
+                }
+                i += 1;
+            }
+            _ => return Err(format!("unknown option {option}")),
+        }
+    }
+    let file = words[i..].join(" ");
+    if file.is_empty() {
+        return Err("no image file after the options".into());
+    }
+    // Exporters on Windows write backslashes.
+    let path = Path::new(mtl)
+        .parent()
+        .unwrap_or(Path::new(""))
+        .join(file.replace('\\', "/"));
+    // The OBJ's v runs up the image and is stored flipped (v' = 1 - v): its scale and offset, applied
+    // before the flip, become v' -> 1 - (s (1 - v') + o) after it.
+    let to_uv = [scale[0], 0.0, offset[0], 0.0, scale[1], 1.0 - scale[1] - offset[1]];
+    let shown = path.display().to_string();
+    let mut t =
+        Texture::bitmap(&path, &shown, false, Filter::Bilinear, wrap, to_uv).map_err(|e| format!("{shown}: {e}"))?;
+    if let (Some(kd), texture::Pattern::Bitmap { pixels, .. }) = (kd, &mut t.pattern) {
+        pixels.iter_mut().for_each(|p| *p *= kd);
+    }
+    if let Some(bad) = t.out_of_range() {
+        return Err(format!("{shown}: {bad}: a diffuse reflectance must be in [0, 1]"));
+    }
+    Ok((t, notes))
+}
+
 // tobj's numbers are f32, or f64 where a crate turns on its `use_f64`: taken either way.
 fn f32x1<T: Into<f64>>(x: T) -> f32 {
     x.into() as f32
@@ -661,16 +792,18 @@ fn convert(m: &tobj::Material, name: String, mtl: &str) -> Result<(Material, Vec
     if nonzero(ke) && !diffuse {
         notes.push("Ke ignored: only diffuse surfaces emit".into());
     }
+    if let (false, Some(t)) = (diffuse, &m.diffuse_texture) {
+        notes.push(format!("map_Kd {t} ignored (only a diffuse material reads it)"));
+    }
     for (key, tex) in [
         ("map_Ka", &m.ambient_texture),
-        ("map_Kd", &m.diffuse_texture),
         ("map_Ks", &m.specular_texture),
         ("map_Ns", &m.shininess_texture),
         ("map_d", &m.dissolve_texture),
         ("bump map", &m.normal_texture),
     ] {
         if let Some(t) = tex {
-            notes.push(format!("{key} {t} ignored (no textures)"));
+            notes.push(format!("{key} {t} ignored (only map_Kd is read)"));
         }
     }
     // Other statements (PBR extensions, map_Ke, disp, refl, ...), in a stable order.
@@ -1134,12 +1267,12 @@ newmtl plain\nNs 10\n";
             material: Some(0),
             ..ObjImport::default()
         };
-        let e = format!("{:#}", import(&mut s, &path, &opts, 2).unwrap_err());
+        let e = format!("{:#}", import(&mut s, &path, &opts, 2, true).unwrap_err());
         assert!(
             e.ends_with("a.obj:7: more than 2 triangles: the limit (MAX_TRIANGLES) is reached here"),
             "{e}"
         );
-        import(&mut s, &path, &opts, 3).expect("three is within a limit of three");
+        import(&mut s, &path, &opts, 3, true).expect("three is within a limit of three");
         assert!(s.meshes.len() == 1 && s.warnings.is_empty());
     }
 
@@ -1154,5 +1287,201 @@ newmtl plain\nNs 10\n";
         s.materials[0].surface = Surface::Glass { ior: 1.5 };
         let e = format!("{:#}", s.import_obj(&path, &ObjImport::default()).unwrap_err());
         assert!(e.contains("is already taken by a different material"), "{e}");
+    }
+
+    /// The texture coordinate of each vertex of `m`, by its position.
+    fn uv_by_position(m: &Mesh) -> Vec<([f32; 3], [f32; 2])> {
+        let uvs = m.uvs.as_ref().expect("texture coordinates");
+        let mut v: Vec<([f32; 3], [f32; 2])> = m
+            .positions
+            .iter()
+            .zip(uvs)
+            .map(|(p, t)| (p.to_array(), t.to_array()))
+            .collect();
+        v.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        v
+    }
+
+    #[test]
+    fn texture_coordinates_are_flipped_and_follow_their_vertices() {
+        let dir = TempDir::new("obj-uv");
+        // Vertex 1 unused, the second face degenerate (collinear): both go, and the coordinates stay with
+        // the vertices kept. v is flipped (v' = 1 - v): Mitsuba's convention.
+        let obj = "mtllib a.mtl\nusemtl m\nv 5 5 5\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\n\
+                   vt 0 0\nvt 0.25 0.5\nvt 1 0\nvt 0 1\nvt 0.5 0.5\nf 2/2 3/3 4/4\nf 2/2 3/3 5/5\n";
+        let s = import_into(&dir, obj, Some(MTL), &ObjImport::default()).expect("loads");
+        let m = &s.meshes[0];
+        assert_eq!(m.indices.len(), 1);
+        assert_eq!(
+            uv_by_position(m),
+            [
+                ([0.0, 0.0, 0.0], [0.25, 0.5]),
+                ([0.0, 1.0, 0.0], [0.0, 0.0]),
+                ([1.0, 0.0, 0.0], [1.0, 1.0])
+            ]
+        );
+        // Without the flip (Mitsuba's flip_tex_coords="false"), through a mirroring transform (which turns
+        // the winding, not the coordinates).
+        let path = dir.0.join("a.obj");
+        let mut t = scene();
+        let mirror = ObjImport {
+            transform: DAffine3::from_mat3(DMat3::from_diagonal(DVec3::new(-1.0, 1.0, 1.0))),
+            material: None,
+        };
+        import(&mut t, &path, &mirror, 100, false).expect("loads");
+        assert_eq!(
+            uv_by_position(&t.meshes[0]),
+            [
+                ([-1.0, 0.0, 0.0], [1.0, 0.0]),
+                ([0.0, 0.0, 0.0], [0.25, 0.5]),
+                ([0.0, 1.0, 0.0], [0.0, 1.0])
+            ]
+        );
+        // One position with two texture coordinates (a seam) is two vertices.
+        let seam = format!(
+            "mtllib a.mtl\nusemtl m\n{TRI}v 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nf 1/1 2/2 3/3\nf 2/4 4/4 3/1\n"
+        );
+        let s = import_into(&dir, &seam, Some(MTL), &ObjImport::default()).expect("loads");
+        let m = &s.meshes[0];
+        assert_eq!((m.positions.len(), m.uvs.as_ref().map(Vec::len)), (6, Some(6)));
+        // Only some corners with a vt, or one not finite: none kept (the latter with a warning).
+        let some = format!("mtllib a.mtl\nusemtl m\n{TRI}v 1 1 0\nvt 0 0\nf 1/1 2/1 3/1\nf 2 4 3\n");
+        let s = import_into(&dir, &some, Some(MTL), &ObjImport::default()).expect("loads");
+        assert_eq!(s.meshes[0].uvs, None);
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        let nan = format!("mtllib a.mtl\nusemtl m\n{TRI}vt 0 0\nvt nan 0\nf 1/1 2/2 3/1\n");
+        let s = import_into(&dir, &nan, Some(MTL), &ObjImport::default()).expect("loads");
+        assert_eq!(s.meshes[0].uvs, None);
+        assert!(
+            s.warnings.len() == 1 && s.warnings[0].contains("texture coordinates dropped: coordinate 1 is not finite"),
+            "{:?}",
+            s.warnings
+        );
+    }
+
+    #[test]
+    fn mtl_map_kd_is_a_texture_on_a_diffuse_material() {
+        let dir = TempDir::new("obj-map-kd");
+        std::fs::create_dir_all(dir.0.join("mats/tex")).unwrap();
+        // 2 x 1: white, then sRGB (128, 64, 0).
+        texture::write_png(&dir.0.join("mats/tex/w.png"), 2, 1, &[255, 255, 255, 128, 64, 0]);
+        dir.write(
+            "mats/a.mtl",
+            "newmtl wood\nKd 0.5 0.5 0.5\nmap_Kd -s 2 2 1 -o 0.25 0.5 tex\\w.png\n\
+             newmtl bare\nmap_Kd -clamp on tex/w.png\n\
+             newmtl gone\nKd 0.3 0.3 0.3\nmap_Kd missing.png\n\
+             newmtl shiny\nKs 1 1 1\nillum 3\nmap_Kd tex/w.png\n\
+             newmtl odd\nKd 1 1 1\nmap_Kd -bm 0.5 tex/w.png\n",
+        );
+        let names = ["wood", "bare", "gone", "shiny", "odd"];
+        let mut obj = format!("mtllib mats/a.mtl\n{TRI}vt 0 0\nvt 1 0\nvt 0 1\n");
+        for n in names {
+            obj += &format!("usemtl {n}\nf 1/1 2/2 3/3\n");
+        }
+        let path = dir.write("a.obj", &obj);
+        let mut s = scene();
+        s.import_obj(&path, &ObjImport::default())
+            .unwrap_or_else(|e| panic!("{e:#}"));
+        let m = &s.meshes[0];
+        assert!(m.uvs.is_some());
+        let material = |i: usize| &s.materials[m.materials[i] as usize];
+        let texture = |i: usize| &s.textures[material(i).texture.expect("textured") as usize];
+        let dark = Vec3::new(
+            texture::srgb_to_linear(128.0 / 255.0),
+            texture::srgb_to_linear(64.0 / 255.0),
+            0.0,
+        );
+        // Kd multiplies the image; -s and -o scale and offset the OBJ's (unflipped) coordinates.
+        let wood = texture(0);
+        assert_eq!(
+            wood.pattern,
+            texture::Pattern::Bitmap {
+                width: 2,
+                height: 1,
+                pixels: vec![Vec3::splat(0.5), dark * 0.5]
+            }
+        );
+        assert_eq!((wood.filter, wood.wrap), (Filter::Bilinear, Wrap::Repeat));
+        assert_eq!(wood.to_uv, [2.0, 0.0, 0.25, 0.0, 2.0, -1.5]);
+        assert_eq!(
+            material(0).surface,
+            Surface::Diffuse {
+                albedo: Vec3::splat(0.5)
+            }
+        );
+        // The OBJ's (u, v) = (0.1, 0.2) is stored as (0.1, 0.8); through to_uv it is the image's
+        // (2 u + 0.25, 1 - (2 v + 0.5)) = (0.45, 0.1), v from the top.
+        let (u, v) = (0.1f32, 0.8f32);
+        let t = wood.to_uv;
+        let looked_up = (t[0] * u + t[1] * v + t[2], t[3] * u + t[4] * v + t[5]);
+        assert!(
+            (looked_up.0 - 0.45).abs() < 1e-6 && (looked_up.1 - 0.1).abs() < 1e-6,
+            "{looked_up:?}"
+        );
+        let bare = texture(1);
+        assert_eq!((bare.wrap, bare.to_uv), (Wrap::Clamp, texture::IDENTITY_UV));
+        assert_eq!(material(1).surface, Surface::Diffuse { albedo: Vec3::ONE });
+        assert_eq!(material(2).texture, None);
+        assert_eq!(
+            material(2).surface,
+            Surface::Diffuse {
+                albedo: Vec3::splat(0.3)
+            }
+        );
+        assert_eq!(material(3).texture, None);
+        assert_eq!(texture(4).wrap, Wrap::Repeat);
+        assert_eq!(s.textures.len(), 3);
+        let notes = |name: &str| {
+            s.warnings
+                .iter()
+                .find(|w| w.contains(&format!("material \"{name}\"")))
+                .cloned()
+                .unwrap_or_default()
+        };
+        assert!(
+            notes("gone").contains("map_Kd missing.png ignored (") && notes("gone").contains("the constant Kd is used"),
+            "{:?}",
+            s.warnings
+        );
+        assert!(
+            notes("shiny").contains("map_Kd tex/w.png ignored (only a diffuse material reads it)"),
+            "{:?}",
+            s.warnings
+        );
+        assert!(
+            notes("odd").contains("map_Kd option -bm 0.5 ignored"),
+            "{:?}",
+            s.warnings
+        );
+        assert!(notes("wood").is_empty() && notes("bare").is_empty(), "{:?}", s.warnings);
+        s.validate().unwrap_err(); // no light: everything else is valid
+        let e = format!("{:#}", s.validate().unwrap_err());
+        assert!(e.contains("no emitting quad or triangle"), "{e}");
+        // Imported again: the same textures and materials.
+        let (textures, materials) = (s.textures.len(), s.materials.len());
+        s.import_obj(&path, &ObjImport::default()).unwrap();
+        assert_eq!((s.textures.len(), s.materials.len()), (textures, materials));
+        assert_eq!(s.meshes[1].materials, s.meshes[0].materials);
+        // Without texture coordinates the map cannot be read: Kd alone, with a warning.
+        let path = dir.write("b.obj", &format!("mtllib mats/a.mtl\n{TRI}usemtl wood\nf 1 2 3\n"));
+        let mut s = scene();
+        s.import_obj(&path, &ObjImport::default()).unwrap();
+        let m = &s.materials[s.meshes[0].materials[0] as usize];
+        assert_eq!(
+            (m.texture, m.surface),
+            (
+                None,
+                Surface::Diffuse {
+                    albedo: Vec3::splat(0.5)
+                }
+            )
+        );
+        assert!(
+            s.warnings.len() == 1
+                && s.warnings[0]
+                    .contains("map_Kd -s 2 2 1 -o 0.25 0.5 tex\\w.png ignored (the OBJ has no texture coordinates"),
+            "{:?}",
+            s.warnings
+        );
     }
 }

@@ -125,3 +125,249 @@ pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), Strin
         .collect();
     Ok((width, height, pixels))
 }
+
+/// Mitsuba's `to_uv` from the 4x4 affine transform its XML gives: Mitsuba applies it to the point
+/// (u, v, 0), so the z column drops out and the translation's x and y are the offsets.
+pub fn uv_map_from_affine(m: &glam::DAffine3) -> [f32; 6] {
+    let (x, y, t) = (m.matrix3.x_axis, m.matrix3.y_axis, m.translation);
+    [x.x, y.x, t.x, x.y, y.y, t.y].map(|c| c as f32)
+}
+
+/// Two affine uv maps (as `to_uv`) one after the other: the map of `outer(inner(uv))`.
+pub fn compose_uv(outer: [f32; 6], inner: [f32; 6]) -> [f32; 6] {
+    let [a, b, c, d, e, f] = outer;
+    let [p, q, r, s, t, u] = inner;
+    [
+        a * p + b * s,
+        a * q + b * t,
+        a * r + b * u + c,
+        d * p + e * s,
+        d * q + e * t,
+        d * r + e * u + f,
+    ]
+}
+
+/// Mitsuba's texture coordinates of a sphere at `offset` from its centre (any length; in the sphere's
+/// object axes, which are the world's for a sphere without rotation): u the longitude from +x towards
+/// +y over 2 pi, v the angle from +z over pi.
+pub fn sphere_uv(offset: Vec3) -> glam::Vec2 {
+    let d = offset.normalize_or_zero();
+    let phi = d.y.atan2(d.x);
+    let phi = if phi < 0.0 { phi + std::f32::consts::TAU } else { phi };
+    glam::Vec2::new(
+        phi / std::f32::consts::TAU,
+        d.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
+    )
+}
+
+impl Texture {
+    /// An image file as a texture (its pixels by [`read_image`]); `name` is how messages name it.
+    pub fn bitmap(
+        path: &Path,
+        name: impl Into<String>,
+        raw: bool,
+        filter: Filter,
+        wrap: Wrap,
+        to_uv: [f32; 6],
+    ) -> Result<Texture, String> {
+        let (width, height, pixels) = read_image(path, raw)?;
+        Ok(Texture {
+            name: name.into(),
+            pattern: Pattern::Bitmap { width, height, pixels },
+            filter,
+            wrap,
+            to_uv,
+        })
+    }
+
+    /// The first value that is not a reflectance (finite and in [0, 1] in every channel), described
+    /// (`pixel (3, 7) (column, row from the top) is [1.5, 0, 0]`); `None` when all are.
+    pub fn out_of_range(&self) -> Option<String> {
+        let bad = |v: &Vec3| !(v.is_finite() && v.cmpge(Vec3::ZERO).all() && v.cmple(Vec3::ONE).all());
+        match &self.pattern {
+            Pattern::Bitmap { width, pixels, .. } => pixels.iter().position(bad).map(|k| {
+                let w = (*width).max(1) as usize;
+                let (x, y) = (k % w, k / w);
+                format!(
+                    "pixel ({x}, {y}) (column, row from the top) is {}",
+                    super::fmt_vec(pixels[k].to_array())
+                )
+            }),
+            Pattern::Checkerboard { color0, color1 } => [("color0", color0), ("color1", color1)]
+                .into_iter()
+                .find(|(_, c)| bad(c))
+                .map(|(n, c)| format!("{n} is {}", super::fmt_vec(c.to_array()))),
+        }
+    }
+
+    /// Checks what a renderer relies on: a bitmap's size within [`MAX_TEXTURE_SIDE`] and its pixel count,
+    /// every value a reflectance (finite, in [0, 1]), a finite `to_uv`.
+    pub fn check(&self) -> Result<(), String> {
+        if let Pattern::Bitmap { width, height, pixels } = &self.pattern {
+            if !(1..=MAX_TEXTURE_SIDE).contains(width) || !(1..=MAX_TEXTURE_SIDE).contains(height) {
+                return Err(format!(
+                    "image of {width} x {height} pixels: each side must be in 1..={MAX_TEXTURE_SIDE}"
+                ));
+            }
+            if pixels.len() as u64 != *width as u64 * *height as u64 {
+                return Err(format!("{} pixels for {width} x {height}", pixels.len()));
+            }
+        }
+        if let Some(bad) = self.out_of_range() {
+            return Err(format!("{bad}: a reflectance must be finite and in [0, 1]"));
+        }
+        if !self.to_uv.iter().all(|x| x.is_finite()) {
+            return Err(format!("to_uv {:?} is not finite", self.to_uv));
+        }
+        Ok(())
+    }
+
+    /// The texture with every channel above `most` lowered to it, and how many pixels (or colours)
+    /// changed; `None` when none is above.
+    pub fn lowered(&self, most: f32) -> Option<(Texture, usize)> {
+        let cap = Vec3::splat(most);
+        let mut out = self.clone();
+        let changed = match &mut out.pattern {
+            Pattern::Bitmap { pixels, .. } => pixels
+                .iter_mut()
+                .filter(|p| p.cmpgt(cap).any())
+                .map(|p| *p = p.min(cap))
+                .count(),
+            Pattern::Checkerboard { color0, color1 } => [color0, color1]
+                .into_iter()
+                .filter(|c| c.cmpgt(cap).any())
+                .map(|c| *c = c.min(cap))
+                .count(),
+        };
+        (changed > 0).then_some((out, changed))
+    }
+}
+
+/// The index of `texture` in `textures`, added when no equal one is there (the same image read twice,
+/// for two materials, is stored once).
+pub fn intern(textures: &mut Vec<Texture>, texture: std::borrow::Cow<'_, Texture>) -> u32 {
+    let i = match textures.iter().position(|t| *t == *texture) {
+        Some(i) => i,
+        None => {
+            textures.push(texture.into_owned());
+            textures.len() - 1
+        }
+    };
+    i as u32
+}
+
+/// Writes an 8-bit RGB PNG of `width` x `height` pixels (`rgb`: 3 bytes a pixel, top row first).
+#[cfg(test)]
+pub(crate) fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) {
+    image::RgbImage::from_raw(width, height, rgb.to_vec())
+        .expect("3 bytes a pixel")
+        .save(path)
+        .expect("writing a test PNG");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{DAffine3, DMat3, DVec3, Vec2};
+
+    #[test]
+    fn to_uv_is_the_affine_map_of_u_v_0() {
+        // Mitsuba: scale 2 then translate 0.5 in u: u' = 2 u + 0.5; the z column (here a shear into
+        // z) drops out.
+        let m = DAffine3::from_translation(DVec3::new(0.5, 0.25, 9.0))
+            * DAffine3::from_mat3(DMat3::from_cols(
+                DVec3::new(2.0, 0.0, 0.0),
+                DVec3::new(0.0, 3.0, 0.0),
+                DVec3::new(7.0, 8.0, 1.0),
+            ));
+        assert_eq!(uv_map_from_affine(&m), [2.0, 0.0, 0.5, 0.0, 3.0, 0.25]);
+        // A quarter turn about z: (u, v) -> (-v, u).
+        let r = DAffine3::from_rotation_z(std::f64::consts::FRAC_PI_2);
+        let q = uv_map_from_affine(&r);
+        let want = [0.0, -1.0, 0.0, 1.0, 0.0, 0.0];
+        assert!(q.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-7), "{q:?}");
+        // Composition: outer after inner.
+        let flip_u = [-1.0, 0.0, 1.0, 0.0, 1.0, 0.0];
+        let scale = [2.0, 0.0, 0.5, 0.0, 3.0, 0.25];
+        assert_eq!(compose_uv(scale, flip_u), [-2.0, 0.0, 2.5, 0.0, 3.0, 0.25]);
+        assert_eq!(compose_uv(IDENTITY_UV, scale), scale);
+    }
+
+    #[test]
+    fn sphere_uv_matches_mitsuba() {
+        // Mitsuba 3.9.1 (scalar_rgb), a ray hitting the unit sphere: the hit point and its si.uv.
+        for (p, uv) in [
+            (Vec3::X, Vec2::new(0.0, 0.5)),
+            (Vec3::Y, Vec2::new(0.25, 0.5)),
+            (Vec3::NEG_X, Vec2::new(0.5, 0.5)),
+            (Vec3::NEG_Y, Vec2::new(0.75, 0.5)),
+            (Vec3::new(0.3, 0.1, 0.948683), Vec2::new(0.0512, 0.1024)),
+        ] {
+            let got = sphere_uv(p * 2.5);
+            assert!(got.distance(uv) < 1e-4, "{p}: {got} against Mitsuba's {uv}");
+        }
+    }
+
+    #[test]
+    fn values_are_checked_and_lowered() {
+        let mut t = Texture {
+            name: "t".into(),
+            pattern: Pattern::Bitmap {
+                width: 2,
+                height: 2,
+                pixels: vec![
+                    Vec3::splat(0.1),
+                    Vec3::splat(0.99),
+                    Vec3::new(0.5, 0.96, 0.2),
+                    Vec3::ZERO,
+                ],
+            },
+            filter: Filter::Bilinear,
+            wrap: Wrap::Repeat,
+            to_uv: IDENTITY_UV,
+        };
+        assert_eq!(t.check(), Ok(()));
+        assert_eq!((t.max(), t.min()), (Vec3::splat(0.99), Vec3::ZERO));
+        let (low, n) = t.lowered(0.95).expect("two pixels above");
+        assert_eq!((n, low.max()), (2, Vec3::splat(0.95)));
+        assert!(t.lowered(0.99).is_none());
+        if let Pattern::Bitmap { pixels, .. } = &mut t.pattern {
+            pixels[3] = Vec3::new(0.0, f32::NAN, 0.0);
+        }
+        let e = t.check().unwrap_err();
+        assert!(
+            e.starts_with("pixel (1, 1) (column, row from the top) is [0, NaN, 0]"),
+            "{e}"
+        );
+        if let Pattern::Bitmap { pixels, .. } = &mut t.pattern {
+            pixels.pop();
+        }
+        assert_eq!(t.check().unwrap_err(), "3 pixels for 2 x 2");
+        let c = Texture {
+            pattern: Pattern::Checkerboard {
+                color0: Vec3::splat(0.4),
+                color1: Vec3::new(0.2, 1.5, 0.2),
+            },
+            ..t.clone()
+        };
+        assert!(c.check().unwrap_err().starts_with("color1 is [0.2, 1.5, 0.2]"));
+        let mut textures = vec![c.clone()];
+        assert_eq!(intern(&mut textures, std::borrow::Cow::Borrowed(&c)), 0);
+        assert_eq!(intern(&mut textures, std::borrow::Cow::Owned(t)), 1);
+        assert_eq!(textures.len(), 2);
+    }
+
+    #[test]
+    fn images_are_read_top_row_first_and_decoded() {
+        let dir = crate::scene::TempDir::new("texture-read");
+        let path = dir.0.join("a.png");
+        // 2 x 1: a red pixel then a grey one of code 188.
+        write_png(&path, 2, 1, &[255, 0, 0, 188, 188, 188]);
+        let (w, h, px) = read_image(&path, false).unwrap();
+        assert_eq!((w, h), (2, 1));
+        assert_eq!(px[0], Vec3::X);
+        assert!((px[1].x - srgb_to_linear(188.0 / 255.0)).abs() < 1e-6);
+        let (_, _, raw) = read_image(&path, true).unwrap();
+        assert!((raw[1].x - 188.0 / 255.0).abs() < 1e-6);
+    }
+}

@@ -19,6 +19,7 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 
+use super::texture::{self, Filter, Pattern, Texture, Wrap};
 use super::{obj, Camera, ImageRegion, Material, ObjImport, Quad, Scene, Sphere, Surface, MAX_TRIANGLES};
 
 /// [`Scene::parse`]: mesh files are found relative to the directory of `origin`.
@@ -81,7 +82,7 @@ struct RawCamera {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawMaterial {
-    diffuse: Option<Spanned<[f32; 3]>>,
+    diffuse: Option<Spanned<RawReflectance>>,
     mirror: Option<Spanned<[f32; 3]>>,
     glass: Option<Spanned<f32>>,
     conductor: Option<Spanned<RawConductor>>,
@@ -95,10 +96,85 @@ struct RawMaterial {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawPlastic {
-    diffuse: Option<[f32; 3]>,
+    diffuse: Option<Spanned<RawReflectance>>,
     specular: Option<[f32; 3]>,
     ior: Option<f32>,
     nonlinear: Option<bool>,
+}
+
+/// A diffuse reflectance (a diffuse material's `diffuse`, a plastic's): `[r, g, b]`, or a texture table
+/// ([`RawTexture`]).
+enum RawReflectance {
+    Constant([f32; 3]),
+    Texture(RawTexture),
+}
+
+impl<'de> Deserialize<'de> for RawReflectance {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::{self, IgnoredAny, MapAccess, SeqAccess, Visitor};
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = RawReflectance;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(
+                    "an array of 3 numbers [r, g, b], or a texture table ({ texture = \"file.png\" } or \
+                     { checkerboard = [[r, g, b], [r, g, b]] })",
+                )
+            }
+
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> std::result::Result<Self::Value, A::Error> {
+                let mut v = [0.0f32; 3];
+                for (i, c) in v.iter_mut().enumerate() {
+                    *c = seq
+                        .next_element()?
+                        .ok_or_else(|| de::Error::invalid_length(i, &"3 numbers"))?;
+                }
+                let mut n = 3;
+                while seq.next_element::<IgnoredAny>()?.is_some() {
+                    n += 1;
+                }
+                if n > 3 {
+                    return Err(de::Error::invalid_length(n, &"3 numbers"));
+                }
+                Ok(RawReflectance::Constant(v))
+            }
+
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> std::result::Result<Self::Value, A::Error> {
+                RawTexture::deserialize(de::value::MapAccessDeserializer::new(map)).map(RawReflectance::Texture)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// `{ texture = "wood.png", filter = "bilinear", wrap = "repeat", raw = false, scale = [su, sv] }` (an
+/// image, relative to the scene file) or `{ checkerboard = [[r, g, b], [r, g, b]], scale = [su, sv] }`:
+/// Mitsuba's bitmap and checkerboard, `scale` their to_uv (u' = su u, v' = sv v).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTexture {
+    texture: Option<Spanned<String>>,
+    checkerboard: Option<Spanned<[[f32; 3]; 2]>>,
+    filter: Option<Spanned<RawFilter>>,
+    wrap: Option<Spanned<RawWrap>>,
+    raw: Option<Spanned<bool>>,
+    scale: Option<Spanned<[f32; 2]>>,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum RawFilter {
+    Bilinear,
+    Nearest,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum RawWrap {
+    Repeat,
+    Mirror,
+    Clamp,
 }
 
 /// `thin = { ior = 1.5, reflectance = [..], transmittance = [..] }`: Mitsuba's thindielectric.
@@ -297,8 +373,9 @@ fn build(src: &Source, raw: RawScene, base: &Path) -> Result<Scene> {
     let mut raw_materials: Vec<_> = raw.materials.iter().collect();
     raw_materials.sort_by_key(|(_, m)| m.span().start);
     let mut materials = Vec::with_capacity(raw_materials.len());
+    let mut textures = Vec::new();
     for (key, m) in raw_materials {
-        materials.push(material(src, key, m, &mut spans)?);
+        materials.push(material(src, key, m, base, &mut textures, &mut spans)?);
     }
 
     let mut spheres = Vec::with_capacity(raw.sphere.len());
@@ -364,7 +441,7 @@ fn build(src: &Source, raw: RawScene, base: &Path) -> Result<Scene> {
         spheres,
         quads,
         meshes: Vec::new(),
-        textures: Vec::new(),
+        textures,
         regions,
         warnings: Vec::new(),
     };
@@ -404,18 +481,24 @@ fn lookup(src: &Source, materials: &[Material], r: &Spanned<String>, path: &str)
 
 /// The material as written; its values are checked by `Scene::check`, what only the file can get
 /// wrong (two surface kinds, none, emission written beside mirror or glass) here.
-fn material(src: &Source, name: &str, m: &Spanned<RawMaterial>, spans: &mut Spans) -> Result<Material> {
+fn material(
+    src: &Source,
+    name: &str,
+    m: &Spanned<RawMaterial>,
+    base: &Path,
+    textures: &mut Vec<Texture>,
+    spans: &mut Spans,
+) -> Result<Material> {
     let p = format!("materials.{name}");
     let r = m.get_ref();
     spans.insert(p.clone(), m.span());
-    for (field, v) in [
-        ("diffuse", &r.diffuse),
-        ("mirror", &r.mirror),
-        ("emission", &r.emission),
-    ] {
+    for (field, v) in [("mirror", &r.mirror), ("emission", &r.emission)] {
         if let Some(v) = v {
             spans.insert(format!("{p}.{field}"), v.span());
         }
+    }
+    if let Some(d) = &r.diffuse {
+        spans.insert(format!("{p}.diffuse"), d.span());
     }
     if let Some(g) = &r.glass {
         spans.insert(format!("{p}.glass"), g.span());
@@ -460,8 +543,11 @@ fn material(src: &Source, name: &str, m: &Spanned<RawMaterial>, spans: &mut Span
             ));
         }
     }
+    let mut texture = None;
     let surface = if let Some(d) = &r.diffuse {
-        Surface::Diffuse { albedo: vec3(d) }
+        let (albedo, t) = reflectance(src, &p, "diffuse", d, base, textures, spans)?;
+        texture = t;
+        Surface::Diffuse { albedo }
     } else if let Some(mr) = &r.mirror {
         Surface::Mirror { reflectance: vec3(mr) }
     } else if let Some(g) = &r.glass {
@@ -470,8 +556,17 @@ fn material(src: &Source, name: &str, m: &Spanned<RawMaterial>, spans: &mut Span
         conductor(src, &format!("{p}.conductor"), c)?
     } else if let Some(c) = &r.plastic {
         let c = c.get_ref();
+        let diffuse = match &c.diffuse {
+            Some(d) => {
+                spans.insert(format!("{p}.plastic.diffuse"), d.span());
+                let (diffuse, t) = reflectance(src, &p, "plastic.diffuse", d, base, textures, spans)?;
+                texture = t;
+                diffuse
+            }
+            None => Vec3::splat(0.5),
+        };
         Surface::Plastic {
-            diffuse: c.diffuse.map_or(Vec3::splat(0.5), Vec3::from),
+            diffuse,
             specular: c.specular.map_or(Vec3::ONE, Vec3::from),
             ior: c.ior.unwrap_or(PLASTIC_IOR),
             nonlinear: c.nonlinear.unwrap_or(false),
@@ -497,8 +592,113 @@ fn material(src: &Source, name: &str, m: &Spanned<RawMaterial>, spans: &mut Span
         name: name.to_string(),
         surface,
         emission: r.emission.as_ref().map_or(Vec3::ZERO, vec3),
-        texture: None,
+        texture,
     })
+}
+
+/// A diffuse reflectance written at `{p}.{field}`: the constant, or the texture's largest value in each
+/// channel and its index in `textures` (the same texture written twice is stored once). Its values are
+/// checked by `Scene::check`, located at `{p}.texture`.
+fn reflectance(
+    src: &Source,
+    p: &str,
+    field: &str,
+    d: &Spanned<RawReflectance>,
+    base: &Path,
+    textures: &mut Vec<Texture>,
+    spans: &mut Spans,
+) -> Result<(Vec3, Option<u32>)> {
+    let t = match d.get_ref() {
+        RawReflectance::Constant(v) => return Ok((Vec3::from_array(*v), None)),
+        RawReflectance::Texture(t) => t,
+    };
+    let fp = format!("{p}.{field}");
+    let fail = |span: Range<usize>, sub: &str, message: String| {
+        let path = if sub.is_empty() {
+            fp.clone()
+        } else {
+            format!("{fp}.{sub}")
+        };
+        src.error(span, Some(&path), message)
+    };
+    let to_uv = match &t.scale {
+        Some(s) => {
+            let [su, sv] = *s.get_ref();
+            if !(su.is_finite() && sv.is_finite() && su != 0.0 && sv != 0.0) {
+                return Err(fail(
+                    s.span(),
+                    "scale",
+                    format!("both must be finite and non-zero, got [{su}, {sv}]"),
+                ));
+            }
+            [su, 0.0, 0.0, 0.0, sv, 0.0]
+        }
+        None => texture::IDENTITY_UV,
+    };
+    let texture = match (&t.texture, &t.checkerboard) {
+        (Some(_), Some(c)) => {
+            return Err(fail(
+                c.span(),
+                "checkerboard",
+                "give either texture (an image) or checkerboard, not both".into(),
+            ))
+        }
+        (None, None) => {
+            return Err(fail(
+                d.span(),
+                "",
+                "a texture table needs texture = \"file.png\" or checkerboard = [[r, g, b], [r, g, b]]".into(),
+            ))
+        }
+        (None, Some(c)) => {
+            let image_only = [
+                ("filter", t.filter.as_ref().map(|x| x.span())),
+                ("wrap", t.wrap.as_ref().map(|x| x.span())),
+                ("raw", t.raw.as_ref().map(|x| x.span())),
+            ];
+            if let Some((key, Some(span))) = image_only.into_iter().find(|(_, span)| span.is_some()) {
+                return Err(fail(
+                    span,
+                    key,
+                    "applies to an image texture only, not a checkerboard".into(),
+                ));
+            }
+            spans.insert(format!("{p}.texture"), c.span());
+            let [c0, c1] = *c.get_ref();
+            Texture {
+                name: "checkerboard".into(),
+                pattern: Pattern::Checkerboard {
+                    color0: Vec3::from_array(c0),
+                    color1: Vec3::from_array(c1),
+                },
+                filter: Filter::Bilinear,
+                wrap: Wrap::Repeat,
+                to_uv,
+            }
+        }
+        (Some(file), None) => {
+            spans.insert(format!("{p}.texture"), file.span());
+            if file.get_ref().trim().is_empty() {
+                return Err(fail(file.span(), "texture", "must name an image file".into()));
+            }
+            let path = base.join(file.get_ref());
+            let shown = path.display().to_string();
+            let filter = match t.filter.as_ref().map(|f| *f.get_ref()) {
+                Some(RawFilter::Nearest) => Filter::Nearest,
+                Some(RawFilter::Bilinear) | None => Filter::Bilinear,
+            };
+            let wrap = match t.wrap.as_ref().map(|w| *w.get_ref()) {
+                Some(RawWrap::Mirror) => Wrap::Mirror,
+                Some(RawWrap::Clamp) => Wrap::Clamp,
+                Some(RawWrap::Repeat) | None => Wrap::Repeat,
+            };
+            let raw = t.raw.as_ref().is_some_and(|r| *r.get_ref());
+            Texture::bitmap(&path, &shown, raw, filter, wrap, to_uv)
+                .map_err(|e| fail(file.span(), "texture", format!("{shown}: {e}")))?
+        }
+    };
+    let most = texture.max();
+    Ok((most, Some(texture::intern(textures, std::borrow::Cow::Owned(texture)))))
 }
 
 /// Mitsuba's default plastic coat: polypropylene (1.49) in air (1.000277).
@@ -567,6 +767,7 @@ fn import_mesh(
         &base.join(file),
         &ObjImport { transform, material },
         MAX_TRIANGLES,
+        true,
     )
     .map_err(|e| src.error(r.file.span(), Some(&fpath), format!("{e:#}")))?;
     // Imported materials are located at the mesh that brought them.
@@ -1687,5 +1888,256 @@ material = "light"
             dir.0.display()
         );
         assert_eq!(e, want);
+    }
+
+    /// `dir` with `tex/t.png` (2 x 1: white, then sRGB (128, 64, 0)), a corrupt PNG and an EXR above 1.
+    fn texture_dir() -> TempDir {
+        let dir = TempDir::new("toml-tex");
+        std::fs::create_dir_all(dir.0.join("tex")).unwrap();
+        texture::write_png(&dir.0.join("tex/t.png"), 2, 1, &[255, 255, 255, 128, 64, 0]);
+        dir.write("corrupt.png", "not a PNG at all");
+        image::Rgb32FImage::from_raw(1, 1, vec![0.5, 2.0, 0.5])
+            .unwrap()
+            .save(dir.0.join("bright.exr"))
+            .unwrap();
+        dir
+    }
+
+    /// BASE with line `line` replaced by `with` (and `more` appended), parsed as `<dir>/t.toml`.
+    fn in_dir(dir: &TempDir, line: usize, with: &str, more: &str) -> Result<Scene> {
+        Scene::parse(
+            &format!("{}{more}", edit(line, with)),
+            &dir.0.join("t.toml").display().to_string(),
+        )
+    }
+
+    fn assert_dir_err(dir: &TempDir, line: usize, with: &str, at: usize, path: &str, needle: &str) {
+        let e = match in_dir(dir, line, with, "") {
+            Ok(_) => panic!("expected an error for {with}"),
+            Err(e) => format!("{e:#}").replace(&format!("{}/", dir.0.display()), ""),
+        };
+        assert_located(&e, at, path, needle);
+    }
+
+    #[test]
+    fn diffuse_and_plastic_textures() {
+        let dir = texture_dir();
+        let s = in_dir(&dir, 10, r#"diffuse = { texture = "tex/t.png" }"#, "").unwrap_or_else(|e| panic!("{e:#}"));
+        let white = &s.materials[0];
+        let t = &s.textures[white.texture.unwrap() as usize];
+        assert!(t.name.ends_with("tex/t.png"), "{}", t.name);
+        assert_eq!(
+            (t.filter, t.wrap, t.to_uv),
+            (Filter::Bilinear, Wrap::Repeat, texture::IDENTITY_UV)
+        );
+        let dark = Vec3::new(
+            texture::srgb_to_linear(128.0 / 255.0),
+            texture::srgb_to_linear(64.0 / 255.0),
+            0.0,
+        );
+        assert_eq!(
+            t.pattern,
+            Pattern::Bitmap {
+                width: 2,
+                height: 1,
+                pixels: vec![Vec3::ONE, dark]
+            }
+        );
+        assert_eq!(white.surface, Surface::Diffuse { albedo: Vec3::ONE });
+
+        let s = in_dir(
+            &dir,
+            10,
+            r#"diffuse = { texture = "tex/t.png", filter = "nearest", wrap = "mirror", raw = true, scale = [4, 2] }"#,
+            "",
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        let t = &s.textures[0];
+        assert_eq!(
+            (t.filter, t.wrap, t.to_uv),
+            (Filter::Nearest, Wrap::Mirror, [4.0, 0.0, 0.0, 0.0, 2.0, 0.0])
+        );
+        assert!(
+            matches!(&t.pattern, Pattern::Bitmap { pixels, .. } if (pixels[1].x - 128.0 / 255.0).abs() < 1e-6),
+            "raw"
+        );
+
+        // A checkerboard on the diffuse material, the same image on a plastic and on a second material:
+        // the image is stored once.
+        let more = "[materials.plain]\ndiffuse = { texture = \"tex/t.png\" }\n";
+        let s = in_dir(
+            &dir,
+            14,
+            r#"plastic = { diffuse = { texture = "tex/t.png" }, ior = 1.2 }"#,
+            more,
+        );
+        let e = format!("{:#}", s.unwrap_err());
+        assert!(
+            e.contains("materials.glass.plastic.diffuse: at most"),
+            "white pixels exceed a plastic's bound: {e}"
+        );
+        let text = edit(
+            14,
+            r#"plastic = { diffuse = { texture = "tex/t.png", scale = [0.5, 0.5] } }"#,
+        )
+        .replace(
+            "diffuse = [0.5, 0.5, 0.5]",
+            "diffuse = { checkerboard = [[0.1, 0.2, 0.3], [0.5, 0.5, 0.5]], scale = [8, 8] }",
+        );
+        let text = format!("{text}{}", more.replace("t.png\"", "t.png\", scale = [0.5, 0.5]"));
+        // A plastic's white pixels would exceed its bound: darker ones, through an EXR, are fine.
+        image::Rgb32FImage::from_raw(1, 1, vec![0.5, 0.25, 0.125])
+            .unwrap()
+            .save(dir.0.join("tex/t.png.exr"))
+            .unwrap();
+        let text = text.replace("tex/t.png", "tex/t.png.exr");
+        let s = Scene::parse(&text, &dir.0.join("t.toml").display().to_string()).unwrap_or_else(|e| panic!("{e:#}"));
+        let m = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap();
+        assert_eq!(
+            s.textures[m("white").texture.unwrap() as usize].pattern,
+            Pattern::Checkerboard {
+                color0: Vec3::new(0.1, 0.2, 0.3),
+                color1: Vec3::splat(0.5)
+            }
+        );
+        assert_eq!(
+            s.textures[m("white").texture.unwrap() as usize].to_uv,
+            [8.0, 0.0, 0.0, 0.0, 8.0, 0.0]
+        );
+        assert_eq!(
+            m("white").surface,
+            Surface::Diffuse {
+                albedo: Vec3::splat(0.5)
+            }
+        );
+        assert_eq!(m("glass").texture, m("plain").texture, "one image, stored once");
+        assert_eq!(s.textures.len(), 2);
+        assert!(
+            matches!(m("glass").surface, Surface::Plastic { diffuse, .. } if diffuse == Vec3::new(0.5, 0.25, 0.125))
+        );
+    }
+
+    #[test]
+    fn texture_errors_name_line_and_field() {
+        let dir = texture_dir();
+        let cases: &[(&str, &str, &str)] = &[
+            (
+                r#"diffuse = { texture = "missing.png" }"#,
+                "materials.white.diffuse.texture",
+                "missing.png: cannot open the image",
+            ),
+            (
+                r#"diffuse = { texture = "corrupt.png" }"#,
+                "materials.white.diffuse.texture",
+                "corrupt.png: not a readable PNG, JPEG or EXR image",
+            ),
+            (
+                r#"diffuse = { texture = " " }"#,
+                "materials.white.diffuse.texture",
+                "must name an image file",
+            ),
+            (
+                r#"diffuse = { texture = "tex/t.png", checkerboard = [[0.1, 0.1, 0.1], [0.2, 0.2, 0.2]] }"#,
+                "materials.white.diffuse.checkerboard",
+                "not both",
+            ),
+            (
+                r#"diffuse = { filter = "nearest" }"#,
+                "materials.white.diffuse",
+                "needs texture = \"file.png\" or checkerboard",
+            ),
+            (
+                r#"diffuse = { checkerboard = [[0.1, 0.1, 0.1], [0.2, 0.2, 0.2]], wrap = "clamp" }"#,
+                "materials.white.diffuse.wrap",
+                "applies to an image texture only",
+            ),
+            (
+                r#"diffuse = { texture = "tex/t.png", filter = "cubic" }"#,
+                "materials.white.diffuse.filter",
+                "unknown variant `cubic`, expected `bilinear` or `nearest`",
+            ),
+            (
+                r#"diffuse = { texture = "tex/t.png", tile = 2 }"#,
+                "materials.white.diffuse.tile",
+                "unknown field `tile`",
+            ),
+            (
+                r#"diffuse = { texture = "tex/t.png", scale = [0, 1] }"#,
+                "materials.white.diffuse.scale",
+                "finite and non-zero",
+            ),
+            (
+                r#"diffuse = { texture = "tex/t.png", scale = [1] }"#,
+                "materials.white.diffuse.scale",
+                "invalid length 1",
+            ),
+            (
+                r#"diffuse = { checkerboard = [[0.1, 0.2, 1.5], [0.5, 0.5, 0.5]] }"#,
+                "materials.white.texture",
+                "texture \"checkerboard\": color0 is [0.1, 0.2, 1.5]: a reflectance must be finite and in [0, 1]",
+            ),
+            (
+                r#"diffuse = { texture = "bright.exr" }"#,
+                "materials.white.texture",
+                "bright.exr\": pixel (0, 0) (column, row from the top) is [0.5, 2, 0.5]",
+            ),
+            ("diffuse = [0.5, 0.5]", "materials.white.diffuse", "invalid length 2"),
+            (
+                "diffuse = [0.5, 0.5, 0.5, 0.5, 0.5]",
+                "materials.white.diffuse",
+                "invalid length 5, expected 3 numbers",
+            ),
+            (
+                "diffuse = [0.5, \"x\", 0.5]",
+                "materials.white.diffuse[1]",
+                "invalid type: string",
+            ),
+            (
+                "diffuse = \"red\"",
+                "materials.white.diffuse",
+                "expected an array of 3 numbers [r, g, b], or a texture table",
+            ),
+        ];
+        for (with, path, needle) in cases {
+            assert_dir_err(&dir, 10, with, 10, path, needle);
+        }
+        assert_dir_err(
+            &dir,
+            14,
+            "plastic = { diffuse = { checkerboard = [[0.99, 0.5, 0.5], [0.1, 0.1, 0.1]] } }",
+            14,
+            "materials.glass.plastic.diffuse",
+            "at most 0.9",
+        );
+    }
+
+    #[test]
+    fn textured_meshes_get_flipped_texture_coordinates_or_are_refused() {
+        let dir = texture_dir();
+        dir.write("a.mtl", "newmtl m\nKd 0.5 0.5 0.5\n");
+        dir.write("a.obj", OBJ);
+        dir.write(
+            "uv.obj",
+            "v 0 1 0\nv 0 0 0\nv 0 0 1\nvt 0 0.25\nvt 1 0.5\nvt 0 1\nf 1/1 2/2 3/3\n",
+        );
+        let mesh = |file: &str| format!("\n[[mesh]]\nfile = \"{file}\"\nmaterial = \"white\"\n");
+        let textured = r#"diffuse = { texture = "tex/t.png" }"#;
+        let s = in_dir(&dir, 10, textured, &mesh("uv.obj")).unwrap_or_else(|e| panic!("{e:#}"));
+        let m = &s.meshes[0];
+        let uvs = m.uvs.as_ref().expect("every vertex has a vt");
+        for (i, p) in m.positions.iter().enumerate() {
+            let want = match p.to_array() {
+                [0.0, 1.0, 0.0] => glam::Vec2::new(0.0, 0.75),
+                [0.0, 0.0, 0.0] => glam::Vec2::new(1.0, 0.5),
+                _ => glam::Vec2::new(0.0, 0.0),
+            };
+            assert_eq!(uvs[i], want, "{p}");
+        }
+        let e = format!("{:#}", in_dir(&dir, 10, textured, &mesh("a.obj")).unwrap_err());
+        assert!(
+            e.contains("t.toml:38:1: mesh[0]: ")
+                && e.contains("a.obj: material \"white\" reads a texture, but the mesh has no texture coordinates"),
+            "{e}"
+        );
     }
 }

@@ -1,0 +1,88 @@
+// Textures (Mitsuba's bitmap and checkerboard): the diffuse reflectance of a material with one, at the
+// texture coordinates of the hit. CPU twin: crates/engine/src/reference/texture.rs; what each texture
+// holds: crates/engine/src/scene/texture.rs, laid out by crates/engine/src/gpu_scene.rs.
+//
+// A texture in texture_texels: a header of TEXTURE_HEADER texels,
+//   0: kind | filter << 4 | wrap << 8, width, height, the texel of its first pixel (a bitmap)
+//   1: to_uv's first row (a, b, c): u' = a u + b v + c     2: its second row (d, e, f)
+//   3: a checkerboard's color0                           4: its color1
+// then a bitmap's pixels, one texel each (linear RGB), row by row from the image's top row.
+#ifndef TEXTURE_GLSL
+#define TEXTURE_GLSL
+
+const uint TEXTURE_HEADER = 5u;
+
+// The texture coordinates of hit h, as Mitsuba gives them: a quad's planar coordinates (a rectangle's
+// local x, y from [-1, 1] to [0, 1]), a sphere's longitude and colatitude about the world's axes, a
+// triangle's interpolated from its vertices'.
+vec2 surface_uv(Hit h) {
+    if (h.kind == HIT_SPHERE) {
+        float phi = atan(h.normal.y, h.normal.x);
+        if (phi < 0.0) phi += 2.0 * PI;
+        return vec2(phi * (0.5 / PI), acos(clamp(h.normal.z, -1.0, 1.0)) * (1.0 / PI));
+    }
+    if (h.kind == HIT_TRIANGLE) {
+        vec4 a = uintBitsToFloat(texelFetch(triangle_uv_texels, int(2u * h.prim)));
+        vec2 c = uintBitsToFloat(texelFetch(triangle_uv_texels, int(2u * h.prim + 1u)).xy);
+        return (1.0 - h.local.x - h.local.y) * a.xy + h.local.x * a.zw + h.local.y * c;
+    }
+    return h.local;
+}
+
+// Pixel coordinate i of a side of n pixels, wrapped (Mitsuba's wrap modes).
+int wrap_pixel(int i, int n, uint wrap) {
+    if (wrap == WRAP_CLAMP) return clamp(i, 0, n - 1);
+    int m = i - n * int(floor(float(i) / float(n)));
+    if (wrap == WRAP_MIRROR && (int(floor(float(i) / float(n))) & 1) != 0) m = n - 1 - m;
+    return m;
+}
+
+vec3 texture_pixel(uint first, ivec2 size, ivec2 p, uint wrap) {
+    int x = wrap_pixel(p.x, size.x, wrap);
+    int y = wrap_pixel(p.y, size.y, wrap);
+    return uintBitsToFloat(texelFetch(texture_texels, int(first) + y * size.x + x).xyz);
+}
+
+// The value of the texture whose header is at texel `at`, at texture coordinates uv.
+vec3 texture_value(uint at, vec2 uv) {
+    uvec4 head = texelFetch(texture_texels, int(at));
+    vec3 r0 = uintBitsToFloat(texelFetch(texture_texels, int(at + 1u)).xyz);
+    vec3 r1 = uintBitsToFloat(texelFetch(texture_texels, int(at + 2u)).xyz);
+    vec2 st = vec2(r0.x * uv.x + r0.y * uv.y + r0.z, r1.x * uv.x + r1.y * uv.y + r1.z);
+    uint kind = head.x & 15u;
+    if (kind == TEXTURE_CHECKERBOARD) {
+        // Mitsuba's checkerboard: color0 where the fractional parts of u and v are on the same side of 1/2.
+        bvec2 upper = greaterThan(st - floor(st), vec2(0.5));
+        return uintBitsToFloat(texelFetch(texture_texels, int(at + (upper.x == upper.y ? 3u : 4u))).xyz);
+    }
+    uint filter_type = (head.x >> 4) & 15u;
+    uint wrap = (head.x >> 8) & 15u;
+    ivec2 size = ivec2(head.yz);
+    vec2 p = st * vec2(size);
+    if (filter_type == FILTER_NEAREST) return texture_pixel(head.w, size, ivec2(floor(p)), wrap);
+    // Bilinear between the four pixel centres around p.
+    p -= 0.5;
+    ivec2 i = ivec2(floor(p));
+    vec2 w = p - vec2(i);
+    vec3 c00 = texture_pixel(head.w, size, i, wrap);
+    vec3 c10 = texture_pixel(head.w, size, i + ivec2(1, 0), wrap);
+    vec3 c01 = texture_pixel(head.w, size, i + ivec2(0, 1), wrap);
+    vec3 c11 = texture_pixel(head.w, size, i + ivec2(1, 1), wrap);
+    return (1.0 - w.y) * ((1.0 - w.x) * c00 + w.x * c10) + w.y * ((1.0 - w.x) * c01 + w.x * c11);
+}
+
+// Material m (material() read it) at hit h with its texture applied: a diffuse surface's albedo, or a
+// plastic's diffuse factor from the texture's diffuse_reflectance (as the host makes Material.color for
+// a constant one: scene/plastic.rs).
+void apply_texture(inout Material m, Hit h) {
+    if (!HAS_TEXTURES || m.texture == 0u) return;
+    vec3 value = texture_value(m.texture - 1u, surface_uv(h));
+    if (m.surface == SURFACE_PLASTIC) {
+        vec3 terms, bound;
+        material_terms(h.material, terms, bound);
+        vec3 inner = bound.z != 0.0 ? 1.0 - value * bound.y : vec3(1.0 - bound.y);
+        value = value / inner / (m.ior * m.ior);
+    }
+    m.color = value;
+}
+#endif
