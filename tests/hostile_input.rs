@@ -1,4 +1,4 @@
-//! Hostile input: random and mutated scene files (the real ones in scenes/, bytes flipped, lines dropped
+//! Hostile input: random and mutated scene files and texture images (the real ones in scenes/, bytes flipped, lines dropped
 //! or repeated, numbers replaced by extreme ones, text cut short) give a scene or an error, never a panic,
 //! a hang (each load under `MAX_LOAD`) or an allocation beyond a stated bound (`MAX_ALLOC`, counted by
 //! this binary's allocator). And the scene limits hold at their bounds.
@@ -46,8 +46,8 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
 
-/// A loader under test: one file's text in, a scene or an error out.
-type Load = fn(&str) -> anyhow::Result<Scene>;
+/// A loader under test: one file's bytes in, a scene or an error out.
+type Load = fn(&[u8]) -> anyhow::Result<Scene>;
 
 /// Each format, its loader and the files its mutations start from.
 fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
@@ -69,6 +69,15 @@ fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
             vec!["scenes/meshes/cornell-box.obj", "scenes/meshes/furnace-sphere.obj"],
         ),
         (
+            "image",
+            load_image,
+            vec![
+                "scenes/textures/wood.png",
+                "scenes/references/textures/gray.png",
+                "scenes/references/textures/gradient.exr",
+            ],
+        ),
+        (
             "xml",
             load_xml,
             vec![
@@ -80,21 +89,36 @@ fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
 }
 
 /// A Mitsuba scene, read from a file (includes and meshes resolve against its directory).
-fn load_xml(text: &str) -> anyhow::Result<Scene> {
+fn load_xml(text: &[u8]) -> anyhow::Result<Scene> {
     let path = scratch("xml").join("s.xml");
-    std::fs::write(&path, text)?;
+    std::fs::write(&path, String::from_utf8_lossy(text).as_bytes())?;
     Ok(Scene::load(&path)?)
 }
 
-fn load_toml(text: &str) -> anyhow::Result<Scene> {
+fn load_toml(text: &[u8]) -> anyhow::Result<Scene> {
     // Mesh paths resolve against the real scenes/ directory, so mutated scenes still find (or miss) them.
-    Ok(Scene::parse(text, &format!("{ROOT}/scenes/fuzzed.toml"))?)
+    Ok(Scene::parse(
+        &String::from_utf8_lossy(text),
+        &format!("{ROOT}/scenes/fuzzed.toml"),
+    )?)
+}
+
+/// An image (PNG, JPEG or EXR: the decoder goes by its content) as a floor's texture in a minimal scene.
+fn load_image(bytes: &[u8]) -> anyhow::Result<Scene> {
+    let dir = scratch("image");
+    std::fs::write(dir.join("t.img"), bytes)?;
+    let scene = "[camera]\neye = [0.0, 1.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\nvfov = 40.0\n\
+                 resolution = [8, 8]\n\n[materials.floor]\ndiffuse = { texture = \"t.img\", scale = [2, 2] }\n\n\
+                 [[quad]]\norigin = [-1.0, 0.0, -1.0]\nedge_u = [0.0, 0.0, 2.0]\nedge_v = [2.0, 0.0, 0.0]\n\
+                 material = \"floor\"\n\n[materials.light]\nemission = [1.0, 1.0, 1.0]\n\n[[quad]]\n\
+                 origin = [-0.1, 1.0, -0.1]\nedge_u = [0.2, 0.0, 0.0]\nedge_v = [0.0, 0.0, 0.2]\nmaterial = \"light\"\n";
+    Ok(Scene::parse(scene, &dir.join("s.toml").display().to_string())?)
 }
 
 /// The OBJ (with the cornell box's MTL beside it) imported by a minimal scene.
-fn load_obj(text: &str) -> anyhow::Result<Scene> {
+fn load_obj(text: &[u8]) -> anyhow::Result<Scene> {
     let dir = scratch("obj");
-    std::fs::write(dir.join("m.obj"), text)?;
+    std::fs::write(dir.join("m.obj"), String::from_utf8_lossy(text).as_bytes())?;
     std::fs::copy(
         format!("{ROOT}/scenes/meshes/cornell-box.mtl"),
         dir.join("cornell-box.mtl"),
@@ -222,10 +246,9 @@ fn regex_free_numbers(text: &str) -> Vec<(usize, usize)> {
 /// Loads the text once, bounded in time and allocation; the result may be a scene or an error (counted
 /// in `outcomes`: scenes, errors).
 fn load_bounded(load: Load, text: &[u8], outcomes: &Cell<(u32, u32)>) -> Result<(), TestCaseError> {
-    let text = String::from_utf8_lossy(text);
     let (live, start) = (LIVE.with(Cell::get), Instant::now());
     PEAK.with(|p| p.set(live));
-    let result = load(&text);
+    let result = load(text);
     let (took, peak) = (start.elapsed(), PEAK.with(Cell::get) - live);
     prop_assert!(took < MAX_LOAD, "a load took {took:?}");
     prop_assert!(peak <= MAX_ALLOC, "a load allocated {} MiB", peak >> 20);
@@ -265,8 +288,10 @@ fn never_panics(name: &str, load: Load, seeds: &[&str]) {
     // The mutations reach both sides: some files still load, others are refused.
     let (scenes, errors) = outcomes.get();
     println!("{name}: {scenes} mutated files loaded, {errors} refused");
+    // An image's mutations mostly break a checksum (PNG's CRCs): fewer of them load.
+    let least = if name == "image" { CASES / 200 } else { CASES / 20 };
     assert!(
-        scenes > CASES / 20 && errors > CASES / 20,
+        scenes > least && errors > least,
         "{name}: {scenes} loaded, {errors} refused"
     );
     let mut runner = TestRunner::new(Config {
@@ -285,10 +310,9 @@ fn never_panics(name: &str, load: Load, seeds: &[&str]) {
 fn every_format_survives_mutated_files() {
     for (name, load, seeds) in formats() {
         // The unmutated seeds load: the mutations start from real scenes.
-        if name == "toml" {
+        if name == "toml" || name == "image" {
             for s in &seeds {
-                load(&std::fs::read_to_string(Path::new(ROOT).join(s)).unwrap())
-                    .unwrap_or_else(|e| panic!("{s}: {e:#}"));
+                load(&std::fs::read(Path::new(ROOT).join(s)).unwrap()).unwrap_or_else(|e| panic!("{s}: {e:#}"));
             }
         }
         never_panics(name, load, &seeds);
@@ -304,7 +328,7 @@ fn scene_limits_hold_at_their_bounds() {
             .lines()
             .find(|l| l.trim_start().starts_with("resolution"))
             .expect("a resolution line");
-        load_toml(&base.replace(line, &format!("resolution = [{w}, {h}]")))
+        load_toml(base.replace(line, &format!("resolution = [{w}, {h}]")).as_bytes())
     };
     assert!(with_resolution(MAX_RESOLUTION, MAX_RESOLUTION).is_ok());
     let e = format!("{:#}", with_resolution(MAX_RESOLUTION + 1, 8).unwrap_err());
@@ -313,7 +337,7 @@ fn scene_limits_hold_at_their_bounds() {
     assert!(e.contains("camera.resolution"), "{e}");
 
     // Spheres and quads together: MAX_SHAPES is accepted, one more is not.
-    let mut scene = load_toml(&base).unwrap();
+    let mut scene = load_toml(base.as_bytes()).unwrap();
     let sphere = scene.spheres[0];
     scene.spheres.resize(MAX_SHAPES - scene.quads.len(), sphere);
     scene.validate().unwrap();
@@ -344,7 +368,11 @@ fn scene_limits_hold_at_their_bounds() {
     assert!(e.contains("not a regular file"), "{e}");
     let e = format!(
         "{:#}",
-        load_toml(&base.replace("[[sphere]]", "[[mesh]]\nfile = \"/dev/zero\"\n\n[[sphere]]")).unwrap_err()
+        load_toml(
+            base.replace("[[sphere]]", "[[mesh]]\nfile = \"/dev/zero\"\n\n[[sphere]]")
+                .as_bytes()
+        )
+        .unwrap_err()
     );
     assert!(e.contains("/dev/zero") && e.contains("not a regular file"), "{e}");
 }
