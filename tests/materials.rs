@@ -205,30 +205,6 @@ fn plastic_under_a_square_light_matches_its_closed_form() {
     assert_clean(&ctx);
 }
 
-const OPEN_FLOOR: &str = r#"
-# A 1000 m square floor under a small square light, seen from straight above (tests/stability.rs).
-[camera]
-eye = [0.0, 0.5, 0.0]
-look_at = [0.0, 0.0, 0.0]
-up = [0.0, 0.0, -1.0]
-vfov = 2.0
-resolution = [8, 8]
-[materials.floor]
-diffuse = [0.5, 0.5, 0.5]
-[materials.light]
-emission = [10.0, 10.0, 10.0]
-[[quad]]
-origin = [-500.0, 0.0, -500.0]
-edge_u = [0.0, 0.0, 1000.0]
-edge_v = [1000.0, 0.0, 0.0]
-material = "floor"
-[[quad]]
-origin = [-0.1, 1.0, -0.1]
-edge_u = [0.2, 0.0, 0.0]
-edge_v = [0.0, 0.0, 0.2]
-material = "light"
-"#;
-
 /// scenes/references/cornell-textured.xml: cornell-gold with a bitmap floor (an 8-bit sRGB PNG, bilinear,
 /// repeated 3 x 2 times), a checkerboard back wall, the blue sphere a plastic whose diffuse_reflectance is
 /// the bitmap (nearest, mirrored) and a small box mesh with the bitmap on its faces (OBJ texture

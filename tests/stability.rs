@@ -236,30 +236,6 @@ fn plain_ppm_renders_the_same_at_any_scale() {
     }
 }
 
-const OPEN_FLOOR: &str = r#"
-# A 1000 m square floor under a small square light: the irradiance below the light has a closed form.
-[camera]
-eye = [0.0, 0.5, 0.0]
-look_at = [0.0, 0.0, 0.0]
-up = [0.0, 0.0, -1.0]
-vfov = 2.0
-resolution = [8, 8]
-[materials.floor]
-diffuse = [0.5, 0.5, 0.5]
-[materials.light]
-emission = [10.0, 10.0, 10.0]
-[[quad]]
-origin = [-500.0, 0.0, -500.0]
-edge_u = [0.0, 0.0, 1000.0]
-edge_v = [1000.0, 0.0, 0.0]
-material = "floor"
-[[quad]]
-origin = [-0.1, 1.0, -0.1]
-edge_u = [0.2, 0.0, 0.0]
-edge_v = [0.0, 0.0, 0.2]
-material = "light"
-"#;
-
 #[test]
 fn irradiance_under_a_square_light_matches_its_closed_form() {
     // A Lambertian square of side a and radiance Le at height h, centred above a point, gives it

@@ -6,6 +6,32 @@ use std::path::Path;
 
 use ppm_vk_engine::{Context, ContextOptions, Scene};
 
+/// A 1000 m square floor under a small square light, seen from straight above: the radiance below the
+/// light has a closed form (tests/stability.rs for a diffuse floor, tests/materials.rs for a plastic one).
+pub const OPEN_FLOOR: &str = r#"
+# A 1000 m square floor under a small square light: the irradiance below the light has a closed form.
+[camera]
+eye = [0.0, 0.5, 0.0]
+look_at = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+vfov = 2.0
+resolution = [8, 8]
+[materials.floor]
+diffuse = [0.5, 0.5, 0.5]
+[materials.light]
+emission = [10.0, 10.0, 10.0]
+[[quad]]
+origin = [-500.0, 0.0, -500.0]
+edge_u = [0.0, 0.0, 1000.0]
+edge_v = [1000.0, 0.0, 0.0]
+material = "floor"
+[[quad]]
+origin = [-0.1, 1.0, -0.1]
+edge_u = [0.2, 0.0, 0.0]
+edge_v = [0.0, 0.0, 0.2]
+material = "light"
+"#;
+
 /// The test scene of the paper.
 pub const CORNELL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell-spheres.toml");
 /// The regions of the test scene's file, in the pixels of its 512 x 512 reference.

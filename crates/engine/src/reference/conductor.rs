@@ -50,17 +50,7 @@ mod tests {
     fn fresnel_matches_mitsubas_conductor() {
         let text = include_str!("../../../../scenes/references/conductor-fresnel.json");
         let json: serde_json::Value = serde_json::from_str(text).unwrap();
-        // A colour as the JSON writes it: a number, an [r, g, b] array, or Mitsuba's {"type": "rgb", "value": ..}.
-        fn rgb(v: &serde_json::Value) -> Vec3 {
-            match v {
-                serde_json::Value::Number(n) => Vec3::splat(n.as_f64().unwrap() as f32),
-                serde_json::Value::Array(a) => {
-                    Vec3::from_slice(&a.iter().map(|x| x.as_f64().unwrap() as f32).collect::<Vec<_>>())
-                }
-                serde_json::Value::Object(o) => rgb(&o["value"]),
-                other => panic!("{other}"),
-            }
-        }
+        let rgb = crate::reference::json_rgb;
         let mut checked = 0;
         for case in json["cases"].as_array().unwrap() {
             let bsdf = &case["bsdf"];

@@ -682,6 +682,20 @@ pub fn probe(
         .collect()
 }
 
+/// A colour as the tests' JSON files (made with Mitsuba) write it: a number, an [r, g, b] array, or
+/// Mitsuba's {"type": "rgb", "value": ..}.
+#[cfg(test)]
+pub(crate) fn json_rgb(v: &serde_json::Value) -> Vec3 {
+    match v {
+        serde_json::Value::Number(n) => Vec3::splat(n.as_f64().unwrap() as f32),
+        serde_json::Value::Array(a) => {
+            Vec3::from_slice(&a.iter().map(|x| x.as_f64().unwrap() as f32).collect::<Vec<_>>())
+        }
+        serde_json::Value::Object(o) => json_rgb(&o["value"]),
+        other => panic!("not a colour: {other}"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

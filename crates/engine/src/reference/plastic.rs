@@ -39,16 +39,7 @@ mod tests {
         serde_json::from_str(text).unwrap()
     }
 
-    fn rgb(v: &serde_json::Value) -> Vec3 {
-        match v {
-            serde_json::Value::Number(n) => Vec3::splat(n.as_f64().unwrap() as f32),
-            serde_json::Value::Array(a) => {
-                Vec3::from_slice(&a.iter().map(|x| x.as_f64().unwrap() as f32).collect::<Vec<_>>())
-            }
-            serde_json::Value::Object(o) => rgb(&o["value"]),
-            _ => panic!("not a colour: {v}"),
-        }
-    }
+    use crate::reference::json_rgb as rgb;
 
     /// A case of coated-bsdfs.json as the material the kernels read.
     fn material(case: &serde_json::Value) -> (Material, Vec3, f32, bool) {

@@ -86,16 +86,7 @@ mod tests {
 
     const REFERENCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/references");
 
-    fn rgb(v: &serde_json::Value) -> Vec3 {
-        match v {
-            serde_json::Value::Number(n) => Vec3::splat(n.as_f64().unwrap() as f32),
-            serde_json::Value::Array(a) => {
-                Vec3::from_slice(&a.iter().map(|x| x.as_f64().unwrap() as f32).collect::<Vec<_>>())
-            }
-            serde_json::Value::Object(o) => rgb(&o["value"]),
-            _ => panic!("not a colour: {v}"),
-        }
-    }
+    use crate::reference::json_rgb as rgb;
 
     /// Mitsuba's bitmap and checkerboard evaluated at 30-34 texture coordinates each (inside, on pixel
     /// centres and between them, outside [0, 1] both ways) in 25 cases: three images (8-bit sRGB RGB, a
