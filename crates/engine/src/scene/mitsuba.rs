@@ -2938,14 +2938,19 @@ mod tests {
             c.extend_from_slice(&(!crc).to_be_bytes());
             c
         };
-        let mut ihdr = 100_000u32.to_be_bytes().to_vec();
-        ihdr.extend_from_slice(&1u32.to_be_bytes());
-        ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
-        let mut huge = b"\x89PNG\r\n\x1a\n".to_vec();
-        huge.extend(chunk(b"IHDR", &ihdr));
-        huge.extend(chunk(b"IDAT", &[]));
-        huge.extend(chunk(b"IEND", &[]));
-        std::fs::write(dir.0.join("huge.png"), &huge).unwrap();
+        let claiming = |w: u32, h: u32| {
+            let mut ihdr = w.to_be_bytes().to_vec();
+            ihdr.extend_from_slice(&h.to_be_bytes());
+            ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
+            let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+            png.extend(chunk(b"IHDR", &ihdr));
+            png.extend(chunk(b"IDAT", &[]));
+            png.extend(chunk(b"IEND", &[]));
+            png
+        };
+        std::fs::write(dir.0.join("huge.png"), claiming(100_000, 1)).unwrap();
+        // Sides within bounds, but 2^28 pixels: refused before anything is decoded.
+        std::fs::write(dir.0.join("vast.png"), claiming(16384, 16384)).unwrap();
         // An EXR with a value above 1.
         image::Rgb32FImage::from_raw(1, 1, vec![1.5, 0.5, 0.5])
             .unwrap()
@@ -2965,6 +2970,7 @@ mod tests {
             (bitmap("missing.png"), r#"<texture type="bitmap" name="reflectance">"#, 13, "missing.png: cannot open the image"),
             (bitmap("corrupt.png"), r#"<texture type="bitmap" name="reflectance">"#, 13, "corrupt.png: not a readable PNG"),
             (bitmap("huge.png"), r#"<texture type="bitmap" name="reflectance">"#, 13, "huge.png: image of 100000 x 1 pixels"),
+            (bitmap("vast.png"), r#"<texture type="bitmap" name="reflectance">"#, 13, "vast.png: image of 16384 x 16384 pixels: at most"),
             (
                 bitmap("bright.exr"),
                 r#"<texture type="bitmap" name="reflectance">"#,

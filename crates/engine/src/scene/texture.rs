@@ -13,6 +13,11 @@ use glam::Vec3;
 /// texel buffer (`Limit` errors say so for the sum of a scene's textures).
 pub const MAX_TEXTURE_SIDE: u32 = 16384;
 
+/// Most pixels one image may have: 2^26 (8192 x 8192). Decoding takes 12 bytes a pixel twice over on the
+/// host (the decoder's and ours) and the kernels 16 on the device: this keeps one image near 1.5 GiB of host
+/// memory at most, whatever size its header claims.
+pub const MAX_TEXTURE_PIXELS: u64 = 1 << 26;
+
 /// How coordinates outside [0, 1] wrap (Mitsuba's `wrap_mode`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Wrap {
@@ -32,8 +37,8 @@ pub enum Filter {
 pub enum Pattern {
     /// Linear RGB pixels, row by row from the image's top row.
     Bitmap { width: u32, height: u32, pixels: Vec<Vec3> },
-    /// Mitsuba's checkerboard: color0 where floor(2u) + floor(2v) is even (of the uv after `to_uv`), else
-    /// color1.
+    /// Mitsuba's checkerboard: color0 where the fractional parts of u and v (after `to_uv`) are on the same
+    /// side of 1/2 (both above it, or neither), else color1.
     Checkerboard { color0: Vec3, color1: Vec3 },
 }
 
@@ -105,6 +110,11 @@ pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), Strin
     if width == 0 || height == 0 || width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
         return Err(format!(
             "image of {width} x {height} pixels: each side must be in 1..={MAX_TEXTURE_SIDE}"
+        ));
+    }
+    if width as u64 * height as u64 > MAX_TEXTURE_PIXELS {
+        return Err(format!(
+            "image of {width} x {height} pixels: at most {MAX_TEXTURE_PIXELS} pixels (8192 x 8192)"
         ));
     }
     let image = open()?
