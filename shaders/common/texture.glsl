@@ -32,8 +32,9 @@ vec2 surface_uv(Hit h) {
 // Pixel coordinate i of a side of n pixels, wrapped (Mitsuba's wrap modes).
 int wrap_pixel(int i, int n, uint wrap) {
     if (wrap == WRAP_CLAMP) return clamp(i, 0, n - 1);
-    int m = i - n * int(floor(float(i) / float(n)));
-    if (wrap == WRAP_MIRROR && (int(floor(float(i) / float(n))) & 1) != 0) m = n - 1 - m;
+    int k = int(floor(float(i) / float(n))); // which copy of the image i lies in
+    int m = i - n * k;
+    if (wrap == WRAP_MIRROR && (k & 1) != 0) m = n - 1 - m;
     return m;
 }
 

@@ -230,37 +230,33 @@ void main() {
                 apply_texture(m, h);
                 bool front = dot(r.d, h.normal) < 0.0;
                 vec3 nf = front ? h.normal : -h.normal;
-                if (m.surface == SURFACE_DIFFUSE) {
-                    if (front) hit_emitted += r.thr * m.emission; // emitters are one-sided
-                    // Term (d) for this path, where it is one of the samples (below).
-                    if (params.direct_light != 0u && hit_is_sample) {
-                        hit_emitted += r.thr * direct_light(h.pos, nf, m.color, 0.0, rng);
-                        if (bvh_spent) sp = 0u; // counted there; no budget for the rest
-                    }
-                    if (max(m.color.r, max(m.color.g, m.color.b)) > 0.0 && slot < params.hit_slots) {
-                        hit_points[base_slot + slot] = HitPoint(h.pos, pixel, nf, 0u, r.thr * m.color / PI, 0u);
-                        slot++;
-                    }
-                    break;
-                }
-                if (HAS_PLASTICS && m.surface == SURFACE_PLASTIC) {
-                    // Both lobes while the pixel has slots for the reflection's path and those pending
-                    // (the base's hit point, weighted D (1 - F(cos_o)) / pi, and the coat's reflection,
-                    // weighted ks F(cos_o)), else one, chosen in proportion to its largest weight.
-                    vec3 spec, diff;
-                    plastic_lobes(h.material, m, -dot(r.d, nf), spec, diff);
-                    bool base = true, coat = true;
-                    if (slot + sp + 1u >= params.hit_slots) {
-                        if (!(max3(spec) + max3(diff) > 0.0)) break;
-                        float ps = max3(spec) / (max3(spec) + max3(diff));
-                        coat = rng_float(rng) < ps;
-                        base = !coat;
-                        if (coat) spec /= ps; else diff /= 1.0 - ps;
+                bool diffuse = m.surface == SURFACE_DIFFUSE;
+                if (diffuse || (HAS_PLASTICS && m.surface == SURFACE_PLASTIC)) {
+                    // A diffuse surface, or a plastic's base under its coat: the hit point and term (d).
+                    // A plastic keeps both lobes while the pixel has slots for the reflection's path and
+                    // those pending (the base's hit point, weighted D (1 - F(cos_o)) / pi, and the coat's
+                    // reflection, weighted ks F(cos_o)), else one, chosen in proportion to its largest
+                    // weight.
+                    vec3 diff = m.color, spec = vec3(0.0);
+                    bool base = true, coat = false;
+                    if (diffuse) {
+                        if (front) hit_emitted += r.thr * m.emission; // emitters are one-sided
+                    } else if (HAS_PLASTICS) {
+                        plastic_lobes(h.material, m, -dot(r.d, nf), spec, diff);
+                        coat = true;
+                        if (slot + sp + 1u >= params.hit_slots) {
+                            if (!(max3(spec) + max3(diff) > 0.0)) break;
+                            float ps = max3(spec) / (max3(spec) + max3(diff));
+                            coat = rng_float(rng) < ps;
+                            base = !coat;
+                            if (coat) spec /= ps; else diff /= 1.0 - ps;
+                        }
                     }
                     if (base) {
+                        // Term (d) for this path, where it is one of the samples (below).
                         if (params.direct_light != 0u && hit_is_sample) {
-                            hit_emitted += r.thr * direct_light(h.pos, nf, diff, m.ior, rng);
-                            if (bvh_spent) sp = 0u;
+                            hit_emitted += r.thr * direct_light(h.pos, nf, diff, diffuse ? 0.0 : m.ior, rng);
+                            if (bvh_spent) sp = 0u; // counted there; no budget for the rest
                         }
                         if (max3(diff) > 0.0 && slot < params.hit_slots) {
                             hit_points[base_slot + slot] = HitPoint(h.pos, pixel, nf, 0u, r.thr * diff / PI, 0u);

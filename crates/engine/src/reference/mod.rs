@@ -314,45 +314,36 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                     let m = &texture::apply(g, &g.materials[h.material as usize], h.uv);
                     let front = d.dot(h.normal) < 0.0;
                     let nf = if front { h.normal } else { -h.normal };
-                    if m.surface == SURFACE_DIFFUSE {
-                        if front {
-                            hit_emitted += thr * v3(m.emission);
-                        }
-                        if p.direct_light != 0 && hit_is_sample {
-                            hit_emitted += thr * direct_light(g, h.pos, nf, v3(m.color), 0.0, &mut rng);
-                        }
-                        let c = v3(m.color);
-                        if c.max_element() > 0.0 && slot < slots {
-                            out.hits[base + slot] = HitPoint {
-                                pos: h.pos.to_array(),
-                                pixel,
-                                normal: nf.to_array(),
-                                weight: (thr * c / PI).to_array(),
-                                ..Default::default()
-                            };
-                            slot += 1;
-                        }
-                        break;
-                    }
-                    if m.surface == SURFACE_PLASTIC {
-                        // ray.comp: both lobes while there are slots, else one.
-                        let (mut spec, mut diff) = plastic::lobes(m, -d.dot(nf));
-                        let (mut on_base, mut coat) = (true, true);
-                        if slot + stack.len() + 1 >= slots {
-                            let Some(ps) = coat_probability(spec, diff) else {
-                                break;
-                            };
-                            coat = rng.float() < ps;
-                            on_base = !coat;
-                            if coat {
-                                spec /= ps;
-                            } else {
-                                diff /= 1.0 - ps;
+                    let diffuse = m.surface == SURFACE_DIFFUSE;
+                    if diffuse || m.surface == SURFACE_PLASTIC {
+                        // ray.comp: a diffuse surface, or a plastic's base and coat (both lobes while
+                        // there are slots, else one).
+                        let (mut diff, mut spec) = (v3(m.color), Vec3::ZERO);
+                        let (mut on_base, mut coat) = (true, false);
+                        if diffuse {
+                            if front {
+                                hit_emitted += thr * v3(m.emission);
+                            }
+                        } else {
+                            (spec, diff) = plastic::lobes(m, -d.dot(nf));
+                            coat = true;
+                            if slot + stack.len() + 1 >= slots {
+                                let Some(ps) = coat_probability(spec, diff) else {
+                                    break;
+                                };
+                                coat = rng.float() < ps;
+                                on_base = !coat;
+                                if coat {
+                                    spec /= ps;
+                                } else {
+                                    diff /= 1.0 - ps;
+                                }
                             }
                         }
                         if on_base {
                             if p.direct_light != 0 && hit_is_sample {
-                                hit_emitted += thr * direct_light(g, h.pos, nf, diff, m.ior, &mut rng);
+                                let coat_ior = if diffuse { 0.0 } else { m.ior };
+                                hit_emitted += thr * direct_light(g, h.pos, nf, diff, coat_ior, &mut rng);
                             }
                             if diff.max_element() > 0.0 && slot < slots {
                                 out.hits[base + slot] = HitPoint {
