@@ -83,6 +83,16 @@ fn cornell_coated() -> ppm_vk_engine::Scene {
     scene
 }
 
+/// scenes/references/cornell-rough.xml at RES x RES: cornell-gold with the gold sphere a rough conductor
+/// (GGX, alpha 0.2) and the glass sphere rough (Beckmann, alpha 0.1): their visible-normal sampling on the
+/// eye paths (hit-point paths and emission samples) and the photons, both distributions.
+fn cornell_rough() -> ppm_vk_engine::Scene {
+    let xml = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/references/cornell-rough.xml");
+    let scene = ppm_vk_engine::Scene::load_with(xml, &[("res".to_string(), RES.to_string())]).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    scene
+}
+
 fn ray_pass_matches_reference_case(specialize: bool, direct: DirectLight) {
     ray_pass_matches_reference_on(cornell(RES, RES), specialize, direct);
 }
@@ -252,6 +262,12 @@ fn ray_pass_matches_reference_with_coated_surfaces_unspecialized() {
     ray_pass_matches_reference_on(cornell_coated(), false, DirectLight::Sample);
 }
 
+/// Rough metal and rough glass: a sampled lobe per bounce.
+#[test]
+fn ray_pass_matches_reference_with_rough_surfaces() {
+    ray_pass_matches_reference_on(cornell_rough(), true, DirectLight::Sample);
+}
+
 #[test]
 fn ray_pass_matches_reference_with_direct_light_by_photons() {
     ray_pass_matches_reference_case(true, DirectLight::Photons);
@@ -334,6 +350,16 @@ fn photon_records_match_reference_case(specialize: bool) {
 /// `flux_rel`: how close a record's flux must be to its twin's (relative). 1e-5 where the flux is a product
 /// of constants (albedos, mirror reflectances); see the conductor's test for where it is not.
 fn photon_records_match_reference_on(scene: ppm_vk_engine::Scene, specialize: bool, flux_rel: f64) {
+    photon_records_match_reference_within(scene, specialize, flux_rel, 0.995)
+}
+
+/// `min_matched`: the fraction of the CPU's records that must have a GPU twin.
+fn photon_records_match_reference_within(
+    scene: ppm_vk_engine::Scene,
+    specialize: bool,
+    flux_rel: f64,
+    min_matched: f64,
+) {
     let ctx = ctx();
     let mut r = Renderer::new(
         &ctx,
@@ -371,7 +397,10 @@ fn photon_records_match_reference_on(scene: ppm_vk_engine::Scene, specialize: bo
     let mut cell_ok = 0usize;
     for (i, p) in gpu.iter().enumerate() {
         for (f, s) in p.flux.iter().zip(start) {
-            assert!(f.is_finite() && *f > 0.0 && *f <= s * (1.0 + 1e-6), "record {i}: {p:?}");
+            assert!(
+                f.is_finite() && *f > 0.0 && *f <= s * (1.0 + 1e-6),
+                "record {i}: {p:?} (a photon starts with {start:?})"
+            );
         }
         let pos = v(p.pos);
         assert!(
@@ -422,7 +451,7 @@ fn photon_records_match_reference_on(scene: ppm_vk_engine::Scene, specialize: bo
     let matched = match_records_within(&gpu, &cpu, 1e-4 * scene_extent(&scene), flux_rel);
     println!("records matched one to one: {matched} of {}", cpu.len());
     assert!(
-        matched * 1000 >= cpu.len() * 995,
+        matched as f64 >= cpu.len() as f64 * min_matched,
         "only {matched} of {} CPU records have a GPU twin",
         cpu.len()
     );
@@ -469,6 +498,17 @@ fn photon_records_match_reference_with_a_conductor() {
 #[test]
 fn photon_records_match_reference_with_coated_surfaces() {
     photon_records_match_reference_on(cornell_coated(), true, 1e-3);
+}
+
+/// Rough metal and rough glass (cornell_rough): each bounce draws a visible normal from a direction that
+/// f32 rounding of the hit (and lavapipe's exp, log and sin against Rust's) moves, and the difference
+/// grows along the path and flips its later thresholds (Fresnel, roulette, a reflection below the
+/// horizon) more often than specular bounces do. Measured on 37313 records: 99.45% matched within 1e-4,
+/// 99.69% within 1e-3 and 99.74% within 1e-2 of the extent with flux within 10%: the rest are paths that
+/// took another branch, which the histogram and total-flux checks above bound.
+#[test]
+fn photon_records_match_reference_with_rough_surfaces() {
+    photon_records_match_reference_within(cornell_rough(), true, 1e-3, 0.993);
 }
 
 /// Compares the GPU's pass accumulators with a brute-force gather over the GPU's own records.

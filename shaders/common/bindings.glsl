@@ -13,7 +13,7 @@
 #include "params.glsl"
 layout(std430, binding = 1) readonly buffer Spheres { Sphere spheres[]; };
 layout(std430, binding = 2) readonly buffer Quads { Quad quads[]; };
-// The materials as 16-byte texels (color, surface | emission, ior): material() reads them. Texel fetches
+// The materials as 16-byte texels, five each (color, surface | emission, ior | ...): material() reads them. Texel fetches
 // are vector gathers on lavapipe, where a storage-buffer load is a loop over the lanes (bvh.glsl).
 layout(binding = 3) uniform usamplerBuffer material_texels;
 // The BVH's nodes (BvhNode) and triangles (Triangle) as 16-byte texels: bvh_node() and bvh_triangle()
@@ -36,20 +36,20 @@ layout(binding = 7) uniform usamplerBuffer triangle_uv_texels;
 #endif
 // Material i without its lobe terms (left zero: material_terms reads them where a surface needs them).
 Material material(uint i) {
-    uvec4 a = texelFetch(material_texels, int(4u * i));
-    uvec4 b = texelFetch(material_texels, int(4u * i + 1u));
-    uint texture = HAS_TEXTURES ? texelFetch(material_texels, int(4u * i + 2u)).w : 0u;
+    uvec4 a = texelFetch(material_texels, int(5u * i));
+    uvec4 b = texelFetch(material_texels, int(5u * i + 1u));
+    uint texture = HAS_TEXTURES ? texelFetch(material_texels, int(5u * i + 2u)).w : 0u;
     return Material(uintBitsToFloat(a.xyz), a.w, uintBitsToFloat(b.xyz), uintBitsToFloat(b.w), vec3(0.0),
-                    texture, vec3(0.0), 0u);
+                    texture, vec3(0.0), 0u, 0.0, 0.0, 0u, 0u);
 }
 // Material i's lobe terms (Material.lobe_a, lobe_b: what they hold depends on the surface).
 void material_terms(uint i, out vec3 a, out vec3 b) {
-    a = uintBitsToFloat(texelFetch(material_texels, int(4u * i + 2u)).xyz);
-    b = uintBitsToFloat(texelFetch(material_texels, int(4u * i + 3u)).xyz);
+    a = uintBitsToFloat(texelFetch(material_texels, int(5u * i + 2u)).xyz);
+    b = uintBitsToFloat(texelFetch(material_texels, int(5u * i + 3u)).xyz);
 }
 // Only lobe_a.
 vec3 material_term_a(uint i) {
-    return uintBitsToFloat(texelFetch(material_texels, int(4u * i + 2u)).xyz);
+    return uintBitsToFloat(texelFetch(material_texels, int(5u * i + 2u)).xyz);
 }
 
 #ifdef SCENE_CONSTANTS

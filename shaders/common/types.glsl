@@ -10,16 +10,19 @@ const uint SURFACE_GLASS = 2u;
 const uint SURFACE_CONDUCTOR = 3u;
 const uint SURFACE_PLASTIC = 4u;  // Mitsuba's plastic: plastic.glsl
 const uint SURFACE_THIN = 5u;     // Mitsuba's thindielectric: thin_dielectric.glsl
+const uint SURFACE_ROUGH_CONDUCTOR = 6u; // Mitsuba's roughconductor: rough_conductor.glsl
+const uint SURFACE_ROUGH_GLASS = 7u;     // Mitsuba's roughdielectric: rough_dielectric.glsl
 
-// Four 16-byte texels; material() reads the first two, material_terms() the others (only conductors,
-// plastics and thin dielectrics need them, so every other surface costs two fetches).
+// Five 16-byte texels; material() reads the first two, material_terms() the next two (only conductors,
+// plastics and thin dielectrics need them, so every other surface costs two fetches), and
+// material_microfacet() the last (only rough surfaces).
 struct Material {
-    vec3 color;      // diffuse albedo, mirror reflectance, a conductor's or thin dielectric's
+    vec3 color;      // diffuse albedo, mirror reflectance, a (rough) conductor's or thin dielectric's
                      // specular_reflectance, or a plastic's diffuse factor (plastic.glsl)
     uint surface;    // SURFACE_*
     vec3 emission;   // radiance leaving the front side (quads only)
-    float ior;       // glass, plastic coat, thin dielectric: index inside over index outside
-    vec3 lobe_a;     // conductor: real part eta of the complex index, per channel; plastic: the coat's
+    float ior;       // (rough) glass, plastic coat, thin dielectric: index inside over index outside
+    vec3 lobe_a;     // (rough) conductor: real part eta of the complex index, per channel; plastic: the coat's
                      // specular_reflectance; thin dielectric: specular_transmittance
     uint texture;    // 0: none; else 1 + the texel of its texture's header (texture.glsl), whose value is
                      // the diffuse albedo (diffuse) or diffuse_reflectance (plastic) at each point
@@ -27,6 +30,10 @@ struct Material {
                      // weight its diffuse lobe gives (plastic.glsl), y its fdr_int and z 1 if nonlinear
                      // (what turns a texture's diffuse_reflectance into its diffuse factor)
     uint pad1;
+    float alpha_u;   // rough surfaces: the microfacet roughness along the tangent (microfacet.glsl)
+    float alpha_v;   // and along the bitangent
+    uint distribution; // MICROFACET_*
+    uint pad2;
 };
 
 const uint TEXTURE_BITMAP = 0u;

@@ -1,5 +1,5 @@
-// Pass 3, a photon pass: photons leave the lights in proportion to their power, bounce off mirrors and
-// through glass, and leave a record at every diffuse surface (and plastic's diffuse base) they reach,
+// Pass 3, a photon pass: photons leave the lights in proportion to their power, bounce off mirrors, rough
+// metals and through (rough) glass, and leave a record at every diffuse surface (and plastic's diffuse base) they reach,
 // continuing by Russian roulette.
 // Records are appended to one buffer; the lanes of a subgroup that leave a record at the same step reserve
 // their slots with a single atomic (a global counter hit once per record is slow under contention). A
@@ -36,6 +36,7 @@ layout(push_constant) uniform PhotonPush {
 #include "conductor.glsl"
 #include "plastic.glsl"
 #include "thin_dielectric.glsl"
+#include "rough_dielectric.glsl"
 #include "texture.glsl"
 #include "grid.glsl"
 #include "invocation.glsl"
@@ -225,6 +226,9 @@ void main() {
             if (!plastic_scatter(h.material, m, fi, h.pos, nf, u, u1, u2, o, d, flux)) { alive = false; continue; }
         } else if (HAS_THIN && m.surface == SURFACE_THIN) {
             flux *= thin_branch(h.material, m, h.pos, nf, rng_float(rng), o, d);
+        } else if (rough_bounce(h.material, m, h.pos, nf, front, rng, o, d, flux)) {
+            // A rough lobe, sampled as the eye paths sample it (no record: an S vertex, ray.comp).
+            if (max3(flux) <= 0.0) alive = false;
         } else {
             glass_branch(h.pos, nf, front, m.ior, rng_float(rng), o, d);
         }

@@ -39,7 +39,10 @@
 //   E S* D (S|D)+ L  everything that bounced before reaching it: the photon estimate at the hit points.
 // With `--direct photons` (the paper's estimator) (d) stays with the photons and these paths take (a) only.
 // A plastic is both an S (its coat's reflection) and a D (its base, plastic.glsl): an emission-sample path
-// takes the base's term (d) there and goes on along the coat, without choosing between them.
+// takes the base's term (d) there and goes on along the coat, without choosing between them. Rough
+// conductors and rough glass are S too: every path samples one direction of their lobes, with the exact
+// weight f cos / pdf (rough_conductor.glsl, rough_dielectric.glsl), and leaves no hit point there; the
+// photons do the same with the same weights, so the partition above is unchanged.
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_control_flow_attributes : require
@@ -75,6 +78,7 @@ layout(push_constant) uniform RayPush {
 #include "conductor.glsl"
 #include "plastic.glsl"
 #include "thin_dielectric.glsl"
+#include "rough_dielectric.glsl"
 #include "texture.glsl"
 #include "invocation.glsl"
 #include "lights.glsl"
@@ -181,6 +185,10 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             thr *= thin_branch(h.material, m, h.pos, nf, rng_float(rng), o, d);
             continue;
         }
+        if (rough_bounce(h.material, m, h.pos, nf, front, rng, o, d, thr)) {
+            if (max3(thr) <= 0.0) break;
+            continue;
+        }
         glass_branch(h.pos, nf, front, m.ior, rng_float(rng), o, d);
     }
     return sum;
@@ -271,6 +279,10 @@ void main() {
                     continue;
                 }
                 r.depth++;
+                if (rough_bounce(h.material, m, h.pos, nf, front, rng, r.o, r.d, r.thr)) {
+                    if (max3(r.thr) <= 0.0) break;
+                    continue;
+                }
                 if (HAS_THIN && m.surface == SURFACE_THIN) {
                     // As glass: both branches while the pixel has slots, else one.
                     float rr = thin_reflectance(-dot(r.d, nf), m.ior);

@@ -162,9 +162,15 @@ impl GpuScene {
                         ior,
                     ),
                     Surface::ThinDielectric { ior, reflectance, .. } => (reflectance, layout::SURFACE_THIN, ior),
+                    Surface::RoughConductor { reflectance, .. } => (reflectance, layout::SURFACE_ROUGH_CONDUCTOR, 1.0),
+                    Surface::RoughGlass { ior, .. } => (Vec3::ONE, layout::SURFACE_ROUGH_GLASS, ior),
+                };
+                let rough = match m.surface {
+                    Surface::RoughConductor { rough, .. } | Surface::RoughGlass { rough, .. } => Some(rough),
+                    _ => None,
                 };
                 let (lobe_a, lobe_b) = match m.surface {
-                    Surface::Conductor { eta, k, .. } => (arr(eta), arr(k)),
+                    Surface::Conductor { eta, k, .. } | Surface::RoughConductor { eta, k, .. } => (arr(eta), arr(k)),
                     Surface::Plastic {
                         diffuse,
                         specular,
@@ -189,6 +195,12 @@ impl GpuScene {
                     lobe_a,
                     lobe_b,
                     texture: m.texture.map_or(0, |t| texture_at[t as usize] + 1),
+                    alpha_u: rough.map_or(0.0, |r| r.alpha),
+                    alpha_v: rough.map_or(0.0, |r| r.alpha),
+                    distribution: rough.map_or(0, |r| match r.ggx {
+                        true => layout::MICROFACET_GGX,
+                        false => layout::MICROFACET_BECKMANN,
+                    }),
                     ..Default::default()
                 }
             })

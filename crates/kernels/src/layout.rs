@@ -11,6 +11,11 @@ pub const SURFACE_GLASS: u32 = 2;
 pub const SURFACE_CONDUCTOR: u32 = 3;
 pub const SURFACE_PLASTIC: u32 = 4;
 pub const SURFACE_THIN: u32 = 5;
+pub const SURFACE_ROUGH_CONDUCTOR: u32 = 6;
+pub const SURFACE_ROUGH_GLASS: u32 = 7;
+/// `Material::distribution` of a rough surface (microfacet.glsl).
+pub const MICROFACET_BECKMANN: u32 = 0;
+pub const MICROFACET_GGX: u32 = 1;
 /// `HitPoint::pixel` of an empty slot.
 pub const EMPTY_SLOT: u32 = u32::MAX;
 /// The probe pass's fixed-point scale for d^2 / r^2 (2^30).
@@ -34,6 +39,12 @@ pub struct Material {
     /// turn a texture's diffuse_reflectance into its diffuse factor.
     pub lobe_b: [f32; 3],
     pub pad1: u32,
+    /// A rough surface's microfacet roughness along the tangent and the bitangent, and its
+    /// `MICROFACET_*` distribution; zero for other surfaces.
+    pub alpha_u: f32,
+    pub alpha_v: f32,
+    pub distribution: u32,
+    pub pad2: u32,
 }
 gpu_struct!(Material {
     color,
@@ -43,7 +54,11 @@ gpu_struct!(Material {
     lobe_a,
     texture,
     lobe_b,
-    pad1
+    pad1,
+    alpha_u,
+    alpha_v,
+    distribution,
+    pad2
 });
 
 /// A texture's kind, filter and wrap mode in its header (texture.glsl).

@@ -6,7 +6,10 @@
 
 use anyhow::{anyhow, Context as _, Result};
 
-use crate::layout::{Light, Quad, Sphere, Triangle, LIGHT_TRIANGLE, SURFACE_CONDUCTOR, SURFACE_PLASTIC, SURFACE_THIN};
+use crate::layout::{
+    Light, Quad, Sphere, Triangle, LIGHT_TRIANGLE, SURFACE_CONDUCTOR, SURFACE_PLASTIC, SURFACE_ROUGH_CONDUCTOR,
+    SURFACE_ROUGH_GLASS, SURFACE_THIN,
+};
 use crate::reflected::{KernelInfo, SOURCES};
 
 /// Scenes with more spheres and quads than this keep the buffer-reading kernels.
@@ -71,10 +74,13 @@ pub fn scene_constants(c: &SceneConstants) -> String {
     let inline: &[Triangle] = if c.inline_triangles { c.triangles } else { &[] };
     let has = |surface: u32| c.surfaces & (1 << surface) != 0;
     s += &format!(
-        "const bool SCENE_CONDUCTORS = {};\nconst bool SCENE_PLASTICS = {};\nconst bool SCENE_THIN = {};\n",
+        "const bool SCENE_CONDUCTORS = {};\nconst bool SCENE_PLASTICS = {};\nconst bool SCENE_THIN = {};\n\
+         const bool SCENE_ROUGH_CONDUCTORS = {};\nconst bool SCENE_ROUGH_GLASS = {};\n",
         has(SURFACE_CONDUCTOR),
         has(SURFACE_PLASTIC),
-        has(SURFACE_THIN)
+        has(SURFACE_THIN),
+        has(SURFACE_ROUGH_CONDUCTOR),
+        has(SURFACE_ROUGH_GLASS)
     );
     s += &format!("const bool SCENE_TEXTURES = {};\n", c.textures);
     s += &format!(

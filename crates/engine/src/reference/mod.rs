@@ -4,16 +4,19 @@
 
 pub mod bvh;
 pub mod conductor;
+pub mod microfacet;
 pub mod plastic;
 pub mod rng;
+pub mod rough_conductor;
+pub mod rough_dielectric;
 pub mod texture;
 pub mod thin_dielectric;
 pub mod trace;
 
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 use ppm_vk_kernels::layout::{
     HitPoint, HitStats, Material, PassAccum, Photon, EMPTY_SLOT, LIGHT_TRIANGLE, SURFACE_DIFFUSE, SURFACE_PLASTIC,
-    SURFACE_THIN,
+    SURFACE_ROUGH_CONDUCTOR, SURFACE_ROUGH_GLASS, SURFACE_THIN,
 };
 use ppm_vk_kernels::photon::SALT_EMISSION;
 use ppm_vk_kernels::ray::RayPush;
@@ -108,6 +111,33 @@ fn direct_light(g: &GpuScene, p: Vec3, nf: Vec3, albedo: Vec3, coat_ior: f32, rn
     match coat_ior > 0.0 {
         true => l * (1.0 - plastic::coat_fresnel(cos_p, coat_ior)),
         false => l,
+    }
+}
+
+/// rough_dielectric.glsl's `rough_bounce`: for a rough conductor or rough glass, the new origin,
+/// direction and weight (zero: the path ends), its numbers drawn from `rng` in the kernel's order; None
+/// for every other surface.
+fn rough_bounce(
+    g: &GpuScene,
+    m: &Material,
+    pos: Vec3,
+    nf: Vec3,
+    front: bool,
+    rng: &mut Rng,
+    d: Vec3,
+) -> Option<(Vec3, Vec3, Vec3)> {
+    match m.surface {
+        SURFACE_ROUGH_CONDUCTOR => {
+            let u = Vec2::new(rng.float(), rng.float());
+            Some(rough_conductor::bounce(g, m, pos, nf, u, d))
+        }
+        SURFACE_ROUGH_GLASS => {
+            let u = rng.float();
+            let u2 = Vec2::new(rng.float(), rng.float());
+            let (o, d, w) = rough_dielectric::bounce(g, m, pos, nf, front, u, u2, d);
+            Some((o, d, Vec3::splat(w)))
+        }
+        _ => None,
     }
 }
 
@@ -206,6 +236,14 @@ fn emission_sample(
             let w;
             (o, d, w) = thin_dielectric::branch(g, m, h.pos, nf, rng.float(), d);
             thr *= w;
+            continue;
+        }
+        if let Some((o2, d2, w)) = rough_bounce(g, m, h.pos, nf, front, rng, d) {
+            (o, d) = (o2, d2);
+            thr *= w;
+            if thr.max_element() <= 0.0 {
+                return sum;
+            }
             continue;
         }
         (o, d) = glass_branch(g, h.pos, nf, front, m.ior, rng.float(), d);
@@ -366,6 +404,14 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         continue;
                     }
                     depth += 1;
+                    if let Some((o2, d2, w)) = rough_bounce(g, m, h.pos, nf, front, &mut rng, d) {
+                        (o, d) = (o2, d2);
+                        thr *= w;
+                        if thr.max_element() <= 0.0 {
+                            break;
+                        }
+                        continue;
+                    }
                     if m.surface == SURFACE_THIN {
                         let rr = thin_dielectric::reflectance(-d.dot(nf), m.ior);
                         if rr < 1.0 && slot + stack.len() + 1 < slots {
@@ -525,6 +571,12 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             let w;
             (o, d, w) = thin_dielectric::branch(g, m, h.pos, nf, rng.float(), d);
             flux *= w;
+        } else if let Some((o2, d2, w)) = rough_bounce(g, m, h.pos, nf, front, &mut rng, d) {
+            (o, d) = (o2, d2);
+            flux *= w;
+            if flux.max_element() <= 0.0 {
+                return true;
+            }
         } else {
             (o, d) = glass_branch(g, h.pos, nf, front, m.ior, rng.float(), d);
         }

@@ -21,7 +21,7 @@ use glam::{DAffine3, DMat3, DMat4, DVec3, DVec4, Vec2, Vec3};
 use super::conductors;
 use super::obj::{self, RawMesh};
 use super::texture::{self, Filter, Pattern, Texture, Wrap};
-use super::{Camera, Material, Mesh, ObjImport, Quad, Scene, Sphere, Surface, MAX_TRIANGLES};
+use super::{Camera, Material, Mesh, Microfacet, ObjImport, Quad, Scene, Sphere, Surface, MAX_TRIANGLES};
 use crate::error::Error;
 
 /// Deepest `<include>` nesting, Mitsuba's own limit (`ParserConfig::max_include_depth`).
@@ -914,14 +914,16 @@ impl Builder {
                         props.color("k")?.unwrap_or(none_k),
                     ),
                 };
-                if kind == "roughconductor" {
-                    props.ignore(&["alpha", "alpha_u", "alpha_v", "distribution", "sample_visible"]);
-                    self.warn(
-                        e,
-                        "rough conductor rendered as a smooth conductor (ppm-vk has no glossy reflection yet)",
-                    );
+                let reflectance = props.color("specular_reflectance")?.unwrap_or(Vec3::ONE);
+                match kind {
+                    "roughconductor" => Surface::RoughConductor {
+                        reflectance,
+                        eta,
+                        k,
+                        rough: microfacet(e, &props)?,
+                    },
+                    _ => Surface::conductor(reflectance, eta, k),
                 }
-                Surface::conductor(props.color("specular_reflectance")?.unwrap_or(Vec3::ONE), eta, k)
             }
             kind @ ("dielectric" | "roughdielectric") => {
                 let (int, ext) = (ior(e, &props, "int_ior", "bk7")?, ior(e, &props, "ext_ior", "air")?);
@@ -941,15 +943,13 @@ impl Builder {
                          (relative index >= 1)"
                     )));
                 }
-                if kind == "roughdielectric" {
-                    props.ignore(&["alpha", "alpha_u", "alpha_v", "distribution", "sample_visible"]);
-                    self.warn(
-                        e,
-                        "rough dielectric rendered as smooth glass (ppm-vk has no glossy transmission)",
-                    );
-                }
-                let surface = Surface::Glass {
-                    ior: (int / ext) as f32,
+                let ior = (int / ext) as f32;
+                let surface = match kind {
+                    "roughdielectric" => Surface::RoughGlass {
+                        ior,
+                        rough: microfacet(e, &props)?,
+                    },
+                    _ => Surface::Glass { ior },
                 };
                 props.finish()?;
                 return Ok(Bsdf {
@@ -1237,7 +1237,7 @@ impl Builder {
             return Err(emitter_at.err(format!(
                 "an area emitter on a {} surface: ppm-vk lights are diffuse (or black) only",
                 match bsdf.surface {
-                    Surface::Glass { .. } => "dielectric",
+                    Surface::Glass { .. } | Surface::RoughGlass { .. } => "dielectric",
                     Surface::Plastic { .. } => "plastic",
                     Surface::ThinDielectric { .. } => "thin dielectric",
                     _ => "conductor",
@@ -1443,8 +1443,11 @@ impl Builder {
         props.finish()?;
         let one_sided = match bsdf.surface {
             Surface::Diffuse { albedo } => albedo != Vec3::ZERO,
-            Surface::Mirror { .. } | Surface::Conductor { .. } | Surface::Plastic { .. } => true,
-            Surface::Glass { .. } | Surface::ThinDielectric { .. } => false,
+            Surface::Mirror { .. }
+            | Surface::Conductor { .. }
+            | Surface::RoughConductor { .. }
+            | Surface::Plastic { .. } => true,
+            Surface::Glass { .. } | Surface::RoughGlass { .. } | Surface::ThinDielectric { .. } => false,
         };
         if closed == Closed::No && one_sided && !bsdf.two_sided {
             self.warn(
@@ -1688,6 +1691,47 @@ fn fov_x(props: &Props, aspect: f64, e: &Elem) -> Result<f64> {
 
 /// A bsdf's index of refraction `name` (int_ior, ext_ior): a <float>, a <string> naming a material, or
 /// Mitsuba's `default` when absent.
+/// A rough BSDF's microfacet distribution: `distribution` (Mitsuba's default "beckmann", or "ggx") and
+/// `alpha` (default 0.1, raised to Mitsuba's floor 1e-4 as Mitsuba does), or `alpha_u` and `alpha_v`
+/// when equal; `sample_visible` changes only how Mitsuba samples (ppm-vk always samples visible normals).
+fn microfacet(e: &Elem, props: &Props) -> Result<Microfacet> {
+    let ggx = match props.string("distribution")? {
+        None | Some("beckmann") => false,
+        Some("ggx") => true,
+        Some(other) => {
+            let at = props.get("distribution").unwrap();
+            return Err(at.err(format!("unknown distribution \"{other}\" (read: beckmann, ggx)")));
+        }
+    };
+    props.ignore(&["sample_visible"]);
+    let alpha = match (props.float("alpha")?, props.float("alpha_u")?, props.float("alpha_v")?) {
+        (Some(a), None, None) => a,
+        (None, None, None) => 0.1,
+        (None, Some(u), Some(v)) if u == v => u,
+        (None, Some(_), Some(_)) => {
+            return Err(e.err(
+                "anisotropic roughness (alpha_u != alpha_v) is not modelled: it needs the surface's \
+                 tangents, which ppm-vk's shapes do not carry yet",
+            ))
+        }
+        (Some(_), _, _) => return Err(e.err("give alpha, or alpha_u and alpha_v, not both")),
+        (None, _, _) => return Err(e.err("give both alpha_u and alpha_v")),
+    };
+    let named = if props.get("alpha").is_some() {
+        "alpha"
+    } else {
+        "alpha_u"
+    };
+    if !(alpha.is_finite() && alpha >= 0.0) {
+        let at = props.get(named).unwrap();
+        return Err(at.err(format!("must be finite and >= 0, got {alpha}")));
+    }
+    Ok(Microfacet {
+        ggx,
+        alpha: (alpha as f32).max(Microfacet::MIN_ALPHA),
+    })
+}
+
 fn ior(e: &Elem, props: &Props, name: &str, default: &str) -> Result<f64> {
     let Some(p) = props.get(name) else {
         return ior_named(e, default);
@@ -2347,19 +2391,65 @@ mod tests {
         );
         assert!(s.quads[0].normal().distance(Vec3::NEG_Y) < 1e-6);
 
+        // Rough conductors and dielectrics: Mitsuba's defaults (Beckmann, alpha 0.1), GGX, alpha_u and
+        // alpha_v when equal, and Mitsuba's floor on alpha.
         let s = load_body(
-            r#"<shape type="sphere"><bsdf type="roughconductor"><float name="alpha" value="0.1"/></bsdf></shape>"#,
+            r#"<shape type="sphere"><bsdf type="roughconductor"/></shape>
+               <shape type="sphere"><bsdf type="roughconductor"><string name="distribution" value="ggx"/>
+                 <float name="alpha_u" value="0.3"/><float name="alpha_v" value="0.3"/><string name="material" value="Cu"/>
+                 <boolean name="sample_visible" value="false"/></bsdf></shape>
+               <shape type="sphere"><bsdf type="roughdielectric"><float name="alpha" value="0"/><float name="int_ior" value="1.5"/></bsdf></shape>"#,
         )
         .unwrap();
+        let (none_eta, none_k) = conductors::named("none").unwrap();
+        let (cu_eta, cu_k) = conductors::named("Cu").unwrap();
         assert_eq!(
-            s.materials[s.spheres[0].material as usize].surface,
-            Surface::Mirror { reflectance: Vec3::ONE }
+            surface_of(&s, 0),
+            Surface::RoughConductor {
+                reflectance: Vec3::ONE,
+                eta: none_eta,
+                k: none_k,
+                rough: Microfacet { ggx: false, alpha: 0.1 }
+            }
         );
-        assert!(
-            s.warnings.len() == 1 && s.warnings[0].contains("rough conductor rendered as a smooth conductor"),
-            "{:?}",
-            s.warnings
+        assert_eq!(
+            surface_of(&s, 1),
+            Surface::RoughConductor {
+                reflectance: Vec3::ONE,
+                eta: cu_eta,
+                k: cu_k,
+                rough: Microfacet { ggx: true, alpha: 0.3 }
+            }
         );
+        assert_eq!(
+            surface_of(&s, 2),
+            Surface::RoughGlass {
+                ior: (1.5 / 1.000277f64) as f32,
+                rough: Microfacet {
+                    ggx: false,
+                    alpha: Microfacet::MIN_ALPHA
+                }
+            }
+        );
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        for (body, message) in [
+            (
+                r#"<float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/>"#,
+                "anisotropic roughness",
+            ),
+            (r#"<string name="distribution" value="phong"/>"#, "unknown distribution \"phong\""),
+            (r#"<float name="alpha" value="0.1"/><float name="alpha_u" value="0.1"/>"#, "not both"),
+            (r#"<float name="alpha_u" value="0.1"/>"#, "give both alpha_u and alpha_v"),
+            (r#"<float name="alpha" value="-1"/>"#, "must be finite and >= 0"),
+        ] {
+            for kind in ["roughconductor", "roughdielectric"] {
+                let e = load_body(&format!(r#"<shape type="sphere"><bsdf type="{kind}">{body}</bsdf></shape>"#))
+                    .map(|_| ())
+                    .unwrap_err();
+                let e = format!("{e:#}");
+                assert!(e.contains(message) && e.contains("scene.xml:12:"), "{kind} {body}: {e}");
+            }
+        }
         // A named metal, and eta/k given as rgb or float: the conductor's Fresnel term.
         let s = load_body(
             r#"<shape type="sphere"><bsdf type="conductor"><string name="material" value="Au"/></bsdf></shape>

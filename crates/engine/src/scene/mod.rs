@@ -77,6 +77,17 @@ pub enum Surface {
         ior: f32,
         nonlinear: bool,
     },
+    /// Mitsuba's `roughconductor` (reference/rough_conductor.rs): the conductor's facets, oriented by a
+    /// microfacet distribution.
+    RoughConductor {
+        reflectance: Vec3,
+        eta: Vec3,
+        k: Vec3,
+        rough: Microfacet,
+    },
+    /// Mitsuba's `roughdielectric` (reference/rough_dielectric.rs): the glass's facets, oriented by a
+    /// microfacet distribution; `ior` is the index inside over the index outside.
+    RoughGlass { ior: f32, rough: Microfacet },
     /// Mitsuba's `thindielectric` (reference/thin_dielectric.rs): a pane of relative index `ior` that
     /// reflects (times `reflectance`) or lets light through without bending it (times `transmittance`).
     ThinDielectric {
@@ -84,6 +95,28 @@ pub enum Surface {
         reflectance: Vec3,
         transmittance: Vec3,
     },
+}
+
+/// A microfacet distribution (reference/microfacet.rs): Mitsuba's `distribution` and its roughness
+/// `alpha` (isotropic: the readers refuse `alpha_u` != `alpha_v`, which needs surface tangents).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Microfacet {
+    pub ggx: bool,
+    pub alpha: f32,
+}
+
+impl Microfacet {
+    /// Mitsuba's floor on alpha (its MicrofacetDistribution clamps to it): below it the lobe is narrower
+    /// than f32 directions resolve.
+    pub const MIN_ALPHA: f32 = 1e-4;
+
+    pub fn distribution_name(&self) -> &'static str {
+        if self.ggx {
+            "ggx"
+        } else {
+            "beckmann"
+        }
+    }
 }
 
 impl Surface {
@@ -851,6 +884,35 @@ fn positive_ior(ior: f32, path: &str) -> Result<(), Invalid> {
     }
 }
 
+/// A conductor's specular_reflectance and complex index (smooth or rough).
+fn conductor_terms(p: &str, reflectance: Vec3, eta: Vec3, k: Vec3) -> Result<(), Invalid> {
+    unit_vec(reflectance, &format!("{p}.reflectance"))?;
+    for (name, v) in [("eta", eta), ("k", k)] {
+        let path = format!("{p}.conductor.{name}");
+        finite_vec(v, &path)?;
+        if v.cmplt(Vec3::ZERO).any() {
+            let got = fmt_vec(v.to_array());
+            return Err(invalid(path, format!("every component must be >= 0, got {got}")));
+        }
+    }
+    if (eta + k).cmple(Vec3::ZERO).any() {
+        let message = "eta and k are both 0 in a channel: no such metal (Mitsuba's default is eta 0, k 1)";
+        return Err(invalid(format!("{p}.conductor"), message.to_string()));
+    }
+    Ok(())
+}
+
+/// A microfacet roughness: finite, at least Mitsuba's floor (the readers raise smaller values to it).
+fn roughness(rough: Microfacet, path: &str) -> Result<(), Invalid> {
+    match rough.alpha.is_finite() && rough.alpha >= Microfacet::MIN_ALPHA {
+        true => Ok(()),
+        false => Err(invalid(
+            path.to_string(),
+            format!("must be finite and >= {}, got {}", Microfacet::MIN_ALPHA, rough.alpha),
+        )),
+    }
+}
+
 fn check_material(m: &Material) -> Result<(), Invalid> {
     let p = format!("materials.{}", m.name);
     let ep = format!("{p}.emission");
@@ -864,21 +926,7 @@ fn check_material(m: &Material) -> Result<(), Invalid> {
     match m.surface {
         Surface::Diffuse { albedo } => unit_vec(albedo, &format!("{p}.diffuse"))?,
         Surface::Mirror { reflectance } => unit_vec(reflectance, &format!("{p}.mirror"))?,
-        Surface::Conductor { reflectance, eta, k } => {
-            unit_vec(reflectance, &format!("{p}.reflectance"))?;
-            for (name, v) in [("eta", eta), ("k", k)] {
-                let path = format!("{p}.conductor.{name}");
-                finite_vec(v, &path)?;
-                if v.cmplt(Vec3::ZERO).any() {
-                    let got = fmt_vec(v.to_array());
-                    return Err(invalid(path, format!("every component must be >= 0, got {got}")));
-                }
-            }
-            if (eta + k).cmple(Vec3::ZERO).any() {
-                let message = "eta and k are both 0 in a channel: no such metal (Mitsuba's default is eta 0, k 1)";
-                return Err(invalid(format!("{p}.conductor"), message.to_string()));
-            }
-        }
+        Surface::Conductor { reflectance, eta, k } => conductor_terms(&p, reflectance, eta, k)?,
         Surface::Glass { ior } => {
             if !(ior.is_finite() && ior >= 1.0) {
                 return Err(invalid(
@@ -908,6 +956,24 @@ fn check_material(m: &Material) -> Result<(), Invalid> {
                     ),
                 ));
             }
+        }
+        Surface::RoughConductor {
+            reflectance,
+            eta,
+            k,
+            rough,
+        } => {
+            conductor_terms(&p, reflectance, eta, k)?;
+            roughness(rough, &format!("{p}.conductor.alpha"))?;
+        }
+        Surface::RoughGlass { ior, rough } => {
+            if !(ior.is_finite() && ior >= 1.0) {
+                return Err(invalid(
+                    format!("{p}.rough_glass.ior"),
+                    format!("index of refraction must be finite and >= 1, got {ior}"),
+                ));
+            }
+            roughness(rough, &format!("{p}.rough_glass.alpha"))?;
         }
         Surface::ThinDielectric {
             ior,
