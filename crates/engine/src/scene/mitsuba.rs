@@ -2437,15 +2437,26 @@ mod tests {
                 r#"<float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/>"#,
                 "anisotropic roughness",
             ),
-            (r#"<string name="distribution" value="phong"/>"#, "unknown distribution \"phong\""),
-            (r#"<float name="alpha" value="0.1"/><float name="alpha_u" value="0.1"/>"#, "not both"),
-            (r#"<float name="alpha_u" value="0.1"/>"#, "give both alpha_u and alpha_v"),
+            (
+                r#"<string name="distribution" value="phong"/>"#,
+                "unknown distribution \"phong\"",
+            ),
+            (
+                r#"<float name="alpha" value="0.1"/><float name="alpha_u" value="0.1"/>"#,
+                "not both",
+            ),
+            (
+                r#"<float name="alpha_u" value="0.1"/>"#,
+                "give both alpha_u and alpha_v",
+            ),
             (r#"<float name="alpha" value="-1"/>"#, "must be finite and >= 0"),
         ] {
             for kind in ["roughconductor", "roughdielectric"] {
-                let e = load_body(&format!(r#"<shape type="sphere"><bsdf type="{kind}">{body}</bsdf></shape>"#))
-                    .map(|_| ())
-                    .unwrap_err();
+                let e = load_body(&format!(
+                    r#"<shape type="sphere"><bsdf type="{kind}">{body}</bsdf></shape>"#
+                ))
+                .map(|_| ())
+                .unwrap_err();
                 let e = format!("{e:#}");
                 assert!(e.contains(message) && e.contains("scene.xml:12:"), "{kind} {body}: {e}");
             }

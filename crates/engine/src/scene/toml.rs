@@ -20,7 +20,7 @@ use serde::Deserialize;
 use crate::error::{Error, Result};
 
 use super::texture::{self, Filter, Pattern, Texture, Wrap};
-use super::{obj, Camera, ImageRegion, Material, ObjImport, Quad, Scene, Sphere, Surface, MAX_TRIANGLES};
+use super::{obj, Camera, ImageRegion, Material, Microfacet, ObjImport, Quad, Scene, Sphere, Surface, MAX_TRIANGLES};
 
 /// [`Scene::parse`]: mesh files are found relative to the directory of `origin`.
 pub(super) fn parse(text: &str, origin: &str) -> Result<Scene> {
@@ -88,7 +88,26 @@ struct RawMaterial {
     conductor: Option<Spanned<RawConductor>>,
     plastic: Option<Spanned<RawPlastic>>,
     thin: Option<Spanned<RawThin>>,
+    rough_glass: Option<Spanned<RawRoughGlass>>,
     emission: Option<Spanned<[f32; 3]>>,
+}
+
+/// `rough_glass = { ior = 1.5, alpha = 0.1, distribution = "beckmann" }`: Mitsuba's roughdielectric, with
+/// its defaults (BK7 in air, alpha 0.1, Beckmann).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRoughGlass {
+    ior: Option<f32>,
+    alpha: Option<f32>,
+    distribution: Option<RawDistribution>,
+}
+
+/// A microfacet distribution's name (Mitsuba's `distribution`).
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum RawDistribution {
+    Beckmann,
+    Ggx,
 }
 
 /// `plastic = { diffuse = [..], specular = [..], ior = 1.49, nonlinear = false }`: Mitsuba's plastic
@@ -188,7 +207,8 @@ struct RawThin {
 
 /// `conductor = "Au"` (a metal Mitsuba names), or `conductor = { eta = [..], k = [..] }`, either with an
 /// optional `reflectance` (Mitsuba's specular_reflectance) in the table form:
-/// `conductor = { material = "Cu", reflectance = [0.9, 0.9, 0.9] }`.
+/// `conductor = { material = "Cu", reflectance = [0.9, 0.9, 0.9] }`, and rough with `alpha` (and
+/// `distribution`): `conductor = { material = "Au", alpha = 0.2, distribution = "ggx" }`.
 #[derive(Deserialize)]
 #[serde(untagged)]
 enum RawConductor {
@@ -203,6 +223,10 @@ struct RawConductorTable {
     eta: Option<[f32; 3]>,
     k: Option<[f32; 3]>,
     reflectance: Option<[f32; 3]>,
+    /// Given: a rough conductor (Mitsuba's roughconductor) of this roughness.
+    alpha: Option<f32>,
+    /// The rough conductor's distribution (default Beckmann, as Mitsuba's); needs `alpha`.
+    distribution: Option<RawDistribution>,
 }
 
 #[derive(Deserialize)]
@@ -512,6 +536,9 @@ fn material(
     if let Some(c) = &r.thin {
         spans.insert(format!("{p}.thin"), c.span());
     }
+    if let Some(c) = &r.rough_glass {
+        spans.insert(format!("{p}.rough_glass"), c.span());
+    }
     // Exactly one kind of surface: the second one written is the error.
     let kinds = [
         ("diffuse", r.diffuse.as_ref().map(|v| v.span())),
@@ -520,6 +547,7 @@ fn material(
         ("conductor", r.conductor.as_ref().map(|v| v.span())),
         ("plastic", r.plastic.as_ref().map(|v| v.span())),
         ("thin", r.thin.as_ref().map(|v| v.span())),
+        ("rough_glass", r.rough_glass.as_ref().map(|v| v.span())),
     ];
     let mut given = kinds.iter().filter_map(|(k, span)| span.clone().map(|s| (*k, s)));
     if let (Some((a, _)), Some((b, span))) = (given.next(), given.next()) {
@@ -528,7 +556,7 @@ fn material(
             Some(&format!("{p}.{b}")),
             format!(
                 "a material cannot be both {a} and {b}: give exactly one of diffuse, mirror, glass, conductor, \
-                 plastic, thin"
+                 plastic, thin, rough_glass"
             ),
         ));
     }
@@ -539,7 +567,7 @@ fn material(
                 e.span(),
                 Some(&format!("{p}.emission")),
                 "emission can only be combined with diffuse (or stand alone), \
-                 not with mirror, glass, conductor, plastic or thin",
+                 not with mirror, glass, conductor, plastic, thin or rough_glass",
             ));
         }
     }
@@ -578,6 +606,12 @@ fn material(
             reflectance: t.reflectance.map_or(Vec3::ONE, Vec3::from),
             transmittance: t.transmittance.map_or(Vec3::ONE, Vec3::from),
         }
+    } else if let Some(g) = &r.rough_glass {
+        let g = g.get_ref();
+        Surface::RoughGlass {
+            ior: g.ior.unwrap_or(THIN_IOR),
+            rough: microfacet(g.alpha.unwrap_or(0.1), g.distribution),
+        }
     } else if r.emission.is_some() {
         // A pure emitter reflects nothing.
         Surface::Diffuse { albedo: Vec3::ZERO }
@@ -585,7 +619,8 @@ fn material(
         return Err(src.error(
             m.span(),
             Some(&p),
-            "needs one of diffuse, mirror, glass, conductor, plastic, thin (or emission alone for a black emitter)",
+            "needs one of diffuse, mirror, glass, conductor, plastic, thin, rough_glass (or emission alone for a \
+             black emitter)",
         ));
     };
     Ok(Material {
@@ -703,7 +738,7 @@ fn reflectance(
 
 /// Mitsuba's default plastic coat: polypropylene (1.49) in air (1.000277).
 const PLASTIC_IOR: f32 = 1.49 / 1.000277;
-/// Mitsuba's default thin dielectric: BK7 (1.5046) in air.
+/// Mitsuba's default thin and rough dielectric: BK7 (1.5046) in air.
 const THIN_IOR: f32 = 1.5046 / 1.000277;
 
 /// A `conductor` entry: a named metal (Mitsuba's names and RGB values, scene/conductors.rs) or eta and k.
@@ -718,9 +753,16 @@ fn conductor(src: &Source, p: &str, c: &Spanned<RawConductor>) -> Result<Surface
             ))
         })
     };
-    let (material, eta, k, reflectance) = match c.get_ref() {
-        RawConductor::Named(name) => (Some(name.as_str()), None, None, None),
-        RawConductor::Table(t) => (t.material.as_deref(), t.eta, t.k, t.reflectance),
+    let (material, eta, k, reflectance, alpha, distribution) = match c.get_ref() {
+        RawConductor::Named(name) => (Some(name.as_str()), None, None, None, None, None),
+        RawConductor::Table(t) => (
+            t.material.as_deref(),
+            t.eta,
+            t.k,
+            t.reflectance,
+            t.alpha,
+            t.distribution,
+        ),
     };
     let (eta, k) = match (material, eta, k) {
         (Some(name), None, None) => named(name)?,
@@ -729,7 +771,25 @@ fn conductor(src: &Source, p: &str, c: &Spanned<RawConductor>) -> Result<Surface
         (Some(_), _, _) => return Err(fail("give a material name or eta and k, not both".into())),
         (None, _, _) => return Err(fail("give both eta and k (or a material name)".into())),
     };
-    Ok(Surface::conductor(reflectance.map_or(Vec3::ONE, Vec3::from), eta, k))
+    let reflectance = reflectance.map_or(Vec3::ONE, Vec3::from);
+    match (alpha, distribution) {
+        (Some(alpha), distribution) => Ok(Surface::RoughConductor {
+            reflectance,
+            eta,
+            k,
+            rough: microfacet(alpha, distribution),
+        }),
+        (None, Some(_)) => Err(fail("a distribution needs alpha (the roughness)".into())),
+        (None, None) => Ok(Surface::conductor(reflectance, eta, k)),
+    }
+}
+
+/// A rough surface's distribution (Mitsuba's default: Beckmann); alpha is checked by `Scene::check`.
+fn microfacet(alpha: f32, distribution: Option<RawDistribution>) -> Microfacet {
+    Microfacet {
+        ggx: matches!(distribution, Some(RawDistribution::Ggx)),
+        alpha,
+    }
 }
 
 /// Reads `[[mesh]]` number `i` into `scene`: the OBJ file relative to `base`, its transform, and the
@@ -1360,7 +1420,7 @@ material = "light"
             &text,
             15,
             "materials.glass.emission",
-            "not with mirror, glass, conductor, plastic or thin",
+            "not with mirror, glass, conductor, plastic, thin or rough_glass",
         );
         let text = BASE.replace(
             "diffuse = [0.5, 0.5, 0.5]",
@@ -1457,6 +1517,55 @@ material = "light"
                 transmittance: Vec3::new(0.9, 0.8, 0.7)
             }
         );
+        // Rough surfaces: Mitsuba's defaults (Beckmann, alpha 0.1, BK7 in air) and GGX.
+        assert_eq!(
+            surface("rough_glass = {}"),
+            Surface::RoughGlass {
+                ior: THIN_IOR,
+                rough: Microfacet { ggx: false, alpha: 0.1 }
+            }
+        );
+        assert_eq!(
+            surface(r#"rough_glass = { ior = 1.33, alpha = 0.3, distribution = "ggx" }"#),
+            Surface::RoughGlass {
+                ior: 1.33,
+                rough: Microfacet { ggx: true, alpha: 0.3 }
+            }
+        );
+        let (au_eta, au_k) = crate::scene::conductors::named("Au").unwrap();
+        assert_eq!(
+            surface(r#"conductor = { material = "Au", alpha = 0.2, distribution = "ggx" }"#),
+            Surface::RoughConductor {
+                reflectance: Vec3::ONE,
+                eta: au_eta,
+                k: au_k,
+                rough: Microfacet { ggx: true, alpha: 0.2 }
+            }
+        );
+        assert_err(
+            &edit(14, r#"conductor = { material = "Au", alpha = 0.0 }"#),
+            14,
+            "materials.glass.conductor.alpha",
+            ">= 0.0001",
+        );
+        assert_err(
+            &edit(14, r#"conductor = { material = "Au", distribution = "ggx" }"#),
+            14,
+            "materials.glass.conductor",
+            "needs alpha",
+        );
+        assert_err(
+            &edit(14, r#"rough_glass = { distribution = "phong" }"#),
+            14,
+            "materials.glass.rough_glass.distribution",
+            "unknown variant",
+        );
+        assert_err(
+            &edit(14, "rough_glass = { ior = 0.5 }"),
+            14,
+            "materials.glass.rough_glass.ior",
+            ">= 1",
+        );
         // Errors name the line and the field.
         assert_err(
             &edit(14, "plastic = { ior = -1.5 }"),
@@ -1486,7 +1595,7 @@ material = "light"
             &BASE.replace("glass = 1.5", "plastic = {}\nemission = [1.0, 1.0, 1.0]"),
             15,
             "materials.glass.emission",
-            "not with mirror, glass, conductor, plastic or thin",
+            "not with mirror, glass, conductor, plastic, thin or rough_glass",
         );
     }
 
