@@ -38,7 +38,8 @@ pub struct CompareArgs {
     time: f64,
     /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone". Words joined by
     /// `+`: ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass),
-    /// photons (direct light by the photons) or sample (by light sampling, the default), ls=N (light samples).
+    /// gh=A (glossy hit points on rough conductors of alpha >= A), photons (direct light by the photons) or
+    /// sample (by light sampling, the default), ls=N (light samples).
     #[arg(
         long,
         default_value = "ppm; ppm+probe; ppm+probe-sf; ppm+cone; ppm+probe+cone; ppm+probe-sf+cone"
@@ -107,11 +108,12 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
                     _ => s.light_samples = e as u32,
                 }
             }
+            "gh" => s.glossy_hits = Some(number("gh")?),
             "photons" => s.direct = ppm_vk_engine::DirectLight::Photons,
             "sample" => s.direct = ppm_vk_engine::DirectLight::Sample,
             other => bail!(
                 "variant {name:?}: unknown word {other:?} (ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A, es=N, \
-                 ls=N, photons, sample)"
+                 ls=N, gh=A, photons, sample)"
             ),
         }
     }

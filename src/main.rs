@@ -169,6 +169,11 @@ pub(crate) struct SettingsArgs {
     #[arg(long, default_value_t = Settings::default().light_samples,
           value_parser = clap::value_parser!(u32).range(1..=ppm_vk_engine::settings::MAX_EMISSION_SAMPLES as i64))]
     light_samples: u32,
+    /// Glossy hit points: eye paths end with a hit point on rough conductors of at least this roughness
+    /// (alpha), where the photons leave records and the gather evaluates the BRDF per photon; without it
+    /// every rough lobe is sampled through (docs/accuracy.md compares the two).
+    #[arg(long, value_name = "ALPHA", value_parser = parse_glossy)]
+    glossy_hits: Option<f32>,
     /// Photon probing (eq. 7-9): `paper` is eq. 9 as printed, `scale-free` is r' = r (1 + lambda / r^2).
     #[arg(long, value_enum, default_value_t = ProbeArg::Off)]
     probe: ProbeArg,
@@ -200,6 +205,7 @@ impl SettingsArgs {
             emission_samples: self.emission_samples,
             direct: self.direct.into(),
             light_samples: self.light_samples,
+            glossy_hits: self.glossy_hits,
             ..Settings::default()
         };
         settings.validate()?;
@@ -350,6 +356,10 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
 
 fn parse_fraction(s: &str) -> Result<f32, String> {
     parse_in(s, |f: f32| f > 0.0 && f < 1.0, "in (0, 1)")
+}
+
+fn parse_glossy(s: &str) -> Result<f32, String> {
+    parse_in(s, |f: f32| f.is_finite() && f >= 0.0, "finite and >= 0")
 }
 
 fn parse_positive(s: &str) -> Result<f32, String> {

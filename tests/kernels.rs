@@ -98,17 +98,19 @@ fn ray_pass_matches_reference_case(specialize: bool, direct: DirectLight) {
 }
 
 fn ray_pass_matches_reference_on(scene: ppm_vk_engine::Scene, specialize: bool, direct: DirectLight) {
-    let ctx = ctx();
-    let mut r = Renderer::new(
-        &ctx,
-        &scene,
+    ray_pass_matches_reference_with(
+        scene,
         Settings {
             specialize,
             direct,
             ..settings()
         },
     )
-    .unwrap();
+}
+
+fn ray_pass_matches_reference_with(scene: ppm_vk_engine::Scene, settings: Settings) {
+    let ctx = ctx();
+    let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
     let g = r.gpu_scene().clone();
     let g = &g;
     let gpu_hits = r.read_hit_points().unwrap();
@@ -268,6 +270,19 @@ fn ray_pass_matches_reference_with_rough_surfaces() {
     ray_pass_matches_reference_on(cornell_rough(), true, DirectLight::Sample);
 }
 
+/// Glossy hit points on the rough gold sphere (the glass still sampled through): their weight (the BRDF's
+/// bound over 4 cos_o), the direction towards the eye, and term (d) by the BRDF.
+#[test]
+fn ray_pass_matches_reference_with_glossy_hit_points() {
+    ray_pass_matches_reference_with(
+        cornell_rough(),
+        Settings {
+            glossy_hits: Some(0.0),
+            ..settings()
+        },
+    );
+}
+
 #[test]
 fn ray_pass_matches_reference_with_direct_light_by_photons() {
     ray_pass_matches_reference_case(true, DirectLight::Photons);
@@ -350,26 +365,22 @@ fn photon_records_match_reference_case(specialize: bool) {
 /// `flux_rel`: how close a record's flux must be to its twin's (relative). 1e-5 where the flux is a product
 /// of constants (albedos, mirror reflectances); see the conductor's test for where it is not.
 fn photon_records_match_reference_on(scene: ppm_vk_engine::Scene, specialize: bool, flux_rel: f64) {
-    photon_records_match_reference_within(scene, specialize, flux_rel, 0.995)
+    let settings = Settings {
+        specialize,
+        ..settings()
+    };
+    photon_records_match_reference_within(scene, settings, flux_rel, 0.995)
 }
 
 /// `min_matched`: the fraction of the CPU's records that must have a GPU twin.
 fn photon_records_match_reference_within(
     scene: ppm_vk_engine::Scene,
-    specialize: bool,
+    settings: Settings,
     flux_rel: f64,
     min_matched: f64,
 ) {
     let ctx = ctx();
-    let mut r = Renderer::new(
-        &ctx,
-        &scene,
-        Settings {
-            specialize,
-            ..settings()
-        },
-    )
-    .unwrap();
+    let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
     let gpu = r.trace_and_gather(0, PHOTONS).unwrap();
     let g = r.gpu_scene().clone();
     let cpu = reference::photon_pass(&g, 0, PHOTONS, SALT_PHOTON);
@@ -508,7 +519,17 @@ fn photon_records_match_reference_with_coated_surfaces() {
 /// took another branch, which the histogram and total-flux checks above bound.
 #[test]
 fn photon_records_match_reference_with_rough_surfaces() {
-    photon_records_match_reference_within(cornell_rough(), true, 1e-3, 0.993);
+    photon_records_match_reference_within(cornell_rough(), settings(), 1e-3, 0.993);
+}
+
+/// The same with glossy hit points on the gold sphere: records there too.
+#[test]
+fn photon_records_match_reference_with_glossy_hit_points() {
+    let settings = Settings {
+        glossy_hits: Some(0.0),
+        ..settings()
+    };
+    photon_records_match_reference_within(cornell_rough(), settings, 1e-3, 0.993);
 }
 
 /// Compares the GPU's pass accumulators with a brute-force gather over the GPU's own records.
@@ -520,8 +541,9 @@ fn check_gather(
     records: &[Photon],
     cone_k: f32,
     flux_fixed: f32,
+    materials: &[ppm_vk_engine::layout::Material],
 ) {
-    let cpu = reference::gather(hits, stats, records, cone_k);
+    let cpu = reference::gather(hits, stats, records, cone_k, materials);
     assert_eq!(cpu.len(), accum.len());
     let slots = accum.len();
     let (mut m_equal, mut worst_m, mut flux_checked, mut gathered) = (0usize, 0u32, 0usize, 0usize);
@@ -577,11 +599,17 @@ struct GridShape {
     photons: Option<u32>,
     /// SPPM instead of PPM: one hit point per pixel, in pixel order.
     sppm: bool,
+    /// cornell_rough with glossy hit points on its gold sphere, whose BRDF the gather evaluates per photon.
+    glossy: bool,
 }
 
 fn gather_case(cone_k: Option<f32>, grid: GridShape) {
     let ctx = ctx();
-    let scene = cornell(RES, RES);
+    let scene = if grid.glossy {
+        cornell_rough()
+    } else {
+        cornell(RES, RES)
+    };
     let r0 = ppm_vk_engine::gpu_scene::default_radius(&scene); // eq. 8, the starting radius
     let grid_cell = grid.cell_of_radius.map(|f| f * r0);
     let photons_per_pass = grid.photons.unwrap_or(PHOTONS);
@@ -592,6 +620,7 @@ fn gather_case(cone_k: Option<f32>, grid: GridShape) {
         grid_cell,
         photons_per_pass,
         mode,
+        glossy_hits: grid.glossy.then_some(0.0),
         ..settings()
     };
     let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
@@ -622,6 +651,12 @@ fn gather_case(cone_k: Option<f32>, grid: GridShape) {
     if grid.sppm {
         label += ", SPPM";
     }
+    if grid.glossy {
+        label += ", glossy hit points";
+        let glossy = r.read_hit_points().unwrap().iter().filter(|h| h.brdf != 0).count();
+        println!("{label}: {glossy} glossy hit points");
+        assert!(glossy > 50, "only {glossy} glossy hit points");
+    }
     check_gather(
         &label,
         &accum,
@@ -630,6 +665,7 @@ fn gather_case(cone_k: Option<f32>, grid: GridShape) {
         &records,
         cone_k.unwrap_or(0.0),
         r.gpu_scene().params.flux_fixed,
+        &r.gpu_scene().materials,
     );
     assert_clean(&ctx);
 }
@@ -646,6 +682,20 @@ fn gather_matches_brute_force() {
     );
 }
 
+/// Glossy hit points: the gather weighs each photon by the rough conductor's BRDF for its direction.
+#[test]
+fn gather_on_glossy_hit_points_matches_brute_force() {
+    for cone_k in [None, Some(1.1)] {
+        gather_case(
+            cone_k,
+            GridShape {
+                glossy: true,
+                ..GridShape::default()
+            },
+        );
+    }
+}
+
 /// Cells half the radius wide in the smallest hash table: a lookup spans about 5x5 cells (the general
 /// window, not 2x2x2), and many windows hold two cells that share a bucket. Each photon must still be
 /// counted once, from its own cell (the keys of grid.glsl; without them M differs on 416 of 1256). A
@@ -658,6 +708,7 @@ fn gather_with_wide_windows_and_shared_buckets_matches_brute_force() {
             cell_of_radius: Some(0.5),
             photons: Some(5000),
             sppm,
+            ..GridShape::default()
         };
         gather_case(None, shape);
     }

@@ -61,7 +61,7 @@ fn eye_passes_and_statistics_match_reference() {
     r.update_only().unwrap();
     let after = r.read_stats().unwrap();
     let flux_fixed = r.gpu_scene().params.flux_fixed;
-    let cpu_gather = reference::gather(&hits, &before, &records, 0.0);
+    let cpu_gather = reference::gather(&hits, &before, &records, 0.0, &r.gpu_scene().materials);
     let mut updated = 0;
     for i in 0..hits.len() {
         assert_eq!(accum[i].m, cpu_gather[i].0, "pixel {i}: M");

@@ -567,7 +567,7 @@ fn hot_spot_sums_match_an_f64_brute_force() {
     let hits = r.read_hit_points().unwrap();
     let stats = r.read_stats().unwrap();
     let flux_fixed = r.gpu_scene().params.flux_fixed as f64;
-    let cpu = reference::gather(&hits, &stats, &records, 0.0);
+    let cpu = reference::gather(&hits, &stats, &records, 0.0, &r.gpu_scene().materials);
     let hottest = accum.iter().map(|a| a.m).max().unwrap();
     println!(
         "hot spot: {} records, the hottest hit point gathered {hottest}",

@@ -1,8 +1,9 @@
 // The photons of this batch near a group of hit points. A thread gathers for GROUP hit points at once
 // (consecutive entries of the spatially sorted order, so usually neighbours on one surface) and tests each
 // photon it reads against all of them: on lavapipe every read from a storage buffer is a gather per lane,
-// and the group shares its reads. Calls the including kernel's `visit(j, flux, d2)` for each photon within
-// sqrt(q_r2[j]) of hit point j that arrives from the side it is seen from. Needs `sorted_texels` (records
+// and the group shares its reads. Calls the including kernel's `visit(j, flux, dir, d2)` for each photon within
+// sqrt(q_r2[j]) of hit point j that arrives from the side it is seen from (dir: its direction of travel,
+// not normalised). Needs `sorted_texels` (records
 // grouped by bucket, two 16-byte texels each: position and cell key, flux and direction), `cell_start` and
 // `params` declared before it. The records are read as texels: a texel fetch is a vector gather on
 // lavapipe, where a storage-buffer load is a loop over the lanes (bvh.glsl).
@@ -40,7 +41,7 @@ vec3 q_pos[GROUP];
 vec3 q_normal[GROUP];
 float q_r2[GROUP];
 
-void visit(uint j, vec3 flux, float d2);
+void visit(uint j, vec3 flux, vec3 dir, float d2);
 
 // The photons of cell `key` (its bucket may hold other cells' too) for the members in bit set `select`.
 // Fields are read only when needed: most photons of a bucket are outside every sphere.
@@ -71,7 +72,7 @@ void visit_cell(uint key, uint select) {
         vec3 flux = uintBitsToFloat(b.xyz);
         vec3 dir = oct_decode_unnormalized(b.w);
         [[unroll]] for (uint j = 0u; j < GROUP; j++) {
-            if (inside[j] && dot(dir, q_normal[j]) < 0.0) visit(j, flux, d2[j]);
+            if (inside[j] && dot(dir, q_normal[j]) < 0.0) visit(j, flux, dir, d2[j]);
         }
     }
 }

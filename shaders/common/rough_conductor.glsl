@@ -5,8 +5,9 @@
 // m) specular_reflectance, at most 1, so no photon gains flux (the fixed-point sums rely on it). The
 // estimate stays consistent because such a vertex is treated as the mirror is (an S in ray.comp's path
 // notation): no hit point and no photon record there, its lobe sampled by both path kinds with the exact
-// weight; the BSDF is reciprocal, so the photons' weight is the eye paths'. CPU twin:
-// crates/engine/src/reference/rough_conductor.rs.
+// weight; the BSDF is reciprocal, so the photons' weight is the eye paths'. Rough enough conductors
+// (RenderParams.glossy_alpha) may instead hold hit points, below. CPU twin:
+// crates/engine/src/reference/rough_conductor.rs. ROUGH_EVAL_ONLY (the gather) leaves the bounce out.
 #ifndef ROUGH_CONDUCTOR_GLSL
 #define ROUGH_CONDUCTOR_GLSL
 #include "microfacet.glsl"
@@ -23,6 +24,56 @@ vec3 to_local(vec3 d, vec3 t, vec3 b, vec3 nf) {
     return vec3(dot(d, t), dot(d, b), dot(d, nf));
 }
 
+// Glossy hit points (params.glossy_alpha): where an eye path leaves a hit point on rough conductor i
+// instead of sampling through it, the photons leave records there too (photon.comp), and the gather
+// weighs each photon by the BRDF for its own incoming direction. f(wi, wo) = ks F(wi.h) D(h) G1(wi, h)
+// G1(wo, h) / (4 cos_i cos_o) is bounded: D(h) <= D(n) = 1 / (pi alpha^2), G1(wi, h) / cos_i <= gb (2 /
+// min(alpha, 2) for GGX, exactly; 3.535 / alpha + 1 for Beckmann's fit, whose supremum is 3.535 / alpha
+// below alpha = 4 and under 1.01 above), F, G1(wo, h) and ks <= 1. The hit point's weight holds ks and
+// the bound over 4 cos_o (rough_conductor_hit_weight), and a photon contributes its flux times the rest,
+// rough_conductor_ratio, at most 1 per channel: the fixed-point sums' bound (RenderParams.flux_fixed)
+// holds as for a diffuse hit point.
+float rough_conductor_bound(Microfacet mf) {
+    float gb = mf.kind == MICROFACET_GGX ? 2.0 / min(mf.au, 2.0) : 3.535 / mf.au + 1.0;
+    return gb / (PI * mf.au * mf.av);
+}
+
+// The terms of f(wi, wo) for unit wi, wo leaving the surface of unit normal n: returns D G1(wi) G1(wo) /
+// cos_i (0 where either is below it), and F the facets' Fresnel term per channel.
+float rough_conductor_terms(uint i, vec3 wi, vec3 wo, vec3 n, out vec3 f) {
+    f = vec3(0.0);
+    vec3 t, b;
+    onb(n, t, b);
+    vec3 li = to_local(wi, t, b, n), lo = to_local(wo, t, b, n);
+    if (li.z <= 0.0 || lo.z <= 0.0) return 0.0;
+    Microfacet mf = material_microfacet(i);
+    vec3 h = normalize(li + lo);
+    vec3 eta, k;
+    material_terms(i, eta, k);
+    f = fresnel_conductor(clamp(dot(li, h), 0.0, 1.0), eta, k);
+    return mf_d(mf, h) * mf_g1(mf, li, h) * mf_g1(mf, lo, h) / li.z;
+}
+
+// A glossy hit point's weight on rough conductor i: the eye path's throughput times ks times the bound
+// over 4 cos_o.
+vec3 rough_conductor_hit_weight(uint i, vec3 color, vec3 thr, float cos_o) {
+    return thr * color * (rough_conductor_bound(material_microfacet(i)) / (4.0 * cos_o));
+}
+
+// What a photon arriving along -wi gives a glossy hit point on rough conductor i seen from wo: f(wi, wo)
+// over the hit point's weight per unit throughput, at most 1 per channel.
+vec3 rough_conductor_ratio(uint i, vec3 wi, vec3 wo, vec3 n) {
+    vec3 f;
+    float s = rough_conductor_terms(i, wi, wo, n, f);
+    return min(f * (s / rough_conductor_bound(material_microfacet(i))), vec3(1.0));
+}
+
+// Whether eye paths leave hit points on material i (a rough conductor) rather than sample through it.
+bool glossy_hit(uint i) {
+    return material_microfacet(i).au >= params.glossy_alpha;
+}
+
+#ifndef ROUGH_EVAL_ONLY
 // One bounce off rough conductor i (`m` as material() read it) at pos: o and d become the reflected ray;
 // returns its weight, 0 where the sampled direction goes below the surface (the path ends there).
 vec3 rough_conductor_bounce(uint i, Material m, vec3 pos, vec3 nf, vec2 u, inout vec3 o, inout vec3 d) {
@@ -40,4 +91,5 @@ vec3 rough_conductor_bounce(uint i, Material m, vec3 pos, vec3 nf, vec2 u, inout
     o = offset_ray(pos, nf);
     return m.color * fresnel_conductor(dot(wi, h), eta, k) * mf_g1(mf, wo, h);
 }
+#endif
 #endif

@@ -123,16 +123,20 @@ struct RenderParams {
     uint lookup_limit;      // loop steps a subgroup's lookups may take (neighbours.glsl); 0xffffffff: no limit
     uint direct_light;      // 1: direct light by light sampling at the eye paths (ray.comp), the photons
                             // skipping their first diffuse record (photon.comp); 0: all by photons
+    float glossy_alpha;     // rough conductors of at least this roughness hold hit points and photon
+                            // records (rough_conductor.glsl, "glossy hit points"); above every alpha: none
 };
 
-// A diffuse point seen from a pixel (PPM pass 1). Fixed for the whole render.
+// A diffuse (or glossy) point seen from a pixel (PPM pass 1). Fixed for the whole render.
 struct HitPoint {
     vec3 pos;
     uint pixel;      // 0xffffffff: empty slot
     vec3 normal;     // facing the eye ray
-    uint pad0;
-    vec3 weight;     // eye-path throughput * f_r (albedo / pi)
-    uint pad1;
+    uint brdf;       // 0: `weight` holds the BRDF (diffuse, a plastic's base); else 1 + the index of the rough
+                     // conductor it lies on, whose BRDF the gather evaluates per photon (rough_conductor.glsl)
+    vec3 weight;     // eye-path throughput * f_r (albedo / pi), or on a rough conductor throughput times
+                     // the bound of its BRDF (rough_conductor_hit_weight)
+    uint wo;         // brdf != 0: the direction towards the eye, octahedral snorm 2x16 (oct_encode)
 };
 
 // Per-hit-point progressive statistics (eq. 3, 6), in double: N and tau must not lose increments over

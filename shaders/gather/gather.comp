@@ -1,6 +1,7 @@
 // Pass 4, gather: for each hit point, the photons of this batch inside its sphere of radius R that arrive
 // from the side it is seen from. M counts them; tau_M sums their flux, times the cone filter's weight
-// w = 1 - d / (k R) when the filter is on (eq. 10, 12-13). Sums go into PassAccum in fixed point, so the
+// w = 1 - d / (k R) when the filter is on (eq. 10, 12-13), and on a glossy hit point (HitPoint.brdf)
+// times its BRDF for the photon's direction over the bound its weight holds (rough_conductor_ratio). Sums go into PassAccum in fixed point, so the
 // result does not depend on the order of photons in a bucket.
 //
 // Each thread takes GROUP consecutive entries of `order`, the non-empty hit-point slots sorted along a
@@ -19,20 +20,29 @@ layout(binding = 4) uniform usamplerBuffer sorted_texels;
 layout(std430, binding = 5) readonly buffer CellStart { uint cell_start[]; };
 layout(std430, binding = 6) readonly buffer Order { uint order[]; };
 layout(std430, binding = 7) writeonly buffer Status { uint lookup_status; }; // 1: a lookup was cut short
+// The materials (bindings.glsl's table), for the BRDFs of glossy hit points.
+layout(binding = 8) uniform usamplerBuffer material_texels;
 layout(push_constant) uniform GatherPush {
     uint count;      // entries of `order`
     float cone_k;    // cone filter constant k >= 1; 0: off
 } pc;
 #include "neighbours.glsl"
 #include "invocation.glsl"
+#include "materials.glsl"
+#include "conductor.glsl"
+#define ROUGH_EVAL_ONLY
+#include "rough_conductor.glsl"
 
 // Each member's sums over the photons it received.
 uint m[GROUP];
 int64_t fr[GROUP], fg[GROUP], fb[GROUP];
 float inv_kr[GROUP];
+uint q_brdf[GROUP];  // HitPoint.brdf: 0, or 1 + a rough conductor's material
+vec3 q_wo[GROUP];    // towards the eye, where q_brdf != 0
 float flux_fixed; // params.flux_fixed, read once: a storage-buffer read per photon costs lavapipe a gather
 
-void visit(uint j, vec3 flux, float d2) {
+void visit(uint j, vec3 flux, vec3 dir, float d2) {
+    if (q_brdf[j] != 0u) flux *= rough_conductor_ratio(q_brdf[j] - 1u, -normalize(dir), q_wo[j], q_normal[j]);
     // eq. 10; the weight folds into the fixed-point scale, and without the filter no root is taken.
     float scale = inv_kr[j] > 0.0 ? (1.0 - sqrt(d2) * inv_kr[j]) * flux_fixed : flux_fixed;
     ivec3 f = ivec3(flux * scale + 0.5); // round to nearest: flux and weight are never negative
@@ -55,12 +65,15 @@ void main() {
         fb[j] = 0L;
         q_r2[j] = -1.0;
         inv_kr[j] = 0.0;
+        q_brdf[j] = 0u;
         slot[j] = first + j < pc.count ? order[first + j] : 0xffffffffu;
         if (slot[j] == 0xffffffffu) continue;
         HitPoint hp = hit_points[slot[j]];
         if (hp.pixel == 0xffffffffu) continue; // SPPM: this pass's eye path found no diffuse surface
         q_pos[j] = hp.pos;
         q_normal[j] = hp.normal;
+        q_brdf[j] = hp.brdf;
+        q_wo[j] = hp.brdf != 0u ? normalize(oct_decode_unnormalized(hp.wo)) : vec3(0.0);
         q_r2[j] = float(stats[slot[j]].r2);
         if (pc.cone_k > 0.0) inv_kr[j] = 1.0 / (pc.cone_k * sqrt(q_r2[j]));
     }

@@ -193,6 +193,12 @@ void main() {
 #endif
         Material m = material(h.material);
         apply_texture(m, h);
+        if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR && (params.direct_light == 0u || depth > 1u)
+            && glossy_hit(h.material)) {
+            // A glossy hit point's surface (rough_conductor.glsl): a record, as on a diffuse surface (the first
+            // landing skipped with direct light sampled), then the lobe sampled below.
+            emit(Photon(h.pos, grid_key(grid_cell(h.pos)), flux, oct_encode(d)));
+        }
         if (m.surface == SURFACE_DIFFUSE) {
             float p = max(m.color.r, max(m.color.g, m.color.b));
             if (p <= 0.0) { alive = false; continue; } // a black emitter absorbs

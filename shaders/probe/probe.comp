@@ -35,7 +35,7 @@ uint m[GROUP];
 int64_t sum[GROUP];
 float inv_r2[GROUP];
 
-void visit(uint j, vec3 flux, float d2) {
+void visit(uint j, vec3 flux, vec3 dir, float d2) {
     m[j]++;
     sum[j] += int64_t(int(d2 * inv_r2[j] * PROBE_FIXED + 0.5)); // eq. 7's |t_p - g|^2, in units of r^2
 }

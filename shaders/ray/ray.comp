@@ -42,7 +42,11 @@
 // takes the base's term (d) there and goes on along the coat, without choosing between them. Rough
 // conductors and rough glass are S too: every path samples one direction of their lobes, with the exact
 // weight f cos / pdf (rough_conductor.glsl, rough_dielectric.glsl), and leaves no hit point there; the
-// photons do the same with the same weights, so the partition above is unchanged.
+// photons do the same with the same weights, so the partition above is unchanged. A rough conductor of
+// roughness at least params.glossy_alpha is a D instead (a glossy hit point): the eye paths end there
+// with a hit point and term (d) by its BRDF, the photons leave a record there (but the first landing) and
+// go on by sampling its lobe, and the gather evaluates its BRDF per photon; the partition is again the
+// one above with those vertices as D.
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_control_flow_attributes : require
@@ -100,9 +104,11 @@ vec3 camera_ray(uint px, uint py, vec2 jitter) {
 // (power / prob, with power = Le area pi) gives Le area / prob = flux / pi. Emitters are one-sided.
 // coat_ior > 0: p is a plastic's diffuse base under a coat of that index, whose f_r also has the factor
 // (1 - F(cos_p)) of the light's direction (plastic.glsl); albedo then holds D (1 - F(cos_o)).
+// rough > 0: p is a glossy hit point on rough conductor rough - 1, seen from wo, whose f_r is its BRDF for
+// the light's direction (rough_conductor.glsl); albedo then holds its specular_reflectance.
 // A shadow ray that runs out of traversal steps answers "occluded": it is counted here, as an eye path is,
 // and the caller must then check bvh_spent and bvh_cut and drop the sample (geometry.glsl: occluded).
-vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, float coat_ior, inout Rng rng) {
+vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, float coat_ior, uint rough, vec3 wo, inout Rng rng) {
     Emitter e = choose_emitter(rng_float(rng));
     float a = rng_float(rng);
     float b = rng_float(rng);
@@ -122,7 +128,13 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, float coat_ior, inout Rng rng) {
         if (bvh_spent && !was_spent) atomicAdd(cut.eye_paths, 1u);
         return vec3(0.0);
     }
-    vec3 l = albedo * e.flux * (cos_p * cos_y / (PI * PI * d2));
+    vec3 fr = albedo / PI;
+    if (HAS_ROUGH_CONDUCTORS && rough != 0u) {
+        vec3 f;
+        float s = rough_conductor_terms(rough - 1u, w, wo, nf, f);
+        fr = albedo * f * (s / (4.0 * dot(wo, nf)));
+    }
+    vec3 l = fr * e.flux * (cos_p * cos_y / (PI * d2));
     if (HAS_PLASTICS && coat_ior > 0.0) l *= 1.0 - coat_fresnel(cos_p, coat_ior);
     return l;
 }
@@ -153,9 +165,19 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             vec3 e = front ? thr * m.emission : vec3(0.0); // emitters are one-sided
             if (max(e.r, max(e.g, e.b)) > 0.0) seen = true;
             if (params.direct_light != 0u) {
-                vec3 l = direct_light(h.pos, nf, m.color, 0.0, rng);
+                vec3 l = direct_light(h.pos, nf, m.color, 0.0, 0u, vec3(0.0), rng);
                 if (max(l.r, max(l.g, l.b)) > 0.0) lit = true;
                 e += thr * l;
+            }
+            return sum + e;
+        }
+        if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR && glossy_hit(h.material)) {
+            // A glossy hit point's vertex: its term (d), and the path ends (the photons have the rest).
+            vec3 e = vec3(0.0);
+            if (params.direct_light != 0u) {
+                vec3 l = direct_light(h.pos, nf, m.color, 0.0, h.material + 1u, -d, rng);
+                if (max3(l) > 0.0) lit = true;
+                e = thr * l;
             }
             return sum + e;
         }
@@ -172,7 +194,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             vec3 spec, diff;
             plastic_lobes(h.material, m, -dot(d, nf), spec, diff);
             if (params.direct_light != 0u) {
-                vec3 l = direct_light(h.pos, nf, diff, m.ior, rng);
+                vec3 l = direct_light(h.pos, nf, diff, m.ior, 0u, vec3(0.0), rng);
                 if (max3(l) > 0.0) lit = true;
                 sum += thr * l;
             }
@@ -263,7 +285,7 @@ void main() {
                     if (base) {
                         // Term (d) for this path, where it is one of the samples (below).
                         if (params.direct_light != 0u && hit_is_sample) {
-                            hit_emitted += r.thr * direct_light(h.pos, nf, diff, diffuse ? 0.0 : m.ior, rng);
+                            hit_emitted += r.thr * direct_light(h.pos, nf, diff, diffuse ? 0.0 : m.ior, 0u, vec3(0.0), rng);
                             if (bvh_spent) sp = 0u; // counted there; no budget for the rest
                         }
                         if (max3(diff) > 0.0 && slot < params.hit_slots) {
@@ -277,6 +299,23 @@ void main() {
                     r.d = reflect(r.d, nf);
                     r.o = offset_ray(h.pos, nf);
                     continue;
+                }
+                if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR && glossy_hit(h.material)) {
+                    // A glossy hit point (rough_conductor.glsl): term (d) by its BRDF, the hit point whose
+                    // gather evaluates the BRDF per photon; the path ends here.
+                    vec3 wo = -r.d;
+                    float cos_o = dot(wo, nf);
+                    if (!(cos_o > 0.0)) break;
+                    if (params.direct_light != 0u && hit_is_sample) {
+                        hit_emitted += r.thr * direct_light(h.pos, nf, m.color, 0.0, h.material + 1u, wo, rng);
+                        if (bvh_spent) sp = 0u; // counted there; no budget for the rest
+                    }
+                    if (slot < params.hit_slots) {
+                        vec3 w = rough_conductor_hit_weight(h.material, m.color, r.thr, cos_o);
+                        hit_points[base_slot + slot] = HitPoint(h.pos, pixel, nf, h.material + 1u, w, oct_encode(wo));
+                        slot++;
+                    }
+                    break;
                 }
                 r.depth++;
                 if (rough_bounce(h.material, m, h.pos, nf, front, rng, r.o, r.d, r.thr)) {

@@ -375,6 +375,7 @@ impl GpuScene {
             seed: settings.seed,
             flux_fixed,
             direct_light: (settings.direct == crate::settings::DirectLight::Sample) as u32,
+            glossy_alpha: settings.glossy_hits.unwrap_or(f32::MAX),
             ..Default::default()
         };
         set_camera(&mut params, &scene.camera);

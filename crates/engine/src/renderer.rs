@@ -808,7 +808,7 @@ impl Renderer {
                     cone_k: self.settings.cone_k.unwrap_or(0.0),
                 };
                 self.profiler.scope(cmd, "gather", || {
-                    gather::record_gather(&k.gather, cmd, &self.params, &hits, &self.grid, &push)
+                    gather::record_gather(&k.gather, cmd, &self.params, &hits, &self.grid, &self.materials, &push)
                 })?;
             }
             GridUse::Probe => {

@@ -87,6 +87,12 @@ pub struct Settings {
     /// chain and the direct light at its end.
     #[serde(default = "default_light_samples")]
     pub light_samples: u32,
+    /// Glossy hit points: rough conductors of at least this roughness (alpha) end the eye paths with a hit
+    /// point whose gather evaluates their BRDF per photon, and the photons leave records on them;
+    /// rougher is closer to diffuse, where photons serve best. `None`: every rough lobe is sampled through
+    /// by the eye paths (shaders/common/rough_conductor.glsl; docs/accuracy.md compares the two).
+    #[serde(default)]
+    pub glossy_hits: Option<f32>,
     /// Compile the tracing kernels with the scene inlined as constants (faster; same results up to the
     /// last bit of a fused multiply-add). `false` uses the kernels as built.
     pub specialize: bool,
@@ -129,6 +135,7 @@ impl Default for Settings {
             emission_samples: 16,
             direct: default_direct(),
             light_samples: default_light_samples(),
+            glossy_hits: None,
             specialize: true,
             max_inline_triangles: default_inline_triangles(),
             grid_buckets: None,
@@ -240,6 +247,14 @@ impl Settings {
                     self.light_samples
                 ),
             ));
+        }
+        if let Some(a) = self.glossy_hits {
+            if !(a.is_finite() && a >= 0.0) {
+                return Err(invalid(
+                    "glossy_hits",
+                    format!("the least roughness (alpha) of a glossy hit point must be finite and >= 0, got {a}"),
+                ));
+            }
         }
         if self.emission_samples > MAX_EMISSION_SAMPLES {
             return Err(invalid(

@@ -64,18 +64,21 @@ pub struct GridReader {
     pub group: u32,
 }
 
+/// `materials`: the material table (binding 8), whose rough conductors' BRDFs glossy hit points evaluate.
 pub fn record_gather(
     k: &GridReader,
     cmd: vk::CommandBuffer,
     params: &Buffer,
     hits: &HitBuffers,
     grid: &Grid,
+    materials: &Buffer,
     push: &GatherPush,
 ) -> Result<()> {
     let threads = push.count.div_ceil(k.group) as u64;
+    let [a, b, c, d, e, f, g, h] = grid_reader_bindings(params, hits, grid);
     k.pipeline.dispatch(
         cmd,
-        &grid_reader_bindings(params, hits, grid),
+        &[a, b, c, d, e, f, g, h, materials],
         bytemuck::bytes_of(push),
         threads,
     )

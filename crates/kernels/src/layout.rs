@@ -178,6 +178,9 @@ pub struct RenderParams {
     /// 1: direct light by light sampling at the eye paths, the photons leaving no record where they first
     /// land straight from a light; 0: all light through the photons (the paper's estimator).
     pub direct_light: u32,
+    /// Rough conductors of at least this roughness hold hit points and photon records, their BRDF
+    /// evaluated per photon by the gather ("glossy hit points", rough_conductor.glsl); `f32::MAX`: none.
+    pub glossy_alpha: f32,
 }
 gpu_struct!(RenderParams {
     eye,
@@ -206,7 +209,8 @@ gpu_struct!(RenderParams {
     photon_bvh_budget,
     eye_bvh_budget,
     lookup_limit,
-    direct_light
+    direct_light,
+    glossy_alpha
 });
 
 #[repr(C)]
@@ -215,17 +219,19 @@ pub struct HitPoint {
     pub pos: [f32; 3],
     pub pixel: u32,
     pub normal: [f32; 3],
-    pub pad0: u32,
+    /// 0: `weight` holds the BRDF; else 1 + the rough conductor whose BRDF the gather evaluates per photon.
+    pub brdf: u32,
     pub weight: [f32; 3],
-    pub pad1: u32,
+    /// Where `brdf` != 0: the direction towards the eye, octahedral snorm 2x16.
+    pub wo: u32,
 }
 gpu_struct!(HitPoint {
     pos,
     pixel,
     normal,
-    pad0,
+    brdf,
     weight,
-    pad1
+    wo
 });
 
 impl HitPoint {

@@ -89,7 +89,17 @@ pub fn emitter_point(e: &Emitter, mut a: f32, mut b: f32) -> Vec3 {
 
 /// ray.comp's `direct_light`: term (d) at diffuse point p, one light sample with its shadow ray;
 /// `coat_ior` > 0: p is a plastic's base under a coat of that index.
-fn direct_light(g: &GpuScene, p: Vec3, nf: Vec3, albedo: Vec3, coat_ior: f32, rng: &mut Rng) -> Vec3 {
+/// `rough`: p is a glossy hit point on that rough conductor, seen from the direction given (albedo: its
+/// specular_reflectance).
+fn direct_light(
+    g: &GpuScene,
+    p: Vec3,
+    nf: Vec3,
+    albedo: Vec3,
+    coat_ior: f32,
+    rough: Option<(&Material, Vec3)>,
+    rng: &mut Rng,
+) -> Vec3 {
     let e = choose_emitter(g, rng.float());
     let a = rng.float();
     let b = rng.float();
@@ -107,11 +117,23 @@ fn direct_light(g: &GpuScene, p: Vec3, nf: Vec3, albedo: Vec3, coat_ior: f32, rn
     if intersect_scene(g, o, w, 0.0, d).is_some() {
         return Vec3::ZERO;
     }
-    let l = albedo * e.flux * (cos_p * cos_y / (PI * PI * d2));
+    let fr = match rough {
+        Some((m, wo)) => {
+            let (s, f) = rough_conductor::terms(m, w, wo, nf);
+            albedo * f * (s / (4.0 * wo.dot(nf)))
+        }
+        None => albedo / PI,
+    };
+    let l = fr * e.flux * (cos_p * cos_y / (PI * d2));
     match coat_ior > 0.0 {
         true => l * (1.0 - plastic::coat_fresnel(cos_p, coat_ior)),
         false => l,
     }
+}
+
+/// rough_conductor.glsl's `glossy_hit`: a rough conductor of roughness at least `glossy_alpha`.
+fn glossy_hit(g: &GpuScene, m: &Material) -> bool {
+    m.surface == SURFACE_ROUGH_CONDUCTOR && m.alpha_u >= g.params.glossy_alpha
 }
 
 /// rough_dielectric.glsl's `rough_bounce`: for a rough conductor or rough glass, the new origin,
@@ -207,9 +229,19 @@ fn emission_sample(
             let mut e = if front { thr * v3(m.emission) } else { Vec3::ZERO };
             *seen |= e.max_element() > 0.0;
             if g.params.direct_light != 0 {
-                let l = direct_light(g, h.pos, nf, v3(m.color), 0.0, rng);
+                let l = direct_light(g, h.pos, nf, v3(m.color), 0.0, None, rng);
                 *lit |= l.max_element() > 0.0;
                 e += thr * l;
+            }
+            return sum + e;
+        }
+        if glossy_hit(g, m) {
+            // A glossy hit point's vertex: its term (d), and the path ends.
+            let mut e = Vec3::ZERO;
+            if g.params.direct_light != 0 {
+                let l = direct_light(g, h.pos, nf, v3(m.color), 0.0, Some((m, -d)), rng);
+                *lit |= l.max_element() > 0.0;
+                e = thr * l;
             }
             return sum + e;
         }
@@ -223,7 +255,7 @@ fn emission_sample(
             // Both lobes: the base's term (d) here, the path on along the coat.
             let (spec, diff) = plastic::lobes(m, -d.dot(nf));
             if g.params.direct_light != 0 {
-                let l = direct_light(g, h.pos, nf, diff, m.ior, rng);
+                let l = direct_light(g, h.pos, nf, diff, m.ior, None, rng);
                 *lit |= l.max_element() > 0.0;
                 sum += thr * l;
             }
@@ -381,7 +413,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         if on_base {
                             if p.direct_light != 0 && hit_is_sample {
                                 let coat_ior = if diffuse { 0.0 } else { m.ior };
-                                hit_emitted += thr * direct_light(g, h.pos, nf, diff, coat_ior, &mut rng);
+                                hit_emitted += thr * direct_light(g, h.pos, nf, diff, coat_ior, None, &mut rng);
                             }
                             if diff.max_element() > 0.0 && slot < slots {
                                 out.hits[base + slot] = HitPoint {
@@ -402,6 +434,29 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         d = reflect(d, nf);
                         o = offset_ray(g, h.pos, nf);
                         continue;
+                    }
+                    if glossy_hit(g, m) {
+                        // ray.comp: a glossy hit point, its term (d) by the BRDF; the path ends.
+                        let wo = -d;
+                        let cos_o = wo.dot(nf);
+                        if cos_o.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+                            break;
+                        }
+                        if p.direct_light != 0 && hit_is_sample {
+                            hit_emitted += thr * direct_light(g, h.pos, nf, v3(m.color), 0.0, Some((m, wo)), &mut rng);
+                        }
+                        if slot < slots {
+                            out.hits[base + slot] = HitPoint {
+                                pos: h.pos.to_array(),
+                                pixel,
+                                normal: nf.to_array(),
+                                brdf: h.material + 1,
+                                weight: rough_conductor::hit_weight(m, thr, cos_o).to_array(),
+                                wo: oct_encode(wo),
+                            };
+                            slot += 1;
+                        }
+                        break;
                     }
                     depth += 1;
                     if let Some((o2, d2, w)) = rough_bounce(g, m, h.pos, nf, front, &mut rng, d) {
@@ -524,6 +579,15 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
         let m = &texture::apply(g, &g.materials[h.material as usize], h.uv);
         let front = d.dot(h.normal) < 0.0;
         let nf = if front { h.normal } else { -h.normal };
+        if (p.direct_light == 0 || depth > 1) && glossy_hit(g, m) {
+            // photon.comp: a record on a glossy hit point's surface; its lobe sampled below.
+            out.push(Photon {
+                pos: h.pos.to_array(),
+                cell: trace::grid_key(g, h.pos),
+                flux: flux.to_array(),
+                dir: oct_encode(d),
+            });
+        }
         if m.surface == SURFACE_DIFFUSE {
             let c = v3(m.color);
             let pr = c.max_element();
@@ -595,7 +659,8 @@ pub fn photon_pass(g: &GpuScene, first: u64, count: u32, salt: u32) -> Vec<Photo
 
 /// What one hit point gathers from `photons`, by brute force over every photon (an independent check
 /// of the grid): M, and the flux sum in f64 (with the cone weight of eq. 10 when `cone_k` > 0).
-pub fn gather_one(hp: &HitPoint, r2: f64, photons: &[Photon], cone_k: f32) -> (u32, DVec3) {
+/// `materials`: the scene's (`GpuScene::materials`), for the BRDFs of glossy hit points.
+pub fn gather_one(hp: &HitPoint, r2: f64, photons: &[Photon], cone_k: f32, materials: &[Material]) -> (u32, DVec3) {
     let mut m = 0;
     let mut sum = DVec3::ZERO;
     if hp.pixel == EMPTY_SLOT {
@@ -605,28 +670,39 @@ pub fn gather_one(hp: &HitPoint, r2: f64, photons: &[Photon], cone_k: f32) -> (u
     let r = r2f.sqrt();
     let pos = v3(hp.pos);
     let n = v3(hp.normal);
+    let glossy = (hp.brdf != 0).then(|| (&materials[hp.brdf as usize - 1], oct_decode(hp.wo).normalize()));
     for p in photons {
         let dv = v3(p.pos) - pos;
         let d2 = dv.dot(dv);
         if d2 > r2f || oct_decode(p.dir).dot(n) >= 0.0 {
             continue;
         }
+        let ratio = match glossy {
+            Some((m, wo)) => rough_conductor::ratio(m, -oct_decode(p.dir).normalize(), wo, n),
+            None => Vec3::ONE,
+        };
         let w = if cone_k > 0.0 {
             1.0 - d2.sqrt() / (cone_k * r)
         } else {
             1.0
         }; // eq. 10
         m += 1;
-        sum += v3(p.flux).as_dvec3() * w as f64;
+        sum += (v3(p.flux) * ratio).as_dvec3() * w as f64;
     }
     (m, sum)
 }
 
 /// `gather_one` for every slot.
-pub fn gather(hits: &[HitPoint], stats: &[HitStats], photons: &[Photon], cone_k: f32) -> Vec<(u32, DVec3)> {
+pub fn gather(
+    hits: &[HitPoint],
+    stats: &[HitStats],
+    photons: &[Photon],
+    cone_k: f32,
+    materials: &[Material],
+) -> Vec<(u32, DVec3)> {
     hits.iter()
         .zip(stats)
-        .map(|(h, s)| gather_one(h, s.r2, photons, cone_k))
+        .map(|(h, s)| gather_one(h, s.r2, photons, cone_k, materials))
         .collect()
 }
 

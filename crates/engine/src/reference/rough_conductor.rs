@@ -10,7 +10,7 @@ use ppm_vk_kernels::layout::Material;
 
 use super::conductor::fresnel_conductor;
 use super::microfacet::Microfacet;
-use super::trace::{offset_ray, onb, reflect, v3};
+use super::trace::{offset_ray, onb, reflect, v3, PI};
 use crate::gpu_scene::GpuScene;
 
 /// `d` in the local frame (t, b, nf).
@@ -50,6 +50,45 @@ pub fn sample(m: &Material, mf: &Microfacet, wi: Vec3, u: Vec2) -> Option<(Vec3,
     }
     let f = v3(m.color) * fresnel_conductor(wi.dot(h), v3(m.lobe_a), v3(m.lobe_b));
     Some((wo, f * mf.g1(wo, h)))
+}
+
+/// The bound of a glossy hit point's BRDF over ks / (4 cos_o): D(n) = 1 / (pi alpha^2) times the supremum
+/// of G1(v) / cos_v (2 / min(alpha, 2) for GGX; 3.535 / alpha + 1 for Beckmann's fit), as
+/// rough_conductor.glsl's `rough_conductor_bound`.
+pub fn bound(mf: &Microfacet) -> f32 {
+    let gb = if mf.ggx {
+        2.0 / mf.au.min(2.0)
+    } else {
+        3.535 / mf.au + 1.0
+    };
+    gb / (PI * mf.au * mf.av)
+}
+
+/// `rough_conductor_terms`: D G1(wi) G1(wo) / cos_i and F per channel, for unit wi, wo leaving the surface
+/// of unit normal n (world space); 0 where either is below it.
+pub fn terms(m: &Material, wi: Vec3, wo: Vec3, n: Vec3) -> (f32, Vec3) {
+    let (t, b) = onb(n);
+    let (li, lo) = (to_local(wi, t, b, n), to_local(wo, t, b, n));
+    if li.z <= 0.0 || lo.z <= 0.0 {
+        return (0.0, Vec3::ZERO);
+    }
+    let mf = Microfacet::of(m);
+    let h = (li + lo).normalize();
+    let f = fresnel_conductor(li.dot(h).clamp(0.0, 1.0), v3(m.lobe_a), v3(m.lobe_b));
+    (mf.d(h) * mf.g1(li, h) * mf.g1(lo, h) / li.z, f)
+}
+
+/// `rough_conductor_hit_weight`: a glossy hit point's weight, throughput times ks times the bound over 4
+/// cos_o.
+pub fn hit_weight(m: &Material, thr: Vec3, cos_o: f32) -> Vec3 {
+    thr * v3(m.color) * (bound(&Microfacet::of(m)) / (4.0 * cos_o))
+}
+
+/// `rough_conductor_ratio`: what a photon arriving along -wi gives a glossy hit point seen from wo, per
+/// unit flux: f(wi, wo) over the hit point's weight per unit throughput, at most 1 per channel.
+pub fn ratio(m: &Material, wi: Vec3, wo: Vec3, n: Vec3) -> Vec3 {
+    let (s, f) = terms(m, wi, wo, n);
+    (f * (s / bound(&Microfacet::of(m)))).min(Vec3::ONE)
 }
 
 /// rough_conductor.glsl's `rough_conductor_bounce`: the new origin, direction and weight of a path
