@@ -540,10 +540,10 @@ fn check_gather(
     stats: &[HitStats],
     records: &[Photon],
     cone_k: f32,
-    flux_fixed: f32,
-    materials: &[ppm_vk_engine::layout::Material],
+    g: &ppm_vk_engine::gpu_scene::GpuScene,
 ) {
-    let cpu = reference::gather(hits, stats, records, cone_k, materials);
+    let flux_fixed = g.params.flux_fixed;
+    let cpu = reference::gather(hits, stats, records, cone_k, &g.materials);
     assert_eq!(cpu.len(), accum.len());
     let slots = accum.len();
     let (mut m_equal, mut worst_m, mut flux_checked, mut gathered) = (0usize, 0u32, 0usize, 0usize);
@@ -664,8 +664,7 @@ fn gather_case(cone_k: Option<f32>, grid: GridShape) {
         &stats,
         &records,
         cone_k.unwrap_or(0.0),
-        r.gpu_scene().params.flux_fixed,
-        &r.gpu_scene().materials,
+        r.gpu_scene(),
     );
     assert_clean(&ctx);
 }
