@@ -701,6 +701,10 @@ fn f32x3<T: Into<f64>>(v: Option<[T; 3]>) -> Option<[f32; 3]> {
     v.map(|a| a.map(f32x1))
 }
 
+/// The least GGX alpha an MTL mirror's roughness makes rough: below it (Ns above 937) the lobe is
+/// narrower than the image resolves, and the mirror stays a mirror.
+const MTL_MIN_ALPHA: f32 = 1e-3;
+
 /// An MTL material as an engine material, with notes on what it approximates (the table in
 /// docs/scene-format.md). `mtl` names the file in errors.
 fn convert(m: &tobj::Material, name: String, mtl: &str) -> Result<(Material, Vec<String>)> {
@@ -766,11 +770,35 @@ fn convert(m: &tobj::Material, name: String, mtl: &str) -> Result<(Material, Vec
         if nonzero(kd) {
             notes.push("Kd ignored: a mirror reflects Ks only".into());
         }
-        Surface::Mirror {
-            reflectance: ks.unwrap_or_else(|| {
-                notes.push("no Ks: mirror reflectance 1 assumed".into());
-                Vec3::ONE
-            }),
+        let reflectance = ks.unwrap_or_else(|| {
+            notes.push("no Ks: mirror reflectance 1 assumed".into());
+            Vec3::ONE
+        });
+        // Roughness: the PBR extension's Pr, else Ns read as Blender's exporter writes it
+        // (Ns = 1000 (1 - roughness)^2), and GGX alpha = roughness^2 as Blender's shaders use it.
+        let pr = match m.unknown_param.get("Pr") {
+            None => None,
+            Some(s) => Some(
+                s.split_whitespace()
+                    .next()
+                    .and_then(|x| x.parse::<f32>().ok())
+                    .filter(|x| (0.0..=1.0).contains(x))
+                    .ok_or_else(|| fail(format!("Pr (roughness) must be a number in [0, 1], got {s:?}")))?,
+            ),
+        };
+        let ns = number(m.shininess.map(f32x1), "Ns")?;
+        let roughness = pr.or(ns.map(|ns| 1.0 - (ns.clamp(0.0, 1000.0) / 1000.0).sqrt()));
+        match roughness.map(|r| r * r).filter(|&a| a >= MTL_MIN_ALPHA) {
+            Some(alpha) => {
+                let (eta, k) = super::conductors::named("none").expect("the default conductor");
+                Surface::RoughConductor {
+                    reflectance,
+                    eta,
+                    k,
+                    rough: super::Microfacet { ggx: true, alpha },
+                }
+            }
+            None => Surface::Mirror { reflectance },
         }
     } else {
         if nonzero(ks) && !matches!(illum, Some(0 | 1)) {
@@ -975,6 +1003,38 @@ newmtl plain\nNs 10\n";
             "{glossy}"
         );
         assert!(about("plain").contains("no Kd: diffuse albedo 0.8"));
+
+        // A mirror's roughness: Pr, else Ns as Blender writes it; GGX alpha = roughness^2.
+        let mtl = "newmtl a\nKs 1 1 1\nNs 250\nillum 3\nnewmtl b\nKs 0.9 0.9 0.9\nPr 0.3\nNs 5\n\
+                   newmtl c\nKs 1 1 1\nNs 1000\nillum 3\nnewmtl d\nKs 1 1 1\nPr 2\n";
+        let obj = format!("mtllib a.mtl\n{TRI}usemtl a\nf 1 2 3\nusemtl b\nf 1 2 3\nusemtl c\nf 1 2 3\n");
+        let rdir = TempDir::new("obj-rough");
+        let r = import_into(
+            &rdir,
+            &obj,
+            Some(&mtl.replace("newmtl d\nKs 1 1 1\nPr 2\n", "")),
+            &ObjImport::default(),
+        )
+        .expect("loads");
+        let rough = |i: usize| r.materials[r.meshes[0].materials[i] as usize].surface;
+        let (eta, k) = crate::scene::conductors::named("none").unwrap();
+        let rc = |reflectance: f32, alpha: f32| Surface::RoughConductor {
+            reflectance: Vec3::splat(reflectance),
+            eta,
+            k,
+            rough: crate::scene::Microfacet { ggx: true, alpha },
+        };
+        assert_eq!(rough(0), rc(1.0, 0.25), "Ns 250: roughness 0.5");
+        assert!(
+            matches!(rough(1), Surface::RoughConductor { rough, .. } if (rough.alpha - 0.09).abs() < 1e-6),
+            "Pr 0.3"
+        );
+        assert_eq!(rough(2), Surface::Mirror { reflectance: Vec3::ONE }, "Ns 1000: smooth");
+        let e = err(&format!("mtllib a.mtl\n{TRI}usemtl d\nf 1 2 3\n"), Some(mtl));
+        assert!(
+            e.contains("Pr (roughness) must be a number in [0, 1]") && e.contains("a.mtl"),
+            "{e}"
+        );
 
         // The same file again: its materials (and their warnings) are not repeated.
         let mut again = s.clone();
