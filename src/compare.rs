@@ -38,7 +38,7 @@ pub struct CompareArgs {
     time: f64,
     /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone". Words joined by
     /// `+`: ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass),
-    /// gh=A (glossy hit points on rough conductors of alpha >= A), photons (direct light by the photons) or
+    /// gh=A (glossy hit points on rough conductors of alpha >= A), nogh (none), photons (direct light by the photons) or
     /// sample (by light sampling, the default), ls=N (light samples).
     #[arg(
         long,
@@ -109,11 +109,12 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
                 }
             }
             "gh" => s.glossy_hits = Some(number("gh")?),
+            "nogh" => s.glossy_hits = None,
             "photons" => s.direct = ppm_vk_engine::DirectLight::Photons,
             "sample" => s.direct = ppm_vk_engine::DirectLight::Sample,
             other => bail!(
                 "variant {name:?}: unknown word {other:?} (ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A, es=N, \
-                 ls=N, gh=A, photons, sample)"
+                 ls=N, gh=A, nogh, photons, sample)"
             ),
         }
     }

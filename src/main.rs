@@ -170,10 +170,11 @@ pub(crate) struct SettingsArgs {
           value_parser = clap::value_parser!(u32).range(1..=ppm_vk_engine::settings::MAX_EMISSION_SAMPLES as i64))]
     light_samples: u32,
     /// Glossy hit points: eye paths end with a hit point on rough conductors of at least this roughness
-    /// (alpha), where the photons leave records and the gather evaluates the BRDF per photon; without it
-    /// every rough lobe is sampled through (docs/accuracy.md compares the two).
-    #[arg(long, value_name = "ALPHA", value_parser = parse_glossy)]
-    glossy_hits: Option<f32>,
+    /// (alpha), where the photons leave records and the gather evaluates the BRDF per photon; smoother
+    /// ones, and rough glass, are sampled through. `off`: every rough lobe is sampled through
+    /// (docs/accuracy.md compares the two).
+    #[arg(long, value_name = "ALPHA", default_value = GLOSSY_DEFAULT, value_parser = parse_glossy)]
+    glossy_hits: Glossy,
     /// Photon probing (eq. 7-9): `paper` is eq. 9 as printed, `scale-free` is r' = r (1 + lambda / r^2).
     #[arg(long, value_enum, default_value_t = ProbeArg::Off)]
     probe: ProbeArg,
@@ -205,7 +206,7 @@ impl SettingsArgs {
             emission_samples: self.emission_samples,
             direct: self.direct.into(),
             light_samples: self.light_samples,
-            glossy_hits: self.glossy_hits,
+            glossy_hits: self.glossy_hits.0,
             ..Settings::default()
         };
         settings.validate()?;
@@ -358,9 +359,20 @@ fn parse_fraction(s: &str) -> Result<f32, String> {
     parse_in(s, |f: f32| f > 0.0 && f < 1.0, "in (0, 1)")
 }
 
-fn parse_glossy(s: &str) -> Result<f32, String> {
-    parse_in(s, |f: f32| f.is_finite() && f >= 0.0, "finite and >= 0")
+/// `--glossy-hits`'s default, as `Settings::default().glossy_hits` has it.
+const GLOSSY_DEFAULT: &str = "0.1";
+
+/// `--glossy-hits`: a roughness, or `off`.
+fn parse_glossy(s: &str) -> Result<Glossy, String> {
+    if s.eq_ignore_ascii_case("off") {
+        return Ok(Glossy(None));
+    }
+    parse_in(s, |f: f32| f.is_finite() && f >= 0.0, "finite and >= 0 (or `off`)").map(|a| Glossy(Some(a)))
 }
+
+/// What `--glossy-hits` gives: the least roughness of a glossy hit point, or none.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Glossy(Option<f32>);
 
 fn parse_positive(s: &str) -> Result<f32, String> {
     parse_in(s, |f: f32| f.is_finite() && f > 0.0, "positive and finite")

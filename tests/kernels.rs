@@ -264,10 +264,16 @@ fn ray_pass_matches_reference_with_coated_surfaces_unspecialized() {
     ray_pass_matches_reference_on(cornell_coated(), false, DirectLight::Sample);
 }
 
-/// Rough metal and rough glass: a sampled lobe per bounce.
+/// Rough metal and rough glass sampled through (no glossy hit points): a sampled lobe per bounce.
 #[test]
 fn ray_pass_matches_reference_with_rough_surfaces() {
-    ray_pass_matches_reference_on(cornell_rough(), true, DirectLight::Sample);
+    ray_pass_matches_reference_with(
+        cornell_rough(),
+        Settings {
+            glossy_hits: None,
+            ..settings()
+        },
+    );
 }
 
 /// Glossy hit points on the rough gold sphere (the glass still sampled through): their weight (the BRDF's
@@ -519,7 +525,11 @@ fn photon_records_match_reference_with_coated_surfaces() {
 /// took another branch, which the histogram and total-flux checks above bound.
 #[test]
 fn photon_records_match_reference_with_rough_surfaces() {
-    photon_records_match_reference_within(cornell_rough(), settings(), 1e-3, 0.993);
+    let settings = Settings {
+        glossy_hits: None,
+        ..settings()
+    };
+    photon_records_match_reference_within(cornell_rough(), settings, 1e-3, 0.993);
 }
 
 /// The same with glossy hit points on the gold sphere: records there too.

@@ -22,6 +22,11 @@ layout(std430, binding = 6) readonly buffer Order { uint order[]; };
 layout(std430, binding = 7) writeonly buffer Status { uint lookup_status; }; // 1: a lookup was cut short
 // The materials (bindings.glsl's table), for the BRDFs of glossy hit points.
 layout(binding = 8) uniform usamplerBuffer material_texels;
+// Whether the scene has glossy hit points: the renderer compiles the gather with 0 where it has none, since
+// lavapipe would evaluate the BRDF for every photon under a mask (3x the gather's time on cornell-spheres).
+#ifndef GLOSSY_HITS
+#define GLOSSY_HITS 1
+#endif
 layout(push_constant) uniform GatherPush {
     uint count;      // entries of `order`
     float cone_k;    // cone filter constant k >= 1; 0: off
@@ -42,7 +47,9 @@ vec3 q_wo[GROUP];    // towards the eye, where q_brdf != 0
 float flux_fixed; // params.flux_fixed, read once: a storage-buffer read per photon costs lavapipe a gather
 
 void visit(uint j, vec3 flux, vec3 dir, float d2) {
+#if GLOSSY_HITS
     if (q_brdf[j] != 0u) flux *= rough_conductor_ratio(q_brdf[j] - 1u, -normalize(dir), q_wo[j], q_normal[j]);
+#endif
     // eq. 10; the weight folds into the fixed-point scale, and without the filter no root is taken.
     float scale = inv_kr[j] > 0.0 ? (1.0 - sqrt(d2) * inv_kr[j]) * flux_fixed : flux_fixed;
     ivec3 f = ivec3(flux * scale + 0.5); // round to nearest: flux and weight are never negative

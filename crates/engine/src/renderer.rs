@@ -470,6 +470,10 @@ impl Renderer {
             ProbeMode::Off => 1,
             _ => gather::GROUP,
         };
+        // Whether any hit point can be glossy (a rough conductor of roughness glossy_alpha or more).
+        let glossy = gpu.materials.iter().any(|m| {
+            m.surface == ppm_vk_kernels::layout::SURFACE_ROUGH_CONDUCTOR && m.alpha_u >= gpu.params.glossy_alpha
+        });
         let pipelines = || -> anyhow::Result<Kernels> {
             Ok(Kernels {
                 ray: traced(&reflected::RAY)?,
@@ -477,7 +481,7 @@ impl Renderer {
                 photon: traced(&reflected::PHOTON)?,
                 photon_resume: pipeline(ctx, &reflected::PHOTON_RESUME)?,
                 lookup: Lookup::new(ctx)?,
-                gather: gather::with_group(ctx, &reflected::GATHER, group)?,
+                gather: gather::with_variant(ctx, &reflected::GATHER, group, glossy)?,
                 update: pipeline(ctx, &reflected::UPDATE)?,
                 resolve: pipeline(ctx, &reflected::RESOLVE)?,
             })

@@ -47,12 +47,30 @@ pub const GROUP: u32 = 2;
 
 /// A kernel that reads the photon grid (gather or probe) compiled to take `group` hit points per thread.
 pub fn with_group(ctx: &ppm_vk_device::Context, k: &crate::reflected::KernelInfo, group: u32) -> Result<GridReader> {
-    let pipeline = match group {
-        GROUP => crate::pipeline(ctx, k)?,
+    with_variant(ctx, k, group, true)
+}
+
+/// The same, and for the gather whether it evaluates the BRDFs of glossy hit points (`GLOSSY_HITS` in
+/// gather.comp; the kernel as built does): a scene without them gets a gather without that code.
+pub fn with_variant(
+    ctx: &ppm_vk_device::Context,
+    k: &crate::reflected::KernelInfo,
+    group: u32,
+    glossy: bool,
+) -> Result<GridReader> {
+    let pipeline = match (group, glossy) {
+        (GROUP, true) => crate::pipeline(ctx, k)?,
         _ => crate::pipeline_from(
             ctx,
             k,
-            &crate::specialize::compile_with(k, &[("GROUP_SIZE", &group.to_string())], "")?,
+            &crate::specialize::compile_with(
+                k,
+                &[
+                    ("GROUP_SIZE", &group.to_string()),
+                    ("GLOSSY_HITS", if glossy { "1" } else { "0" }),
+                ],
+                "",
+            )?,
         )?,
     };
     Ok(GridReader { pipeline, group })
