@@ -93,6 +93,19 @@ fn cornell_rough() -> ppm_vk_engine::Scene {
     scene
 }
 
+/// scenes/references/cornell-roughplastic.xml at RES x RES: cornell-coated with both plastics rough (Mitsuba's
+/// roughplastic: a GGX floor of alpha 0.2, a Beckmann sphere of alpha 0.1): the coat's table, its sampled
+/// reflection along the eye paths and the photons' choice of lobe through a sampled facet.
+fn cornell_roughplastic() -> ppm_vk_engine::Scene {
+    let xml = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/references/cornell-roughplastic.xml"
+    );
+    let scene = ppm_vk_engine::Scene::load_with(xml, &[("res".to_string(), RES.to_string())]).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    scene
+}
+
 fn ray_pass_matches_reference_case(specialize: bool, direct: DirectLight) {
     ray_pass_matches_reference_on(cornell(RES, RES), specialize, direct);
 }
@@ -274,6 +287,12 @@ fn ray_pass_matches_reference_with_rough_surfaces() {
             ..settings()
         },
     );
+}
+
+/// Rough plastics: the coat's table and its sampled reflection.
+#[test]
+fn ray_pass_matches_reference_with_rough_plastics() {
+    ray_pass_matches_reference_on(cornell_roughplastic(), true, DirectLight::Sample);
 }
 
 /// Glossy hit points on the rough gold sphere (the glass still sampled through): their weight (the BRDF's
@@ -530,6 +549,12 @@ fn photon_records_match_reference_with_rough_surfaces() {
         ..settings()
     };
     photon_records_match_reference_within(cornell_rough(), settings, 1e-3, 0.993);
+}
+
+/// Rough plastics: records carry flux times the coat's table, bounces choose a lobe through a sampled facet.
+#[test]
+fn photon_records_match_reference_with_rough_plastics() {
+    photon_records_match_reference_within(cornell_roughplastic(), settings(), 1e-3, 0.993);
 }
 
 /// The same with glossy hit points on the gold sphere: records there too.
@@ -1267,6 +1292,7 @@ fn cornell_textured() -> ppm_vk_engine::Scene {
             specular: Vec3::ONE,
             ior: 1.5,
             nonlinear: true,
+            rough: None,
         },
         2,
     );

@@ -16,10 +16,21 @@ struct Microfacet {
     float av;        // alpha along the bitangent
 };
 
+// Direction d in the local frame (t, b, nf) (the distributions the readers accept are isotropic: any
+// tangent serves).
+vec3 to_local(vec3 d, vec3 t, vec3 b, vec3 nf) {
+    return vec3(dot(d, t), dot(d, b), dot(d, nf));
+}
+
 // Material i's distribution (the material's fifth texel; bindings.glsl's material_texels).
 Microfacet material_microfacet(uint i) {
     uvec4 t = texelFetch(material_texels, int(5u * i + 4u));
     return Microfacet(t.z, uintBitsToFloat(t.x), uintBitsToFloat(t.y));
+}
+
+// Material i's table (Material.table: a rough plastic's coat).
+uint material_table(uint i) {
+    return texelFetch(material_texels, int(5u * i + 4u)).w;
 }
 
 // The distribution of normals D(m).

@@ -7,13 +7,16 @@
 // crates/engine/src/reference/plastic.rs.
 #ifndef PLASTIC_GLSL
 #define PLASTIC_GLSL
+#include "microfacet.glsl"
 
 // A kernel compiled for one scene (SCENE_CONSTANTS) knows whether it has plastics; without them this
 // code is left out, as the conductors' is.
 #ifdef SCENE_CONSTANTS
 #define HAS_PLASTICS SCENE_PLASTICS
+#define HAS_ROUGH_PLASTICS SCENE_ROUGH_PLASTICS
 #else
 #define HAS_PLASTICS true
+#define HAS_ROUGH_PLASTICS true
 #endif
 
 float max3(vec3 v) {
@@ -27,35 +30,104 @@ float coat_fresnel(float cos_i, float ior) {
     return fresnel_dielectric(clamp(cos_i, 0.0, 1.0), 1.0 / ior, cos_t);
 }
 
-// Seen from (or lit from) incidence cos_o, the specular lobe's weight (specular_reflectance F(cos_o))
-// and the diffuse lobe's D (1 - F(cos_o)), whose f_r is that over pi times (1 - F) of the other direction.
-void plastic_lobes(uint i, Material m, float cos_o, out vec3 spec, out vec3 diff) {
-    float f = coat_fresnel(cos_o, m.ior);
-    spec = material_term_a(i) * f;
-    diff = m.color * (1.0 - f);
+// The coat's transmittance from outside at incidence cos: 1 - F for a smooth coat (table 0), else a rough
+// coat's table (Material.table: 64 values over the cosine, four a texel of texture_texels), linearly
+// interpolated as Mitsuba's roughplastic reads it (scene/rough_plastic.rs made it).
+float coat_transmittance(uint table, float cos_i, float ior) {
+    if (!HAS_ROUGH_PLASTICS || table == 0u) return 1.0 - coat_fresnel(cos_i, ior);
+    float x = clamp(cos_i, 0.0, 1.0) * 63.0;
+    uint k = min(uint(x), 62u);
+    float a = x - float(k);
+    uint at = table - 1u;
+    float t0 = uintBitsToFloat(texelFetch(texture_texels, int(at + k / 4u))[k % 4u]);
+    float t1 = uintBitsToFloat(texelFetch(texture_texels, int(at + (k + 1u) / 4u))[(k + 1u) % 4u]);
+    return mix(t0, t1, a);
 }
 
-// A photon's scattering off plastic i, arriving along d at a point with normal nf facing it, where
-// Fresnel reflects fi: the specular lobe with probability max(ks) fi (weight ks / max(ks)), the diffuse
-// lobe with probability (1 - fi) bound (weight D (1 - F(cos_o)) / bound, at most 1 per channel: the host
-// keeps bound = max(D) (1 - F(1)) <= 1), else absorbed: false. Roulette and the choice of lobe in one draw,
-// and no bounce gains flux, which the fixed-point sums rely on. u: the choice; u1, u2: the direction.
-bool plastic_scatter(uint i, Material m, float fi, vec3 pos, vec3 nf, float u, float u1, float u2,
-                     inout vec3 o, inout vec3 d, inout vec3 flux) {
+// A path arriving along d at plastic i (nf facing it): the coat's reflection, d becoming its direction and
+// spec its weight, and the diffuse lobe's D t(cos_o) (diff), whose f_r is that over pi times t of the other
+// direction. A smooth coat reflects d as a mirror with weight ks F(cos_o); a rough one (Mitsuba's
+// roughplastic) about a normal visible from d, drawn from rng, with weight ks F(wi.h) G1(wo, h) (0 where wo
+// goes below the surface), as the rough conductor's (rough_conductor.glsl). table: material_table(i).
+void plastic_lobes(uint i, Material m, uint table, vec3 nf, inout Rng rng, inout vec3 d, out vec3 spec,
+                   out vec3 diff) {
+    float cos_o = -dot(d, nf);
+    diff = m.color * coat_transmittance(table, cos_o, m.ior);
+    if (!HAS_ROUGH_PLASTICS || table == 0u) {
+        spec = material_term_a(i) * coat_fresnel(cos_o, m.ior);
+        d = reflect(d, nf);
+        return;
+    }
+    float u1 = rng_float(rng);
+    float u2 = rng_float(rng);
+    vec3 t, b;
+    onb(nf, t, b);
+    vec3 wi = -to_local(d, t, b, nf);
+    Microfacet mf = material_microfacet(i);
+    vec3 h = mf_sample_visible(mf, wi, vec2(u1, u2));
+    vec3 wo = reflect(-wi, h);
+    spec = wi.z > 0.0 && wo.z > 0.0 ? material_term_a(i) * (coat_fresnel(dot(wi, h), m.ior) * mf_g1(mf, wo, h))
+                                    : vec3(0.0);
+    d = normalize(wo.x * t + wo.y * b + wo.z * nf);
+}
+
+// A photon's scattering off plastic i (table: material_table(i)), arriving along d at a point with normal nf
+// facing it, where the coat reflects with probability fi: the coat with probability max(ks) fi (weight ks /
+// max(ks)), the diffuse lobe with probability (1 - fi) bound (weight D t(cos_o) / bound, at most 1 per
+// channel: the host keeps bound = max(D) max(t) <= 1), else absorbed: false. Roulette and the choice of
+// lobe in one draw, and no bounce gains flux, which the fixed-point sums rely on. u: the choice; u1, u2:
+// the direction. A smooth coat's fi is F(cos_i) and its reflection a mirror's; a rough coat draws a normal
+// h visible from d (two more numbers from rng), fi = F(wi.h), reflects about h with the weight times G1(wo,
+// h), and lets the photon into the base with weight times G1 of its refraction through h, whose mean over
+// h is the table's t(cos_i): so the record's flux times t(cos_i) and this bounce agree.
+bool plastic_scatter(uint i, Material m, uint table, vec3 pos, vec3 nf, float u, float u1, float u2,
+                     inout Rng rng, inout vec3 o, inout vec3 d, inout vec3 flux) {
     vec3 ks, bound;
     material_terms(i, ks, bound);
     float ks_max = max3(ks);
+    if (!HAS_ROUGH_PLASTICS || table == 0u) {
+        float fi = coat_fresnel(-dot(d, nf), m.ior);
+        float ps = ks_max * fi;
+        if (u < ps) {
+            flux *= ks / ks_max;
+            d = reflect(d, nf);
+        } else if (u < ps + (1.0 - fi) * bound.x) {
+            d = cosine_direction(nf, u1, u2);
+            flux *= m.color * ((1.0 - coat_fresnel(dot(d, nf), m.ior)) / bound.x);
+        } else {
+            return false;
+        }
+        o = offset_ray(pos, nf);
+        return true;
+    }
+    float v1 = rng_float(rng);
+    float v2 = rng_float(rng);
+    vec3 t, b;
+    onb(nf, t, b);
+    vec3 wi = -to_local(d, t, b, nf);
+    if (wi.z <= 0.0) return false;
+    Microfacet mf = material_microfacet(i);
+    vec3 h = mf_sample_visible(mf, wi, vec2(v1, v2));
+    float cos_h = dot(wi, h);
+    float cos_t;
+    float fi = fresnel_dielectric(cos_h, 1.0 / m.ior, cos_t);
     float ps = ks_max * fi;
+    float g;
     if (u < ps) {
-        flux *= ks / ks_max;
-        d = reflect(d, nf);
+        vec3 wo = reflect(-wi, h);
+        g = wo.z > 0.0 ? mf_g1(mf, wo, h) : 0.0;
+        flux *= ks / ks_max * g;
+        d = normalize(wo.x * t + wo.y * b + wo.z * nf);
     } else if (u < ps + (1.0 - fi) * bound.x) {
+        float e = 1.0 / m.ior;
+        vec3 wt = normalize(-e * wi + (e * cos_h - cos_t) * h);
+        g = wt.z < 0.0 ? mf_g1(mf, wt, h) : 0.0;
         d = cosine_direction(nf, u1, u2);
-        flux *= m.color * ((1.0 - coat_fresnel(dot(d, nf), m.ior)) / bound.x);
+        flux *= m.color * (coat_transmittance(table, dot(d, nf), m.ior) / bound.x * g);
     } else {
         return false;
     }
     o = offset_ray(pos, nf);
-    return true;
+    return g > 0.0;
 }
 #endif

@@ -18,12 +18,6 @@
 #define HAS_ROUGH_CONDUCTORS true
 #endif
 
-// A direction arriving along d at a point with normal nf facing it, in the local frame (t, b, nf) (the
-// distributions the readers accept are isotropic: any tangent serves).
-vec3 to_local(vec3 d, vec3 t, vec3 b, vec3 nf) {
-    return vec3(dot(d, t), dot(d, b), dot(d, nf));
-}
-
 // Glossy hit points (params.glossy_alpha): where an eye path leaves a hit point on rough conductor i
 // instead of sampling through it, the photons leave records there too (photon.comp), and the gather
 // weighs each photon by the BRDF for its own incoming direction. f(wi, wo) = ks F(wi.h) D(h) G1(wi, h)

@@ -27,13 +27,15 @@ struct Material {
     uint texture;    // 0: none; else 1 + the texel of its texture's header (texture.glsl), whose value is
                      // the diffuse albedo (diffuse) or diffuse_reflectance (plastic) at each point
     vec3 lobe_b;     // conductor: imaginary part k (extinction), per channel; plastic: x, the largest
-                     // weight its diffuse lobe gives (plastic.glsl), y its fdr_int and z 1 if nonlinear
+                     // weight its diffuse lobe gives (plastic.glsl), y its coat's internal diffuse
+                     // reflectance (fdr_int when smooth) and z 1 if nonlinear
                      // (what turns a texture's diffuse_reflectance into its diffuse factor)
     uint pad1;
     float alpha_u;   // rough surfaces: the microfacet roughness along the tangent (microfacet.glsl)
     float alpha_v;   // and along the bitangent
     uint distribution; // MICROFACET_*
-    uint pad2;
+    uint table;      // a rough plastic: 1 + the texel of its coat's transmittance table in texture_texels
+                     // (64 values over the cosine, four a texel: plastic.glsl); else 0
 };
 
 const uint TEXTURE_BITMAP = 0u;

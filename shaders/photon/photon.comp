@@ -219,17 +219,21 @@ void main() {
             d = reflect(d, nf);
             o = offset_ray(h.pos, nf);
         } else if (HAS_PLASTICS && m.surface == SURFACE_PLASTIC) {
-            // The diffuse lobe's record carries the flux the coat lets in, times (1 - F(cos_i))
-            // (plastic.glsl); the first landing is skipped with direct light sampled, as on a diffuse
-            // surface (its shadow rays evaluate the plastic too).
-            float fi = coat_fresnel(-dot(d, nf), m.ior);
+            // The diffuse lobe's record carries the flux the coat lets in, times t(cos_i) (1 - F(cos_i)
+            // when smooth: plastic.glsl); the first landing is skipped with direct light sampled, as on a
+            // diffuse surface (its shadow rays evaluate the plastic too).
+            uint table = HAS_ROUGH_PLASTICS ? material_table(h.material) : 0u;
             if ((params.direct_light == 0u || depth > 1u) && max3(m.color) > 0.0) {
-                emit(Photon(h.pos, grid_key(grid_cell(h.pos)), flux * (1.0 - fi), oct_encode(d)));
+                float t = coat_transmittance(table, -dot(d, nf), m.ior);
+                emit(Photon(h.pos, grid_key(grid_cell(h.pos)), flux * t, oct_encode(d)));
             }
             float u = rng_float(rng);
             float u1 = rng_float(rng);
             float u2 = rng_float(rng);
-            if (!plastic_scatter(h.material, m, fi, h.pos, nf, u, u1, u2, o, d, flux)) { alive = false; continue; }
+            if (!plastic_scatter(h.material, m, table, h.pos, nf, u, u1, u2, rng, o, d, flux)) {
+                alive = false;
+                continue;
+            }
         } else if (HAS_THIN && m.surface == SURFACE_THIN) {
             flux *= thin_branch(h.material, m, h.pos, nf, rng_float(rng), o, d);
         } else if (rough_bounce(h.material, m, h.pos, nf, front, rng, o, d, flux)) {

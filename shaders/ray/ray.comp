@@ -103,12 +103,14 @@ vec3 camera_ray(uint px, uint py, vec2 jitter) {
 // estimate f_r Le G / pdf is (albedo / pi) Le (cos_p cos_y / d^2) (area / prob), and the light's flux
 // (power / prob, with power = Le area pi) gives Le area / prob = flux / pi. Emitters are one-sided.
 // coat_ior > 0: p is a plastic's diffuse base under a coat of that index, whose f_r also has the factor
-// (1 - F(cos_p)) of the light's direction (plastic.glsl); albedo then holds D (1 - F(cos_o)).
+// t(cos_p) of the light's direction (1 - F(cos_p) when smooth, coat_table 0: plastic.glsl); albedo then
+// holds D t(cos_o).
 // rough > 0: p is a glossy hit point on rough conductor rough - 1, seen from wo, whose f_r is its BRDF for
 // the light's direction (rough_conductor.glsl); albedo then holds its specular_reflectance.
 // A shadow ray that runs out of traversal steps answers "occluded": it is counted here, as an eye path is,
 // and the caller must then check bvh_spent and bvh_cut and drop the sample (geometry.glsl: occluded).
-vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, float coat_ior, uint rough, vec3 wo, inout Rng rng) {
+vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, float coat_ior, uint coat_table, uint rough, vec3 wo,
+                  inout Rng rng) {
     Emitter e = choose_emitter(rng_float(rng));
     float a = rng_float(rng);
     float b = rng_float(rng);
@@ -135,7 +137,7 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, float coat_ior, uint rough, vec3
         fr = albedo * f * (s / (4.0 * dot(wo, nf)));
     }
     vec3 l = fr * e.flux * (cos_p * cos_y / (PI * d2));
-    if (HAS_PLASTICS && coat_ior > 0.0) l *= 1.0 - coat_fresnel(cos_p, coat_ior);
+    if (HAS_PLASTICS && coat_ior > 0.0) l *= coat_transmittance(coat_table, cos_p, coat_ior);
     return l;
 }
 
@@ -165,7 +167,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             vec3 e = front ? thr * m.emission : vec3(0.0); // emitters are one-sided
             if (max(e.r, max(e.g, e.b)) > 0.0) seen = true;
             if (params.direct_light != 0u) {
-                vec3 l = direct_light(h.pos, nf, m.color, 0.0, 0u, vec3(0.0), rng);
+                vec3 l = direct_light(h.pos, nf, m.color, 0.0, 0u, 0u, vec3(0.0), rng);
                 if (max(l.r, max(l.g, l.b)) > 0.0) lit = true;
                 e += thr * l;
             }
@@ -175,7 +177,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             // A glossy hit point's vertex: its term (d), and the path ends (the photons have the rest).
             vec3 e = vec3(0.0);
             if (params.direct_light != 0u) {
-                vec3 l = direct_light(h.pos, nf, m.color, 0.0, h.material + 1u, -d, rng);
+                vec3 l = direct_light(h.pos, nf, m.color, 0.0, 0u, h.material + 1u, -d, rng);
                 if (max3(l) > 0.0) lit = true;
                 e = thr * l;
             }
@@ -192,14 +194,16 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             // the path goes on along the coat's reflection (term (a) and (d) further along its chain).
             // Plastic does not emit.
             vec3 spec, diff;
-            plastic_lobes(h.material, m, -dot(d, nf), spec, diff);
+            uint table = HAS_ROUGH_PLASTICS ? material_table(h.material) : 0u;
+            vec3 coat_d = d;
+            plastic_lobes(h.material, m, table, nf, rng, coat_d, spec, diff);
             if (params.direct_light != 0u) {
-                vec3 l = direct_light(h.pos, nf, diff, m.ior, 0u, vec3(0.0), rng);
+                vec3 l = direct_light(h.pos, nf, diff, m.ior, table, 0u, vec3(0.0), rng);
                 if (max3(l) > 0.0) lit = true;
                 sum += thr * l;
             }
             thr *= spec;
-            d = reflect(d, nf);
+            d = coat_d;
             o = offset_ray(h.pos, nf);
             continue;
         }
@@ -269,10 +273,13 @@ void main() {
                     // weight.
                     vec3 diff = m.color, spec = vec3(0.0);
                     bool base = true, coat = false;
+                    uint table = 0u;
+                    vec3 coat_d = r.d;
                     if (diffuse) {
                         if (front) hit_emitted += r.thr * m.emission; // emitters are one-sided
                     } else if (HAS_PLASTICS) {
-                        plastic_lobes(h.material, m, -dot(r.d, nf), spec, diff);
+                        table = HAS_ROUGH_PLASTICS ? material_table(h.material) : 0u;
+                        plastic_lobes(h.material, m, table, nf, rng, coat_d, spec, diff);
                         coat = true;
                         if (slot + sp + 1u >= params.hit_slots) {
                             if (!(max3(spec) + max3(diff) > 0.0)) break;
@@ -285,7 +292,7 @@ void main() {
                     if (base) {
                         // Term (d) for this path, where it is one of the samples (below).
                         if (params.direct_light != 0u && hit_is_sample) {
-                            hit_emitted += r.thr * direct_light(h.pos, nf, diff, diffuse ? 0.0 : m.ior, 0u, vec3(0.0), rng);
+                            hit_emitted += r.thr * direct_light(h.pos, nf, diff, diffuse ? 0.0 : m.ior, table, 0u, vec3(0.0), rng);
                             if (bvh_spent) sp = 0u; // counted there; no budget for the rest
                         }
                         if (max3(diff) > 0.0 && slot < params.hit_slots) {
@@ -296,7 +303,7 @@ void main() {
                     }
                     r.depth++;
                     r.thr *= spec;
-                    r.d = reflect(r.d, nf);
+                    r.d = coat_d;
                     r.o = offset_ray(h.pos, nf);
                     continue;
                 }
@@ -307,7 +314,7 @@ void main() {
                     float cos_o = dot(wo, nf);
                     if (!(cos_o > 0.0)) break;
                     if (params.direct_light != 0u && hit_is_sample) {
-                        hit_emitted += r.thr * direct_light(h.pos, nf, m.color, 0.0, h.material + 1u, wo, rng);
+                        hit_emitted += r.thr * direct_light(h.pos, nf, m.color, 0.0, 0u, h.material + 1u, wo, rng);
                         if (bvh_spent) sp = 0u; // counted there; no budget for the rest
                     }
                     if (slot < params.hit_slots) {

@@ -141,11 +141,31 @@ pub fn default_radius(scene: &Scene) -> f32 {
 impl GpuScene {
     /// `photon_capacity` sizes the photon batch buffers (see `Renderer`).
     pub fn new(scene: &Scene, settings: &Settings, photon_capacity: u32) -> Result<GpuScene> {
-        let (textures, texture_at) = texture_texels(&scene.textures);
+        let (mut textures, texture_at) = texture_texels(&scene.textures);
         let materials: Vec<Material> = scene
             .materials
             .iter()
             .map(|m| {
+                // A plastic's coat (scene/plastic.rs): a rough one's transmittance table goes after the
+                // textures, four values a texel (plastic.glsl's coat_transmittance reads it).
+                let coat = match m.surface {
+                    Surface::Plastic { ior, rough, .. } => Some(plastic::coat(ior, rough)),
+                    _ => None,
+                };
+                let table = match coat.as_ref().and_then(|c| c.table.as_ref()) {
+                    Some(t) => {
+                        let at = textures.len() as u32 + 1;
+                        textures.extend(t.chunks(4).map(|c| {
+                            let mut texel = [0u32; 4];
+                            for (k, v) in c.iter().enumerate() {
+                                texel[k] = v.to_bits();
+                            }
+                            texel
+                        }));
+                        at
+                    }
+                    None => 0,
+                };
                 let (color, surface, ior) = match m.surface {
                     Surface::Diffuse { albedo } => (albedo, layout::SURFACE_DIFFUSE, 1.0),
                     Surface::Mirror { reflectance } => (reflectance, layout::SURFACE_MIRROR, 1.0),
@@ -157,7 +177,7 @@ impl GpuScene {
                         nonlinear,
                         ..
                     } => (
-                        plastic::diffuse_factor(diffuse, ior, nonlinear),
+                        plastic::diffuse_factor(diffuse, ior, nonlinear, coat.as_ref().expect("a coat").internal),
                         layout::SURFACE_PLASTIC,
                         ior,
                     ),
@@ -167,6 +187,7 @@ impl GpuScene {
                 };
                 let rough = match m.surface {
                     Surface::RoughConductor { rough, .. } | Surface::RoughGlass { rough, .. } => Some(rough),
+                    Surface::Plastic { rough, .. } => rough,
                     _ => None,
                 };
                 let (lobe_a, lobe_b) = match m.surface {
@@ -176,14 +197,18 @@ impl GpuScene {
                         specular,
                         ior,
                         nonlinear,
-                    } => (
-                        arr(specular),
-                        [
-                            plastic::diffuse_bound(diffuse, ior, nonlinear),
-                            plastic::fresnel_diffuse_reflectance(1.0 / ior),
-                            nonlinear as u32 as f32,
-                        ],
-                    ),
+                        ..
+                    } => {
+                        let coat = coat.as_ref().expect("a coat");
+                        (
+                            arr(specular),
+                            [
+                                plastic::diffuse_bound(diffuse, ior, nonlinear, coat),
+                                coat.internal,
+                                nonlinear as u32 as f32,
+                            ],
+                        )
+                    }
                     Surface::ThinDielectric { transmittance, .. } => (arr(transmittance), [0.0; 3]),
                     _ => ([0.0; 3], [0.0; 3]),
                 };
@@ -201,6 +226,7 @@ impl GpuScene {
                         true => layout::MICROFACET_GGX,
                         false => layout::MICROFACET_BECKMANN,
                     }),
+                    table,
                     ..Default::default()
                 }
             })

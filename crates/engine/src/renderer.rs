@@ -1503,6 +1503,7 @@ fn tracing_pipeline(
             lights: &gpu.lights,
             surfaces: gpu.materials.iter().fold(0, |bits, m| bits | 1 << m.surface),
             textures: gpu.materials.iter().any(|m| m.texture != 0),
+            rough_plastics: gpu.materials.iter().any(|m| m.table != 0),
         });
         let defines = [&[("SCENE_CONSTANTS", "1")][..], defines].concat();
         pipeline_from(ctx, k, &specialize::compile_with(k, &defines, &constants)?)

@@ -44,7 +44,9 @@ pub struct Material {
     pub alpha_u: f32,
     pub alpha_v: f32,
     pub distribution: u32,
-    pub pad2: u32,
+    /// A rough plastic's coat: 1 + the texel of its transmittance table in the texture buffer (64 values,
+    /// four a texel); 0 for every other surface.
+    pub table: u32,
 }
 gpu_struct!(Material {
     color,
@@ -58,7 +60,7 @@ gpu_struct!(Material {
     alpha_u,
     alpha_v,
     distribution,
-    pad2
+    table
 });
 
 /// A texture's kind, filter and wrap mode in its header (texture.glsl).

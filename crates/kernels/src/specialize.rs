@@ -36,6 +36,8 @@ pub struct SceneConstants<'a> {
     pub surfaces: u32,
     /// Whether any material has a texture: without one the kernels do not read the texture index.
     pub textures: bool,
+    /// Whether any plastic is rough (Material::table): without one the plastics' code leaves it out.
+    pub rough_plastics: bool,
 }
 
 /// An f32 written so GLSL reads back exactly the same bits: nine significant digits name an f32 uniquely
@@ -83,6 +85,7 @@ pub fn scene_constants(c: &SceneConstants) -> String {
         has(SURFACE_ROUGH_GLASS)
     );
     s += &format!("const bool SCENE_TEXTURES = {};\n", c.textures);
+    s += &format!("const bool SCENE_ROUGH_PLASTICS = {};\n", c.rough_plastics);
     s += &format!(
         "const uint NUM_INLINE_TRIANGLES = {}u;\nconst bool SCENE_BVH = {};\n",
         inline.len(),

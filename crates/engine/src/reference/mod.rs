@@ -88,7 +88,7 @@ pub fn emitter_point(e: &Emitter, mut a: f32, mut b: f32) -> Vec3 {
 }
 
 /// ray.comp's `direct_light`: term (d) at diffuse point p, one light sample with its shadow ray;
-/// `coat_ior` > 0: p is a plastic's base under a coat of that index.
+/// `coat`: p is that plastic's base under its coat.
 /// `rough`: p is a glossy hit point on that rough conductor, seen from the direction given (albedo: its
 /// specular_reflectance).
 fn direct_light(
@@ -96,7 +96,7 @@ fn direct_light(
     p: Vec3,
     nf: Vec3,
     albedo: Vec3,
-    coat_ior: f32,
+    coat: Option<&Material>,
     rough: Option<(&Material, Vec3)>,
     rng: &mut Rng,
 ) -> Vec3 {
@@ -125,9 +125,9 @@ fn direct_light(
         None => albedo / PI,
     };
     let l = fr * e.flux * (cos_p * cos_y / (PI * d2));
-    match coat_ior > 0.0 {
-        true => l * (1.0 - plastic::coat_fresnel(cos_p, coat_ior)),
-        false => l,
+    match coat {
+        Some(m) => l * plastic::coat_transmittance(g, m.table, cos_p, m.ior),
+        None => l,
     }
 }
 
@@ -170,34 +170,6 @@ fn coat_probability(spec: Vec3, diff: Vec3) -> Option<f32> {
     (total > 0.0).then(|| spec.max_element() / total)
 }
 
-/// photon.comp's `plastic_scatter` (plastic.glsl): the photon's new (origin, direction, weight) off plastic
-/// `m` where Fresnel reflects `fi`, or `None` where it is absorbed.
-fn plastic_scatter(
-    g: &GpuScene,
-    m: &Material,
-    fi: f32,
-    pos: Vec3,
-    nf: Vec3,
-    [u, u1, u2]: [f32; 3],
-    d: Vec3,
-) -> Option<(Vec3, Vec3, Vec3)> {
-    let ks = v3(m.lobe_a);
-    let bound = m.lobe_b[0];
-    let ps = ks.max_element() * fi;
-    let (d, w) = if u < ps {
-        (reflect(d, nf), ks / ks.max_element())
-    } else if u < ps + (1.0 - fi) * bound {
-        let d = cosine_direction(nf, u1, u2);
-        (
-            d,
-            v3(m.color) * ((1.0 - plastic::coat_fresnel(d.dot(nf), m.ior)) / bound),
-        )
-    } else {
-        return None;
-    };
-    Some((offset_ray(g, pos, nf), d, w))
-}
-
 /// One emission eye sample of ray.comp's `emission_sample`: the emission met along the specular chain
 /// through a random point of the pixel, one Fresnel branch chosen with probability f, and with direct light
 /// sampled (`RenderParams::direct_light`) term (d) at its diffuse end. `cut` counts a path ended at the
@@ -229,7 +201,7 @@ fn emission_sample(
             let mut e = if front { thr * v3(m.emission) } else { Vec3::ZERO };
             *seen |= e.max_element() > 0.0;
             if g.params.direct_light != 0 {
-                let l = direct_light(g, h.pos, nf, v3(m.color), 0.0, None, rng);
+                let l = direct_light(g, h.pos, nf, v3(m.color), None, None, rng);
                 *lit |= l.max_element() > 0.0;
                 e += thr * l;
             }
@@ -239,7 +211,7 @@ fn emission_sample(
             // A glossy hit point's vertex: its term (d), and the path ends.
             let mut e = Vec3::ZERO;
             if g.params.direct_light != 0 {
-                let l = direct_light(g, h.pos, nf, v3(m.color), 0.0, Some((m, -d)), rng);
+                let l = direct_light(g, h.pos, nf, v3(m.color), None, Some((m, -d)), rng);
                 *lit |= l.max_element() > 0.0;
                 e = thr * l;
             }
@@ -253,14 +225,14 @@ fn emission_sample(
         }
         if m.surface == SURFACE_PLASTIC {
             // Both lobes: the base's term (d) here, the path on along the coat.
-            let (spec, diff) = plastic::lobes(m, -d.dot(nf));
+            let (coat_d, spec, diff) = plastic::plastic_lobes(g, m, nf, rng, d);
             if g.params.direct_light != 0 {
-                let l = direct_light(g, h.pos, nf, diff, m.ior, None, rng);
+                let l = direct_light(g, h.pos, nf, diff, Some(m), None, rng);
                 *lit |= l.max_element() > 0.0;
                 sum += thr * l;
             }
             thr *= spec;
-            d = reflect(d, nf);
+            d = coat_d;
             o = offset_ray(g, h.pos, nf);
             continue;
         }
@@ -390,12 +362,13 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         // there are slots, else one).
                         let (mut diff, mut spec) = (v3(m.color), Vec3::ZERO);
                         let (mut on_base, mut coat) = (true, false);
+                        let mut coat_d = d;
                         if diffuse {
                             if front {
                                 hit_emitted += thr * v3(m.emission);
                             }
                         } else {
-                            (spec, diff) = plastic::lobes(m, -d.dot(nf));
+                            (coat_d, spec, diff) = plastic::plastic_lobes(g, m, nf, &mut rng, d);
                             coat = true;
                             if slot + stack.len() + 1 >= slots {
                                 let Some(ps) = coat_probability(spec, diff) else {
@@ -412,8 +385,8 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         }
                         if on_base {
                             if p.direct_light != 0 && hit_is_sample {
-                                let coat_ior = if diffuse { 0.0 } else { m.ior };
-                                hit_emitted += thr * direct_light(g, h.pos, nf, diff, coat_ior, None, &mut rng);
+                                let coat = (!diffuse).then_some(m);
+                                hit_emitted += thr * direct_light(g, h.pos, nf, diff, coat, None, &mut rng);
                             }
                             if diff.max_element() > 0.0 && slot < slots {
                                 out.hits[base + slot] = HitPoint {
@@ -431,7 +404,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         }
                         depth += 1;
                         thr *= spec;
-                        d = reflect(d, nf);
+                        d = coat_d;
                         o = offset_ray(g, h.pos, nf);
                         continue;
                     }
@@ -443,7 +416,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                             break;
                         }
                         if p.direct_light != 0 && hit_is_sample {
-                            hit_emitted += thr * direct_light(g, h.pos, nf, v3(m.color), 0.0, Some((m, wo)), &mut rng);
+                            hit_emitted += thr * direct_light(g, h.pos, nf, v3(m.color), None, Some((m, wo)), &mut rng);
                         }
                         if slot < slots {
                             out.hits[base + slot] = HitPoint {
@@ -616,17 +589,17 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             d = reflect(d, nf);
             o = offset_ray(g, h.pos, nf);
         } else if m.surface == SURFACE_PLASTIC {
-            let fi = plastic::coat_fresnel(-d.dot(nf), m.ior);
             if (p.direct_light == 0 || depth > 1) && v3(m.color).max_element() > 0.0 {
+                let t = plastic::coat_transmittance(g, m.table, -d.dot(nf), m.ior);
                 out.push(Photon {
                     pos: h.pos.to_array(),
                     cell: trace::grid_key(g, h.pos),
-                    flux: (flux * (1.0 - fi)).to_array(),
+                    flux: (flux * t).to_array(),
                     dir: oct_encode(d),
                 });
             }
             let u = [rng.float(), rng.float(), rng.float()];
-            let Some((o2, d2, w)) = plastic_scatter(g, m, fi, h.pos, nf, u, d) else {
+            let Some((o2, d2, w)) = plastic::scatter(g, m, h.pos, nf, u, &mut rng, d) else {
                 return true;
             };
             (o, d) = (o2, d2);

@@ -9,10 +9,14 @@
 //! photons' bound are the host's (scene/plastic.rs). Checked against Mitsuba's own plastic in the tests
 //! below.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use ppm_vk_kernels::layout::Material;
 
-use super::trace::{fresnel_dielectric, v3};
+use super::microfacet::Microfacet;
+use super::rng::Rng;
+use super::rough_conductor::to_local;
+use super::trace::{cosine_direction, fresnel_dielectric, offset_ray, onb, reflect, v3};
+use crate::gpu_scene::GpuScene;
 
 /// The coat's Fresnel reflectance for light arriving from outside at incidence `cos_i`, `ior` the
 /// index inside over the index outside.
@@ -28,11 +32,105 @@ pub fn lobes(m: &Material, cos_o: f32) -> (Vec3, Vec3) {
     (v3(m.lobe_a) * f, v3(m.color) * (1.0 - f))
 }
 
+/// plastic.glsl's `coat_transmittance`: 1 - F (table 0) or the rough coat's table in the texture texels.
+pub fn coat_transmittance(g: &GpuScene, table: u32, cos_i: f32, ior: f32) -> f32 {
+    if table == 0 {
+        return 1.0 - coat_fresnel(cos_i, ior);
+    }
+    let x = cos_i.clamp(0.0, 1.0) * 63.0;
+    let k = (x as u32).min(62);
+    let a = x - k as f32;
+    let value = |k: u32| f32::from_bits(g.textures[(table - 1 + k / 4) as usize][(k % 4) as usize]);
+    let (t0, t1) = (value(k), value(k + 1));
+    t0 + (t1 - t0) * a
+}
+
+/// plastic.glsl's `plastic_lobes`: for a path arriving along `d` (`nf` facing it), the coat's reflected
+/// direction and weight (a rough coat draws its normal from `rng`) and the diffuse lobe's D t(cos_o).
+pub fn plastic_lobes(g: &GpuScene, m: &Material, nf: Vec3, rng: &mut Rng, d: Vec3) -> (Vec3, Vec3, Vec3) {
+    let cos_o = -d.dot(nf);
+    let diff = v3(m.color) * coat_transmittance(g, m.table, cos_o, m.ior);
+    if m.table == 0 {
+        return (reflect(d, nf), v3(m.lobe_a) * coat_fresnel(cos_o, m.ior), diff);
+    }
+    let u = Vec2::new(rng.float(), rng.float());
+    let (t, b) = onb(nf);
+    let wi = -to_local(d, t, b, nf);
+    let mf = Microfacet::of(m);
+    let h = mf.sample_visible(wi, u);
+    let wo = reflect(-wi, h);
+    let spec = match wi.z > 0.0 && wo.z > 0.0 {
+        true => v3(m.lobe_a) * (coat_fresnel(wi.dot(h), m.ior) * mf.g1(wo, h)),
+        false => Vec3::ZERO,
+    };
+    ((wo.x * t + wo.y * b + wo.z * nf).normalize(), spec, diff)
+}
+
+/// photon.comp's `plastic_scatter` (plastic.glsl): the photon's new (origin, direction, weight) off plastic
+/// `m`, or None where it is absorbed. A rough coat draws two more numbers from `rng`.
+pub fn scatter(
+    g: &GpuScene,
+    m: &Material,
+    pos: Vec3,
+    nf: Vec3,
+    [u, u1, u2]: [f32; 3],
+    rng: &mut Rng,
+    d: Vec3,
+) -> Option<(Vec3, Vec3, Vec3)> {
+    let ks = v3(m.lobe_a);
+    let bound = m.lobe_b[0];
+    if m.table == 0 {
+        let fi = coat_fresnel(-d.dot(nf), m.ior);
+        let ps = ks.max_element() * fi;
+        let (d, w) = if u < ps {
+            (reflect(d, nf), ks / ks.max_element())
+        } else if u < ps + (1.0 - fi) * bound {
+            let d = cosine_direction(nf, u1, u2);
+            (d, v3(m.color) * ((1.0 - coat_fresnel(d.dot(nf), m.ior)) / bound))
+        } else {
+            return None;
+        };
+        return Some((offset_ray(g, pos, nf), d, w));
+    }
+    let v = Vec2::new(rng.float(), rng.float());
+    let (t, b) = onb(nf);
+    let wi = -to_local(d, t, b, nf);
+    if wi.z <= 0.0 {
+        return None;
+    }
+    let mf = Microfacet::of(m);
+    let h = mf.sample_visible(wi, v);
+    let cos_h = wi.dot(h);
+    let (fi, cos_t) = fresnel_dielectric(cos_h, 1.0 / m.ior);
+    let ps = ks.max_element() * fi;
+    let (d, w, g1) = if u < ps {
+        let wo = reflect(-wi, h);
+        let g1 = if wo.z > 0.0 { mf.g1(wo, h) } else { 0.0 };
+        (
+            (wo.x * t + wo.y * b + wo.z * nf).normalize(),
+            ks / ks.max_element() * g1,
+            g1,
+        )
+    } else if u < ps + (1.0 - fi) * bound {
+        let e = 1.0 / m.ior;
+        let wt = (-e * wi + (e * cos_h - cos_t) * h).normalize();
+        let g1 = if wt.z < 0.0 { mf.g1(wt, h) } else { 0.0 };
+        let d = cosine_direction(nf, u1, u2);
+        let w = v3(m.color) * (coat_transmittance(g, m.table, d.dot(nf), m.ior) / bound * g1);
+        (d, w, g1)
+    } else {
+        return None;
+    };
+    (g1 > 0.0).then(|| (offset_ray(g, pos, nf), d, w))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::reference::trace::PI;
-    use crate::scene::plastic::{diffuse_bound, diffuse_factor, fresnel_diffuse_reflectance, max_diffuse_reflectance};
+    use crate::scene::plastic::{
+        coat, diffuse_bound, diffuse_factor, fresnel_diffuse_reflectance, max_diffuse_reflectance,
+    };
 
     fn json() -> serde_json::Value {
         let text = include_str!("../../../../scenes/references/coated-bsdfs.json");
@@ -50,10 +148,10 @@ mod tests {
         let nonlinear = case.get("nonlinear").is_some_and(|v| v.as_bool().unwrap());
         let ior = int / ext;
         let m = Material {
-            color: diffuse_factor(diffuse, ior, nonlinear).to_array(),
+            color: diffuse_factor(diffuse, ior, nonlinear, coat(ior, None).internal).to_array(),
             ior,
             lobe_a: specular.to_array(),
-            lobe_b: [diffuse_bound(diffuse, ior, nonlinear), 0.0, 0.0],
+            lobe_b: [diffuse_bound(diffuse, ior, nonlinear, &coat(ior, None)), 0.0, 0.0],
             ..Default::default()
         };
         (m, diffuse, ior, nonlinear)
@@ -131,10 +229,11 @@ mod tests {
     #[test]
     fn the_diffuse_bound_holds() {
         for (ior, nonlinear) in [(1.49, false), (1.5, true), (1.2, false), (2.5, true)] {
-            let rd = max_diffuse_reflectance(ior, nonlinear);
-            let b = diffuse_bound(Vec3::splat(rd), ior, nonlinear);
+            let c = coat(ior, None);
+            let rd = max_diffuse_reflectance(ior, nonlinear, &c);
+            let b = diffuse_bound(Vec3::splat(rd), ior, nonlinear, &c);
             assert!((b - 1.0).abs() < 1e-4 || rd == 1.0, "ior {ior}: bound {b} at {rd}");
-            let d = diffuse_factor(Vec3::splat(rd), ior, nonlinear).x;
+            let d = diffuse_factor(Vec3::splat(rd), ior, nonlinear, c.internal).x;
             for k in 0..=100 {
                 let w = d * (1.0 - coat_fresnel(k as f32 / 100.0, ior));
                 assert!(w <= b * (1.0 + 1e-6), "weight {w} above the bound {b}");

@@ -77,6 +77,8 @@ pub enum Surface {
         specular: Vec3,
         ior: f32,
         nonlinear: bool,
+        /// Mitsuba's `roughplastic`: the coat a microfacet distribution (scene/rough_plastic.rs).
+        rough: Option<Microfacet>,
     },
     /// Mitsuba's `roughconductor` (reference/rough_conductor.rs): the conductor's facets, oriented by a
     /// microfacet distribution.
@@ -134,8 +136,14 @@ impl Surface {
     /// A plastic, its diffuse reflectance lowered where a channel exceeds what a photon can scatter
     /// without gaining flux ([`plastic::max_diffuse_reflectance`], 0.93-0.95 for common coats); the
     /// message says so, for the loader to warn with.
-    pub fn plastic(diffuse: Vec3, specular: Vec3, ior: f32, nonlinear: bool) -> (Surface, Option<String>) {
-        let most = plastic::max_diffuse_reflectance(ior, nonlinear);
+    pub fn plastic(
+        diffuse: Vec3,
+        specular: Vec3,
+        ior: f32,
+        nonlinear: bool,
+        rough: Option<Microfacet>,
+    ) -> (Surface, Option<String>) {
+        let most = plastic::max_diffuse_reflectance(ior, nonlinear, &plastic::coat(ior, rough));
         let kept = diffuse.min(Vec3::splat(most));
         let warning = (kept != diffuse).then(|| {
             format!(
@@ -149,6 +157,7 @@ impl Surface {
             specular,
             ior,
             nonlinear,
+            rough,
         };
         (surface, warning)
     }
@@ -941,12 +950,16 @@ fn check_material(m: &Material) -> Result<(), Invalid> {
             specular,
             ior,
             nonlinear,
+            rough,
         } => {
             positive_ior(ior, &format!("{p}.plastic.ior"))?;
             unit_vec(specular, &format!("{p}.plastic.specular"))?;
+            if let Some(rough) = rough {
+                roughness(rough, &format!("{p}.plastic.alpha"))?;
+            }
             let path = format!("{p}.plastic.diffuse");
             unit_vec(diffuse, &path)?;
-            let most = plastic::max_diffuse_reflectance(ior, nonlinear);
+            let most = plastic::max_diffuse_reflectance(ior, nonlinear, &plastic::coat(ior, rough));
             if diffuse.max_element() > most {
                 return Err(invalid(
                     path,
@@ -1357,7 +1370,7 @@ mod tests {
         }
         // A plastic reads one too, within its bound.
         let mut s = textured_scene();
-        let (surface, _) = Surface::plastic(s.textures[0].max(), Vec3::ONE, 1.5, false);
+        let (surface, _) = Surface::plastic(s.textures[0].max(), Vec3::ONE, 1.5, false, None);
         s.materials[0].surface = surface;
         s.validate().expect("a textured plastic");
     }

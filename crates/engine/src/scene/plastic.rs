@@ -21,35 +21,65 @@ pub fn fresnel_diffuse_reflectance(eta: f32) -> f32 {
     }
 }
 
-/// The diffuse lobe's factor D per channel (`Material::color` of a plastic).
-pub fn diffuse_factor(diffuse: Vec3, ior: f32, nonlinear: bool) -> Vec3 {
-    let fdr_int = fresnel_diffuse_reflectance(1.0 / ior);
+/// What the kernels need of a plastic's coat (smooth: Mitsuba's `plastic`; rough: `roughplastic`,
+/// scene/rough_plastic.rs): its transmittance from outside over the cosine as a table (rough; smooth
+/// coats transmit 1 - F, computed in the kernel), its internal diffuse reflectance (fdr_int, or the rough
+/// coat's), and the most it transmits at any angle.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Coat {
+    pub table: Option<Vec<f32>>,
+    pub internal: f32,
+    pub most: f32,
+}
+
+/// The coat of index `ior` (inside over outside), rough with `rough`.
+pub fn coat(ior: f32, rough: Option<crate::scene::Microfacet>) -> Coat {
+    match rough {
+        None => Coat {
+            table: None,
+            internal: fresnel_diffuse_reflectance(1.0 / ior),
+            most: 1.0 - normal_fresnel(ior),
+        },
+        Some(r) => {
+            let (table, internal) = super::rough_plastic::tables(r.ggx, r.alpha, ior);
+            let most = table.iter().fold(0.0f32, |a, &t| a.max(t));
+            Coat {
+                table: Some(table),
+                internal,
+                most,
+            }
+        }
+    }
+}
+
+/// The diffuse lobe's factor D per channel (`Material::color` of a plastic), `internal` the coat's
+/// internal diffuse reflectance ([`Coat::internal`]).
+pub fn diffuse_factor(diffuse: Vec3, ior: f32, nonlinear: bool, internal: f32) -> Vec3 {
     let inner = if nonlinear {
-        Vec3::ONE - diffuse * fdr_int
+        Vec3::ONE - diffuse * internal
     } else {
-        Vec3::splat(1.0 - fdr_int)
+        Vec3::splat(1.0 - internal)
     };
     diffuse / inner / (ior * ior)
 }
 
-/// The largest weight a cosine-sampled diffuse bounce gives: max D (1 - F(1)), F smallest at normal
-/// incidence (`Material::lobe_b[0]`). The photons choose the diffuse lobe with (1 - F(cos_i)) times this.
-pub fn diffuse_bound(diffuse: Vec3, ior: f32, nonlinear: bool) -> f32 {
-    diffuse_factor(diffuse, ior, nonlinear).max_element() * (1.0 - normal_fresnel(ior))
+/// The largest weight a cosine-sampled diffuse bounce gives: max D times the most the coat transmits
+/// (`Material::lobe_b[0]`). The photons choose the diffuse lobe with (1 - F(cos_i)) times this.
+pub fn diffuse_bound(diffuse: Vec3, ior: f32, nonlinear: bool, coat: &Coat) -> f32 {
+    diffuse_factor(diffuse, ior, nonlinear, coat.internal).max_element() * coat.most
 }
 
 /// The largest diffuse_reflectance per channel for which [`diffuse_bound`] stays at most 1, so that no
 /// photon leaves a plastic with more flux than it arrived with (the fixed-point sums rely on it). Mitsuba's
 /// model allows more (up to 1): above this the per-sample weight of a cosine-sampled bounce exceeds 1
 /// although the albedo does not.
-pub fn max_diffuse_reflectance(ior: f32, nonlinear: bool) -> f32 {
-    let fdr_int = fresnel_diffuse_reflectance(1.0 / ior);
-    // D (1 - F0) = 1, with D = rd / inner / ior^2.
-    let c = ior * ior / (1.0 - normal_fresnel(ior));
+pub fn max_diffuse_reflectance(ior: f32, nonlinear: bool, coat: &Coat) -> f32 {
+    // D most = 1, with D = rd / inner / ior^2.
+    let c = ior * ior / coat.most;
     let rd = if nonlinear {
-        c / (1.0 + c * fdr_int)
+        c / (1.0 + c * coat.internal)
     } else {
-        c * (1.0 - fdr_int)
+        c * (1.0 - coat.internal)
     };
     rd.min(1.0)
 }

@@ -64,7 +64,7 @@ fn mitsuba_visible_normal(mf: &Microfacet, wi: Vec3, u: Vec2) -> Vec3 {
     } else {
         (b, PI / 2.0 - PI / 4.0 * (a / b))
     };
-    let (px, mut py) = (r * phi.cos(), r * phi.sin());
+    let (px, mut py): (f32, f32) = (r * phi.cos(), r * phi.sin());
     let s = 0.5 * (1.0 + v.z);
     py = (1.0 - px * px).max(0.0).sqrt() * (1.0 - s) + py * s;
     let z = (1.0 - px * px - py * py).max(0.0).sqrt();

@@ -119,6 +119,9 @@ struct RawPlastic {
     specular: Option<[f32; 3]>,
     ior: Option<f32>,
     nonlinear: Option<bool>,
+    /// Given: Mitsuba's roughplastic, its coat of this roughness.
+    alpha: Option<f32>,
+    distribution: Option<RawDistribution>,
 }
 
 /// A diffuse reflectance (a diffuse material's `diffuse`, a plastic's): `[r, g, b]`, or a texture table
@@ -593,11 +596,19 @@ fn material(
             }
             None => Vec3::splat(0.5),
         };
+        if c.distribution.is_some() && c.alpha.is_none() {
+            return Err(src.error(
+                r.plastic.as_ref().map_or(m.span(), |p| p.span()),
+                Some(&format!("{p}.plastic")),
+                "a distribution needs alpha (the roughness)",
+            ));
+        }
         Surface::Plastic {
             diffuse,
             specular: c.specular.map_or(Vec3::ONE, Vec3::from),
             ior: c.ior.unwrap_or(PLASTIC_IOR),
             nonlinear: c.nonlinear.unwrap_or(false),
+            rough: c.alpha.map(|a| microfacet(a, c.distribution)),
         }
     } else if let Some(t) = &r.thin {
         let t = t.get_ref();
@@ -1489,7 +1500,8 @@ material = "light"
                 diffuse: Vec3::splat(0.5),
                 specular: Vec3::ONE,
                 ior: PLASTIC_IOR,
-                nonlinear: false
+                nonlinear: false,
+                rough: None
             }
         );
         assert_eq!(
@@ -1498,7 +1510,8 @@ material = "light"
                 diffuse: Vec3::new(0.1, 0.2, 0.3),
                 specular: Vec3::splat(0.5),
                 ior: 1.6,
-                nonlinear: true
+                nonlinear: true,
+                rough: None
             }
         );
         assert_eq!(
@@ -1516,6 +1529,23 @@ material = "light"
                 reflectance: Vec3::splat(0.5),
                 transmittance: Vec3::new(0.9, 0.8, 0.7)
             }
+        );
+        // Rough plastic: a coat of roughness alpha (Mitsuba's roughplastic, Beckmann by default).
+        assert_eq!(
+            surface(r#"plastic = { alpha = 0.2, distribution = "ggx" }"#),
+            Surface::Plastic {
+                diffuse: Vec3::splat(0.5),
+                specular: Vec3::ONE,
+                ior: PLASTIC_IOR,
+                nonlinear: false,
+                rough: Some(Microfacet { ggx: true, alpha: 0.2 })
+            }
+        );
+        assert_err(
+            &edit(14, r#"plastic = { distribution = "ggx" }"#),
+            14,
+            "materials.glass.plastic",
+            "needs alpha",
         );
         // Rough surfaces: Mitsuba's defaults (Beckmann, alpha 0.1, BK7 in air) and GGX.
         assert_eq!(
