@@ -21,15 +21,21 @@
 // Glossy hit points (params.glossy_alpha): where an eye path leaves a hit point on rough conductor i
 // instead of sampling through it, the photons leave records there too (photon.comp), and the gather
 // weighs each photon by the BRDF for its own incoming direction. f(wi, wo) = ks F(wi.h) D(h) G1(wi, h)
-// G1(wo, h) / (4 cos_i cos_o) is bounded: D(h) <= D(n) = 1 / (pi alpha^2), G1(wi, h) / cos_i <= gb (2 /
-// min(alpha, 2) for GGX, exactly; 3.535 / alpha + 1 for Beckmann's fit, whose supremum is 3.535 / alpha
-// below alpha = 4 and under 1.01 above), F, G1(wo, h) and ks <= 1. The hit point's weight holds ks and
+// G1(wo, h) / (4 cos_i cos_o) is bounded: D(h) <= its peak (1 / (pi alpha^2) at the normal up to alpha = 1
+// for GGX and 1 / sqrt(2) for Beckmann; beyond, GGX's is alpha^2 / pi at grazing and Beckmann's
+// 4 alpha^2 e^(1 / alpha^2 - 2) / pi at tan^2 = 2 alpha^2 - 1), G1(wi, h) / cos_i <= gb (2 / min(alpha, 2)
+// for GGX, exactly; 3.535 / alpha + 1 for Beckmann's fit, whose supremum is 3.535 / alpha below alpha = 4
+// and under 1.01 above), F, G1(wo, h) and ks <= 1. The hit point's weight holds ks and
 // the bound over 4 cos_o (rough_conductor_hit_weight), and a photon contributes its flux times the rest,
 // rough_conductor_ratio, at most 1 per channel: the fixed-point sums' bound (RenderParams.flux_fixed)
 // holds as for a diffuse hit point.
 float rough_conductor_bound(Microfacet mf) {
+    float a2 = mf.au * mf.av;
+    float peak;
+    if (mf.kind == MICROFACET_GGX) peak = max(1.0, a2 * a2);
+    else peak = a2 > 0.5 ? 4.0 * a2 * a2 * exp(1.0 / a2 - 2.0) : 1.0;
     float gb = mf.kind == MICROFACET_GGX ? 2.0 / min(mf.au, 2.0) : 3.535 / mf.au + 1.0;
-    return gb / (PI * mf.au * mf.av);
+    return gb * peak / (PI * a2);
 }
 
 // The terms of f(wi, wo) for unit wi, wo leaving the surface of unit normal n: returns D G1(wi) G1(wo) /
