@@ -360,7 +360,7 @@ fn parse_fraction(s: &str) -> Result<f32, String> {
 }
 
 /// `--glossy-hits`'s default, as `Settings::default().glossy_hits` has it.
-const GLOSSY_DEFAULT: &str = "0.1";
+const GLOSSY_DEFAULT: &str = "0.15";
 
 /// `--glossy-hits`: a roughness, or `off`.
 fn parse_glossy(s: &str) -> Result<Glossy, String> {
