@@ -38,20 +38,38 @@ float rough_conductor_bound(Microfacet mf) {
     return gb * peak / (PI * a2);
 }
 
-// The terms of f(wi, wo) for unit wi, wo leaving the surface of unit normal n: returns D G1(wi) G1(wo) /
-// cos_i (0 where either is below it), and F the facets' Fresnel term per channel.
-float rough_conductor_terms(uint i, vec3 wi, vec3 wo, vec3 n, out vec3 f) {
+// What evaluating rough conductor i's BRDF towards wo (unit, leaving the surface of unit normal n) needs,
+// read once: its distribution, complex index, the local frame, wo in it, and the bound. The gather reads
+// it once per glossy hit point, not per photon.
+struct RoughView {
+    Microfacet mf;
+    vec3 eta;
+    vec3 k;
+    vec3 t;
+    vec3 b;
+    vec3 lo;
+    float bound;
+};
+
+RoughView rough_view(uint i, vec3 wo, vec3 n) {
+    RoughView v;
+    v.mf = material_microfacet(i);
+    material_terms(i, v.eta, v.k);
+    onb(n, v.t, v.b);
+    v.lo = to_local(wo, v.t, v.b, n);
+    v.bound = rough_conductor_bound(v.mf);
+    return v;
+}
+
+// The terms of f(wi, wo) for unit wi leaving the surface of normal n (v: rough_view towards wo): returns
+// D G1(wi) G1(wo) / cos_i (0 where either is below it), and F the facets' Fresnel term per channel.
+float rough_conductor_terms(RoughView v, vec3 wi, vec3 n, out vec3 f) {
     f = vec3(0.0);
-    vec3 t, b;
-    onb(n, t, b);
-    vec3 li = to_local(wi, t, b, n), lo = to_local(wo, t, b, n);
-    if (li.z <= 0.0 || lo.z <= 0.0) return 0.0;
-    Microfacet mf = material_microfacet(i);
-    vec3 h = normalize(li + lo);
-    vec3 eta, k;
-    material_terms(i, eta, k);
-    f = fresnel_conductor(clamp(dot(li, h), 0.0, 1.0), eta, k);
-    return mf_d(mf, h) * mf_g1(mf, li, h) * mf_g1(mf, lo, h) / li.z;
+    vec3 li = to_local(wi, v.t, v.b, n);
+    if (li.z <= 0.0 || v.lo.z <= 0.0) return 0.0;
+    vec3 h = normalize(li + v.lo);
+    f = fresnel_conductor(clamp(dot(li, h), 0.0, 1.0), v.eta, v.k);
+    return mf_d(v.mf, h) * mf_g1(v.mf, li, h) * mf_g1(v.mf, v.lo, h) / li.z;
 }
 
 // A glossy hit point's weight on rough conductor i: the eye path's throughput times ks times the bound
@@ -60,12 +78,12 @@ vec3 rough_conductor_hit_weight(uint i, vec3 color, vec3 thr, float cos_o) {
     return thr * color * (rough_conductor_bound(material_microfacet(i)) / (4.0 * cos_o));
 }
 
-// What a photon arriving along -wi gives a glossy hit point on rough conductor i seen from wo: f(wi, wo)
-// over the hit point's weight per unit throughput, at most 1 per channel.
-vec3 rough_conductor_ratio(uint i, vec3 wi, vec3 wo, vec3 n) {
+// What a photon arriving along -wi gives a glossy hit point (v: rough_view of its rough conductor towards
+// the eye): f(wi, wo) over the hit point's weight per unit throughput, at most 1 per channel.
+vec3 rough_conductor_ratio(RoughView v, vec3 wi, vec3 n) {
     vec3 f;
-    float s = rough_conductor_terms(i, wi, wo, n, f);
-    return min(f * (s / rough_conductor_bound(material_microfacet(i))), vec3(1.0));
+    float s = rough_conductor_terms(v, wi, n, f);
+    return min(f * (s / v.bound), vec3(1.0));
 }
 
 // Whether eye paths leave hit points on material i (a rough conductor) rather than sample through it.

@@ -43,12 +43,14 @@ uint m[GROUP];
 int64_t fr[GROUP], fg[GROUP], fb[GROUP];
 float inv_kr[GROUP];
 uint q_brdf[GROUP];  // HitPoint.brdf: 0, or 1 + a rough conductor's material
-vec3 q_wo[GROUP];    // towards the eye, where q_brdf != 0
+#if GLOSSY_HITS
+RoughView q_view[GROUP]; // its BRDF towards the eye, where q_brdf != 0
+#endif
 float flux_fixed; // params.flux_fixed, read once: a storage-buffer read per photon costs lavapipe a gather
 
 void visit(uint j, vec3 flux, vec3 dir, float d2) {
 #if GLOSSY_HITS
-    if (q_brdf[j] != 0u) flux *= rough_conductor_ratio(q_brdf[j] - 1u, -normalize(dir), q_wo[j], q_normal[j]);
+    if (q_brdf[j] != 0u) flux *= rough_conductor_ratio(q_view[j], -normalize(dir), q_normal[j]);
 #endif
     // eq. 10; the weight folds into the fixed-point scale, and without the filter no root is taken.
     float scale = inv_kr[j] > 0.0 ? (1.0 - sqrt(d2) * inv_kr[j]) * flux_fixed : flux_fixed;
@@ -80,7 +82,9 @@ void main() {
         q_pos[j] = hp.pos;
         q_normal[j] = hp.normal;
         q_brdf[j] = hp.brdf;
-        q_wo[j] = hp.brdf != 0u ? normalize(oct_decode_unnormalized(hp.wo)) : vec3(0.0);
+#if GLOSSY_HITS
+        if (hp.brdf != 0u) q_view[j] = rough_view(hp.brdf - 1u, normalize(oct_decode_unnormalized(hp.wo)), hp.normal);
+#endif
         q_r2[j] = float(stats[slot[j]].r2);
         if (pc.cone_k > 0.0) inv_kr[j] = 1.0 / (pc.cone_k * sqrt(q_r2[j]));
     }

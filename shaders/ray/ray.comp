@@ -133,7 +133,7 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, float coat_ior, uint coat_table,
     vec3 fr = albedo / PI;
     if (HAS_ROUGH_CONDUCTORS && rough != 0u) {
         vec3 f;
-        float s = rough_conductor_terms(rough - 1u, w, wo, nf, f);
+        float s = rough_conductor_terms(rough_view(rough - 1u, wo, nf), w, nf, f);
         fr = albedo * f * (s / (4.0 * dot(wo, nf)));
     }
     vec3 l = fr * e.flux * (cos_p * cos_y / (PI * d2));
