@@ -77,16 +77,19 @@ fn mitsuba_visible_normal(mf: &Microfacet, wi: Vec3, u: Vec2) -> Vec3 {
     Vec3::new(-slope.x, -slope.y, 1.0).normalize()
 }
 
+/// The Gauss-Legendre nodes Mitsuba's eval_reflectance and eval_transmittance integrate with for a
+/// relative index `eta`: 32 per axis where eta > 1, else 128.
+fn coat_nodes(eta: f32) -> Vec<(f64, f64)> {
+    gauss_legendre(if eta > 1.0 { 32 } else { 128 })
+}
+
 /// The coat's albedo seen from wi (wi.z > 0) for a relative index `eta` (transmitted over incident):
 /// its reflection (`reflect`) or its transmission, each weighed by G1 of the outgoing direction, as
-/// Mitsuba's eval_reflectance and eval_transmittance integrate it (32 x 32 nodes where eta > 1, else
-/// 128 x 128).
-fn coat_albedo(mf: &Microfacet, wi: Vec3, eta: f32, reflection: bool) -> f64 {
-    let n = if eta > 1.0 { 32 } else { 128 };
-    let nodes = gauss_legendre(n);
+/// Mitsuba's eval_reflectance and eval_transmittance integrate it over `nodes` (coat_nodes(eta)).
+fn coat_albedo(mf: &Microfacet, wi: Vec3, eta: f32, reflection: bool, nodes: &[(f64, f64)]) -> f64 {
     let mut sum = 0.0;
-    for &(x, wx) in &nodes {
-        for &(y, wy) in &nodes {
+    for &(x, wx) in nodes {
+        for &(y, wy) in nodes {
             let u = Vec2::new((0.5 * x + 0.5) as f32, (0.5 * y + 0.5) as f32);
             let m = mitsuba_visible_normal(mf, wi, u);
             let cos_i = wi.dot(m);
@@ -115,13 +118,14 @@ pub fn tables(ggx: bool, alpha: f32, ior: f32) -> (Vec<f32>, f32) {
         au: alpha,
         av: alpha,
     };
+    let (outside, inside) = (coat_nodes(ior), coat_nodes(1.0 / ior));
     let mut transmittance = Vec::with_capacity(TABLE_POINTS);
     let mut internal = 0.0;
     for k in 0..TABLE_POINTS {
         let mu = (k as f32 / (TABLE_POINTS - 1) as f32).max(1e-6);
         let wi = Vec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
-        transmittance.push(coat_albedo(&mf, wi, ior, false) as f32);
-        internal += coat_albedo(&mf, wi, 1.0 / ior, true) * mu as f64;
+        transmittance.push(coat_albedo(&mf, wi, ior, false, &outside) as f32);
+        internal += coat_albedo(&mf, wi, 1.0 / ior, true, &inside) * mu as f64;
     }
     (transmittance, (2.0 * internal / TABLE_POINTS as f64) as f32)
 }
