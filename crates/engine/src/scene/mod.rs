@@ -112,14 +112,6 @@ impl Microfacet {
     /// Mitsuba's floor on alpha (its MicrofacetDistribution clamps to it): below it the lobe is narrower
     /// than f32 directions resolve.
     pub const MIN_ALPHA: f32 = 1e-4;
-
-    pub fn distribution_name(&self) -> &'static str {
-        if self.ggx {
-            "ggx"
-        } else {
-            "beckmann"
-        }
-    }
 }
 
 impl Surface {
