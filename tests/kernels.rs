@@ -106,6 +106,17 @@ fn cornell_roughplastic() -> ppm_vk_engine::Scene {
     scene
 }
 
+/// scenes/references/cornell-smooth.xml at RES x RES: coarse meshes (a diffuse and a glass icosphere of 320
+/// triangles) smooth-shaded by their vertex normals: shading normals along the eye paths and Veach's
+/// correction on the photons (shading.glsl).
+fn cornell_smooth() -> ppm_vk_engine::Scene {
+    let xml = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/references/cornell-smooth.xml");
+    let scene = ppm_vk_engine::Scene::load_with(xml, &[("res".to_string(), RES.to_string())]).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert!(scene.meshes.iter().all(|m| m.normals.is_some()), "smooth-shaded meshes");
+    scene
+}
+
 fn ray_pass_matches_reference_case(specialize: bool, direct: DirectLight) {
     ray_pass_matches_reference_on(cornell(RES, RES), specialize, direct);
 }
@@ -309,6 +320,16 @@ fn ray_pass_matches_reference_with_glossy_hit_points() {
 }
 
 #[test]
+fn ray_pass_matches_reference_with_smooth_shading() {
+    ray_pass_matches_reference_on(cornell_smooth(), true, DirectLight::Sample);
+}
+
+#[test]
+fn ray_pass_matches_reference_with_smooth_shading_unspecialized() {
+    ray_pass_matches_reference_on(cornell_smooth(), false, DirectLight::Photons);
+}
+
+#[test]
 fn ray_pass_matches_reference_with_direct_light_by_photons() {
     ray_pass_matches_reference_case(true, DirectLight::Photons);
 }
@@ -425,11 +446,15 @@ fn photon_records_match_reference_within(
     );
 
     // Every GPU record is plausible: finite, positive flux no larger than a photon starts with (roulette
-    // divides by the largest albedo, so no channel grows), inside the scene, hashed into its own bucket.
+    // divides by the largest albedo, so no channel grows), or with smooth shading than the cap on Veach's
+    // correction (shading.glsl), inside the scene, hashed into its own bucket.
     let (lo, hi) = scene.bounds();
     // Inside the box up to f32 rounding of a hit position (~1e-7 of its coordinates; 1e-5 of the extent).
     let eps = 1e-5 * scene_extent(&scene);
-    let start = g.lights[0].power.map(|p| p / g.lights[0].prob);
+    let start = match g.smooth_shading() {
+        true => [(ppm_vk_kernels::layout::FLUX_CAP_FIXED / g.params.flux_fixed as f64) as f32; 3],
+        false => g.lights[0].power.map(|p| p / g.lights[0].prob),
+    };
     let mut cell_ok = 0usize;
     for (i, p) in gpu.iter().enumerate() {
         for (f, s) in p.flux.iter().zip(start) {
@@ -551,6 +576,13 @@ fn photon_records_match_reference_with_rough_surfaces() {
     photon_records_match_reference_within(cornell_rough(), settings, 1e-3, 0.993);
 }
 
+/// Smooth shading: records carry |wi . ns| / |wi . ng|, bounces off the glass the whole correction, and
+/// diffuse bounces are drawn about the true normal (shading.glsl).
+#[test]
+fn photon_records_match_reference_with_smooth_shading() {
+    photon_records_match_reference_on(cornell_smooth(), true, 1e-3);
+}
+
 /// Rough plastics: records carry flux times the coat's table, bounces choose a lobe through a sampled facet.
 #[test]
 fn photon_records_match_reference_with_rough_plastics() {
@@ -636,12 +668,47 @@ struct GridShape {
     sppm: bool,
     /// cornell_rough with glossy hit points on its gold sphere, whose BRDF the gather evaluates per photon.
     glossy: bool,
+    /// cornell_tilted: photons past an int32 of fixed-point units (the gather's WIDE_FLUX path).
+    tilted: bool,
+}
+
+/// cornell-spheres with its floor a mesh of two triangles whose vertex normals all lean 75 degrees
+/// towards +x: Veach's correction for shading normals (shading.glsl) multiplies a record's flux by
+/// |wi . ns| / |wi . ng|, up to about 4 for light from the ceiling and beyond for grazing light, so many
+/// records carry more than the int32 of fixed-point units that one photon's flux otherwise fits.
+fn cornell_tilted() -> ppm_vk_engine::Scene {
+    let mut scene = cornell(RES, RES);
+    let floor = scene
+        .quads
+        .iter()
+        .position(|q| q.normal().y > 0.99 && q.origin.y.abs() < 1e-6)
+        .expect("a floor");
+    let q = scene.quads.remove(floor);
+    let positions = vec![
+        q.origin,
+        q.origin + q.edge_u,
+        q.origin + q.edge_u + q.edge_v,
+        q.origin + q.edge_v,
+    ];
+    let lean = 75f32.to_radians();
+    let n = Vec3::new(lean.sin(), lean.cos(), 0.0);
+    scene.meshes.push(ppm_vk_engine::scene::Mesh {
+        name: "tilted floor".into(),
+        positions,
+        normals: Some(vec![n; 4]),
+        uvs: None,
+        indices: vec![[0, 1, 2], [0, 2, 3]],
+        materials: vec![q.material; 2],
+    });
+    scene
 }
 
 fn gather_case(cone_k: Option<f32>, grid: GridShape) {
     let ctx = ctx();
     let scene = if grid.glossy {
         cornell_rough()
+    } else if grid.tilted {
+        cornell_tilted()
     } else {
         cornell(RES, RES)
     };
@@ -686,6 +753,17 @@ fn gather_case(cone_k: Option<f32>, grid: GridShape) {
     if grid.sppm {
         label += ", SPPM";
     }
+    if grid.tilted {
+        label += ", leaning shading normals";
+        // Records past an int32 of fixed-point units: the wide path really runs.
+        let flux_fixed = r.gpu_scene().params.flux_fixed as f64;
+        let wide = records
+            .iter()
+            .filter(|p| p.flux.iter().any(|&f| f as f64 * flux_fixed + 0.5 >= 2147483520.0))
+            .count();
+        println!("{label}: {wide} of {} records past an int32", records.len());
+        assert!(wide > 100, "only {wide} records past an int32");
+    }
     if grid.glossy {
         label += ", glossy hit points";
         let glossy = r.read_hit_points().unwrap().iter().filter(|h| h.brdf != 0).count();
@@ -714,6 +792,21 @@ fn gather_matches_brute_force() {
             ..GridShape::default()
         },
     );
+}
+
+/// Smooth shading: records whose flux Veach's correction raised past an int32 of fixed-point units are
+/// summed exactly (gather.comp's WIDE_FLUX), with and without the cone filter.
+#[test]
+fn gather_of_photons_past_an_int32_matches_brute_force() {
+    for cone_k in [None, Some(1.1)] {
+        gather_case(
+            cone_k,
+            GridShape {
+                tilted: true,
+                ..GridShape::default()
+            },
+        );
+    }
 }
 
 /// Glossy hit points: the gather weighs each photon by the rough conductor's BRDF for its direction.

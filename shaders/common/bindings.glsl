@@ -20,19 +20,22 @@ layout(binding = 3) uniform usamplerBuffer material_texels;
 // in bvh.glsl read them.
 layout(binding = 4) uniform usamplerBuffer bvh_node_texels;
 layout(binding = 5) uniform usamplerBuffer bvh_triangle_texels;
-// The textures (texture.glsl: each a header of TEXTURE_HEADER texels, then a bitmap's pixels), and the
-// texture coordinates of the BVH's triangles in leaf order, two texels each (u0 v0 u1 v1 | u2 v2): one
-// zeroed texel each in a scene without textures.
+// The textures (texture.glsl: each a header of TEXTURE_HEADER texels, then a bitmap's pixels), and what
+// shading reads of the BVH's triangles in leaf order, TRIANGLE_TEXELS texels each: texture coordinates
+// (u0 v0 u1 v1 | u2 v2, texture.glsl) and vertex normals (shading.glsl): one zeroed texel each in a scene
+// without them.
 layout(binding = 6) uniform usamplerBuffer texture_texels;
-layout(binding = 7) uniform usamplerBuffer triangle_uv_texels;
+layout(binding = 7) uniform usamplerBuffer triangle_texels;
 
-// A kernel compiled for one scene knows whether any material has a texture; without one, the texture
-// index is not even read.
+// A kernel compiled for one scene knows whether any material has a texture (without one, the texture
+// index is not even read) and whether any mesh is smooth-shaded (shading.glsl).
 #ifdef SCENE_CONSTANTS
 #include "scene_constants.glsl"
 #define HAS_TEXTURES SCENE_TEXTURES
+#define HAS_SHADING_NORMALS SCENE_SHADING_NORMALS
 #else
 #define HAS_TEXTURES true
+#define HAS_SHADING_NORMALS true
 #endif
 #include "materials.glsl"
 

@@ -22,8 +22,8 @@ vec2 surface_uv(Hit h) {
         return vec2(phi * (0.5 / PI), acos(clamp(h.normal.z, -1.0, 1.0)) * (1.0 / PI));
     }
     if (h.kind == HIT_TRIANGLE) {
-        vec4 a = uintBitsToFloat(texelFetch(triangle_uv_texels, int(2u * h.prim)));
-        vec2 c = uintBitsToFloat(texelFetch(triangle_uv_texels, int(2u * h.prim + 1u)).xy);
+        vec4 a = uintBitsToFloat(texelFetch(triangle_texels, int(TRIANGLE_TEXELS * h.prim)));
+        vec2 c = uintBitsToFloat(texelFetch(triangle_texels, int(TRIANGLE_TEXELS * h.prim + 1u)).xy);
         return (1.0 - h.local.x - h.local.y) * a.xy + h.local.x * a.zw + h.local.y * c;
     }
     return h.local;

@@ -207,7 +207,8 @@ struct PathCounters {
     uint photon_paths;
     uint eye_paths;
     uint traversal_cut; // paths whose BVH traversal ran out of the loop budget (an error: the renderer stops)
-    uint pad0;
+    uint capped;     // photons held at FLUX_CAP_FIXED at a smooth-shaded surface (shading.glsl); the bench's
+                     // PHOTON_COUNT_STEPS build counts intersections here instead
 };
 
 // A batch's photon work in a BVH scene (photon.comp): photons taken from the counter, photons suspended
@@ -263,4 +264,7 @@ struct Triangle {
 };
 
 const float PROBE_FIXED = 1073741824.0; // 2^30: the probe's fixed-point scale for d^2 / r^2 in [0, 1]
+const uint TRIANGLE_TEXELS = 3u;         // texels per triangle in triangle_texels (bindings.glsl)
+const float FLUX_CAP_FIXED = 70368744177664.0; // 2^46: the most a photon may carry at a smooth-shaded
+                                               // surface, in fixed-point units (shading.glsl)
 #endif

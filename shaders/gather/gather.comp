@@ -27,6 +27,12 @@ layout(binding = 8) uniform usamplerBuffer material_texels;
 #ifndef GLOSSY_HITS
 #define GLOSSY_HITS 1
 #endif
+// Whether a photon may carry more than a light gives one (smooth shading: shading.glsl), up to
+// FLUX_CAP_FIXED units, past an int32: then such a photon converts to int64 (not a vector instruction on
+// AVX2, so only those photons take it). Compiled with 0 where no mesh is smooth-shaded.
+#ifndef WIDE_FLUX
+#define WIDE_FLUX 1
+#endif
 layout(push_constant) uniform GatherPush {
     uint count;      // entries of `order`
     float cone_k;    // cone filter constant k >= 1; 0: off
@@ -54,8 +60,18 @@ void visit(uint j, vec3 flux, vec3 dir, float d2) {
 #endif
     // eq. 10; the weight folds into the fixed-point scale, and without the filter no root is taken.
     float scale = inv_kr[j] > 0.0 ? (1.0 - sqrt(d2) * inv_kr[j]) * flux_fixed : flux_fixed;
-    ivec3 f = ivec3(flux * scale + 0.5); // round to nearest: flux and weight are never negative
+    vec3 v = flux * scale + 0.5; // round to nearest: flux and weight are never negative
     m[j]++;
+#if WIDE_FLUX
+    if (max(v.r, max(v.g, v.b)) >= 2147483520.0) { // the largest f32 below 2^31
+        i64vec3 w = i64vec3(min(v, vec3(FLUX_CAP_FIXED)));
+        fr[j] += w.r;
+        fg[j] += w.g;
+        fb[j] += w.b;
+        return;
+    }
+#endif
+    ivec3 f = ivec3(v);
     fr[j] += int64_t(f.r);
     fg[j] += int64_t(f.g);
     fb[j] += int64_t(f.b);

@@ -1,6 +1,8 @@
 // Pass 3, a photon pass: photons leave the lights in proportion to their power, bounce off mirrors, rough
 // metals and through (rough) glass, and leave a record at every diffuse surface (and plastic's diffuse base) they reach,
-// continuing by Russian roulette.
+// continuing by Russian roulette. On a smooth-shaded mesh each vertex weighs the photon by Veach's
+// correction for shading normals (shading.glsl): shading_in where it arrives (its records carry it), and
+// shading_out where it leaves, but after a diffuse bounce, drawn about the true normal.
 // Records are appended to one buffer; the lanes of a subgroup that leave a record at the same step reserve
 // their slots with a single atomic (a global counter hit once per record is slow under contention). A
 // per-thread array of records, flushed once per path, measured slower on lavapipe: it lives in memory.
@@ -38,6 +40,7 @@ layout(push_constant) uniform PhotonPush {
 #include "thin_dielectric.glsl"
 #include "rough_dielectric.glsl"
 #include "texture.glsl"
+#include "shading.glsl"
 #include "grid.glsl"
 #include "invocation.glsl"
 #include "lights.glsl"
@@ -47,7 +50,18 @@ layout(push_constant) uniform PhotonPush {
 // stores nothing. PHOTON_NO_APPEND: no append. PHOTON_TRACE_ONLY: the same photons leave the lights, but
 // every hit is a diffuse bounce with no material, roulette or record, and a path ends after
 // PHOTON_TRACE_ONLY hits: only the intersections, the direction draws and the loop remain, the ceiling
-// of this design. PHOTON_COUNT_STEPS: counts the intersections traced in cut.pad0 (an untimed run).
+// of this design. PHOTON_COUNT_STEPS: counts the intersections traced in cut.capped (an untimed run).
+
+// A photon's flux after a smooth-shaded vertex's correction, held at FLUX_CAP_FIXED units and counted
+// there (shading.glsl).
+vec3 capped(vec3 flux) {
+    float cap = FLUX_CAP_FIXED / params.flux_fixed;
+    if (max3(flux) > cap) {
+        atomicAdd(cut.capped, 1u);
+        flux = min(flux, vec3(cap));
+    }
+    return flux;
+}
 
 // Appends a record; the active lanes of a subgroup reserve their slots with one atomic.
 void emit(Photon rec) {
@@ -105,6 +119,10 @@ void main() {
     vec3 o, d, flux;
     vec3 lobe;               // the normal a direction is still to be drawn about (pending)
     bool pending = false;
+    // The last vertex's normals, true and shading (shading.glsl): d must lie on the same side of both, and
+    // with `leave` the photon takes shading_out along d (not after a diffuse bounce, drawn about vng).
+    vec3 vng, vns;
+    bool leave = false;
     uint depth = 0u;
     if (pc.resume != 0u && t < work.suspended) {
         PhotonState s = suspended[t];
@@ -115,6 +133,8 @@ void main() {
         depth = s.depth;
         alive = true;
         next = 1u;
+        vng = d; // suspended after its last vertex's checks
+        vns = d;
     }
     for (;;) {
         if (dynamic && bvh_left != 0xffffffffu) {
@@ -146,6 +166,9 @@ void main() {
             float b = rng_float(rng);
             o = offset_ray(emitter_point(e, a, b), e.normal);
             lobe = e.normal;
+            vng = lobe;
+            vns = lobe;
+            leave = false;
             pending = true;
             flux = e.flux;
             depth = 0u;
@@ -157,6 +180,11 @@ void main() {
             d = cosine_direction(lobe, u1, u2);
             pending = false;
         }
+        if (HAS_SHADING_NORMALS) {
+            if (!shading_valid(d, vng, vns)) { alive = false; continue; }
+            if (leave) flux = capped(flux * shading_out(d, vng, vns));
+            leave = false;
+        }
         bvh_sync();
         if (depth >= params.max_photon_depth) {
             atomicAdd(cut.photon_paths, 1u);
@@ -164,7 +192,7 @@ void main() {
             continue;
         }
 #ifdef PHOTON_COUNT_STEPS
-        atomicAdd(cut.pad0, 1u); // per lane: a subgroup-aggregated count undercounts in this loop
+        atomicAdd(cut.capped, 1u); // per lane: a subgroup-aggregated count undercounts in this loop
 #endif
         Hit h;
         if (!intersect_scene(o, d, 0.0, 1e30, h)) {
@@ -193,6 +221,15 @@ void main() {
 #endif
         Material m = material(h.material);
         apply_texture(m, h);
+        vec3 ng = nf;
+        if (HAS_SHADING_NORMALS) {
+            nf = shading_normal(h, ng);
+            if (!shading_valid(d, ng, nf)) { alive = false; continue; }
+            flux = capped(flux * shading_in(-d, ng, nf));
+            vng = ng;
+            vns = nf;
+            leave = true;
+        }
         if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR && (params.direct_light == 0u || depth > 1u)
             && glossy_hit(h.material)) {
             // A glossy hit point's surface (rough_conductor.glsl): a record, as on a diffuse surface (the first
@@ -211,9 +248,10 @@ void main() {
             // unbiased (its expectation is flux * albedo), and never grows (albedo <= p per channel).
             if (rng_float(rng) >= p) { alive = false; continue; }
             flux *= m.color / p;
-            lobe = nf;
+            lobe = ng; // about the true normal: the pdf cancels shading_out (shading.glsl)
+            leave = false;
             pending = true;
-            o = offset_ray(h.pos, nf);
+            o = offset_ray(h.pos, ng);
         } else if (is_reflector(m.surface)) {
             flux *= reflector_weight(h.material, m, -dot(d, nf));
             d = reflect(d, nf);

@@ -47,6 +47,9 @@
 // with a hit point and term (d) by its BRDF, the photons leave a record there (but the first landing) and
 // go on by sampling its lobe, and the gather evaluates its BRDF per photon; the partition is again the
 // one above with those vertices as D.
+// On a smooth-shaded mesh every BSDF works about the shading normal nf, and a direction on different
+// sides of it and of the true surface ng ends the path (shading.glsl); eye paths carry radiance, so they
+// need no other correction (the photons do).
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_control_flow_attributes : require
@@ -84,6 +87,7 @@ layout(push_constant) uniform RayPush {
 #include "thin_dielectric.glsl"
 #include "rough_dielectric.glsl"
 #include "texture.glsl"
+#include "shading.glsl"
 #include "invocation.glsl"
 #include "lights.glsl"
 
@@ -107,9 +111,11 @@ vec3 camera_ray(uint px, uint py, vec2 jitter) {
 // holds D t(cos_o).
 // rough > 0: p is a glossy hit point on rough conductor rough - 1, seen from wo, whose f_r is its BRDF for
 // the light's direction (rough_conductor.glsl); albedo then holds its specular_reflectance.
+// nf is the shading normal, ng the true surface's on its side: a light on different sides of them adds
+// nothing (shading.glsl).
 // A shadow ray that runs out of traversal steps answers "occluded": it is counted here, as an eye path is,
 // and the caller must then check bvh_spent and bvh_cut and drop the sample (geometry.glsl: occluded).
-vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, float coat_ior, uint coat_table, uint rough, vec3 wo,
+vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, uint rough, vec3 wo,
                   inout Rng rng) {
     Emitter e = choose_emitter(rng_float(rng));
     float a = rng_float(rng);
@@ -123,6 +129,7 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 albedo, float coat_ior, uint coat_table,
     float cos_p = dot(nf, w);
     float cos_y = -dot(e.normal, w);
     if (cos_p <= 0.0 || cos_y <= 0.0 || d2 <= 0.0) return vec3(0.0);
+    if (HAS_SHADING_NORMALS && !shading_valid(w, ng, nf)) return vec3(0.0);
     bool was_cut = bvh_cut;
     bool was_spent = bvh_spent;
     if (occluded(o, w, d)) {
@@ -150,8 +157,10 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
     vec3 d = camera_ray(px, py, jitter);
     vec3 thr = vec3(1.0);
     vec3 sum = vec3(0.0); // term (d) at the plastics passed on the way
+    vec3 vng = d, vns = d; // the last vertex's normals, which d must lie on the same side of (shading.glsl)
     for (uint depth = 0u;; depth++) {
         bvh_sync();
+        if (HAS_SHADING_NORMALS && !shading_valid(d, vng, vns)) break;
         if (depth >= params.max_eye_depth) { atomicAdd(cut.eye_paths, 1u); break; }
         Hit h;
         if (!intersect_scene(o, d, 0.0, 1e30, h)) {
@@ -162,12 +171,16 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
         Material m = material(h.material);
         apply_texture(m, h);
         bool front = dot(d, h.normal) < 0.0;
-        vec3 nf = front ? h.normal : -h.normal;
+        vec3 ng = front ? h.normal : -h.normal;
+        vec3 nf = shading_normal(h, ng);
+        if (HAS_SHADING_NORMALS && !shading_valid(d, ng, nf)) break;
+        vng = ng;
+        vns = nf;
         if (m.surface == SURFACE_DIFFUSE) {
             vec3 e = front ? thr * m.emission : vec3(0.0); // emitters are one-sided
             if (max(e.r, max(e.g, e.b)) > 0.0) seen = true;
             if (params.direct_light != 0u) {
-                vec3 l = direct_light(h.pos, nf, m.color, 0.0, 0u, 0u, vec3(0.0), rng);
+                vec3 l = direct_light(h.pos, nf, ng, m.color, 0.0, 0u, 0u, vec3(0.0), rng);
                 if (max(l.r, max(l.g, l.b)) > 0.0) lit = true;
                 e += thr * l;
             }
@@ -177,7 +190,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             // A glossy hit point's vertex: its term (d), and the path ends (the photons have the rest).
             vec3 e = vec3(0.0);
             if (params.direct_light != 0u) {
-                vec3 l = direct_light(h.pos, nf, m.color, 0.0, 0u, h.material + 1u, -d, rng);
+                vec3 l = direct_light(h.pos, nf, ng, m.color, 0.0, 0u, h.material + 1u, -d, rng);
                 if (max3(l) > 0.0) lit = true;
                 e = thr * l;
             }
@@ -198,7 +211,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             vec3 coat_d = d;
             plastic_lobes(h.material, m, table, nf, rng, coat_d, spec, diff);
             if (params.direct_light != 0u) {
-                vec3 l = direct_light(h.pos, nf, diff, m.ior, table, 0u, vec3(0.0), rng);
+                vec3 l = direct_light(h.pos, nf, ng, diff, m.ior, table, 0u, vec3(0.0), rng);
                 if (max3(l) > 0.0) lit = true;
                 sum += thr * l;
             }
@@ -251,8 +264,12 @@ void main() {
 
         while (sp > 0u) {
             Pending r = stack[--sp];
+            // The last vertex's normals, which r.d must lie on the same side of (shading.glsl); a branch
+            // is stacked only where it does.
+            vec3 vng = r.d, vns = r.d;
             for (;;) {
                 bvh_sync();
+                if (HAS_SHADING_NORMALS && !shading_valid(r.d, vng, vns)) break;
                 if (r.depth >= params.max_eye_depth) { atomicAdd(cut.eye_paths, 1u); break; }
                 Hit h;
                 if (!intersect_scene(r.o, r.d, 0.0, 1e30, h)) {
@@ -263,7 +280,11 @@ void main() {
                 Material m = material(h.material);
                 apply_texture(m, h);
                 bool front = dot(r.d, h.normal) < 0.0;
-                vec3 nf = front ? h.normal : -h.normal;
+                vec3 ng = front ? h.normal : -h.normal;
+                vec3 nf = shading_normal(h, ng);
+                if (HAS_SHADING_NORMALS && !shading_valid(r.d, ng, nf)) break;
+                vng = ng;
+                vns = nf;
                 bool diffuse = m.surface == SURFACE_DIFFUSE;
                 if (diffuse || (HAS_PLASTICS && m.surface == SURFACE_PLASTIC)) {
                     // A diffuse surface, or a plastic's base under its coat: the hit point and term (d).
@@ -292,7 +313,7 @@ void main() {
                     if (base) {
                         // Term (d) for this path, where it is one of the samples (below).
                         if (params.direct_light != 0u && hit_is_sample) {
-                            hit_emitted += r.thr * direct_light(h.pos, nf, diff, diffuse ? 0.0 : m.ior, table, 0u, vec3(0.0), rng);
+                            hit_emitted += r.thr * direct_light(h.pos, nf, ng, diff, diffuse ? 0.0 : m.ior, table, 0u, vec3(0.0), rng);
                             if (bvh_spent) sp = 0u; // counted there; no budget for the rest
                         }
                         if (max3(diff) > 0.0 && slot < params.hit_slots) {
@@ -314,7 +335,7 @@ void main() {
                     float cos_o = dot(wo, nf);
                     if (!(cos_o > 0.0)) break;
                     if (params.direct_light != 0u && hit_is_sample) {
-                        hit_emitted += r.thr * direct_light(h.pos, nf, m.color, 0.0, 0u, h.material + 1u, wo, rng);
+                        hit_emitted += r.thr * direct_light(h.pos, nf, ng, m.color, 0.0, 0u, h.material + 1u, wo, rng);
                         if (bvh_spent) sp = 0u; // counted there; no budget for the rest
                     }
                     if (slot < params.hit_slots) {
@@ -333,7 +354,9 @@ void main() {
                     // As glass: both branches while the pixel has slots, else one.
                     float rr = thin_reflectance(-dot(r.d, nf), m.ior);
                     if (rr < 1.0 && slot + sp + 1u < params.hit_slots) {
-                        stack[sp++] = Pending(offset_ray(h.pos, nf), reflect(r.d, nf), r.thr * (rr * m.color), r.depth);
+                        vec3 refl = reflect(r.d, nf);
+                        if (!HAS_SHADING_NORMALS || shading_valid(refl, ng, nf))
+                            stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * (rr * m.color), r.depth);
                         r.thr *= (1.0 - rr) * material_term_a(h.material);
                         r.o = offset_ray(h.pos, -nf);
                     } else {
@@ -358,7 +381,8 @@ void main() {
                     r.d = refl;
                     r.o = offset_ray(h.pos, nf);
                 } else if (slot + sp + 1u < params.hit_slots) {
-                    stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * f, r.depth);
+                    if (!HAS_SHADING_NORMALS || shading_valid(refl, ng, nf))
+                        stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * f, r.depth);
                     r.thr *= 1.0 - f;
                     r.d = refr;
                     r.o = offset_ray(h.pos, -nf);

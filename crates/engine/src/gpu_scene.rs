@@ -27,9 +27,11 @@ pub struct GpuScene {
     pub bvh_stats: BvhStats,
     /// The textures as texels (texture.glsl): one zeroed texel without textures.
     pub textures: Vec<[u32; 4]>,
-    /// The texture coordinates of `bvh_triangles`, two texels each (u0 v0 u1 v1 | u2 v2 0 0); one zeroed
-    /// texel where no textured material is on a mesh.
-    pub triangle_uvs: Vec<[f32; 4]>,
+    /// What shading reads of `bvh_triangles`, `layout::TRIANGLE_TEXELS` texels each (texture.glsl,
+    /// shading.glsl): texture coordinates (u0 v0 u1 v1 | u2 v2 0 0, f32 bits), then the vertex normals
+    /// (octahedral n0 n1 n2, and 1 for a smooth triangle, 0 for a flat one); one zeroed texel where no
+    /// mesh has texture coordinates or vertex normals.
+    pub triangle_texels: Vec<[u32; 4]>,
     /// The kernels test `bvh_triangles` one by one, written into them as constants (a small mesh:
     /// `specialize::MAX_INLINE_TRIANGLES`), and never traverse the BVH.
     pub triangles_inline: bool,
@@ -105,27 +107,42 @@ pub fn texture_texels(textures: &[crate::scene::texture::Texture]) -> (Vec<[u32;
     (texels, at)
 }
 
-/// The texture coordinates of `triangles` (leaf order; `source` indexes the scene's triangles in mesh
-/// order), two texels each, where a mesh has them (zero where not); one zeroed texel if none has.
-fn triangle_uv_texels(scene: &Scene, triangles: &[Triangle]) -> Vec<[f32; 4]> {
-    if scene.meshes.iter().all(|m| m.uvs.is_none()) {
-        return vec![[0.0; 4]];
+/// The shading attributes of `triangles` (leaf order; `source` indexes the scene's triangles in mesh
+/// order), `layout::TRIANGLE_TEXELS` texels each: texture coordinates where a mesh has them (zero where
+/// not), and vertex normals where it has them (flagged flat where not); one zeroed texel if no mesh has
+/// either.
+fn triangle_texels(scene: &Scene, triangles: &[Triangle]) -> Vec<[u32; 4]> {
+    if scene.meshes.iter().all(|m| m.uvs.is_none() && m.normals.is_none()) {
+        return vec![[0; 4]];
     }
-    let by_source: Vec<[glam::Vec2; 3]> = scene
+    let by_source: Vec<([glam::Vec2; 3], Option<[Vec3; 3]>)> = scene
         .meshes
         .iter()
         .flat_map(|m| {
-            m.indices.iter().map(move |t| match &m.uvs {
-                Some(uv) => t.map(|i| uv[i as usize]),
-                None => [glam::Vec2::ZERO; 3],
+            m.indices.iter().map(move |t| {
+                let uv = m
+                    .uvs
+                    .as_ref()
+                    .map_or([glam::Vec2::ZERO; 3], |uv| t.map(|i| uv[i as usize]));
+                (uv, m.normals.as_ref().map(|n| t.map(|i| n[i as usize])))
             })
         })
         .collect();
+    let bits = |x: f32| x.to_bits();
+    let oct = crate::reference::trace::oct_encode;
     triangles
         .iter()
         .flat_map(|t| {
-            let [a, b, c] = by_source[t.source as usize];
-            [[a.x, a.y, b.x, b.y], [c.x, c.y, 0.0, 0.0]]
+            let ([a, b, c], normals) = by_source[t.source as usize];
+            let n = match normals {
+                Some(n) => [oct(n[0]), oct(n[1]), oct(n[2]), 1],
+                None => [0; 4],
+            };
+            [
+                [bits(a.x), bits(a.y), bits(b.x), bits(b.y)],
+                [bits(c.x), bits(c.y), 0, 0],
+                n,
+            ]
         })
         .collect()
 }
@@ -410,10 +427,10 @@ impl GpuScene {
             && !built.triangles.is_empty()
             && built.triangles.len() <= settings.max_inline_triangles as usize
             && spheres.len() + quads.len() <= MAX_INLINE_PRIMITIVES;
-        let triangle_uvs = triangle_uv_texels(scene, &built.triangles);
+        let triangle_texels = triangle_texels(scene, &built.triangles);
         let mut g = GpuScene {
             textures,
-            triangle_uvs,
+            triangle_texels,
             triangles_inline,
             params,
             materials,
@@ -455,6 +472,13 @@ impl GpuScene {
     /// Whether the tracing kernels traverse the BVH (the scene has triangles, not written out).
     pub fn traverses_bvh(&self) -> bool {
         self.params.num_triangles > 0 && !self.triangles_inline
+    }
+
+    /// Whether any triangle is smooth-shaded (has vertex normals): the kernels then read shading normals
+    /// and weigh photons by Veach's correction (shading.glsl).
+    pub fn smooth_shading(&self) -> bool {
+        let stride = layout::TRIANGLE_TEXELS as usize;
+        self.triangle_texels.len() >= stride && self.triangle_texels.chunks_exact(stride).any(|t| t[2][3] != 0)
     }
 
     /// Device bytes of the BVH's nodes and triangles.

@@ -126,9 +126,10 @@ pub struct Renderer {
     lights: Buffer,
     bvh_nodes: Buffer,
     bvh_triangles: Buffer,
-    /// The textures and the triangles' texture coordinates, as texels (texture.glsl).
+    /// The textures, and the triangles' texture coordinates and vertex normals, as texels (texture.glsl,
+    /// shading.glsl).
     textures: Buffer,
-    triangle_uvs: Buffer,
+    triangle_texels: Buffer,
     /// `PathCounters`: paths cut at the depth backstops, over the whole render.
     cut: Buffer,
     limits: PathLimits,
@@ -442,7 +443,7 @@ impl Renderer {
             ("the BVH", bvh_bytes),
             (
                 "the textures",
-                (gpu.textures.len() * 16 + gpu.triangle_uvs.len() * 16) as u64,
+                (gpu.textures.len() * 16 + gpu.triangle_texels.len() * 16) as u64,
             ),
             ("the suspended photons", suspended_bytes),
         ];
@@ -451,7 +452,10 @@ impl Renderer {
         let max_texels = ctx.limits().max_texel_buffer_elements as u64;
         for (what, texels) in [
             ("the textures", gpu.textures.len()),
-            ("the triangles' texture coordinates", gpu.triangle_uvs.len()),
+            (
+                "the triangles' texture coordinates and normals",
+                gpu.triangle_texels.len(),
+            ),
         ] {
             if texels as u64 > max_texels {
                 return Err(Error::limit(
@@ -481,7 +485,7 @@ impl Renderer {
                 photon: traced(&reflected::PHOTON)?,
                 photon_resume: pipeline(ctx, &reflected::PHOTON_RESUME)?,
                 lookup: Lookup::new(ctx)?,
-                gather: gather::with_variant(ctx, &reflected::GATHER, group, glossy)?,
+                gather: gather::with_variant(ctx, &reflected::GATHER, group, glossy, gpu.smooth_shading())?,
                 update: pipeline(ctx, &reflected::UPDATE)?,
                 resolve: pipeline(ctx, &reflected::RESOLVE)?,
             })
@@ -509,7 +513,7 @@ impl Renderer {
                     false => ctx.buffer_from("BVH triangles", &gpu.bvh_triangles)?,
                 },
                 textures: ctx.buffer_from("textures", &gpu.textures)?,
-                triangle_uvs: ctx.buffer_from("triangle texture coordinates", &gpu.triangle_uvs)?,
+                triangle_texels: ctx.buffer_from("triangle texture coordinates and normals", &gpu.triangle_texels)?,
                 cut: ctx.buffer_from("path counters", &[PathCounters::default()])?,
                 limits,
                 hit_points: storage("hit points", slots * std::mem::size_of::<HitPoint>() as u64)?,
@@ -674,7 +678,7 @@ impl Renderer {
             bvh_nodes: &self.bvh_nodes,
             bvh_triangles: &self.bvh_triangles,
             textures: &self.textures,
-            triangle_uvs: &self.triangle_uvs,
+            triangle_texels: &self.triangle_texels,
         }
     }
 
@@ -1283,7 +1287,7 @@ impl Renderer {
         // The intersections the variant traces, from a build of it that counts them (untimed).
         let count = |r: &Self, defines: &[(&str, &str)]| -> anyhow::Result<u64> {
             dispatch(r, &variant(r, &[defines, &[("PHOTON_COUNT_STEPS", "1")]].concat())?)?;
-            Ok(r.ctx.download_prefix::<PathCounters>(&r.cut, 1)?[0].pad0 as u64)
+            Ok(r.ctx.download_prefix::<PathCounters>(&r.cut, 1)?[0].capped as u64)
         };
         let full_steps = count(self, &[])?;
         // Trace-only paths as long as the real ones on average, so both amortise a path's start alike.
@@ -1504,6 +1508,7 @@ fn tracing_pipeline(
             surfaces: gpu.materials.iter().fold(0, |bits, m| bits | 1 << m.surface),
             textures: gpu.materials.iter().any(|m| m.texture != 0),
             rough_plastics: gpu.materials.iter().any(|m| m.table != 0),
+            shading_normals: gpu.smooth_shading(),
         });
         let defines = [&[("SCENE_CONSTANTS", "1")][..], defines].concat();
         pipeline_from(ctx, k, &specialize::compile_with(k, &defines, &constants)?)

@@ -47,19 +47,22 @@ pub const GROUP: u32 = 2;
 
 /// A kernel that reads the photon grid (gather or probe) compiled to take `group` hit points per thread.
 pub fn with_group(ctx: &ppm_vk_device::Context, k: &crate::reflected::KernelInfo, group: u32) -> Result<GridReader> {
-    with_variant(ctx, k, group, true)
+    with_variant(ctx, k, group, true, true)
 }
 
 /// The same, and for the gather whether it evaluates the BRDFs of glossy hit points (`GLOSSY_HITS` in
-/// gather.comp; the kernel as built does): a scene without them gets a gather without that code.
+/// gather.comp) and whether a photon may carry more than a light gives one (`WIDE_FLUX`: smooth shading,
+/// shading.glsl); the kernel as built does both, and a scene that needs neither gets a gather without them.
 pub fn with_variant(
     ctx: &ppm_vk_device::Context,
     k: &crate::reflected::KernelInfo,
     group: u32,
     glossy: bool,
+    wide: bool,
 ) -> Result<GridReader> {
-    let pipeline = match (group, glossy) {
-        (GROUP, true) => crate::pipeline(ctx, k)?,
+    let flag = |on: bool| if on { "1" } else { "0" };
+    let pipeline = match (group, glossy, wide) {
+        (GROUP, true, true) => crate::pipeline(ctx, k)?,
         _ => crate::pipeline_from(
             ctx,
             k,
@@ -67,7 +70,8 @@ pub fn with_variant(
                 k,
                 &[
                     ("GROUP_SIZE", &group.to_string()),
-                    ("GLOSSY_HITS", if glossy { "1" } else { "0" }),
+                    ("GLOSSY_HITS", flag(glossy)),
+                    ("WIDE_FLUX", flag(wide)),
                 ],
                 "",
             )?,

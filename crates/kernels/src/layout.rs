@@ -73,6 +73,13 @@ pub const WRAP_MIRROR: u32 = 1;
 pub const WRAP_CLAMP: u32 = 2;
 /// Texels of a texture's header, before a bitmap's pixels.
 pub const TEXTURE_HEADER: u32 = 5;
+/// Texels per triangle in the triangles' shading buffer: texture coordinates (two), vertex normals (one).
+pub const TRIANGLE_TEXELS: u32 = 3;
+/// The most a photon may carry at a smooth-shaded surface, in fixed-point units of the gather's sums
+/// (2^46, `RenderParams::flux_fixed` per unit of flux: 2^16 times the most any light gives a photon).
+/// Veach's correction for shading normals can raise a photon's flux without bound (shading.glsl); the
+/// rare photon past this is held at it and counted (`PathCounters::capped`).
+pub const FLUX_CAP_FIXED: f64 = 70368744177664.0;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -299,13 +306,15 @@ pub struct PathCounters {
     pub eye_paths: u32,
     /// Paths whose BVH traversal ran out of the loop budget: the renderer stops with an error.
     pub traversal_cut: u32,
-    pub pad0: u32,
+    /// Photons whose flux reached `FLUX_CAP_FIXED` at a smooth-shaded surface (held there: a loss the
+    /// renderer reports). The bench's step-counting build of photon.comp counts intersections here instead.
+    pub capped: u32,
 }
 gpu_struct!(PathCounters {
     photon_paths,
     eye_paths,
     traversal_cut,
-    pad0
+    capped
 });
 
 /// A photon batch's work counters in a BVH scene (photon.comp, photon_resume.comp).

@@ -45,9 +45,10 @@ pub struct SceneBuffers<'a> {
     /// The triangle BVH (`BvhNode`, `Triangle`); one empty leaf without meshes.
     pub bvh_nodes: &'a Buffer,
     pub bvh_triangles: &'a Buffer,
-    /// The textures and the triangles' texture coordinates (texture.glsl); a zeroed texel each without.
+    /// The textures (texture.glsl) and the triangles' texture coordinates and vertex normals (shading.glsl);
+    /// a zeroed texel each without.
     pub textures: &'a Buffer,
-    pub triangle_uvs: &'a Buffer,
+    pub triangle_texels: &'a Buffer,
 }
 
 impl SceneBuffers<'_> {
@@ -61,7 +62,7 @@ impl SceneBuffers<'_> {
             self.bvh_nodes,
             self.bvh_triangles,
             self.textures,
-            self.triangle_uvs,
+            self.triangle_texels,
         ]
     }
 }

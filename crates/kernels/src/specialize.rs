@@ -38,6 +38,8 @@ pub struct SceneConstants<'a> {
     pub textures: bool,
     /// Whether any plastic is rough (Material::table): without one the plastics' code leaves it out.
     pub rough_plastics: bool,
+    /// Whether any mesh has vertex normals (shading.glsl): without one no shading normal is read.
+    pub shading_normals: bool,
 }
 
 /// An f32 written so GLSL reads back exactly the same bits: nine significant digits name an f32 uniquely
@@ -86,6 +88,7 @@ pub fn scene_constants(c: &SceneConstants) -> String {
     );
     s += &format!("const bool SCENE_TEXTURES = {};\n", c.textures);
     s += &format!("const bool SCENE_ROUGH_PLASTICS = {};\n", c.rough_plastics);
+    s += &format!("const bool SCENE_SHADING_NORMALS = {};\n", c.shading_normals);
     s += &format!(
         "const uint NUM_INLINE_TRIANGLES = {}u;\nconst bool SCENE_BVH = {};\n",
         inline.len(),

@@ -9,6 +9,7 @@ pub mod plastic;
 pub mod rng;
 pub mod rough_conductor;
 pub mod rough_dielectric;
+pub mod shading;
 pub mod texture;
 pub mod thin_dielectric;
 pub mod trace;
@@ -90,11 +91,13 @@ pub fn emitter_point(e: &Emitter, mut a: f32, mut b: f32) -> Vec3 {
 /// ray.comp's `direct_light`: term (d) at diffuse point p, one light sample with its shadow ray;
 /// `coat`: p is that plastic's base under its coat.
 /// `rough`: p is a glossy hit point on that rough conductor, seen from the direction given (albedo: its
-/// specular_reflectance).
+/// specular_reflectance). `nf` is the shading normal, `ng` the true surface's on its side.
+#[allow(clippy::too_many_arguments)]
 fn direct_light(
     g: &GpuScene,
     p: Vec3,
     nf: Vec3,
+    ng: Vec3,
     albedo: Vec3,
     coat: Option<&Material>,
     rough: Option<(&Material, Vec3)>,
@@ -111,7 +114,7 @@ fn direct_light(
     w /= d;
     let cos_p = nf.dot(w);
     let cos_y = -e.normal.dot(w);
-    if cos_p <= 0.0 || cos_y <= 0.0 || d2 <= 0.0 {
+    if cos_p <= 0.0 || cos_y <= 0.0 || d2 <= 0.0 || !shading::valid(w, ng, nf) {
         return Vec3::ZERO;
     }
     if intersect_scene(g, o, w, 0.0, d).is_some() {
@@ -190,18 +193,28 @@ fn emission_sample(
     let mut thr = Vec3::ONE;
     // Term (d) at the plastics passed on the way.
     let mut sum = Vec3::ZERO;
+    // The last vertex's normals, which d must lie on the same side of (shading.glsl).
+    let (mut vng, mut vns) = (d, d);
     for _ in 0..g.params.max_eye_depth {
+        if !shading::valid(d, vng, vns) {
+            return sum;
+        }
         let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
             return sum;
         };
         let m = &texture::apply(g, &g.materials[h.material as usize], h.uv);
         let front = d.dot(h.normal) < 0.0;
-        let nf = if front { h.normal } else { -h.normal };
+        let ng = if front { h.normal } else { -h.normal };
+        let nf = shading::normal(&h, ng);
+        if !shading::valid(d, ng, nf) {
+            return sum;
+        }
+        (vng, vns) = (ng, nf);
         if m.surface == SURFACE_DIFFUSE {
             let mut e = if front { thr * v3(m.emission) } else { Vec3::ZERO };
             *seen |= e.max_element() > 0.0;
             if g.params.direct_light != 0 {
-                let l = direct_light(g, h.pos, nf, v3(m.color), None, None, rng);
+                let l = direct_light(g, h.pos, nf, ng, v3(m.color), None, None, rng);
                 *lit |= l.max_element() > 0.0;
                 e += thr * l;
             }
@@ -211,7 +224,7 @@ fn emission_sample(
             // A glossy hit point's vertex: its term (d), and the path ends.
             let mut e = Vec3::ZERO;
             if g.params.direct_light != 0 {
-                let l = direct_light(g, h.pos, nf, v3(m.color), None, Some((m, -d)), rng);
+                let l = direct_light(g, h.pos, nf, ng, v3(m.color), None, Some((m, -d)), rng);
                 *lit |= l.max_element() > 0.0;
                 e = thr * l;
             }
@@ -227,7 +240,7 @@ fn emission_sample(
             // Both lobes: the base's term (d) here, the path on along the coat.
             let (coat_d, spec, diff) = plastic::plastic_lobes(g, m, nf, rng, d);
             if g.params.direct_light != 0 {
-                let l = direct_light(g, h.pos, nf, diff, Some(m), None, rng);
+                let l = direct_light(g, h.pos, nf, ng, diff, Some(m), None, rng);
                 *lit |= l.max_element() > 0.0;
                 sum += thr * l;
             }
@@ -252,7 +265,10 @@ fn emission_sample(
         }
         (o, d) = glass_branch(g, h.pos, nf, front, m.ior, rng.float(), d);
     }
-    *cut += 1;
+    // Past the backstop, a direction the last vertex refuses ends the path there, uncounted (ray.comp).
+    if shading::valid(d, vng, vns) {
+        *cut += 1;
+    }
     sum
 }
 
@@ -345,7 +361,12 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
             // A fixed point of the pixel counts only when no random sample does (ray.comp).
             let hit_is_sample = push.jitter[0] < 0.0 || push.emission_samples == 0;
             while let Some((mut o, mut d, mut thr, mut depth)) = stack.pop() {
+                // The last vertex's normals (shading.glsl); a branch is stacked only where d suits them.
+                let (mut vng, mut vns) = (d, d);
                 loop {
+                    if !shading::valid(d, vng, vns) {
+                        break;
+                    }
                     if depth >= p.max_eye_depth {
                         out.cut += 1;
                         break;
@@ -355,7 +376,12 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                     };
                     let m = &texture::apply(g, &g.materials[h.material as usize], h.uv);
                     let front = d.dot(h.normal) < 0.0;
-                    let nf = if front { h.normal } else { -h.normal };
+                    let ng = if front { h.normal } else { -h.normal };
+                    let nf = shading::normal(&h, ng);
+                    if !shading::valid(d, ng, nf) {
+                        break;
+                    }
+                    (vng, vns) = (ng, nf);
                     let diffuse = m.surface == SURFACE_DIFFUSE;
                     if diffuse || m.surface == SURFACE_PLASTIC {
                         // ray.comp: a diffuse surface, or a plastic's base and coat (both lobes while
@@ -386,7 +412,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         if on_base {
                             if p.direct_light != 0 && hit_is_sample {
                                 let coat = (!diffuse).then_some(m);
-                                hit_emitted += thr * direct_light(g, h.pos, nf, diff, coat, None, &mut rng);
+                                hit_emitted += thr * direct_light(g, h.pos, nf, ng, diff, coat, None, &mut rng);
                             }
                             if diff.max_element() > 0.0 && slot < slots {
                                 out.hits[base + slot] = HitPoint {
@@ -416,7 +442,8 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                             break;
                         }
                         if p.direct_light != 0 && hit_is_sample {
-                            hit_emitted += thr * direct_light(g, h.pos, nf, v3(m.color), None, Some((m, wo)), &mut rng);
+                            hit_emitted +=
+                                thr * direct_light(g, h.pos, nf, ng, v3(m.color), None, Some((m, wo)), &mut rng);
                         }
                         if slot < slots {
                             out.hits[base + slot] = HitPoint {
@@ -443,12 +470,10 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                     if m.surface == SURFACE_THIN {
                         let rr = thin_dielectric::reflectance(-d.dot(nf), m.ior);
                         if rr < 1.0 && slot + stack.len() + 1 < slots {
-                            stack.push((
-                                offset_ray(g, h.pos, nf),
-                                reflect(d, nf),
-                                thr * (rr * v3(m.color)),
-                                depth,
-                            ));
+                            let refl = reflect(d, nf);
+                            if shading::valid(refl, ng, nf) {
+                                stack.push((offset_ray(g, h.pos, nf), refl, thr * (rr * v3(m.color)), depth));
+                            }
                             thr *= (1.0 - rr) * v3(m.lobe_a);
                             o = offset_ray(g, h.pos, -nf);
                         } else {
@@ -473,7 +498,9 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         d = refl;
                         o = offset_ray(g, h.pos, nf);
                     } else if slot + stack.len() + 1 < slots {
-                        stack.push((offset_ray(g, h.pos, nf), refl, thr * f, depth));
+                        if shading::valid(refl, ng, nf) {
+                            stack.push((offset_ray(g, h.pos, nf), refl, thr * f, depth));
+                        }
                         thr *= 1.0 - f;
                         d = refr;
                         o = offset_ray(g, h.pos, -nf);
@@ -545,13 +572,23 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
     let u2 = rng.float();
     let mut d = cosine_direction(e.normal, u1, u2);
     let mut flux = e.flux;
+    // photon.comp's `capped`, without its count.
+    let cap = |f: Vec3| shading::capped(f, p.flux_fixed).0;
     for depth in 1..=p.max_photon_depth {
         let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
             return true;
         };
         let m = &texture::apply(g, &g.materials[h.material as usize], h.uv);
         let front = d.dot(h.normal) < 0.0;
-        let nf = if front { h.normal } else { -h.normal };
+        let ng = if front { h.normal } else { -h.normal };
+        let nf = shading::normal(&h, ng);
+        // Veach's correction (shading.glsl): shading_in here, shading_out on leaving but after a diffuse
+        // bounce (drawn about ng); exactly 1 on a flat surface.
+        if !shading::valid(d, ng, nf) {
+            return true;
+        }
+        flux = cap(flux * shading::factor_in(-d, ng, nf));
+        let mut leave = true;
         if (p.direct_light == 0 || depth > 1) && glossy_hit(g, m) {
             // photon.comp: a record on a glossy hit point's surface; its lobe sampled below.
             out.push(Photon {
@@ -582,8 +619,9 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             flux *= c / pr;
             let v1 = rng.float();
             let v2 = rng.float();
-            d = cosine_direction(nf, v1, v2);
-            o = offset_ray(g, h.pos, nf);
+            d = cosine_direction(ng, v1, v2);
+            o = offset_ray(g, h.pos, ng);
+            leave = false;
         } else if conductor::is_reflector(m.surface) {
             flux *= conductor::reflector_weight(m, -d.dot(nf));
             d = reflect(d, nf);
@@ -616,6 +654,12 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             }
         } else {
             (o, d) = glass_branch(g, h.pos, nf, front, m.ior, rng.float(), d);
+        }
+        if !shading::valid(d, ng, nf) {
+            return true;
+        }
+        if leave {
+            flux = cap(flux * shading::factor_out(d, ng, nf));
         }
     }
     false

@@ -16,6 +16,9 @@ pub struct Hit {
     pub material: u32,
     /// Texture coordinates (texture.glsl's `surface_uv`).
     pub uv: Vec2,
+    /// A smooth-shaded triangle's interpolated vertex normal, not yet turned to any side and `None` where
+    /// the vertex normals cancel (shading.glsl's `shading_normal`; `super::shading::normal` turns it).
+    pub smooth: Option<Vec3>,
 }
 
 pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
@@ -93,6 +96,7 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
                 normal,
                 material: s.material,
                 uv: Vec2::new(phi * (0.5 / PI), normal.z.clamp(-1.0, 1.0).acos() * (1.0 / PI)),
+                smooth: None,
             }
         }
         1 => Hit {
@@ -100,24 +104,35 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
             normal: v3(g.quads[i].normal),
             material: g.quads[i].material,
             uv: local,
+            smooth: None,
         },
         _ => {
             let t = &g.bvh_triangles[i];
             // Interpolated from the vertices' (texture.glsl's surface_uv); zero where no mesh has them.
-            let uv = match g.triangle_uvs.get(2 * i + 1) {
-                Some(c) => {
-                    let a = g.triangle_uvs[2 * i];
-                    (1.0 - local.x - local.y) * Vec2::new(a[0], a[1])
-                        + local.x * Vec2::new(a[2], a[3])
-                        + local.y * Vec2::new(c[0], c[1])
+            let stride = ppm_vk_kernels::layout::TRIANGLE_TEXELS as usize;
+            let texels = g.triangle_texels.get(stride * i..stride * (i + 1));
+            let f = |b: u32| f32::from_bits(b);
+            let w = [1.0 - local.x - local.y, local.x, local.y];
+            let uv = match texels {
+                Some(t) => {
+                    w[0] * Vec2::new(f(t[0][0]), f(t[0][1]))
+                        + w[1] * Vec2::new(f(t[0][2]), f(t[0][3]))
+                        + w[2] * Vec2::new(f(t[1][0]), f(t[1][1]))
                 }
                 None => Vec2::ZERO,
             };
+            // The vertex normals interpolated (shading.glsl's shading_normal).
+            let smooth = texels.filter(|t| t[2][3] != 0).and_then(|t| {
+                let n = w[0] * oct_decode(t[2][0]) + w[1] * oct_decode(t[2][1]) + w[2] * oct_decode(t[2][2]);
+                let l = n.dot(n);
+                (l > 0.0).then(|| n * (1.0 / l.sqrt()))
+            });
             Hit {
                 pos,
                 normal: super::bvh::normal(t),
                 material: t.material,
                 uv,
+                smooth,
             }
         }
     })

@@ -57,6 +57,11 @@ pub const FILES: &[DemoFile] = &[
         make: furnace_sphere_mtl,
     },
     DemoFile {
+        name: "smooth-sphere.obj",
+        committed: true,
+        make: smooth_sphere_obj,
+    },
+    DemoFile {
         name: "glass-sphere.obj",
         committed: false,
         make: glass_sphere_obj,
@@ -423,6 +428,12 @@ fn furnace_sphere_mtl() -> String {
         "{STAMP}\n# albedo 0.5, emission 1: inside, L = Le / (1 - rho) = 2 everywhere\n\
          newmtl grey\nKd 0.5 0.5 0.5\nKe 1 1 1\n"
     )
+}
+
+/// Level 2: 320 triangles, unit radius at the origin, with the sphere's normals, no MTL: a coarse mesh
+/// that smooth shading makes round (`scenes/cornell-smooth.toml`).
+fn smooth_sphere_obj() -> String {
+    sphere_model(2, false, None, "sphere").write(None)
 }
 
 /// Level 5: 20480 triangles, unit radius at the origin, no MTL (the scene gives the material).

@@ -1413,8 +1413,11 @@ impl Builder {
                     m.indices.iter_mut().for_each(|t| t.swap(1, 2));
                     m.normals.iter_mut().flatten().for_each(|n| *n = -*n);
                 }
-                if props.boolean("face_normals")? {
-                    m.normals = None;
+                // As Mitsuba: flat where asked, else the file's vertex normals or its own.
+                match props.boolean("face_normals")? {
+                    true => m.normals = None,
+                    false if m.normals.is_none() => m.compute_vertex_normals(),
+                    false => {}
                 }
                 closed(m)
             }
@@ -1434,7 +1437,11 @@ impl Builder {
                     )));
                 }
                 let i = self.mesh(e, raw, &to_world, flip)?;
-                closed(&self.scene.meshes[i])
+                let m = &mut self.scene.meshes[i];
+                if !face_normals && m.normals.is_none() {
+                    m.compute_vertex_normals();
+                }
+                closed(m)
             }
             _ => return Err(e.err("unsupported shape (read: rectangle, cube, disk, sphere, obj, ply)")),
         };
@@ -2209,6 +2216,34 @@ mod tests {
                 "{format}: the normals are read"
             );
         }
+    }
+
+    /// A mesh without normals gets Mitsuba's own (angle-weighted: its `recompute_vertex_normals`), unless
+    /// `face_normals` asks for flat shading. The expected normals are Mitsuba 3.9's for this file
+    /// (`mi.load_dict({'type': 'obj', ...}).vertex_normal(i)`, scalar_rgb).
+    #[test]
+    fn meshes_without_normals_get_mitsubas_vertex_normals() {
+        let dir = TempDir::new("mitsuba-normals");
+        dir.write("fold.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0.5\nf 1 2 3\nf 2 4 3\n");
+        let shape = |face_normals: &str| {
+            format!(
+                r#"<shape type="obj"><string name="filename" value="fold.obj"/>
+                   <boolean name="face_normals" value="{face_normals}"/><bsdf type="diffuse"/></shape>"#
+            )
+        };
+        let s = load_in(&dir, &shape("false"), &[]).unwrap();
+        let normals = s.meshes[0].normals.as_ref().expect("computed normals");
+        let mitsuba = [
+            Vec3::Z,
+            Vec3::new(-0.227046, -0.227046, 0.947048),
+            Vec3::new(-0.227046, -0.227046, 0.947048),
+            Vec3::new(-0.408248, -0.408248, 0.816497),
+        ];
+        // Our loader keeps the file's vertex order for a mesh of positions only.
+        for (i, (n, want)) in normals.iter().zip(mitsuba).enumerate() {
+            assert!(n.distance(want) < 1e-5, "vertex {i}: {n} against Mitsuba's {want}");
+        }
+        assert!(load_in(&dir, &shape("true"), &[]).unwrap().meshes[0].normals.is_none());
     }
 
     #[test]

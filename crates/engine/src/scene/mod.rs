@@ -255,6 +255,38 @@ impl Triangle {
 }
 
 impl Mesh {
+    /// Vertex normals where the file gave none, as Mitsuba 3 makes them (`Mesh::recompute_vertex_normals`):
+    /// each triangle's normal, weighted by its angle at the vertex (Thuermer and Wuethrich 1998), summed
+    /// and normalised. Degenerate triangles add nothing; a vertex whose sum vanishes takes the normal of
+    /// the first triangle at it that has one.
+    pub fn compute_vertex_normals(&mut self) {
+        let mut sum = vec![glam::DVec3::ZERO; self.positions.len()];
+        let mut first = vec![None; self.positions.len()];
+        for t in &self.indices {
+            let p = t.map(|i| self.positions[i as usize].as_dvec3());
+            let Some(n) = (p[1] - p[0]).cross(p[2] - p[0]).try_normalize() else {
+                continue;
+            };
+            for k in 0..3 {
+                let (Some(a), Some(b)) = (
+                    (p[(k + 1) % 3] - p[k]).try_normalize(),
+                    (p[(k + 2) % 3] - p[k]).try_normalize(),
+                ) else {
+                    continue;
+                };
+                let v = t[k] as usize;
+                sum[v] += n * a.dot(b).clamp(-1.0, 1.0).acos();
+                first[v].get_or_insert(n);
+            }
+        }
+        let normals = sum
+            .iter()
+            .zip(&first)
+            .map(|(s, f)| s.try_normalize().or(*f).unwrap_or(glam::DVec3::Z).as_vec3())
+            .collect();
+        self.normals = Some(normals);
+    }
+
     /// A mesh whose triangles all have one material.
     pub fn with_material(name: impl Into<String>, positions: Vec<Vec3>, indices: Vec<[u32; 3]>, material: u32) -> Mesh {
         let materials = vec![material; indices.len()];

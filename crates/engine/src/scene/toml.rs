@@ -258,6 +258,8 @@ struct RawMesh {
     scale: Option<Spanned<RawScale>>,
     matrix: Option<Spanned<[[f64; 4]; 4]>>,
     material: Option<Spanned<String>>,
+    /// Flat shading even where the OBJ gives vertex normals (Mitsuba's `face_normals`).
+    face_normals: Option<bool>,
 }
 
 #[derive(Deserialize)]
@@ -841,6 +843,11 @@ fn import_mesh(
         true,
     )
     .map_err(|e| src.error(r.file.span(), Some(&fpath), format!("{e:#}")))?;
+    if r.face_normals == Some(true) {
+        if let Some(mesh) = scene.meshes.last_mut() {
+            mesh.normals = None;
+        }
+    }
     // Imported materials are located at the mesh that brought them.
     for k in before..scene.materials.len() {
         spans.insert(format!("materials.{}", scene.materials[k].name), r.file.span());
@@ -1930,6 +1937,27 @@ material = "light"
             Scene::parse(&text, &dir.0.join("t.toml").display().to_string()).unwrap_err()
         );
         assert!(e.contains("t.toml:26:1: no emitting quad or triangle"), "{e}");
+    }
+
+    /// An OBJ's vertex normals shade it smooth; `face_normals = true` shades it flat; an OBJ without
+    /// normals stays flat (the TOML format computes none, unlike Mitsuba's reader).
+    #[test]
+    fn face_normals_shade_a_mesh_flat() {
+        let dir = TempDir::new("toml-face-normals");
+        dir.write(
+            "n.obj",
+            "mtllib a.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n",
+        );
+        dir.write(
+            "flat.obj",
+            "mtllib a.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        );
+        let smooth = with_mesh(&dir, "file = \"n.obj\"").expect("valid");
+        assert_eq!(smooth.meshes[0].normals.as_deref(), Some(&[Vec3::Z; 3][..]));
+        let flat = with_mesh(&dir, "file = \"n.obj\"\nface_normals = true").expect("valid");
+        assert_eq!(flat.meshes[0].normals, None);
+        let none = with_mesh(&dir, "file = \"flat.obj\"\nface_normals = false").expect("valid");
+        assert_eq!(none.meshes[0].normals, None);
     }
 
     #[test]
