@@ -808,6 +808,14 @@ fn render(args: RenderArgs) -> Result<Ended> {
                 last.photon_paths_cut, l.photon_depth, last.eye_paths_cut, l.eye_depth
             );
         }
+        if last.photons_capped > 0 {
+            eprintln!(
+                "warning: {} time(s) a photon's flux was held at 2^16 times a light's, where the correction for \
+                 smooth shading (light grazing a smooth-shaded mesh) would have raised it further: a loss of \
+                 at most the flux beyond that (docs/design.md, smooth shading)",
+                last.photons_capped
+            );
+        }
     }
     if let Some(reference) = reference {
         report_error(&image, &reference, &regions)?;

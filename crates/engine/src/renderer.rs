@@ -68,6 +68,10 @@ pub struct PassStats {
     pub photon_paths_cut: u64,
     /// Eye paths of the whole render so far that reached the depth backstop.
     pub eye_paths_cut: u64,
+    /// Times a photon's flux was held at the cap on Veach's correction for shading normals
+    /// (`layout::FLUX_CAP_FIXED`, shading.glsl), over the whole render so far: 0 but in rare grazing light
+    /// on smooth-shaded meshes.
+    pub photons_capped: u64,
     /// The largest search radius after this pass's update, over the hit points live in it.
     pub radius_max: f32,
     /// The photon grid's cell size for the next pass (1.5 `radius_max`, see `Renderer::fit_grid`).
@@ -1081,6 +1085,7 @@ impl Renderer {
             batches,
             photon_paths_cut: cut.photon_paths as u64,
             eye_paths_cut: cut.eye_paths as u64,
+            photons_capped: cut.capped as u64,
             radius_max: radius_max.live.sqrt(),
             cell_size: self.gpu.params.cell_size,
             wall_ms: start.elapsed().as_secs_f64() * 1e3,

@@ -51,6 +51,9 @@ pub struct PassRecord {
     pub photon_paths_cut: u64,
     #[serde(default)]
     pub eye_paths_cut: u64,
+    /// Photon fluxes held at the cap on smooth shading's correction so far (`PassStats`).
+    #[serde(default)]
+    pub photons_capped: u64,
     /// The largest live search radius after this pass, and the grid cell the next pass uses (`PassStats`).
     #[serde(default)]
     pub radius_max: f32,
@@ -97,6 +100,7 @@ impl PassRecord {
             batches: stats.batches,
             photon_paths_cut: stats.photon_paths_cut,
             eye_paths_cut: stats.eye_paths_cut,
+            photons_capped: stats.photons_capped,
             radius_max: stats.radius_max,
             cell_size: stats.cell_size,
             stage_ms,
@@ -224,6 +228,7 @@ mod tests {
             batches: 1,
             photon_paths_cut: 0,
             eye_paths_cut: 0,
+            photons_capped: 0,
             radius_max: 0.01,
             cell_size: 0.02,
             wall_ms: 12.5,
