@@ -117,6 +117,21 @@ fn cornell_smooth() -> ppm_vk_engine::Scene {
     scene
 }
 
+/// scenes/references/cornell-aniso.xml at RES x RES: an anisotropic gold sphere (GGX 0.05 along its
+/// longitude, 0.4 across) and an anisotropic rough glass mesh (Beckmann 0.05 / 0.3, tangents along each
+/// triangle's first edge, smooth-shaded): the tangent of each kind of hit and the frame made from it.
+fn cornell_aniso() -> ppm_vk_engine::Scene {
+    let xml = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/references/cornell-aniso.xml");
+    let scene = ppm_vk_engine::Scene::load_with(xml, &[("res".to_string(), RES.to_string())]).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let anisotropic = scene
+        .materials
+        .iter()
+        .filter(|m| m.surface.rough().is_some_and(|r| r.is_anisotropic()));
+    assert_eq!(anisotropic.count(), 2);
+    scene
+}
+
 fn ray_pass_matches_reference_case(specialize: bool, direct: DirectLight) {
     ray_pass_matches_reference_on(cornell(RES, RES), specialize, direct);
 }
@@ -317,6 +332,16 @@ fn ray_pass_matches_reference_with_glossy_hit_points() {
             ..settings()
         },
     );
+}
+
+#[test]
+fn ray_pass_matches_reference_with_anisotropic_surfaces() {
+    ray_pass_matches_reference_on(cornell_aniso(), true, DirectLight::Sample);
+}
+
+#[test]
+fn ray_pass_matches_reference_with_anisotropic_surfaces_unspecialized() {
+    ray_pass_matches_reference_on(cornell_aniso(), false, DirectLight::Sample);
 }
 
 #[test]
@@ -574,6 +599,13 @@ fn photon_records_match_reference_with_rough_surfaces() {
         ..settings()
     };
     photon_records_match_reference_within(cornell_rough(), settings, 1e-3, 0.993);
+}
+
+/// Anisotropic rough metal and glass: bounces in the frame of each hit's tangent; as the rough surfaces'
+/// test for the rest.
+#[test]
+fn photon_records_match_reference_with_anisotropic_surfaces() {
+    photon_records_match_reference_within(cornell_aniso(), settings(), 1e-3, 0.993);
 }
 
 /// Smooth shading: records carry |wi . ns| / |wi . ng|, bounces off the glass the whole correction, and

@@ -28,14 +28,17 @@ layout(binding = 6) uniform usamplerBuffer texture_texels;
 layout(binding = 7) uniform usamplerBuffer triangle_texels;
 
 // A kernel compiled for one scene knows whether any material has a texture (without one, the texture
-// index is not even read) and whether any mesh is smooth-shaded (shading.glsl).
+// index is not even read), whether any mesh is smooth-shaded (shading.glsl) and whether any rough
+// surface is anisotropic (geometry.glsl's surface_tangent).
 #ifdef SCENE_CONSTANTS
 #include "scene_constants.glsl"
 #define HAS_TEXTURES SCENE_TEXTURES
 #define HAS_SHADING_NORMALS SCENE_SHADING_NORMALS
+#define HAS_ANISOTROPY SCENE_ANISOTROPIC
 #else
 #define HAS_TEXTURES true
 #define HAS_SHADING_NORMALS true
+#define HAS_ANISOTROPY true
 #endif
 #include "materials.glsl"
 

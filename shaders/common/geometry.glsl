@@ -55,6 +55,8 @@ struct Hit {
     uint prim;       // a triangle's index in the BVH's leaf order
     vec2 local;      // a quad's planar coordinates (its texture coordinates), a triangle's barycentric
                      // weights of v1 and v2 (texture.glsl's surface_uv reads them)
+    vec3 dpdu;       // a quad's edge_u, a triangle's v1 - v0, where a scene has anisotropic surfaces
+                     // (surface_tangent)
 };
 
 const uint HIT_QUAD = 0u;     // hit.normal set in the loop
@@ -72,6 +74,7 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit h
     uint kind = HIT_QUAD;
     hit.local = vec2(0.0);
     hit.prim = 0u;
+    hit.dpdu = vec3(0.0);
     vec3 center = vec3(0.0);
     float inv_radius = 0.0;
     Triangle tri = Triangle(vec3(0.0), 0u, vec3(0.0), 0u, vec3(0.0), 0u);
@@ -103,6 +106,7 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit h
         hit.t = t; found = true; kind = HIT_QUAD;
         hit.normal = q.normal; hit.material = q.material;
         hit.local = vec2(a, b);
+        if (HAS_ANISOTROPY) hit.dpdu = q.edge_u;
     }
     // A small mesh's triangles, written out (specialize.rs): each tested, with the BVH's watertight test.
     if (NUM_INLINE_TRIANGLES > 0u) {
@@ -140,8 +144,23 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit h
         hit.pos = o + hit.t * d;
         if (kind == HIT_SPHERE) hit.normal = (hit.pos - center) * inv_radius;
         if (kind == HIT_TRIANGLE) hit.normal = bvh_normal(tri);
+        if (HAS_ANISOTROPY && kind == HIT_TRIANGLE) hit.dpdu = tri.v1 - tri.v0;
     }
     return found;
+}
+
+// The direction of increasing u at hit h, Mitsuba's dp/du, which an anisotropic lobe's alpha_u lies along
+// (microfacet.glsl's frame): a sphere's longitude about the world's z axis, a quad's first edge (the Mitsuba
+// reader keeps a rectangle's x axis there), a triangle's from its texture coordinates where its mesh has
+// them, else its first edge v1 - v0 (Mitsuba then parameterises it by its barycentric coordinates). Not
+// unit. Checked against Mitsuba's shading frames on each kind of shape (reference::trace's tests).
+vec3 surface_tangent(Hit h) {
+    if (h.kind == HIT_SPHERE) return vec3(-h.normal.y, h.normal.x, 0.0);
+    if (h.kind == HIT_TRIANGLE) {
+        uvec4 t = texelFetch(triangle_texels, int(TRIANGLE_TEXELS * h.prim + 1u));
+        if (t.w != 0u) return oct_decode_unnormalized(t.z);
+    }
+    return h.dpdu;
 }
 
 bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {

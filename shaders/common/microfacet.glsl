@@ -16,10 +16,24 @@ struct Microfacet {
     float av;        // alpha along the bitangent
 };
 
-// Direction d in the local frame (t, b, nf) (the distributions the readers accept are isotropic: any
-// tangent serves).
+// Direction d in the local frame (t, b, nf).
 vec3 to_local(vec3 d, vec3 t, vec3 b, vec3 nf) {
     return vec3(dot(d, t), dot(d, b), dot(d, nf));
+}
+
+// The local frame about nf: its tangent t along dpdu (made orthogonal to nf, as Mitsuba's shading frame
+// is) where a lobe is anisotropic, and the frame of nf alone (onb) where dpdu is 0 (isotropic: any tangent
+// serves) or along nf. On a surface's back side b is Mitsuba's bitangent reversed, which no lobe tells
+// apart (D and G1 are even in y).
+void frame(vec3 nf, vec3 dpdu, out vec3 t, out vec3 b) {
+    vec3 s = dpdu - nf * dot(nf, dpdu);
+    float l = dot(s, s);
+    if (l > 1e-12 * dot(dpdu, dpdu)) {
+        t = s * inversesqrt(l);
+        b = cross(nf, t);
+    } else {
+        onb(nf, t, b);
+    }
 }
 
 // Material i's distribution (the material's fifth texel; bindings.glsl's material_texels).

@@ -86,17 +86,21 @@ vec3 rough_conductor_ratio(RoughView v, vec3 wi, vec3 n) {
     return min(f * (s / v.bound), vec3(1.0));
 }
 
-// Whether eye paths leave hit points on material i (a rough conductor) rather than sample through it.
+// Whether eye paths leave hit points on material i (a rough conductor) rather than sample through it: an
+// isotropic one of roughness at least glossy_alpha (a hit point holds no tangent for an anisotropic lobe).
 bool glossy_hit(uint i) {
-    return material_microfacet(i).au >= params.glossy_alpha;
+    Microfacet mf = material_microfacet(i);
+    return mf.au >= params.glossy_alpha && mf.au == mf.av;
 }
 
 #ifndef ROUGH_EVAL_ONLY
-// One bounce off rough conductor i (`m` as material() read it) at pos: o and d become the reflected ray;
-// returns its weight, 0 where the sampled direction goes below the surface (the path ends there).
-vec3 rough_conductor_bounce(uint i, Material m, vec3 pos, vec3 nf, vec2 u, inout vec3 o, inout vec3 d) {
+// One bounce off rough conductor i (`m` as material() read it) at pos, dpdu its tangent (frame): o and d
+// become the reflected ray; returns its weight, 0 where the sampled direction goes below the surface (the
+// path ends there).
+vec3 rough_conductor_bounce(uint i, Material m, vec3 pos, vec3 nf, vec3 dpdu, vec2 u, inout vec3 o,
+                            inout vec3 d) {
     vec3 t, b;
-    onb(nf, t, b);
+    frame(nf, dpdu, t, b);
     vec3 wi = -to_local(d, t, b, nf);
     if (wi.z <= 0.0) return vec3(0.0);
     Microfacet mf = material_microfacet(i);

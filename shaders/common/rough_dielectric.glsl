@@ -18,12 +18,13 @@
 #endif
 
 // One bounce off rough dielectric i of index ior (inside over outside) at pos, arriving along d from the
-// front (outside) or not, nf facing d: o and d become the new ray; u chooses the branch, u2 the normal.
-// Returns the weight, 0 where the sampled direction leaves on the wrong side (the path ends there).
-float rough_dielectric_bounce(uint i, float ior, vec3 pos, vec3 nf, bool front, float u, vec2 u2,
+// front (outside) or not, nf facing d, dpdu its tangent (frame): o and d become the new ray; u chooses
+// the branch, u2 the normal. Returns the weight, 0 where the sampled direction leaves on the wrong side
+// (the path ends there).
+float rough_dielectric_bounce(uint i, float ior, vec3 pos, vec3 nf, vec3 dpdu, bool front, float u, vec2 u2,
                               inout vec3 o, inout vec3 d) {
     vec3 t, b;
-    onb(nf, t, b);
+    frame(nf, dpdu, t, b);
     vec3 wi = -to_local(d, t, b, nf);
     if (wi.z <= 0.0) return 0.0;
     Microfacet mf = material_microfacet(i);
@@ -46,22 +47,29 @@ float rough_dielectric_bounce(uint i, float ior, vec3 pos, vec3 nf, bool front, 
     return mf_g1(mf, wo, h);
 }
 
-// The bounce of an eye path or a photon off material i (`m` as material() read it), if it is rough: draws
-// its numbers from rng, moves the ray (o, d) on, multiplies w by the weight (0: the path ends) and
-// returns true; false for every other surface, untouched.
-bool rough_bounce(uint i, Material m, vec3 pos, vec3 nf, bool front, inout Rng rng, inout vec3 o,
+// The tangent an anisotropic rough material i needs at hit h (frame); 0 for an isotropic one.
+vec3 rough_tangent(uint i, Hit h) {
+    if (!HAS_ANISOTROPY) return vec3(0.0);
+    Microfacet mf = material_microfacet(i);
+    return mf.au != mf.av ? surface_tangent(h) : vec3(0.0);
+}
+
+// The bounce of an eye path or a photon off material i (`m` as material() read it) at hit h, if it is
+// rough: draws its numbers from rng, moves the ray (o, d) on, multiplies w by the weight (0: the path
+// ends) and returns true; false for every other surface, untouched.
+bool rough_bounce(uint i, Material m, Hit h, vec3 nf, bool front, inout Rng rng, inout vec3 o,
                   inout vec3 d, inout vec3 w) {
     if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR) {
         float u1 = rng_float(rng);
         float u2 = rng_float(rng);
-        w *= rough_conductor_bounce(i, m, pos, nf, vec2(u1, u2), o, d);
+        w *= rough_conductor_bounce(i, m, h.pos, nf, rough_tangent(i, h), vec2(u1, u2), o, d);
         return true;
     }
     if (HAS_ROUGH_GLASS && m.surface == SURFACE_ROUGH_GLASS) {
         float u = rng_float(rng);
         float u1 = rng_float(rng);
         float u2 = rng_float(rng);
-        w *= rough_dielectric_bounce(i, m.ior, pos, nf, front, u, vec2(u1, u2), o, d);
+        w *= rough_dielectric_bounce(i, m.ior, h.pos, nf, rough_tangent(i, h), front, u, vec2(u1, u2), o, d);
         return true;
     }
     return false;

@@ -274,7 +274,7 @@ void main() {
             }
         } else if (HAS_THIN && m.surface == SURFACE_THIN) {
             flux *= thin_branch(h.material, m, h.pos, nf, rng_float(rng), o, d);
-        } else if (rough_bounce(h.material, m, h.pos, nf, front, rng, o, d, flux)) {
+        } else if (rough_bounce(h.material, m, h, nf, front, rng, o, d, flux)) {
             // A rough lobe, sampled as the eye paths sample it (no record: an S vertex, ray.comp).
             if (max3(flux) <= 0.0) alive = false;
         } else {

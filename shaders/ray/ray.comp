@@ -224,7 +224,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             thr *= thin_branch(h.material, m, h.pos, nf, rng_float(rng), o, d);
             continue;
         }
-        if (rough_bounce(h.material, m, h.pos, nf, front, rng, o, d, thr)) {
+        if (rough_bounce(h.material, m, h, nf, front, rng, o, d, thr)) {
             if (max3(thr) <= 0.0) break;
             continue;
         }
@@ -346,7 +346,7 @@ void main() {
                     break;
                 }
                 r.depth++;
-                if (rough_bounce(h.material, m, h.pos, nf, front, rng, r.o, r.d, r.thr)) {
+                if (rough_bounce(h.material, m, h, nf, front, rng, r.o, r.d, r.thr)) {
                     if (max3(r.thr) <= 0.0) break;
                     continue;
                 }

@@ -28,9 +28,10 @@ pub struct GpuScene {
     /// The textures as texels (texture.glsl): one zeroed texel without textures.
     pub textures: Vec<[u32; 4]>,
     /// What shading reads of `bvh_triangles`, `layout::TRIANGLE_TEXELS` texels each (texture.glsl,
-    /// shading.glsl): texture coordinates (u0 v0 u1 v1 | u2 v2 0 0, f32 bits), then the vertex normals
-    /// (octahedral n0 n1 n2, and 1 for a smooth triangle, 0 for a flat one); one zeroed texel where no
-    /// mesh has texture coordinates or vertex normals.
+    /// shading.glsl, geometry.glsl's surface_tangent): texture coordinates (u0 v0 u1 v1 | u2 v2, f32 bits)
+    /// with dp/du from them (octahedral, then 1; 0 0 where the mesh has none or they are degenerate),
+    /// then the vertex normals (octahedral n0 n1 n2, and 1 for a smooth triangle, 0 for a flat one); one
+    /// zeroed texel where no mesh has texture coordinates or vertex normals and no surface is anisotropic.
     pub triangle_texels: Vec<[u32; 4]>,
     /// The kernels test `bvh_triangles` one by one, written into them as constants (a small mesh:
     /// `specialize::MAX_INLINE_TRIANGLES`), and never traverse the BVH.
@@ -108,23 +109,28 @@ pub fn texture_texels(textures: &[crate::scene::texture::Texture]) -> (Vec<[u32;
 }
 
 /// The shading attributes of `triangles` (leaf order; `source` indexes the scene's triangles in mesh
-/// order), `layout::TRIANGLE_TEXELS` texels each: texture coordinates where a mesh has them (zero where
-/// not), and vertex normals where it has them (flagged flat where not); one zeroed texel if no mesh has
-/// either.
+/// order), `layout::TRIANGLE_TEXELS` texels each: texture coordinates and dp/du where a mesh has them
+/// (zero where not), and vertex normals where it has them (flagged flat where not); one zeroed texel if no
+/// mesh has either and no surface is anisotropic (which reads the dp/du flag of every triangle).
 fn triangle_texels(scene: &Scene, triangles: &[Triangle]) -> Vec<[u32; 4]> {
-    if scene.meshes.iter().all(|m| m.uvs.is_none() && m.normals.is_none()) {
+    let anisotropic = scene
+        .materials
+        .iter()
+        .any(|m| m.surface.rough().is_some_and(|r| r.is_anisotropic()));
+    if scene.meshes.iter().all(|m| m.uvs.is_none() && m.normals.is_none()) && !anisotropic {
         return vec![[0; 4]];
     }
-    let by_source: Vec<([glam::Vec2; 3], Option<[Vec3; 3]>)> = scene
+    // Per triangle of the scene: texture coordinates, dp/du from them, vertex normals.
+    type Attributes = ([glam::Vec2; 3], Option<Vec3>, Option<[Vec3; 3]>);
+    let by_source: Vec<Attributes> = scene
         .meshes
         .iter()
         .flat_map(|m| {
             m.indices.iter().map(move |t| {
-                let uv = m
-                    .uvs
-                    .as_ref()
-                    .map_or([glam::Vec2::ZERO; 3], |uv| t.map(|i| uv[i as usize]));
-                (uv, m.normals.as_ref().map(|n| t.map(|i| n[i as usize])))
+                let uv = m.uvs.as_ref().map(|uv| t.map(|i| uv[i as usize]));
+                let dpdu = uv.and_then(|uv| dp_du(t.map(|i| m.positions[i as usize]), uv));
+                let normals = m.normals.as_ref().map(|n| t.map(|i| n[i as usize]));
+                (uv.unwrap_or([glam::Vec2::ZERO; 3]), dpdu, normals)
             })
         })
         .collect();
@@ -133,18 +139,33 @@ fn triangle_texels(scene: &Scene, triangles: &[Triangle]) -> Vec<[u32; 4]> {
     triangles
         .iter()
         .flat_map(|t| {
-            let ([a, b, c], normals) = by_source[t.source as usize];
+            let ([a, b, c], dpdu, normals) = by_source[t.source as usize];
             let n = match normals {
                 Some(n) => [oct(n[0]), oct(n[1]), oct(n[2]), 1],
                 None => [0; 4],
             };
+            let (tangent, has) = dpdu.map_or((0, 0), |d| (oct(d), 1));
             [
                 [bits(a.x), bits(a.y), bits(b.x), bits(b.y)],
-                [bits(c.x), bits(c.y), 0, 0],
+                [bits(c.x), bits(c.y), tangent, has],
                 n,
             ]
         })
         .collect()
+}
+
+/// Mitsuba's dp/du of a triangle with corners `p` and texture coordinates `uv` (its Mesh's
+/// compute_surface_interaction), as a unit vector; None where the coordinates are degenerate
+/// (geometry.glsl's surface_tangent then takes the triangle's first edge, as without coordinates).
+fn dp_du(p: [Vec3; 3], uv: [glam::Vec2; 3]) -> Option<Vec3> {
+    let (duv0, duv1) = ((uv[1] - uv[0]).as_dvec2(), (uv[2] - uv[0]).as_dvec2());
+    let (dp0, dp1) = ((p[1] - p[0]).as_dvec3(), (p[2] - p[0]).as_dvec3());
+    let det = duv0.x * duv1.y - duv0.y * duv1.x;
+    let d = (duv1.y * dp0 - duv0.y * dp1) / det;
+    (det != 0.0)
+        .then_some(d)
+        .and_then(|d| d.try_normalize())
+        .map(|d| d.as_vec3())
 }
 
 /// Eq. 8: r = 2 (X + Y + Z) / (3 s), X, Y, Z the extents of the scene's bounding box, s the image size
@@ -238,7 +259,7 @@ impl GpuScene {
                     lobe_b,
                     texture: m.texture.map_or(0, |t| texture_at[t as usize] + 1),
                     alpha_u: rough.map_or(0.0, |r| r.alpha),
-                    alpha_v: rough.map_or(0.0, |r| r.alpha),
+                    alpha_v: rough.map_or(0.0, |r| r.alpha_v),
                     distribution: rough.map_or(0, |r| match r.ggx {
                         true => layout::MICROFACET_GGX,
                         false => layout::MICROFACET_BECKMANN,

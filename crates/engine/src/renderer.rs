@@ -1514,6 +1514,7 @@ fn tracing_pipeline(
             textures: gpu.materials.iter().any(|m| m.texture != 0),
             rough_plastics: gpu.materials.iter().any(|m| m.table != 0),
             shading_normals: gpu.smooth_shading(),
+            anisotropic: gpu.materials.iter().any(|m| m.alpha_u != m.alpha_v),
         });
         let defines = [&[("SCENE_CONSTANTS", "1")][..], defines].concat();
         pipeline_from(ctx, k, &specialize::compile_with(k, &defines, &constants)?)

@@ -40,6 +40,9 @@ pub struct SceneConstants<'a> {
     pub rough_plastics: bool,
     /// Whether any mesh has vertex normals (shading.glsl): without one no shading normal is read.
     pub shading_normals: bool,
+    /// Whether any rough surface is anisotropic (geometry.glsl's surface_tangent): without one no
+    /// tangent is taken.
+    pub anisotropic: bool,
 }
 
 /// An f32 written so GLSL reads back exactly the same bits: nine significant digits name an f32 uniquely
@@ -89,6 +92,7 @@ pub fn scene_constants(c: &SceneConstants) -> String {
     s += &format!("const bool SCENE_TEXTURES = {};\n", c.textures);
     s += &format!("const bool SCENE_ROUGH_PLASTICS = {};\n", c.rough_plastics);
     s += &format!("const bool SCENE_SHADING_NORMALS = {};\n", c.shading_normals);
+    s += &format!("const bool SCENE_ANISOTROPIC = {};\n", c.anisotropic);
     s += &format!(
         "const uint NUM_INLINE_TRIANGLES = {}u;\nconst bool SCENE_BVH = {};\n",
         inline.len(),

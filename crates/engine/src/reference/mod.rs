@@ -136,30 +136,31 @@ fn direct_light(
 
 /// rough_conductor.glsl's `glossy_hit`: a rough conductor of roughness at least `glossy_alpha`.
 fn glossy_hit(g: &GpuScene, m: &Material) -> bool {
-    m.surface == SURFACE_ROUGH_CONDUCTOR && m.alpha_u >= g.params.glossy_alpha
+    m.surface == SURFACE_ROUGH_CONDUCTOR && m.alpha_u >= g.params.glossy_alpha && m.alpha_u == m.alpha_v
 }
 
-/// rough_dielectric.glsl's `rough_bounce`: for a rough conductor or rough glass, the new origin,
+/// rough_dielectric.glsl's `rough_bounce` at hit `h`: for a rough conductor or rough glass, the new origin,
 /// direction and weight (zero: the path ends), its numbers drawn from `rng` in the kernel's order; None
-/// for every other surface.
+/// for every other surface. An anisotropic lobe lies along the hit's dp/du (`rough_tangent`).
 fn rough_bounce(
     g: &GpuScene,
     m: &Material,
-    pos: Vec3,
+    h: &trace::Hit,
     nf: Vec3,
     front: bool,
     rng: &mut Rng,
     d: Vec3,
 ) -> Option<(Vec3, Vec3, Vec3)> {
+    let (pos, dpdu) = (h.pos, if m.alpha_u != m.alpha_v { h.dpdu } else { Vec3::ZERO });
     match m.surface {
         SURFACE_ROUGH_CONDUCTOR => {
             let u = Vec2::new(rng.float(), rng.float());
-            Some(rough_conductor::bounce(g, m, pos, nf, u, d))
+            Some(rough_conductor::bounce(g, m, pos, nf, dpdu, u, d))
         }
         SURFACE_ROUGH_GLASS => {
             let u = rng.float();
             let u2 = Vec2::new(rng.float(), rng.float());
-            let (o, d, w) = rough_dielectric::bounce(g, m, pos, nf, front, u, u2, d);
+            let (o, d, w) = rough_dielectric::bounce(g, m, pos, nf, dpdu, front, u, u2, d);
             Some((o, d, Vec3::splat(w)))
         }
         _ => None,
@@ -255,7 +256,7 @@ fn emission_sample(
             thr *= w;
             continue;
         }
-        if let Some((o2, d2, w)) = rough_bounce(g, m, h.pos, nf, front, rng, d) {
+        if let Some((o2, d2, w)) = rough_bounce(g, m, &h, nf, front, rng, d) {
             (o, d) = (o2, d2);
             thr *= w;
             if thr.max_element() <= 0.0 {
@@ -459,7 +460,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         break;
                     }
                     depth += 1;
-                    if let Some((o2, d2, w)) = rough_bounce(g, m, h.pos, nf, front, &mut rng, d) {
+                    if let Some((o2, d2, w)) = rough_bounce(g, m, &h, nf, front, &mut rng, d) {
                         (o, d) = (o2, d2);
                         thr *= w;
                         if thr.max_element() <= 0.0 {
@@ -646,7 +647,7 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             let w;
             (o, d, w) = thin_dielectric::branch(g, m, h.pos, nf, rng.float(), d);
             flux *= w;
-        } else if let Some((o2, d2, w)) = rough_bounce(g, m, h.pos, nf, front, &mut rng, d) {
+        } else if let Some((o2, d2, w)) = rough_bounce(g, m, &h, nf, front, &mut rng, d) {
             (o, d) = (o2, d2);
             flux *= w;
             if flux.max_element() <= 0.0 {

@@ -10,7 +10,7 @@ use ppm_vk_kernels::layout::Material;
 
 use super::conductor::fresnel_conductor;
 use super::microfacet::Microfacet;
-use super::trace::{offset_ray, onb, reflect, v3, PI};
+use super::trace::{frame, offset_ray, onb, reflect, v3, PI};
 use crate::gpu_scene::GpuScene;
 
 /// `d` in the local frame (t, b, nf).
@@ -101,8 +101,9 @@ pub fn ratio(m: &Material, wi: Vec3, wo: Vec3, n: Vec3) -> Vec3 {
 
 /// rough_conductor.glsl's `rough_conductor_bounce`: the new origin, direction and weight of a path
 /// arriving along `d` at `pos` (`nf` facing it); a zero weight ends the path.
-pub fn bounce(g: &GpuScene, m: &Material, pos: Vec3, nf: Vec3, u: Vec2, d: Vec3) -> (Vec3, Vec3, Vec3) {
-    let (t, b) = onb(nf);
+/// One bounce at `pos` (rough_conductor.glsl's rough_conductor_bounce); `dpdu` the tangent (frame).
+pub fn bounce(g: &GpuScene, m: &Material, pos: Vec3, nf: Vec3, dpdu: Vec3, u: Vec2, d: Vec3) -> (Vec3, Vec3, Vec3) {
+    let (t, b) = frame(nf, dpdu);
     let wi = -to_local(d, t, b, nf);
     match sample(m, &Microfacet::of(m), wi, u) {
         Some((wo, w)) => (offset_ray(g, pos, nf), (wo.x * t + wo.y * b + wo.z * nf).normalize(), w),

@@ -11,7 +11,7 @@ use ppm_vk_kernels::layout::Material;
 
 use super::microfacet::Microfacet;
 use super::rough_conductor::to_local;
-use super::trace::{fresnel_dielectric, offset_ray, onb, reflect};
+use super::trace::{frame, fresnel_dielectric, offset_ray, reflect};
 use crate::gpu_scene::GpuScene;
 
 /// The facet's Fresnel reflectance for wi at cosine `c` = wi.h to a facet normal h on the outside's side
@@ -103,12 +103,13 @@ pub fn bounce(
     m: &Material,
     pos: Vec3,
     nf: Vec3,
+    dpdu: Vec3,
     front: bool,
     u: f32,
     u2: Vec2,
     d: Vec3,
 ) -> (Vec3, Vec3, f32) {
-    let (t, b) = onb(nf);
+    let (t, b) = frame(nf, dpdu);
     let wi = -to_local(d, t, b, nf);
     match sample(&Microfacet::of(m), m.ior, front, wi, u, u2) {
         Some((wo, w)) => {

@@ -616,7 +616,16 @@ fn transform(e: &Elem) -> Result<DAffine3> {
                 if axis.length() == 0.0 {
                     return Err(step.err("the rotation axis (x, y, z or value) is zero"));
                 }
-                DMat4::from_axis_angle(axis.normalize(), angle.to_radians())
+                // Rodrigues' formula with the axis as written, as Mitsuba 3's Transform::rotate: it does not
+                // normalise it, so an axis that is not unit also scales and shears (tangents.py found it).
+                let (sin, cos) = angle.to_radians().sin_cos();
+                let k = DMat3::from_cols(
+                    DVec3::new(0.0, axis.z, -axis.y),
+                    DVec3::new(-axis.z, 0.0, axis.x),
+                    DVec3::new(axis.y, -axis.x, 0.0),
+                );
+                let outer = DMat3::from_cols(axis * axis.x, axis * axis.y, axis * axis.z);
+                DMat4::from_mat3(DMat3::IDENTITY * cos + k * sin + outer * (1.0 - cos))
             }
             "matrix" => {
                 let v = step.required("value")?;
@@ -984,7 +993,13 @@ impl Builder {
                 let specular = props.color("specular_reflectance")?.unwrap_or(Vec3::ONE);
                 let nonlinear = props.boolean("nonlinear")?;
                 let rough = match kind {
-                    "roughplastic" => Some(microfacet(e, &props)?),
+                    "roughplastic" => {
+                        let rough = microfacet(e, &props)?;
+                        if rough.is_anisotropic() {
+                            return Err(e.err("roughplastic is isotropic (Mitsuba reads alpha only): give alpha"));
+                        }
+                        Some(rough)
+                    }
                     _ => None,
                 };
                 texture = t;
@@ -1249,6 +1264,16 @@ impl Builder {
         let to_world = props.transform("to_world")?;
         let flip = props.boolean("flip_normals")?;
         let textured = bsdf.texture.is_some();
+        // An anisotropic lobe lies along Mitsuba's dp/du: a rectangle's x axis (edge_u below), a sphere's
+        // longitude, a mesh's texture coordinates (or the frame of its face normal without them).
+        let anisotropic = bsdf.surface.rough().is_some_and(|r| r.is_anisotropic());
+        if anisotropic && matches!(e.kind(), "cube" | "disk") {
+            return Err(bsdf_at.err(format!(
+                "anisotropic roughness on a {} is not supported yet (read on rectangles, spheres and OBJ and \
+                 PLY meshes)",
+                e.kind()
+            )));
+        }
         if textured && matches!(e.kind(), "cube" | "disk") {
             return Err(bsdf_at.err(format!(
                 "texture coordinates of a {} are not supported yet (textures are read on rectangles, spheres, \
@@ -1260,8 +1285,9 @@ impl Builder {
         // to_world or flip_normals turns its front side around by swapping the edges, which would swap
         // u and v: a textured one instead runs its first edge backwards from the corner (1, -1), so that
         // its coordinates are (1 - u, v), and its texture's to_uv takes them back to (u, v) first.
+        // An anisotropic one does the same, so that edge_u stays along (minus) Mitsuba's x axis.
         let turned = (to_world.matrix3.determinant() < 0.0) != flip;
-        let backwards = e.kind() == "rectangle" && turned && textured;
+        let backwards = e.kind() == "rectangle" && turned && (textured || anisotropic);
         let material = match (&bsdf.texture, backwards) {
             (Some(t), true) => {
                 let mirrored = Texture {
@@ -1375,6 +1401,12 @@ impl Builder {
                     return Err(e.err(
                         "a textured sphere whose to_world rotates or mirrors it is not supported (its texture \
                          coordinates are taken along the world's axes)",
+                    ));
+                }
+                if anisotropic && axes.to_cols_array().iter().any(|x| x.abs() > 1e-6) {
+                    return Err(e.err(
+                        "an anisotropic sphere whose to_world rotates or mirrors it is not supported (its \
+                         tangents are taken along the world's axes)",
                     ));
                 }
                 self.origins
@@ -1697,8 +1729,9 @@ fn fov_x(props: &Props, aspect: f64, e: &Elem) -> Result<f64> {
 /// A bsdf's index of refraction `name` (int_ior, ext_ior): a <float>, a <string> naming a material, or
 /// Mitsuba's `default` when absent.
 /// A rough BSDF's microfacet distribution: `distribution` (Mitsuba's default "beckmann", or "ggx") and
-/// `alpha` (default 0.1, raised to Mitsuba's floor 1e-4 as Mitsuba does), or `alpha_u` and `alpha_v`
-/// when equal; `sample_visible` changes only how Mitsuba samples (ppm-vk always samples visible normals).
+/// `alpha` (default 0.1), or `alpha_u` and `alpha_v` (anisotropic: along the shape's dp/du and across),
+/// each raised to Mitsuba's floor 1e-4 as Mitsuba does; `sample_visible` changes only how Mitsuba samples
+/// (ppm-vk always samples visible normals).
 fn microfacet(e: &Elem, props: &Props) -> Result<Microfacet> {
     let ggx = match props.string("distribution")? {
         None | Some("beckmann") => false,
@@ -1709,31 +1742,23 @@ fn microfacet(e: &Elem, props: &Props) -> Result<Microfacet> {
         }
     };
     props.ignore(&["sample_visible"]);
-    let alpha = match (props.float("alpha")?, props.float("alpha_u")?, props.float("alpha_v")?) {
-        (Some(a), None, None) => a,
-        (None, None, None) => 0.1,
-        (None, Some(u), Some(v)) if u == v => u,
-        (None, Some(_), Some(_)) => {
-            return Err(e.err(
-                "anisotropic roughness (alpha_u != alpha_v) is not modelled: it needs the surface's \
-                 tangents, which ppm-vk's shapes do not carry yet",
-            ))
-        }
+    let (alpha_u, alpha_v) = match (props.float("alpha")?, props.float("alpha_u")?, props.float("alpha_v")?) {
+        (Some(a), None, None) => (a, a),
+        (None, None, None) => (0.1, 0.1),
+        (None, Some(u), Some(v)) => (u, v),
         (Some(_), _, _) => return Err(e.err("give alpha, or alpha_u and alpha_v, not both")),
         (None, _, _) => return Err(e.err("give both alpha_u and alpha_v")),
     };
-    let named = if props.get("alpha").is_some() {
-        "alpha"
-    } else {
-        "alpha_u"
-    };
-    if !(alpha.is_finite() && alpha >= 0.0) {
-        let at = props.get(named).unwrap();
-        return Err(at.err(format!("must be finite and >= 0, got {alpha}")));
+    for (name, a) in [("alpha", alpha_u), ("alpha_u", alpha_u), ("alpha_v", alpha_v)] {
+        if let Some(at) = props.get(name).filter(|_| !(a.is_finite() && a >= 0.0)) {
+            return Err(at.err(format!("must be finite and >= 0, got {a}")));
+        }
     }
+    let floor = |a: f64| (a as f32).max(Microfacet::MIN_ALPHA);
     Ok(Microfacet {
         ggx,
-        alpha: (alpha as f32).max(Microfacet::MIN_ALPHA),
+        alpha: floor(alpha_u),
+        alpha_v: floor(alpha_v),
     })
 }
 
@@ -2442,7 +2467,7 @@ mod tests {
                 reflectance: Vec3::ONE,
                 eta: none_eta,
                 k: none_k,
-                rough: Microfacet { ggx: false, alpha: 0.1 }
+                rough: Microfacet::isotropic(false, 0.1)
             }
         );
         assert_eq!(
@@ -2451,25 +2476,50 @@ mod tests {
                 reflectance: Vec3::ONE,
                 eta: cu_eta,
                 k: cu_k,
-                rough: Microfacet { ggx: true, alpha: 0.3 }
+                rough: Microfacet::isotropic(true, 0.3)
             }
         );
         assert_eq!(
             surface_of(&s, 2),
             Surface::RoughGlass {
                 ior: (1.5 / 1.000277f64) as f32,
-                rough: Microfacet {
-                    ggx: false,
-                    alpha: Microfacet::MIN_ALPHA
-                }
+                rough: Microfacet::isotropic(false, Microfacet::MIN_ALPHA)
             }
         );
         assert!(s.warnings.is_empty(), "{:?}", s.warnings);
-        for (body, message) in [
+        // Anisotropic: alpha_u along the shape's dp/du, alpha_v across; refused where ppm-vk does not know
+        // Mitsuba's dp/du (cube, disk, a rotated sphere) and on roughplastic (Mitsuba's is isotropic).
+        let aniso = r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.3"/></bsdf>"#;
+        let s = load_body(&format!(
+            r#"<shape type="sphere">{aniso}</shape><shape type="rectangle">{aniso}</shape>"#
+        ))
+        .unwrap();
+        assert_eq!(
+            s.materials[s.spheres[0].material as usize].surface.rough(),
+            Some(Microfacet {
+                ggx: false,
+                alpha: 0.05,
+                alpha_v: 0.3
+            })
+        );
+        for (shape, message) in [
+            ("<shape type=\"cube\">", "anisotropic roughness on a cube"),
+            ("<shape type=\"disk\">", "anisotropic roughness on a disk"),
             (
-                r#"<float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/>"#,
-                "anisotropic roughness",
+                "<shape type=\"sphere\"><transform name=\"to_world\"><rotate x=\"1\" angle=\"30\"/></transform>",
+                "an anisotropic sphere whose to_world rotates",
             ),
+        ] {
+            let e = format!("{:#}", load_body(&format!("{shape}{aniso}</shape>")).unwrap_err());
+            assert!(e.contains(message), "{shape}: {e}");
+        }
+        let e = format!(
+            "{:#}",
+            load_body(r#"<shape type="sphere"><bsdf type="roughplastic"><float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.3"/></bsdf></shape>"#)
+                .unwrap_err()
+        );
+        assert!(e.contains("roughplastic is isotropic"), "{e}");
+        for (body, message) in [
             (
                 r#"<string name="distribution" value="phong"/>"#,
                 "unknown distribution \"phong\"",
@@ -2592,7 +2642,7 @@ mod tests {
         // roughplastic: Mitsuba's default Beckmann, the bound of its rough coat (which transmits less than
         // a smooth one at normal incidence, so it may allow 0.99).
         let ior = (1.49f64 / 1.000277) as f32;
-        let rough = Some(Microfacet { ggx: false, alpha: 0.2 });
+        let rough = Some(Microfacet::isotropic(false, 0.2));
         let most = crate::scene::plastic::max_diffuse_reflectance(ior, false, &crate::scene::plastic::coat(ior, rough));
         let lowered = most < 0.99;
         assert!(
@@ -2922,7 +2972,7 @@ mod tests {
         assert_ne!(p.texture, a.texture);
         assert_eq!(s.textures.len(), 2);
         let ior = (1.49f64 / 1.000277) as f32;
-        let coat = crate::scene::plastic::coat(ior, Some(Microfacet { ggx: false, alpha: 0.1 }));
+        let coat = crate::scene::plastic::coat(ior, Some(Microfacet::isotropic(false, 0.1)));
         let most = crate::scene::plastic::max_diffuse_reflectance(ior, false, &coat);
         assert_eq!(s.textures[p.texture.unwrap() as usize].max(), Vec3::splat(most));
         assert!(matches!(p.surface, Surface::Plastic { diffuse, .. } if diffuse == Vec3::splat(most)));

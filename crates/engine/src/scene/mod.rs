@@ -105,16 +105,42 @@ pub enum Surface {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Microfacet {
     pub ggx: bool,
+    /// Roughness along the surface's tangent (Mitsuba's alpha_u; its alpha when isotropic).
     pub alpha: f32,
+    /// Roughness along the bitangent (alpha_v): equal to `alpha` but on anisotropic surfaces, whose
+    /// tangent is Mitsuba's dp/du (docs/mitsuba.md).
+    pub alpha_v: f32,
 }
 
 impl Microfacet {
+    /// The same roughness in every direction.
+    pub fn isotropic(ggx: bool, alpha: f32) -> Microfacet {
+        Microfacet {
+            ggx,
+            alpha,
+            alpha_v: alpha,
+        }
+    }
+
+    pub fn is_anisotropic(&self) -> bool {
+        self.alpha != self.alpha_v
+    }
+
     /// Mitsuba's floor on alpha (its MicrofacetDistribution clamps to it): below it the lobe is narrower
     /// than f32 directions resolve.
     pub const MIN_ALPHA: f32 = 1e-4;
 }
 
 impl Surface {
+    /// Its microfacet distribution, where it is rough.
+    pub fn rough(&self) -> Option<Microfacet> {
+        match *self {
+            Surface::RoughConductor { rough, .. } | Surface::RoughGlass { rough, .. } => Some(rough),
+            Surface::Plastic { rough, .. } => rough,
+            _ => None,
+        }
+    }
+
     /// A conductor of complex index `eta + i k`, or, for Mitsuba's default "none" (eta 0, k 1: a Fresnel
     /// term of exactly 1 at every angle), the mirror it equals, which the kernels trace without the Fresnel
     /// term.
@@ -938,13 +964,15 @@ fn conductor_terms(p: &str, reflectance: Vec3, eta: Vec3, k: Vec3) -> Result<(),
 
 /// A microfacet roughness: finite, at least Mitsuba's floor (the readers raise smaller values to it).
 fn roughness(rough: Microfacet, path: &str) -> Result<(), Invalid> {
-    match rough.alpha.is_finite() && rough.alpha >= Microfacet::MIN_ALPHA {
-        true => Ok(()),
-        false => Err(invalid(
-            path.to_string(),
-            format!("must be finite and >= {}, got {}", Microfacet::MIN_ALPHA, rough.alpha),
-        )),
+    for a in [rough.alpha, rough.alpha_v] {
+        if !(a.is_finite() && a >= Microfacet::MIN_ALPHA) {
+            return Err(invalid(
+                path.to_string(),
+                format!("must be finite and >= {}, got {a}", Microfacet::MIN_ALPHA),
+            ));
+        }
     }
+    Ok(())
 }
 
 fn check_material(m: &Material) -> Result<(), Invalid> {

@@ -795,7 +795,7 @@ fn convert(m: &tobj::Material, name: String, mtl: &str) -> Result<(Material, Vec
                     reflectance,
                     eta,
                     k,
-                    rough: super::Microfacet { ggx: true, alpha },
+                    rough: super::Microfacet::isotropic(true, alpha),
                 }
             }
             None => Surface::Mirror { reflectance },
@@ -1022,7 +1022,7 @@ newmtl plain\nNs 10\n";
             reflectance: Vec3::splat(reflectance),
             eta,
             k,
-            rough: crate::scene::Microfacet { ggx: true, alpha },
+            rough: crate::scene::Microfacet::isotropic(true, alpha),
         };
         assert_eq!(rough(0), rc(1.0, 0.25), "Ns 250: roughness 0.5");
         assert!(

@@ -98,8 +98,17 @@ struct RawMaterial {
 #[serde(deny_unknown_fields)]
 struct RawRoughGlass {
     ior: Option<f32>,
-    alpha: Option<f32>,
+    alpha: Option<RawAlpha>,
     distribution: Option<RawDistribution>,
+}
+
+/// A rough conductor's or rough glass's roughness: one alpha, or `[alpha_u, alpha_v]` (anisotropic, along
+/// the surface's dp/du and across: docs/scene-format.md).
+#[derive(Deserialize, Clone, Copy)]
+#[serde(untagged, expecting = "a number or an array of 2 numbers [alpha_u, alpha_v]")]
+enum RawAlpha {
+    One(f32),
+    Two([f32; 2]),
 }
 
 /// A microfacet distribution's name (Mitsuba's `distribution`).
@@ -227,7 +236,7 @@ struct RawConductorTable {
     k: Option<[f32; 3]>,
     reflectance: Option<[f32; 3]>,
     /// Given: a rough conductor (Mitsuba's roughconductor) of this roughness.
-    alpha: Option<f32>,
+    alpha: Option<RawAlpha>,
     /// The rough conductor's distribution (default Beckmann, as Mitsuba's); needs `alpha`.
     distribution: Option<RawDistribution>,
 }
@@ -610,7 +619,7 @@ fn material(
             specular: c.specular.map_or(Vec3::ONE, Vec3::from),
             ior: c.ior.unwrap_or(PLASTIC_IOR),
             nonlinear: c.nonlinear.unwrap_or(false),
-            rough: c.alpha.map(|a| microfacet(a, c.distribution)),
+            rough: c.alpha.map(|a| microfacet(RawAlpha::One(a), c.distribution)),
         }
     } else if let Some(t) = &r.thin {
         let t = t.get_ref();
@@ -623,7 +632,7 @@ fn material(
         let g = g.get_ref();
         Surface::RoughGlass {
             ior: g.ior.unwrap_or(THIN_IOR),
-            rough: microfacet(g.alpha.unwrap_or(0.1), g.distribution),
+            rough: microfacet(g.alpha.unwrap_or(RawAlpha::One(0.1)), g.distribution),
         }
     } else if r.emission.is_some() {
         // A pure emitter reflects nothing.
@@ -798,10 +807,11 @@ fn conductor(src: &Source, p: &str, c: &Spanned<RawConductor>) -> Result<Surface
 }
 
 /// A rough surface's distribution (Mitsuba's default: Beckmann); alpha is checked by `Scene::check`.
-fn microfacet(alpha: f32, distribution: Option<RawDistribution>) -> Microfacet {
-    Microfacet {
-        ggx: matches!(distribution, Some(RawDistribution::Ggx)),
-        alpha,
+fn microfacet(alpha: RawAlpha, distribution: Option<RawDistribution>) -> Microfacet {
+    let ggx = matches!(distribution, Some(RawDistribution::Ggx));
+    match alpha {
+        RawAlpha::One(a) => Microfacet::isotropic(ggx, a),
+        RawAlpha::Two([alpha, alpha_v]) => Microfacet { ggx, alpha, alpha_v },
     }
 }
 
@@ -1545,7 +1555,7 @@ material = "light"
                 specular: Vec3::ONE,
                 ior: PLASTIC_IOR,
                 nonlinear: false,
-                rough: Some(Microfacet { ggx: true, alpha: 0.2 })
+                rough: Some(Microfacet::isotropic(true, 0.2))
             }
         );
         assert_err(
@@ -1554,19 +1564,28 @@ material = "light"
             "materials.glass.plastic",
             "needs alpha",
         );
+        // Anisotropic: alpha = [alpha_u, alpha_v].
+        assert_eq!(
+            surface(r#"rough_glass = { alpha = [0.05, 0.3] }"#).rough(),
+            Some(Microfacet {
+                ggx: false,
+                alpha: 0.05,
+                alpha_v: 0.3
+            })
+        );
         // Rough surfaces: Mitsuba's defaults (Beckmann, alpha 0.1, BK7 in air) and GGX.
         assert_eq!(
             surface("rough_glass = {}"),
             Surface::RoughGlass {
                 ior: THIN_IOR,
-                rough: Microfacet { ggx: false, alpha: 0.1 }
+                rough: Microfacet::isotropic(false, 0.1)
             }
         );
         assert_eq!(
             surface(r#"rough_glass = { ior = 1.33, alpha = 0.3, distribution = "ggx" }"#),
             Surface::RoughGlass {
                 ior: 1.33,
-                rough: Microfacet { ggx: true, alpha: 0.3 }
+                rough: Microfacet::isotropic(true, 0.3)
             }
         );
         let (au_eta, au_k) = crate::scene::conductors::named("Au").unwrap();
@@ -1576,7 +1595,7 @@ material = "light"
                 reflectance: Vec3::ONE,
                 eta: au_eta,
                 k: au_k,
-                rough: Microfacet { ggx: true, alpha: 0.2 }
+                rough: Microfacet::isotropic(true, 0.2)
             }
         );
         assert_err(
