@@ -71,48 +71,42 @@ fn cornell_gold(w: u32, h: u32) -> ppm_vk_engine::Scene {
     scene
 }
 
+/// scenes/references/NAME.xml at RES x RES, with no warning.
+fn reference_scene(name: &str) -> ppm_vk_engine::Scene {
+    let xml = format!("{}/scenes/references/{name}.xml", env!("CARGO_MANIFEST_DIR"));
+    let scene = ppm_vk_engine::Scene::load_with(xml, &[("res".to_string(), RES.to_string())]).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    scene
+}
+
 /// scenes/references/cornell-coated.xml at RES x RES: the gold sphere, a white plastic floor, a blue
 /// plastic sphere (nonlinear, specular_reflectance 0.8) and a thin tinted pane in front of it (Mitsuba's
 /// plastic and thindielectric): the coat's two lobes along the eye paths (a hit point on the base and the
 /// reflection both, while slots last), the coat's Fresnel term on the photons' records and their choice of
 /// lobe, and the pane's branches.
 fn cornell_coated() -> ppm_vk_engine::Scene {
-    let xml = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/references/cornell-coated.xml");
-    let scene = ppm_vk_engine::Scene::load_with(xml, &[("res".to_string(), RES.to_string())]).unwrap();
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-    scene
+    reference_scene("cornell-coated")
 }
 
 /// scenes/references/cornell-rough.xml at RES x RES: cornell-gold with the gold sphere a rough conductor
 /// (GGX, alpha 0.2) and the glass sphere rough (Beckmann, alpha 0.1): their visible-normal sampling on the
 /// eye paths (hit-point paths and emission samples) and the photons, both distributions.
 fn cornell_rough() -> ppm_vk_engine::Scene {
-    let xml = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/references/cornell-rough.xml");
-    let scene = ppm_vk_engine::Scene::load_with(xml, &[("res".to_string(), RES.to_string())]).unwrap();
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-    scene
+    reference_scene("cornell-rough")
 }
 
 /// scenes/references/cornell-roughplastic.xml at RES x RES: cornell-coated with both plastics rough (Mitsuba's
 /// roughplastic: a GGX floor of alpha 0.2, a Beckmann sphere of alpha 0.1): the coat's table, its sampled
 /// reflection along the eye paths and the photons' choice of lobe through a sampled facet.
 fn cornell_roughplastic() -> ppm_vk_engine::Scene {
-    let xml = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/scenes/references/cornell-roughplastic.xml"
-    );
-    let scene = ppm_vk_engine::Scene::load_with(xml, &[("res".to_string(), RES.to_string())]).unwrap();
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-    scene
+    reference_scene("cornell-roughplastic")
 }
 
 /// scenes/references/cornell-smooth.xml at RES x RES: coarse meshes (a diffuse and a glass icosphere of 320
 /// triangles) smooth-shaded by their vertex normals: shading normals along the eye paths and Veach's
 /// correction on the photons (shading.glsl).
 fn cornell_smooth() -> ppm_vk_engine::Scene {
-    let xml = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/references/cornell-smooth.xml");
-    let scene = ppm_vk_engine::Scene::load_with(xml, &[("res".to_string(), RES.to_string())]).unwrap();
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let scene = reference_scene("cornell-smooth");
     assert!(scene.meshes.iter().all(|m| m.normals.is_some()), "smooth-shaded meshes");
     scene
 }
@@ -121,9 +115,7 @@ fn cornell_smooth() -> ppm_vk_engine::Scene {
 /// longitude, 0.4 across) and an anisotropic rough glass mesh (Beckmann 0.05 / 0.3, tangents along each
 /// triangle's first edge, smooth-shaded): the tangent of each kind of hit and the frame made from it.
 fn cornell_aniso() -> ppm_vk_engine::Scene {
-    let xml = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/references/cornell-aniso.xml");
-    let scene = ppm_vk_engine::Scene::load_with(xml, &[("res".to_string(), RES.to_string())]).unwrap();
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let scene = reference_scene("cornell-aniso");
     let anisotropic = scene
         .materials
         .iter()

@@ -50,6 +50,17 @@ fn a_gold_sphere_matches_its_mitsuba_reference() {
     assert_clean(&ctx);
 }
 
+/// scenes/references/NAME.xml read at 128 x 128 (its reference block-averaged by 2), with no warning, and
+/// its Mitsuba reference NAME.exr.
+fn reference_scene(name: &str) -> (Scene, Reference) {
+    let xml = Path::new(REFERENCES).join(format!("{name}.xml"));
+    let defines = [("res".to_string(), "128".to_string())];
+    let scene = Scene::load_with(&xml, &defines).unwrap_or_else(|e| panic!("{e:#}"));
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let reference = Reference::load(&Path::new(REFERENCES).join(format!("{name}.exr"))).unwrap();
+    (scene, reference)
+}
+
 /// The image's mean per channel within 1% of the reference's (taken at the image's resolution).
 fn assert_mean_within_1_percent(image: &RgbImage, reference: &Reference) {
     let want = reference.at_resolution(image.width, image.height).unwrap().image.mean();
@@ -83,11 +94,7 @@ fn r_settings() -> Settings {
 /// on the pane's part of the image).
 #[test]
 fn plastic_and_a_thin_pane_match_their_mitsuba_reference() {
-    let xml = Path::new(REFERENCES).join("cornell-coated.xml");
-    let defines = [("res".to_string(), "128".to_string())];
-    let scene = Scene::load_with(&xml, &defines).unwrap_or_else(|e| panic!("{e:#}"));
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-    let reference = Reference::load(&Path::new(REFERENCES).join("cornell-coated.exr")).unwrap();
+    let (scene, reference) = reference_scene("cornell-coated");
     // The pane and the sphere behind it, in the reference's 256 x 256 pixels.
     let pane = Region {
         name: "pane".into(),
@@ -148,11 +155,7 @@ fn plastic_and_a_thin_pane_match_their_mitsuba_reference() {
 /// the same spheres smooth, exceeds.
 #[test]
 fn rough_metal_and_rough_glass_match_their_mitsuba_reference() {
-    let xml = Path::new(REFERENCES).join("cornell-rough.xml");
-    let defines = [("res".to_string(), "128".to_string())];
-    let scene = Scene::load_with(&xml, &defines).unwrap_or_else(|e| panic!("{e:#}"));
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-    let reference = Reference::load(&Path::new(REFERENCES).join("cornell-rough.exr")).unwrap();
+    let (scene, reference) = reference_scene("cornell-rough");
     // The spheres, in the reference's 256 x 256 pixels: the gold one (left, back) and the glass one (front).
     let regions = [
         Region {
@@ -220,11 +223,7 @@ fn rough_metal_and_rough_glass_match_their_mitsuba_reference() {
 /// and the relMSE under a bound that the control, the same plastics smooth, exceeds.
 #[test]
 fn rough_plastic_matches_its_mitsuba_reference() {
-    let xml = Path::new(REFERENCES).join("cornell-roughplastic.xml");
-    let defines = [("res".to_string(), "128".to_string())];
-    let scene = Scene::load_with(&xml, &defines).unwrap_or_else(|e| panic!("{e:#}"));
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-    let reference = Reference::load(&Path::new(REFERENCES).join("cornell-roughplastic.exr")).unwrap();
+    let (scene, reference) = reference_scene("cornell-roughplastic");
     let ctx = ctx();
     let image = render(&ctx, &scene, r_settings(), 32);
     let e = compare(&image, &reference, None, true).unwrap();
@@ -384,11 +383,7 @@ fn plastic_under_a_square_light_matches_its_closed_form() {
 /// tangent across Mitsuba's would render.
 #[test]
 fn anisotropic_roughness_matches_its_mitsuba_reference() {
-    let xml = Path::new(REFERENCES).join("cornell-aniso.xml");
-    let defines = [("res".to_string(), "128".to_string())];
-    let scene = Scene::load_with(&xml, &defines).unwrap_or_else(|e| panic!("{e:#}"));
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-    let reference = Reference::load(&Path::new(REFERENCES).join("cornell-aniso.exr")).unwrap();
+    let (scene, reference) = reference_scene("cornell-aniso");
     // In the reference's 256 x 256 pixels.
     let regions = [
         Region::new("gold", 40, 120, 90, 90),
@@ -482,14 +477,10 @@ fn smooth_shading_matches_its_mitsuba_reference() {
 #[test]
 fn photons_off_a_tilted_shading_normal_match_their_mitsuba_reference() {
     use ppm_vk_engine::DirectLight;
-    let xml = Path::new(REFERENCES).join("cornell-tilted.xml");
-    let defines = [("res".to_string(), "128".to_string())];
-    let scene = Scene::load_with(&xml, &defines).unwrap_or_else(|e| panic!("{e:#}"));
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let (scene, reference) = reference_scene("cornell-tilted");
     assert!(scene.meshes[0].normals.is_some(), "the floor is smooth-shaded");
     let mut flat = scene.clone();
     flat.meshes[0].normals = None;
-    let reference = Reference::load(&Path::new(REFERENCES).join("cornell-tilted.exr")).unwrap();
     let ctx = ctx();
     for (direct, bound) in [(DirectLight::Sample, 0.002), (DirectLight::Photons, 0.005)] {
         let settings = Settings { direct, ..r_settings() };
