@@ -336,6 +336,19 @@ fn ray_pass_matches_reference_with_anisotropic_surfaces_unspecialized() {
     ray_pass_matches_reference_on(cornell_aniso(), false, DirectLight::Sample);
 }
 
+/// An anisotropic sphere in a scene without meshes: the tangent of a sphere, and no triangle buffer to read.
+#[test]
+fn ray_pass_matches_reference_with_an_anisotropic_sphere_and_no_mesh() {
+    let mut scene = cornell_rough();
+    for m in &mut scene.materials {
+        if let Surface::RoughConductor { ref mut rough, .. } = m.surface {
+            rough.alpha_v = 0.5;
+        }
+    }
+    assert!(scene.meshes.is_empty());
+    ray_pass_matches_reference_on(scene, true, DirectLight::Sample);
+}
+
 #[test]
 fn ray_pass_matches_reference_with_smooth_shading() {
     ray_pass_matches_reference_on(cornell_smooth(), true, DirectLight::Sample);

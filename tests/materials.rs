@@ -9,7 +9,7 @@ use std::path::Path;
 use common::*;
 use glam::Vec3;
 use ppm_vk_engine::metrics::{compare, Reference, Region};
-use ppm_vk_engine::scene::Surface;
+use ppm_vk_engine::scene::{Microfacet, Surface};
 use ppm_vk_engine::{Mode, RgbImage, Scene, Settings};
 
 const REFERENCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/references");
@@ -273,7 +273,7 @@ fn a_rough_metal_furnace_matches_its_mitsuba_reference() {
     let mut rougher = scene.clone();
     for m in &mut rougher.materials {
         if let Surface::RoughConductor { ref mut rough, .. } = m.surface {
-            rough.alpha = 0.4;
+            *rough = Microfacet::isotropic(rough.ggx, 0.4);
         }
     }
     let control = render(&ctx, &rougher, through, 64);

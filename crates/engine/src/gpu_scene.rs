@@ -117,7 +117,8 @@ fn triangle_texels(scene: &Scene, triangles: &[Triangle]) -> Vec<[u32; 4]> {
         .materials
         .iter()
         .any(|m| m.surface.rough().is_some_and(|r| r.is_anisotropic()));
-    if scene.meshes.iter().all(|m| m.uvs.is_none() && m.normals.is_none()) && !anisotropic {
+    let triangles_read = scene.meshes.iter().any(|m| m.uvs.is_some() || m.normals.is_some()) || anisotropic;
+    if triangles.is_empty() || !triangles_read {
         return vec![[0; 4]];
     }
     // Per triangle of the scene: texture coordinates, dp/du from them, vertex normals.
