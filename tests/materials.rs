@@ -10,7 +10,7 @@ use common::*;
 use glam::Vec3;
 use ppm_vk_engine::metrics::{compare, Reference, Region};
 use ppm_vk_engine::scene::{Microfacet, Surface};
-use ppm_vk_engine::{Mode, RgbImage, Scene, Settings};
+use ppm_vk_engine::{DirectLight, Mode, RgbImage, Scene, Settings};
 
 const REFERENCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/references");
 
@@ -317,7 +317,6 @@ fn a_rough_metal_furnace_matches_its_mitsuba_reference() {
 fn plastic_under_a_square_light_matches_its_closed_form() {
     use ppm_vk_engine::reference::plastic::coat_fresnel;
     use ppm_vk_engine::scene::plastic::diffuse_factor;
-    use ppm_vk_engine::DirectLight;
     let scene = Scene::parse(
         &OPEN_FLOOR.replace("diffuse = [0.5, 0.5, 0.5]", "plastic = { diffuse = [0.5, 0.5, 0.5] }"),
         "open-plastic-floor.toml",
@@ -348,15 +347,7 @@ fn plastic_under_a_square_light_matches_its_closed_form() {
     let want = coat + base;
     println!("closed form {want:.5}: the coat's reflection {coat:.5}, the base {base:.5}");
     let ctx = ctx();
-    for direct in [DirectLight::Photons, DirectLight::Sample] {
-        let settings = Settings {
-            mode: Mode::Ppm,
-            photons_per_pass: 200_000,
-            initial_radius: Some(0.05),
-            direct,
-            ..Settings::default()
-        };
-        let got = render(&ctx, &scene, settings, 60).mean();
+    for (direct, got) in under_the_square_light(&ctx, &scene) {
         println!("{direct:?}: {got:?}, the base {:.5}", got[0] - coat);
         for (c, got) in got.iter().enumerate() {
             // The coat's reflection is exact in each sample (the camera's rays all reflect into the light),
@@ -476,7 +467,6 @@ fn smooth_shading_matches_its_mitsuba_reference() {
 /// (a build for the purpose) 0.0032 and 0.016, the means 1.6% and 3.2% high.
 #[test]
 fn photons_off_a_tilted_shading_normal_match_their_mitsuba_reference() {
-    use ppm_vk_engine::DirectLight;
     let (scene, reference) = reference_scene("cornell-tilted");
     assert!(scene.meshes[0].normals.is_some(), "the floor is smooth-shaded");
     let mut flat = scene.clone();
@@ -500,6 +490,24 @@ fn photons_off_a_tilted_shading_normal_match_their_mitsuba_reference() {
     assert_clean(&ctx);
 }
 
+/// The mean of an OPEN_FLOOR scene seen from straight above, after 60 PPM passes of 200k photons (radius
+/// 0.05), with direct light by photons, then by shadow rays.
+fn under_the_square_light(ctx: &ppm_vk_engine::Context, scene: &Scene) -> Vec<(DirectLight, [f64; 3])> {
+    [DirectLight::Photons, DirectLight::Sample]
+        .into_iter()
+        .map(|direct| {
+            let settings = Settings {
+                mode: Mode::Ppm,
+                photons_per_pass: 200_000,
+                initial_radius: Some(0.05),
+                direct,
+                ..Settings::default()
+            };
+            (direct, render(ctx, scene, settings, 60).mean())
+        })
+        .collect()
+}
+
 /// Smooth shading against a closed form: OPEN_FLOOR's floor made two triangles whose vertex normals all
 /// lean 30 degrees (ns = (sin 30, cos 30, 0) against the true normal +y), seen from straight above. Its
 /// radiance is rho / pi Le times the integral over the light of cos_s cos_y / d^2, cos_s the light's
@@ -508,7 +516,6 @@ fn photons_off_a_tilted_shading_normal_match_their_mitsuba_reference() {
 /// cosine; a record without the correction gives the flat floor's value.
 #[test]
 fn smooth_shading_under_a_square_light_matches_its_closed_form() {
-    use ppm_vk_engine::DirectLight;
     let mut scene = Scene::parse(OPEN_FLOOR, "open-floor.toml").unwrap_or_else(|e| panic!("{e:#}"));
     let floor = scene.quads.remove(0);
     let lean = 30f32.to_radians();
@@ -541,15 +548,7 @@ fn smooth_shading_under_a_square_light_matches_its_closed_form() {
     let flat = rho / std::f64::consts::PI * le * flat;
     println!("closed form {want:.5} (the flat floor's {flat:.5})");
     let ctx = ctx();
-    for direct in [DirectLight::Photons, DirectLight::Sample] {
-        let settings = Settings {
-            mode: Mode::Ppm,
-            photons_per_pass: 200_000,
-            initial_radius: Some(0.05),
-            direct,
-            ..Settings::default()
-        };
-        let got = render(&ctx, &scene, settings, 60).mean();
+    for (direct, got) in under_the_square_light(&ctx, &scene) {
         println!("{direct:?}: {got:?}");
         for (c, got) in got.iter().enumerate() {
             // As the plastic floor's: by photons within 2.5% (their noise and the radius's falloff bias),
