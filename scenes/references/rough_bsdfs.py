@@ -162,13 +162,19 @@ def named_conductors():
     return out
 
 
-start = time.time()
-dirs = random_directions()
-conductors = [tabulate(i, case, dirs, False) for i, case in enumerate(CONDUCTORS)]
-dielectrics = [tabulate(len(CONDUCTORS) + i, case, dirs, True) for i, case in enumerate(DIELECTRICS)]
-path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "rough-bsdfs.json")
-with open(path, "w") as f:
-    json.dump({"mitsuba_version": mi.__version__, "variant": "scalar_rgb", "samples": SAMPLES, "phi": PHI,
-               "cosines": COSINES, "named_conductors": named_conductors(), "roughconductor": conductors,
-               "roughdielectric": dielectrics}, f, indent=1)
-print(f"wrote {path} in {time.time() - start:.0f} s")
+def main():
+    start = time.time()
+    dirs = random_directions()
+    conductors = [tabulate(i, case, dirs, False) for i, case in enumerate(CONDUCTORS)]
+    dielectrics = [tabulate(len(CONDUCTORS) + i, case, dirs, True) for i, case in enumerate(DIELECTRICS)]
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "rough-bsdfs.json")
+    with open(path, "w") as f:
+        json.dump({"mitsuba_version": mi.__version__, "variant": "scalar_rgb", "samples": SAMPLES, "phi": PHI,
+                   "cosines": COSINES, "named_conductors": named_conductors(), "roughconductor": conductors,
+                   "roughdielectric": dielectrics}, f, indent=1)
+    print(f"wrote {path} in {time.time() - start:.0f} s")
+
+
+# roughplastic_bsdf.py imports the helpers above (the same incidences, outgoing directions and statistics).
+if __name__ == "__main__":
+    main()

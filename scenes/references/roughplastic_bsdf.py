@@ -27,15 +27,16 @@ ppm-vk's CPU twin of this BSDF is compared against it.
 Run: pip install mitsuba numpy; python3 scenes/references/roughplastic_bsdf.py
 """
 import json
-import math
 import os
-import random
 import time
 
 import mitsuba as mi
 import numpy as np
 
 mi.set_variant("scalar_rgb")
+
+# The incidences, the 24 outgoing directions and the statistics of rough_bsdfs.py, beside this script.
+from rough_bsdfs import COSINES, PHI, SAMPLES, incident, interaction, random_directions, rgb, stats  # noqa: E402
 
 CASES = [
     {"type": "roughplastic"},
@@ -45,48 +46,8 @@ CASES = [
      "diffuse_reflectance": {"type": "rgb", "value": [0.2, 0.5, 0.8]}, "specular_reflectance": 0.8},
     {"type": "roughplastic", "distribution": "ggx", "alpha": 0.6, "diffuse_reflectance": 0.9},
 ]
-COSINES = [1.0, 0.9, 0.7, 0.5, 0.3, 0.1]
-PHI = 0.7
-SAMPLES = 1 << 20
-N_WO = 24
 DIRECTIONAL_MU = [max(k / 32, 1e-4) for k in range(33)]
 DIRECTIONAL_WO = [0.0, 0.0, 1.0]
-
-
-def rgb(v):
-    return [float(v[i]) for i in range(3)]
-
-
-def incident(c):
-    s = math.sqrt(max(0.0, 1 - c * c))
-    return [s * math.cos(PHI), s * math.sin(PHI), c]
-
-
-def interaction(wi):
-    si = mi.SurfaceInteraction3f()
-    si.n = mi.Normal3f(0, 0, 1)
-    si.sh_frame = mi.Frame3f(si.n)
-    si.wi = mi.Vector3f(*wi)
-    return si
-
-
-def random_directions():
-    """The 24 outgoing directions of rough_bsdfs.py (the same generator and seed)."""
-    rng = random.Random(1)
-    dirs = []
-    for _ in range(N_WO):
-        z = 2 * rng.random() - 1
-        p = 2 * math.pi * rng.random()
-        r = math.sqrt(max(0.0, 1 - z * z))
-        dirs.append([r * math.cos(p), r * math.sin(p), z])
-    return dirs
-
-
-def stats(w):
-    """Mean and standard error of the mean of each column of w (float64)."""
-    mean = w.mean(axis=0)
-    err = w.std(axis=0, ddof=1) / math.sqrt(len(w))
-    return [float(x) for x in mean], [float(x) for x in err]
 
 
 def coat_only(case):
