@@ -61,6 +61,16 @@ fn reference_scene(name: &str) -> (Scene, Reference) {
     (scene, reference)
 }
 
+/// `what`'s relMSE `e` under `bound`, and its control's above it: the bound tells the two apart
+/// (`control_is` says what the control is).
+fn assert_bound_separates(what: &str, e: f64, control: f64, bound: f64, control_is: &str) {
+    assert!(e < bound, "{what}: relMSE {e} (bound {bound})");
+    assert!(
+        control > bound,
+        "{what}: the bound {bound} cannot tell it from {control_is}: {control}"
+    );
+}
+
 /// The image's mean per channel within 1% of the reference's (taken at the image's resolution).
 fn assert_mean_within_1_percent(image: &RgbImage, reference: &Reference) {
     let want = reference.at_resolution(image.width, image.height).unwrap().image.mean();
@@ -202,13 +212,8 @@ fn rough_metal_and_rough_glass_match_their_mitsuba_reference() {
     // 0.086, 0.052 and 0.017.
     const BOUNDS: [f64; 2] = [0.04, 0.03];
     for k in 0..2 {
-        let name = &regions[k].name;
-        assert!(parts[k] < BOUNDS[k], "relMSE on the {name} sphere {}", parts[k]);
-        assert!(
-            control[k] > BOUNDS[k],
-            "the bound cannot tell the {name} sphere from a smooth one: {}",
-            control[k]
-        );
+        let what = format!("the {} sphere", regions[k].name);
+        assert_bound_separates(&what, parts[k], control[k], BOUNDS[k], "a smooth one");
     }
     assert!(
         rel_mse < 0.01 && control_all > 0.01,
@@ -239,12 +244,7 @@ fn rough_plastic_matches_its_mitsuba_reference() {
     println!("the plastics smooth: relMSE {:.5}", c.rel_mse);
     // Measured 0.0020 (the mean within 0.11%), the control 0.044.
     const BOUND: f64 = 0.005;
-    assert!(e.rel_mse < BOUND, "relMSE {}", e.rel_mse);
-    assert!(
-        c.rel_mse > BOUND,
-        "the bound cannot tell rough plastic from smooth: {}",
-        c.rel_mse
-    );
+    assert_bound_separates("rough plastic", e.rel_mse, c.rel_mse, BOUND, "smooth plastic");
     assert_clean(&ctx);
 }
 
@@ -282,12 +282,7 @@ fn a_rough_metal_furnace_matches_its_mitsuba_reference() {
     // Measured 0.018 (the noise of the emission samples: 1-16 per pixel and pass; the mean within 0.16%),
     // the control 0.116 (its mean 34% lower).
     const BOUND: f64 = 0.03;
-    assert!(e.rel_mse < BOUND, "relMSE {}", e.rel_mse);
-    assert!(
-        c.rel_mse > BOUND,
-        "the bound cannot tell alpha 0.3 from 0.4: {}",
-        c.rel_mse
-    );
+    assert_bound_separates("alpha 0.3", e.rel_mse, c.rel_mse, BOUND, "alpha 0.4");
 
     // Glossy hit points: the same furnace lit by photons alone (but the direct light's shadow rays), each
     // weighed by the rough BRDF in the gather: an independent check of that estimator, whose every
@@ -398,13 +393,7 @@ fn anisotropic_roughness_matches_its_mitsuba_reference() {
             "{}: relMSE {:.5}, turned a quarter {:.5}",
             region.name, e.rel_mse, c.rel_mse
         );
-        assert!(e.rel_mse < bound, "{}: relMSE {}", region.name, e.rel_mse);
-        assert!(
-            c.rel_mse > bound,
-            "{}: the bound cannot tell the lobe from its quarter turn: {}",
-            region.name,
-            c.rel_mse
-        );
+        assert_bound_separates(&region.name, e.rel_mse, c.rel_mse, bound, "its lobes' quarter turn");
     }
     assert_clean(&ctx);
 }
@@ -442,18 +431,8 @@ fn smooth_shading_matches_its_mitsuba_reference() {
     // Measured 0.0023 and 0.0052 (the mean within 0.2%); flat 0.016 and 0.125.
     const BOUND: f64 = 0.006;
     const GLASS_BOUND: f64 = 0.03;
-    assert!(e.rel_mse < BOUND, "relMSE {}", e.rel_mse);
-    assert!(eg.rel_mse < GLASS_BOUND, "glass sphere relMSE {}", eg.rel_mse);
-    assert!(
-        c.rel_mse > BOUND,
-        "the bound cannot tell smooth from flat: {}",
-        c.rel_mse
-    );
-    assert!(
-        cg.rel_mse > GLASS_BOUND,
-        "the glass bound cannot tell smooth from flat: {}",
-        cg.rel_mse
-    );
+    assert_bound_separates("the image", e.rel_mse, c.rel_mse, BOUND, "flat shading");
+    assert_bound_separates("the glass sphere", eg.rel_mse, cg.rel_mse, GLASS_BOUND, "flat shading");
     assert_clean(&ctx);
 }
 
@@ -480,12 +459,7 @@ fn photons_off_a_tilted_shading_normal_match_their_mitsuba_reference() {
         assert_mean_within_1_percent(&image, &reference);
         let c = compare(&render(&ctx, &flat, settings, 32), &reference, None, true).unwrap();
         println!("{direct:?}, the floor flat: relMSE {:.5}", c.rel_mse);
-        assert!(e.rel_mse < bound, "{direct:?}: relMSE {}", e.rel_mse);
-        assert!(
-            c.rel_mse > bound,
-            "{direct:?}: the bound cannot tell the leaning normals from none: {}",
-            c.rel_mse
-        );
+        assert_bound_separates(&format!("{direct:?}"), e.rel_mse, c.rel_mse, bound, "a flat floor");
     }
     assert_clean(&ctx);
 }
