@@ -730,16 +730,20 @@ fn convert(m: &tobj::Material, name: String, mtl: &str) -> Result<(Material, Vec
     };
     let d = number(m.dissolve.map(f32x1), "d")?;
     let ni = number(m.optical_density.map(f32x1), "Ni")?;
-    let tr = match m.unknown_param.get("Tr") {
-        None => None,
-        Some(s) => Some(
-            s.split_whitespace()
+    // A key tobj does not know (Tr, Pr): its first number, where `valid` takes it, else `message`.
+    let unknown_number = |key: &str, valid: fn(f32) -> bool, message: &str| -> Result<Option<f32>> {
+        match m.unknown_param.get(key) {
+            None => Ok(None),
+            Some(s) => s
+                .split_whitespace()
                 .next()
                 .and_then(|x| x.parse::<f32>().ok())
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| fail(format!("Tr needs a number, got {s:?}")))?,
-        ),
+                .filter(|&x| valid(x))
+                .map(Some)
+                .ok_or_else(|| fail(format!("{message}, got {s:?}"))),
+        }
     };
+    let tr = unknown_number("Tr", f32::is_finite, "Tr needs a number")?;
     let illum = m.illumination_model;
     let nonzero = |v: Option<Vec3>| v.is_some_and(|v| v.max_element() > 0.0);
     let mut notes = Vec::new();
@@ -776,16 +780,11 @@ fn convert(m: &tobj::Material, name: String, mtl: &str) -> Result<(Material, Vec
         });
         // Roughness: the PBR extension's Pr, else Ns read as Blender's exporter writes it
         // (Ns = 1000 (1 - roughness)^2), and GGX alpha = roughness^2 as Blender's shaders use it.
-        let pr = match m.unknown_param.get("Pr") {
-            None => None,
-            Some(s) => Some(
-                s.split_whitespace()
-                    .next()
-                    .and_then(|x| x.parse::<f32>().ok())
-                    .filter(|x| (0.0..=1.0).contains(x))
-                    .ok_or_else(|| fail(format!("Pr (roughness) must be a number in [0, 1], got {s:?}")))?,
-            ),
-        };
+        let pr = unknown_number(
+            "Pr",
+            |x| (0.0..=1.0).contains(&x),
+            "Pr (roughness) must be a number in [0, 1]",
+        )?;
         let ns = number(m.shininess.map(f32x1), "Ns")?;
         let roughness = pr.or(ns.map(|ns| 1.0 - (ns.clamp(0.0, 1000.0) / 1000.0).sqrt()));
         match roughness.map(|r| r * r).filter(|&a| a >= MTL_MIN_ALPHA) {

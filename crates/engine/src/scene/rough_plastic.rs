@@ -138,17 +138,6 @@ pub fn lookup(table: &[f32], x: f32) -> f32 {
     table[i] * (1.0 - a) + table[i + 1] * a
 }
 
-/// The diffuse lobe's factor D' / eta^2: diffuse_reflectance with the internal reflection (nonlinear:
-/// per channel), over the squared index.
-pub fn diffuse_factor(diffuse: Vec3, internal: f32, ior: f32, nonlinear: bool) -> Vec3 {
-    let inner = if nonlinear {
-        Vec3::ONE - diffuse * internal
-    } else {
-        Vec3::splat(1.0 - internal)
-    };
-    diffuse / inner / (ior * ior)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -183,7 +172,7 @@ mod tests {
             let ks = bsdf.get("specular_reflectance").map_or(Vec3::ONE, rgb);
             let nonlinear = bsdf.get("nonlinear").is_some_and(|v| v.as_bool().unwrap());
             let (t, internal) = tables(ggx, alpha, ior);
-            let d = diffuse_factor(diffuse, internal, ior, nonlinear);
+            let d = super::super::plastic::diffuse_factor(diffuse, ior, nonlinear, internal);
             for row in case["diffuse_directional"].as_array().unwrap() {
                 let mu = row["mu"].as_f64().unwrap() as f32;
                 let want = rgb(&row["value"]);
