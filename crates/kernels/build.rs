@@ -129,6 +129,18 @@ fn run() -> Result<()> {
     writeln!(code, "];")?;
     writeln!(
         code,
+        "/// Every `const uint NAME = <literal>u;` of shaders/ (SURFACE_*, LIGHT_*, BVH_LEAF...): the Rust side\n/// reads these, so each value is written once, in GLSL."
+    )?;
+    writeln!(code, "pub mod constants {{")?;
+    for (name, (value, file)) in uint_constants(&shader_dir, &sources)? {
+        writeln!(
+            code,
+            "    /// `{name}` of shaders/{file}.\n    pub const {name}: u32 = {value:#x};"
+        )?;
+    }
+    writeln!(code, "}}")?;
+    writeln!(
+        code,
         "/// std430 layouts of the GLSL structs, as glslang laid them out."
     )?;
     writeln!(
@@ -147,6 +159,46 @@ fn run() -> Result<()> {
     writeln!(code, "}}")?;
     std::fs::write(out_dir.join("reflected.rs"), code)?;
     Ok(())
+}
+
+/// The `const uint NAME = 123u;` (or `0x..u`) lines of every file under shaders/, by name with their value
+/// and file; a name given two different values fails the build. Constants defined by an expression are
+/// left to GLSL (none of them is read on the host).
+fn uint_constants(shader_dir: &Path, sources: &[PathBuf]) -> Result<BTreeMap<String, (u32, String)>> {
+    let mut out: BTreeMap<String, (u32, String)> = BTreeMap::new();
+    for path in sources {
+        let rel = path.strip_prefix(shader_dir)?.to_string_lossy().replace('\\', "/");
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        for line in text.lines() {
+            let Some(rest) = line.trim_start().strip_prefix("const uint ") else {
+                continue;
+            };
+            let Some((name, value)) = rest.split_once('=') else {
+                continue;
+            };
+            let (name, value) = (name.trim(), value.split(';').next().unwrap_or("").trim());
+            let Some(digits) = value.strip_suffix('u') else {
+                continue;
+            };
+            let parsed = match digits.strip_prefix("0x") {
+                Some(hex) => u32::from_str_radix(hex, 16),
+                None => digits.parse::<u32>(),
+            };
+            let Ok(v) = parsed else {
+                continue;
+            };
+            match out.get(name) {
+                Some((prev, file)) if *prev != v => {
+                    bail!("GLSL constant {name} is {prev} in shaders/{file} but {v} in shaders/{rel}")
+                }
+                Some(_) => {}
+                None => {
+                    out.insert(name.to_string(), (v, rel.clone()));
+                }
+            }
+        }
+    }
+    Ok(out)
 }
 
 fn collect(dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {

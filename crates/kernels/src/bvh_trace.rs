@@ -8,12 +8,12 @@ use ppm_vk_device::{vk, Buffer, ComputePipeline};
 use crate::{gpu_struct, push_struct};
 
 /// lavapipe's iterations per SIMD group over all loops of an invocation (`BVH_LOOP_LIMIT` in bvh.glsl).
-pub const LOOP_LIMIT: u32 = 65535;
+pub const LOOP_LIMIT: u32 = crate::reflected::constants::BVH_LOOP_LIMIT;
 /// The largest step budget this kernel may pass: a traversal loop costs its longest lane's steps plus one,
 /// and the kernel has no other loop.
 pub const MAX_BUDGET: u32 = LOOP_LIMIT - 1;
 /// Entries of the traversal stack (`BVH_MAX_DEPTH` in bvh.glsl): a BVH deeper than this cannot be traced.
-pub const MAX_DEPTH: u32 = 64;
+pub const MAX_DEPTH: u32 = crate::reflected::constants::BVH_MAX_DEPTH;
 /// `TraceHit::triangle` of a miss.
 pub const NO_HIT: u32 = u32::MAX;
 

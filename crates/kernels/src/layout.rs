@@ -5,17 +5,13 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::gpu_struct;
 
-pub const SURFACE_DIFFUSE: u32 = 0;
-pub const SURFACE_MIRROR: u32 = 1;
-pub const SURFACE_GLASS: u32 = 2;
-pub const SURFACE_CONDUCTOR: u32 = 3;
-pub const SURFACE_PLASTIC: u32 = 4;
-pub const SURFACE_THIN: u32 = 5;
-pub const SURFACE_ROUGH_CONDUCTOR: u32 = 6;
-pub const SURFACE_ROUGH_GLASS: u32 = 7;
 /// `Material::distribution` of a rough surface (microfacet.glsl).
-pub const MICROFACET_BECKMANN: u32 = 0;
-pub const MICROFACET_GGX: u32 = 1;
+pub use crate::reflected::constants::{MICROFACET_BECKMANN, MICROFACET_GGX};
+/// `Material::surface`: which BSDF (types.glsl).
+pub use crate::reflected::constants::{
+    SURFACE_CONDUCTOR, SURFACE_DIFFUSE, SURFACE_GLASS, SURFACE_MIRROR, SURFACE_PLASTIC, SURFACE_ROUGH_CONDUCTOR,
+    SURFACE_ROUGH_GLASS, SURFACE_THIN,
+};
 /// `HitPoint::pixel` of an empty slot.
 pub const EMPTY_SLOT: u32 = u32::MAX;
 /// The probe pass's fixed-point scale for d^2 / r^2 (2^30).
@@ -63,18 +59,14 @@ gpu_struct!(Material {
     table
 });
 
-/// A texture's kind, filter and wrap mode in its header (texture.glsl).
-pub const TEXTURE_BITMAP: u32 = 0;
-pub const TEXTURE_CHECKERBOARD: u32 = 1;
-pub const FILTER_BILINEAR: u32 = 0;
-pub const FILTER_NEAREST: u32 = 1;
-pub const WRAP_REPEAT: u32 = 0;
-pub const WRAP_MIRROR: u32 = 1;
-pub const WRAP_CLAMP: u32 = 2;
 /// Texels of a texture's header, before a bitmap's pixels.
-pub const TEXTURE_HEADER: u32 = 5;
+pub use crate::reflected::constants::TEXTURE_HEADER;
 /// Texels per triangle in the triangles' shading buffer: texture coordinates (two), vertex normals (one).
-pub const TRIANGLE_TEXELS: u32 = 3;
+pub use crate::reflected::constants::TRIANGLE_TEXELS;
+/// A texture's kind, filter and wrap mode in its header (texture.glsl).
+pub use crate::reflected::constants::{
+    FILTER_BILINEAR, FILTER_NEAREST, TEXTURE_BITMAP, TEXTURE_CHECKERBOARD, WRAP_CLAMP, WRAP_MIRROR, WRAP_REPEAT,
+};
 /// The most a photon may carry at a smooth-shaded surface, in fixed-point units of the gather's sums
 /// (2^46, `RenderParams::flux_fixed` per unit of flux: 2^16 times the most any light gives a photon).
 /// Veach's correction for shading normals can raise a photon's flux without bound (shading.glsl); the
@@ -146,8 +138,8 @@ gpu_struct!(Light {
     power,
     pad1
 });
-pub const LIGHT_QUAD: u32 = 0;
-pub const LIGHT_TRIANGLE: u32 = 1;
+/// `Light::kind` (types.glsl).
+pub use crate::reflected::constants::{LIGHT_QUAD, LIGHT_TRIANGLE};
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -369,12 +361,10 @@ gpu_struct!(PhotonState {
 });
 
 /// `BvhNode::child` of a slot without a child.
-pub const BVH_EMPTY: u32 = u32::MAX;
+pub use crate::reflected::constants::BVH_EMPTY;
 /// `BvhNode::child` of a leaf: this bit, its triangle count less one from [`BVH_COUNT_SHIFT`] and its first
 /// triangle below (bvh.glsl's constants of the same names).
-pub const BVH_LEAF: u32 = 1 << 31;
-pub const BVH_COUNT_SHIFT: u32 = 29;
-pub const BVH_FIRST_MASK: u32 = (1 << BVH_COUNT_SHIFT) - 1;
+pub use crate::reflected::constants::{BVH_COUNT_SHIFT, BVH_FIRST_MASK, BVH_LEAF};
 
 /// A node of the 4-wide BVH the kernels traverse (shaders/common/bvh.glsl), 64 bytes: the boxes of up to
 /// four children, quantized to a byte per bound on a power-of-two step per axis, and each child's reference

@@ -23,9 +23,9 @@ pub fn lookup_limit(budget: Option<u32>) -> u32 {
 /// Buckets scanned per workgroup in `grid_scan.comp` (256 threads x 4).
 pub const SCAN_BLOCK: u32 = 1024;
 /// Records per workgroup of the count and the split (`CHUNK` in shaders/lookup/partition.glsl).
-pub const CHUNK: u32 = 8192;
+pub const CHUNK: u32 = crate::reflected::constants::CHUNK;
 /// Most partitions of the buckets (`MAX_PARTS` in partition.glsl).
-pub const MAX_PARTS: u32 = 512;
+pub const MAX_PARTS: u32 = crate::reflected::constants::MAX_PARTS;
 /// Most chunks a batch may have: `grid_offsets.comp` runs one loop step per chunk, and this keeps it far
 /// inside lavapipe's 65535 steps per SIMD group (and the dispatch within 65535 workgroups). 60000 chunks
 /// are 491M records, beyond the largest buffer a device binds (the renderer checks that first).

@@ -16,7 +16,7 @@ pub const SALT_PHOTON: u32 = 1;
 pub const SALT_PROBE: u32 = 2;
 pub const SALT_EYE: u32 = 3;
 /// The eye pass's emission-only samples (`SALT_EMISSION` in ray.comp).
-pub const SALT_EMISSION: u32 = 4;
+pub const SALT_EMISSION: u32 = crate::reflected::constants::SALT_EMISSION;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
