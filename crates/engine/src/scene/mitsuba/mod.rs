@@ -19,8 +19,9 @@
 //! - `bsdf.rs`: `<bsdf>`, one function per plugin; `texture.rs`: `<texture>` (bitmap, checkerboard);
 //! - `shape.rs`: `<shape>`, one function per shape type; `emitter.rs`: `<emitter>`.
 //!
-//! The children use this file's [`Builder`] and `xml.rs`'s [`Elem`], and `properties.rs`; this file calls
-//! into them. Mesh files are read by `scene/obj.rs` (OBJ) and `scene/ply.rs` (PLY).
+//! Uses run one way: the children use this file's [`Builder`], `xml.rs`'s [`Elem`] and `properties.rs`;
+//! `shape.rs` uses `bsdf.rs`, `emitter.rs` and `texture.rs`, and `bsdf.rs` uses `texture.rs`; this file
+//! calls into them. Mesh files are read by `scene/obj.rs` (OBJ) and `scene/ply.rs` (PLY).
 
 mod bsdf;
 mod emitter;
@@ -201,6 +202,9 @@ impl Builder {
 
 #[cfg(test)]
 mod tests {
+    //! The whole reader's tests, and the helpers the other files' tests share (`load_in`, `load_body`,
+    //! `error`, `write_texture`).
+
     use super::*;
     use crate::scene::texture;
     use crate::scene::TempDir;
