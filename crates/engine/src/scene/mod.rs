@@ -12,6 +12,7 @@ pub mod demo;
 mod mitsuba;
 mod obj;
 pub mod plastic;
+mod ply;
 pub mod rough_plastic;
 pub mod texture;
 mod toml;

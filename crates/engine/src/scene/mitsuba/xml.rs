@@ -1,0 +1,416 @@
+//! Stage 1: XML files to one owned tree of [`Elem`]s in document order, as Mitsuba's parser does it:
+//! `$name` parameters substituted in every attribute (`-D` overrides first, then `<default>`s),
+//! `<include>`s spliced in place (relative to the including file, cycles and nesting deeper than
+//! Mitsuba's limit refused).
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+use anyhow::{anyhow, bail, Result};
+
+use crate::error::Error;
+use crate::scene::{read_bounded, MAX_SCENE_BYTES};
+
+/// Deepest `<include>` nesting, Mitsuba's own limit (`ParserConfig::max_include_depth`).
+pub const MAX_INCLUDE_DEPTH: usize = 15;
+
+/// Elements nested deeper than this are refused (real scenes nest about five deep: scene, shape,
+/// bsdf, bsdf, rgb).
+pub const MAX_NESTING: usize = 64;
+
+/// Just past the `>` that ends the tag starting at `at`: the first outside quotes (an attribute value
+/// may hold `>` or `/>`), or the end of the text.
+fn tag_end(b: &[u8], at: usize) -> usize {
+    let mut quote = None;
+    for (i, &c) in b.iter().enumerate().skip(at) {
+        match (quote, c) {
+            (None, b'"' | b'\'') => quote = Some(c),
+            (Some(q), _) if c == q => quote = None,
+            (None, b'>') => return i + 1,
+            _ => {}
+        }
+    }
+    b.len()
+}
+
+/// The line where elements first nest deeper than `max`, by a scan of the tags (`<a>` opens unless
+/// it ends `/>`, `</a>` closes; comments, CDATA and `<?...?>` are skipped), if they do.
+fn too_deep(text: &str, max: usize) -> Option<usize> {
+    let b = text.as_bytes();
+    let (mut depth, mut i) = (0usize, 0usize);
+    let skip_past = |from: usize, end: &[u8]| -> usize {
+        b[from..]
+            .windows(end.len())
+            .position(|w| w == end)
+            .map_or(b.len(), |p| from + p + end.len())
+    };
+    while let Some(p) = b[i..].iter().position(|&c| c == b'<') {
+        let at = i + p;
+        let rest = &b[at..];
+        i = if rest.starts_with(b"<!--") {
+            skip_past(at, b"-->")
+        } else if rest.starts_with(b"<![CDATA[") {
+            skip_past(at, b"]]>")
+        } else if rest.starts_with(b"<?") || rest.starts_with(b"<!") {
+            skip_past(at, b">")
+        } else {
+            let end = tag_end(b, at);
+            if rest.starts_with(b"</") {
+                depth = depth.saturating_sub(1);
+            } else if !b[..end].ends_with(b"/>") {
+                depth += 1;
+                if depth > max {
+                    return Some(1 + b[..at].iter().filter(|&&c| c == b'\n').count());
+                }
+            }
+            end
+        };
+    }
+    None
+}
+
+/// The root element of the scene at `path` (`shown` in messages) and its top-level elements, includes
+/// spliced in; `defines` override its `<default>`s, and one the scene never uses is an error.
+pub(super) fn read(path: &Path, shown: &str, defines: &[(String, String)]) -> Result<(Elem, Vec<Elem>)> {
+    let mut reader = Reader {
+        params: defines
+            .iter()
+            .map(|(k, v)| Param {
+                key: format!("${k}"),
+                value: v.clone(),
+                used: false,
+            })
+            .collect(),
+        open: Vec::new(),
+    };
+    let (root, children) = reader.read(path, shown, None)?;
+    if let Some(p) = reader.params.iter().find(|p| !p.used) {
+        bail!(
+            "{shown}: -D {}={}: the scene never uses ${0} (Mitsuba refuses unused parameters too)",
+            &p.key[1..],
+            p.value
+        );
+    }
+    Ok((root, children))
+}
+
+/// Where an element starts.
+#[derive(Clone, Debug)]
+pub(super) struct Loc {
+    pub(super) file: Rc<str>,
+    line: u32,
+    col: u32,
+}
+
+impl fmt::Display for Loc {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}:{}", self.file, self.line, self.col)
+    }
+}
+
+/// An XML element with its attributes substituted.
+#[derive(Clone, Debug)]
+pub(super) struct Elem {
+    pub(super) tag: String,
+    attrs: Vec<(String, String)>,
+    pub(super) children: Vec<Elem>,
+    pub(super) loc: Loc,
+}
+
+impl Elem {
+    pub(super) fn attr(&self, name: &str) -> Option<&str> {
+        self.attrs.iter().find(|(k, _)| k == name).map(|(_, v)| v.as_str())
+    }
+
+    pub(super) fn kind(&self) -> &str {
+        self.attr("type").unwrap_or("")
+    }
+
+    /// The element as messages name it: `<shape type="rectangle" id="floor">`, `<float name="fov">`.
+    pub(super) fn what(&self) -> String {
+        let mut s = format!("<{}", self.tag);
+        for key in ["type", "id", "name"] {
+            if let Some(v) = self.attr(key) {
+                s += &format!(" {key}=\"{v}\"");
+            }
+        }
+        s + ">"
+    }
+
+    /// A located [`Error::Scene`] (inside anyhow; `Scene::load_with` takes it out): the element is its
+    /// field.
+    pub(super) fn err(&self, msg: impl fmt::Display) -> anyhow::Error {
+        let Loc { file, line, col } = &self.loc;
+        anyhow::Error::from(Error::scene(
+            file.to_string(),
+            *line as usize,
+            *col as usize,
+            self.what(),
+            msg.to_string(),
+        ))
+    }
+
+    pub(super) fn warning(&self, msg: impl fmt::Display) -> String {
+        format!("{}: {}: {msg}", self.loc, self.what())
+    }
+
+    pub(super) fn required(&self, name: &str) -> Result<&str> {
+        self.attr(name)
+            .ok_or_else(|| self.err(format!("needs the attribute {name}")))
+    }
+}
+
+struct Param {
+    /// `$name`.
+    key: String,
+    value: String,
+    used: bool,
+}
+
+struct Reader {
+    /// `-D` overrides first, then `<default>`s as they come (an override wins over a default).
+    params: Vec<Param>,
+    /// Canonical paths of the files being read, outermost first (to catch include cycles).
+    open: Vec<PathBuf>,
+}
+
+impl Reader {
+    /// The root element of the file at `path` and its children (includes spliced in).
+    fn read(&mut self, path: &Path, shown: &str, included_at: Option<&Elem>) -> Result<(Elem, Vec<Elem>)> {
+        let at = |msg: String| match included_at {
+            Some(e) => e.err(msg),
+            None => anyhow!(msg),
+        };
+        // Bounded and regular files only, as for TOML scenes (a device file would be read forever).
+        let text = read_bounded(path, MAX_SCENE_BYTES, "scene file").map_err(|e| match included_at {
+            Some(include) => include.err(e),
+            None => anyhow::Error::from(e),
+        })?;
+        let canonical = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+        if let Some(i) = self.open.iter().position(|p| *p == canonical) {
+            let chain: Vec<String> = self.open[i..]
+                .iter()
+                .chain([&canonical])
+                .map(|p| p.display().to_string())
+                .collect();
+            return Err(at(format!("include cycle: {}", chain.join(" -> "))));
+        }
+        if self.open.len() > MAX_INCLUDE_DEPTH {
+            return Err(at(format!(
+                "includes nested deeper than {MAX_INCLUDE_DEPTH} files (Mitsuba's limit)"
+            )));
+        }
+        // roxmltree's tokenizer recurses per level: refuse deep nesting before it parses.
+        if let Some(line) = too_deep(&text, MAX_NESTING) {
+            let message = format!("elements nested deeper than {MAX_NESTING} levels");
+            return Err(match included_at {
+                Some(include) => include.err(format!("{shown}:{line}: {message}")),
+                None => Error::scene(shown, line, 1, "", message).into(),
+            });
+        }
+        let doc = roxmltree::Document::parse(&text).map_err(|e| {
+            let p = e.pos();
+            at(format!("{shown}:{}:{}: malformed XML: {e}", p.row, p.col))
+        })?;
+        self.open.push(canonical);
+        let file: Rc<str> = shown.into();
+        let src = Src {
+            doc: &doc,
+            file,
+            dir: path.parent().unwrap_or(Path::new("")),
+        };
+        let root = doc.root_element();
+        let mut top = Vec::new();
+        // The root is read like any element (its attributes substituted), without its children.
+        let root_elem = self.element(&src, root, false)?;
+        if root.tag_name().name() == "scene" {
+            if let Some(v) = root_elem.attr("version") {
+                let major = v.split('.').next().and_then(|m| m.parse::<u32>().ok());
+                if major.is_none_or(|m| m < 2) {
+                    return Err(root_elem.err(format!(
+                        "version {v}: only scenes of version 2 and 3 are read (older ones name \
+                         their parameters differently)"
+                    )));
+                }
+            }
+            for child in root.children().filter(|n| n.is_element()) {
+                self.convert(&src, child, &mut top)?;
+            }
+        } else {
+            // An included file may hold one object instead of a scene.
+            self.convert(&src, root, &mut top)?;
+        }
+        self.open.pop();
+        Ok((root_elem, top))
+    }
+
+    /// Appends what `node` stands for to `out`: itself, an included file's elements, or nothing (a
+    /// `<default>`).
+    fn convert(&mut self, src: &Src, node: roxmltree::Node, out: &mut Vec<Elem>) -> Result<()> {
+        let e = self.element(src, node, true)?;
+        match e.tag.as_str() {
+            "default" => {
+                let name = e.required("name")?;
+                let value = e.required("value")?;
+                if name.is_empty() {
+                    return Err(e.err("the name must not be empty"));
+                }
+                let key = format!("${name}");
+                if !self.params.iter().any(|p| p.key == key) {
+                    self.params.push(Param {
+                        key,
+                        value: value.to_string(),
+                        used: true,
+                    });
+                }
+            }
+            "include" => {
+                let file = e.required("filename")?;
+                let path = src.dir.join(file);
+                let shown = path.display().to_string();
+                let (_, children) = self.read(&path, &shown, Some(&e))?;
+                out.extend(children);
+            }
+            _ => out.push(e),
+        }
+        Ok(())
+    }
+
+    /// `node` with its attributes substituted and (with `deep`) its children converted.
+    fn element(&mut self, src: &Src, node: roxmltree::Node, deep: bool) -> Result<Elem> {
+        let pos = src.doc.text_pos_at(node.range().start);
+        let mut e = Elem {
+            tag: node.tag_name().name().to_string(),
+            attrs: Vec::new(),
+            children: Vec::new(),
+            loc: Loc {
+                file: src.file.clone(),
+                line: pos.row,
+                col: pos.col,
+            },
+        };
+        for a in node.attributes() {
+            let value = self
+                .substitute(a.value())
+                .map_err(|m| e.err(format!("attribute {}=\"{}\": {m}", a.name(), a.value())))?;
+            e.attrs.push((a.name().to_string(), value));
+        }
+        if deep {
+            // Bounded, as the reader and the scene's drop recurse per level (a fuzzed file nested
+            // thousands deep overflowed the stack).
+            if node.ancestors().take(MAX_NESTING + 2).count() > MAX_NESTING {
+                return Err(e.err(format!("elements nested deeper than {MAX_NESTING} levels")));
+            }
+            let mut children = Vec::new();
+            for child in node.children().filter(|n| n.is_element()) {
+                self.convert(src, child, &mut children)?;
+            }
+            e.children = children;
+        }
+        Ok(e)
+    }
+
+    /// Mitsuba's substitution: every `$key` (longest keys first) not escaped as `\$` is replaced;
+    /// a `$` left over is an undefined parameter; `\$` then becomes `$`.
+    fn substitute(&mut self, value: &str) -> Result<String, String> {
+        if !value.contains('$') {
+            return Ok(value.to_string());
+        }
+        let mut order: Vec<usize> = (0..self.params.len()).collect();
+        order.sort_by_key(|&i| std::cmp::Reverse(self.params[i].key.len()));
+        let mut s = value.to_string();
+        for i in order {
+            let p = &mut self.params[i];
+            let mut pos = 0;
+            while let Some(k) = s[pos..].find(&p.key).map(|k| k + pos) {
+                if k > 0 && s.as_bytes()[k - 1] == b'\\' {
+                    pos = k + p.key.len();
+                } else {
+                    s.replace_range(k..k + p.key.len(), &p.value);
+                    p.used = true;
+                    pos = k + p.value.len();
+                }
+            }
+        }
+        let bytes = s.as_bytes();
+        for (k, _) in s.match_indices('$') {
+            if k > 0 && bytes[k - 1] == b'\\' {
+                continue;
+            }
+            let name: String = s[k + 1..]
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect();
+            return Err(format!(
+                "undefined parameter ${name} (give it a <default name=\"{name}\" value=\"...\"/> \
+                 or -D {name}=...)"
+            ));
+        }
+        Ok(s.replace("\\$", "$"))
+    }
+}
+
+/// The file being read.
+struct Src<'a, 'input> {
+    doc: &'a roxmltree::Document<'input>,
+    file: Rc<str>,
+    dir: &'a Path,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::tests::load_in;
+    use crate::scene::{Scene, Surface, TempDir};
+
+    #[test]
+    fn defaults_overrides_refs_and_includes() {
+        let dir = TempDir::new("mitsuba-inc");
+        std::fs::create_dir_all(dir.0.join("sub")).unwrap();
+        // Included from sub/, it includes its sibling relative to itself.
+        dir.write(
+            "sub/materials.xml",
+            r#"<scene version="3.0.0"><include filename="more.xml"/></scene>"#,
+        );
+        dir.write("sub/more.xml", r#"<scene version="3.0.0"><bsdf type="diffuse" id="grey"><rgb name="reflectance" value="$albedo"/></bsdf></scene>"#);
+        let body = r#"<default name="albedo" value="0.25"/><default name="albedo_" value="0.75"/>
+            <include filename="sub/materials.xml"/>
+            <shape type="cube"><ref id="grey"/></shape>
+            <shape type="cube"><bsdf type="diffuse"><float name="reflectance" value="$albedo_"/></bsdf></shape>"#;
+        let albedo = |s: &Scene, i: usize| match s.materials[s.quads[i].material as usize].surface {
+            Surface::Diffuse { albedo } => albedo.x,
+            _ => panic!(),
+        };
+        let s = load_in(&dir, body, &[]).unwrap_or_else(|e| panic!("{e:#}"));
+        // $albedo_ is not $albedo followed by "_": the longer name is substituted first.
+        assert_eq!((albedo(&s, 1), albedo(&s, 7)), (0.25, 0.75));
+        assert_eq!(s.materials[s.quads[1].material as usize].name, "grey");
+        let s = load_in(&dir, body, &[("albedo", "0.5")]).unwrap();
+        assert_eq!((albedo(&s, 1), albedo(&s, 7)), (0.5, 0.75));
+        let e = format!("{:#}", load_in(&dir, body, &[("albdo", "0.5")]).unwrap_err());
+        assert!(e.contains("-D albdo=0.5: the scene never uses $albdo"), "{e}");
+
+        // A cycle: a includes b includes a.
+        dir.write("a.xml", r#"<scene version="3.0.0"><include filename="b.xml"/></scene>"#);
+        dir.write(
+            "b.xml",
+            "<scene version=\"3.0.0\">\n<include filename=\"a.xml\"/></scene>",
+        );
+        let e = format!(
+            "{:#}",
+            load_in(&dir, r#"<include filename="a.xml"/>"#, &[]).unwrap_err()
+        );
+        assert!(
+            e.contains("b.xml:2:1: <include>: include cycle: ") && e.contains("a.xml -> ") && e.ends_with("a.xml"),
+            "{e}"
+        );
+        let e = format!(
+            "{:#}",
+            load_in(&dir, r#"<include filename="missing.xml"/>"#, &[]).unwrap_err()
+        );
+        assert!(
+            e.contains("scene.xml:12:1: <include>: ") && e.contains("missing.xml: cannot read scene file"),
+            "{e}"
+        );
+    }
+}
