@@ -41,10 +41,10 @@ pub mod bvh;
 #[allow(dead_code)] // what only the tests use
 mod bvh;
 #[cfg(feature = "test-hooks")]
-pub mod gpu_scene;
+pub mod lower;
 #[cfg(not(feature = "test-hooks"))]
 #[allow(dead_code)]
-mod gpu_scene;
+mod lower;
 #[cfg(feature = "test-hooks")]
 pub mod reference;
 // The host uses the microfacet code (scene/rough_plastic.rs's tables); the rest is the tests'.

@@ -20,8 +20,8 @@ use ppm_vk_kernels::{pipeline, pipeline_from, reflected};
 
 use crate::checkpoint::{self, Checkpoint};
 use crate::error::{DeviceContext as _, Error, Result};
-use crate::gpu_scene::{GpuScene, CELL_PER_RADIUS};
 use crate::image_io::RgbImage;
+use crate::lower::{GpuScene, CELL_PER_RADIUS};
 use crate::scene::{Camera, Scene};
 use crate::settings::{Mode, ProbeMode, Settings};
 use crate::stats::{PassStats, PhotonVariant, ProbeReport};
@@ -517,7 +517,7 @@ impl Renderer {
             );
             return Err(Error::scene(&self.scene_name, 0, 0, "camera.resolution", message));
         }
-        crate::gpu_scene::set_camera(&mut self.start_params, camera);
+        crate::lower::set_camera(&mut self.start_params, camera);
         self.camera = *camera;
         self.scene_sha256 = crate::scene::camera_sha256(camera, &self.geometry_sha256);
         self.start()?;

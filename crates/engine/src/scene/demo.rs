@@ -848,7 +848,7 @@ mod tests {
     fn mesh_scenes_become_gpu_scenes_with_a_bvh() {
         for name in ["cornell-mesh", "furnace-mesh", "cornell-glass-mesh"] {
             let s = demo_scene(name);
-            let g = crate::gpu_scene::GpuScene::new(&s, &crate::Settings::default(), 1 << 16).unwrap();
+            let g = crate::lower::GpuScene::new(&s, &crate::Settings::default(), 1 << 16).unwrap();
             assert_eq!(g.params.num_triangles as usize, s.triangle_count(), "{name}");
             assert_eq!(g.bvh_triangles.len(), s.triangle_count(), "{name}");
             let tri_lights = g
