@@ -644,7 +644,7 @@ fn check_gather(
     stats: &[HitStats],
     records: &[Photon],
     cone_k: f32,
-    g: &ppm_vk_engine::gpu_scene::GpuScene,
+    g: &ppm_vk_engine::lower::GpuScene,
 ) {
     let flux_fixed = g.params.flux_fixed;
     let cpu = reference::gather(hits, stats, records, cone_k, &g.materials);
@@ -749,7 +749,7 @@ fn gather_case(cone_k: Option<f32>, grid: GridShape) {
     } else {
         cornell(RES, RES)
     };
-    let r0 = ppm_vk_engine::gpu_scene::default_radius(&scene); // eq. 8, the starting radius
+    let r0 = ppm_vk_engine::lower::default_radius(&scene); // eq. 8, the starting radius
     let grid_cell = grid.cell_of_radius.map(|f| f * r0);
     let photons_per_pass = grid.photons.unwrap_or(PHOTONS);
     let mode = if grid.sppm { Mode::Sppm } else { Mode::Ppm };
@@ -905,7 +905,7 @@ fn gather_through_the_most_partitions_matches_brute_force() {
 fn lookup_cut_short_is_an_error() {
     let ctx = ctx();
     let scene = cornell(RES, RES);
-    let r0 = ppm_vk_engine::gpu_scene::default_radius(&scene); // eq. 8, the starting radius
+    let r0 = ppm_vk_engine::lower::default_radius(&scene); // eq. 8, the starting radius
     let grid = Settings {
         grid_buckets: Some(ppm_vk_kernels::lookup::SCAN_BLOCK),
         grid_cell: Some(0.25 * r0),
@@ -953,7 +953,7 @@ fn shrinking_cells_leave_the_image_unchanged() {
         let mut cells = Vec::new();
         for _ in 0..6 {
             let stats = adaptive.pass().unwrap();
-            let per_radius = ppm_vk_engine::gpu_scene::CELL_PER_RADIUS;
+            let per_radius = ppm_vk_engine::lower::CELL_PER_RADIUS;
             assert!(
                 stats.cell_size >= per_radius * stats.radius_max,
                 "{mode:?}: cell {} under {per_radius} radii {}",
@@ -1105,7 +1105,7 @@ fn photon_power() {
     let ctx = ctx();
     // Every light's photons start with power / prob; prob-weighted, they sum to the scene's total power.
     for scene in [cornell(RES, RES), furnace(RES, RES)] {
-        let g = ppm_vk_engine::gpu_scene::GpuScene::new(&scene, &settings(), 1024).unwrap();
+        let g = ppm_vk_engine::lower::GpuScene::new(&scene, &settings(), 1024).unwrap();
         let prob: f64 = g.lights.iter().map(|l| l.prob as f64).sum();
         assert!(
             close(prob, 1.0, 1e-6, 0.0),
@@ -1184,7 +1184,7 @@ fn photon_power() {
 
     // With full-depth paths each first-hit-diffuse photon's first record is that same record (the CPU
     // reference per photon): the longer path does not change where and with what it starts.
-    let full = ppm_vk_engine::gpu_scene::GpuScene {
+    let full = ppm_vk_engine::lower::GpuScene {
         params: ppm_vk_engine::layout::RenderParams {
             max_photon_depth: 64,
             ..g.params

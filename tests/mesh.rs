@@ -8,8 +8,9 @@ use std::path::Path;
 use common::*;
 use glam::Vec3;
 use ppm_vk_engine::metrics::{compare, Reference};
-use ppm_vk_engine::scene::{demo, Mesh, Surface};
+use ppm_vk_engine::scene::{Mesh, Surface};
 use ppm_vk_engine::{Mode, Renderer, RgbImage, Scene, Settings};
+use ppm_vk_scene_gen as demo;
 
 fn scene(name: &str) -> Scene {
     demo::ensure(&demo::default_dir()).expect("writing the demo meshes");

@@ -702,7 +702,7 @@ fn sppm_same_seed_same_image_bit_for_bit() {
 #[test]
 fn eq8_radius_of_the_test_scene() {
     let want = 2.0 * (2.0 + 2.0 + 4.0) / (3.0 * 512.0);
-    let got = ppm_vk_engine::gpu_scene::default_radius(&cornell(512, 512));
+    let got = ppm_vk_engine::lower::default_radius(&cornell(512, 512));
     assert!((got as f64 / want - 1.0).abs() < 1e-6, "eq. 8 radius {got} vs {want}");
     // At another width r scales with 1 / s; the renderer starts every hit point at r^2.
     let ctx = ctx();

@@ -13,9 +13,9 @@ use ppm_vk_kernels::layout::{HitPoint, HitStats, PathCounters};
 use serde::{Deserialize, Serialize};
 use sha2::Digest;
 
-use crate::renderer::ProbeReport;
 use crate::scene::Scene;
 use crate::settings::Settings;
+use crate::stats::ProbeReport;
 
 const MAGIC: &[u8; 8] = b"PPMVKCKP";
 /// Raised whenever the layout of the file or of a buffer in it changes.

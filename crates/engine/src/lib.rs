@@ -33,6 +33,7 @@ mod renderer;
 pub mod report;
 pub mod scene;
 pub mod settings;
+mod stats;
 
 #[cfg(feature = "test-hooks")]
 pub mod bvh;
@@ -40,10 +41,10 @@ pub mod bvh;
 #[allow(dead_code)] // what only the tests use
 mod bvh;
 #[cfg(feature = "test-hooks")]
-pub mod gpu_scene;
+pub mod lower;
 #[cfg(not(feature = "test-hooks"))]
 #[allow(dead_code)]
-mod gpu_scene;
+mod lower;
 #[cfg(feature = "test-hooks")]
 pub mod reference;
 // The host uses the microfacet code (scene/rough_plastic.rs's tables); the rest is the tests'.
@@ -60,9 +61,10 @@ pub use image_io::RgbImage;
 pub use ppm_vk_device::{raw_window_handle, Context, ContextOptions, DeviceInfo, ScopeTiming};
 pub use ppm_vk_kernels::layout::PathCounters;
 pub use ppm_vk_kernels::photon::PathLimits;
-pub use renderer::{spread_marks, CancelToken, PassStats, PhotonVariant, ProbeReport, Renderer};
+pub use renderer::{spread_marks, CancelToken, Renderer};
 pub use scene::Scene;
 pub use settings::{DirectLight, Mode, ProbeMode, Settings};
+pub use stats::{PassStats, PhotonVariant, ProbeReport};
 
 /// Opens a Vulkan device (see [`ContextOptions`]); a failure is [`Error::Device`].
 pub fn open_device(options: &ContextOptions) -> Result<Context> {

@@ -10,8 +10,8 @@ use anyhow::{bail, Context as _, Result};
 use serde::{Deserialize, Serialize};
 
 use crate::metrics::ErrorStats;
-use crate::renderer::{PassStats, ProbeReport};
 use crate::settings::Settings;
+use crate::stats::{PassStats, ProbeReport};
 
 pub const SCHEMA: &str = "ppm-vk-report/1";
 

@@ -368,7 +368,7 @@ pub use crate::reflected::constants::{BVH_COUNT_SHIFT, BVH_FIRST_MASK, BVH_LEAF}
 
 /// A node of the 4-wide BVH the kernels traverse (shaders/common/bvh.glsl), 64 bytes: the boxes of up to
 /// four children, quantized to a byte per bound on a power-of-two step per axis, and each child's reference
-/// ([`BVH_EMPTY`], an interior node's index, or a leaf, [`BvhNode::leaf`]). crates/engine/src/bvh.rs
+/// ([`BVH_EMPTY`], an interior node's index, or a leaf, [`BvhNode::leaf`]). crates/engine/src/bvh/widen.rs
 /// collapses the binary SAH tree into it; [`BvhNode::new`] quantizes, [`BvhNode::child_boxes`] decodes as
 /// the kernels do.
 #[repr(C)]

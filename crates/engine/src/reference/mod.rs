@@ -22,7 +22,7 @@ use ppm_vk_kernels::layout::{
 use ppm_vk_kernels::photon::SALT_EMISSION;
 use ppm_vk_kernels::ray::RayPush;
 
-use crate::gpu_scene::GpuScene;
+use crate::lower::GpuScene;
 use crate::settings::ProbeMode;
 use rng::Rng;
 use trace::{

@@ -16,7 +16,7 @@ use super::microfacet::Microfacet;
 use super::rng::Rng;
 use super::rough_conductor::to_local;
 use super::trace::{cosine_direction, fresnel_dielectric, offset_ray, onb, reflect, v3};
-use crate::gpu_scene::GpuScene;
+use crate::lower::GpuScene;
 
 /// The coat's Fresnel reflectance for light arriving from outside at incidence `cos_i`, `ior` the
 /// index inside over the index outside.

@@ -11,7 +11,7 @@ use ppm_vk_kernels::layout::Material;
 use super::conductor::fresnel_conductor;
 use super::microfacet::Microfacet;
 use super::trace::{frame, offset_ray, onb, reflect, v3, PI};
-use crate::gpu_scene::GpuScene;
+use crate::lower::GpuScene;
 
 /// `d` in the local frame (t, b, nf).
 pub fn to_local(d: Vec3, t: Vec3, b: Vec3, nf: Vec3) -> Vec3 {

@@ -12,7 +12,7 @@ use ppm_vk_kernels::layout::Material;
 use super::microfacet::Microfacet;
 use super::rough_conductor::to_local;
 use super::trace::{frame, fresnel_dielectric, offset_ray, reflect};
-use crate::gpu_scene::GpuScene;
+use crate::lower::GpuScene;
 
 /// The facet's Fresnel reflectance for wi at cosine `c` = wi.h to a facet normal h on the outside's side
 /// (c < 0: wi inside), `ior` inside over outside.

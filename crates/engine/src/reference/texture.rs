@@ -7,7 +7,7 @@ use ppm_vk_kernels::layout::{
 };
 
 use super::trace::v3;
-use crate::gpu_scene::GpuScene;
+use crate::lower::GpuScene;
 
 fn texel_rgb(t: [u32; 4]) -> Vec3 {
     Vec3::new(f32::from_bits(t[0]), f32::from_bits(t[1]), f32::from_bits(t[2]))
@@ -81,7 +81,7 @@ pub fn apply(g: &GpuScene, m: &Material, uv: Vec2) -> Material {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gpu_scene::texture_texels;
+    use crate::lower::texture_texels;
     use crate::scene::texture::{read_image, Filter, Pattern, Texture, Wrap};
 
     const REFERENCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/references");

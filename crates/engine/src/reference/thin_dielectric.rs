@@ -8,7 +8,7 @@ use glam::Vec3;
 use ppm_vk_kernels::layout::Material;
 
 use super::trace::{fresnel_dielectric, offset_ray, reflect, v3};
-use crate::gpu_scene::GpuScene;
+use crate::lower::GpuScene;
 
 /// The probability of reflection at incidence `cos_i` (either side: the pane is symmetric).
 pub fn reflectance(cos_i: f32, ior: f32) -> f32 {

@@ -2,7 +2,7 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::gpu_scene::GpuScene;
+use crate::lower::GpuScene;
 
 pub const PI: f32 = std::f32::consts::PI;
 

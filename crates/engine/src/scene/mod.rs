@@ -2,13 +2,13 @@
 //! See `docs/scene-format.md` for the user-facing spec.
 //!
 //! Formats are loaders that all build this one [`Scene`]: `toml` reads the scene file,
-//! `obj` imports OBJ/MTL meshes through tobj, [`demo`] generates the demo meshes. Every value check
-//! lives once, in [`Scene::validate`], so a scene built in code, read from TOML or imported is checked
-//! the same way; the TOML loader maps a failed check's field path (`sphere[1].radius`) back to the line
-//! and column it came from.
+//! `obj` imports OBJ/MTL meshes through tobj ([`generated`] lists the demo meshes that crates/scene-gen
+//! writes). Every value check lives once, in [`Scene::validate`], so a scene built in code, read from TOML
+//! or imported is checked the same way; the TOML loader maps a failed check's field path
+//! (`sphere[1].radius`) back to the line and column it came from.
 
 pub mod conductors;
-pub mod demo;
+pub mod generated;
 mod mitsuba;
 mod obj;
 pub mod plastic;

@@ -15,7 +15,7 @@ use anyhow::{anyhow, bail, Result};
 use glam::{DAffine3, DVec3, Vec2, Vec3};
 
 use super::texture::{self, Filter, Texture, Wrap};
-use super::{demo, fmt_vec, Material, Mesh, Scene, Surface, Triangle};
+use super::{fmt_vec, generated, Material, Mesh, Scene, Surface, Triangle};
 
 /// How [`Scene::import_obj`] places and dresses an OBJ.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,8 +54,8 @@ pub(super) fn import(
 ) -> Result<usize> {
     let shown = path.display().to_string();
     let text = super::read_bounded(path, super::MAX_MESH_BYTES, "OBJ file").map_err(|e| {
-        let hint = if demo::is_generated(path) {
-            format!(" (a generated demo mesh: run `{}` to write it)", demo::COMMAND)
+        let hint = if generated::is_generated(path) {
+            format!(" (a generated demo mesh: run `{}` to write it)", generated::COMMAND)
         } else {
             String::new()
         };
@@ -1319,7 +1319,7 @@ newmtl plain\nNs 10\n";
             s.import_obj(dir.0.join("water.obj"), &ObjImport::default())
                 .unwrap_err()
         );
-        assert!(e.contains(demo::COMMAND), "a generated file's hint: {e}");
+        assert!(e.contains(generated::COMMAND), "a generated file's hint: {e}");
         // The limit, scaled down: three triangles against a limit of two.
         let path = dir.write("a.obj", &format!("{TRI}v 1 1 0\nf 1 2 3\nf 2 4 3\nf 1 2 4\n"));
         let opts = ObjImport {

@@ -1,12 +1,12 @@
 //! Writes the demo meshes of `scenes/*.toml` (OBJ and MTL) into `scenes/meshes/`, or the directory
 //! given, skipping files already written by this version of the generator; `--force` rewrites all.
 //!
-//! `cargo run --release -p ppm-vk-engine --example gen_scenes [-- [--force] [DIR]]`
+//! `cargo run --release -p ppm-vk-scene-gen --bin gen_scenes [-- [--force] [DIR]]`
 
 use std::path::PathBuf;
 
 use anyhow::{bail, Context as _, Result};
-use ppm_vk_engine::scene::demo;
+use ppm_vk_scene_gen as demo;
 
 fn main() -> Result<()> {
     let mut force = false;

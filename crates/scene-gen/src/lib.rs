@@ -1,9 +1,10 @@
 //! The demo meshes of `scenes/`: OBJ and MTL files generated here, so that nothing is downloaded and
-//! the large ones need not be committed.
+//! the large ones need not be committed. A dev-only crate: the engine keeps only the list of these files
+//! and the command that writes them (`ppm_vk_engine::scene::generated`), which this crate reads.
 //!
 //! The small files (`cornell-box`, `furnace-sphere`) are committed; a test checks that they are what
-//! this module writes. The large ones (`water`, ~207k triangles; `glass-sphere`, 20k; `glass-on-table`)
-//! are written on demand by [`ensure`]: `cargo run --release -p ppm-vk-engine --example gen_scenes`,
+//! this crate writes. The large ones (`water`, ~207k triangles; `glass-sphere`, 20k; `glass-on-table`)
+//! are written on demand by [`ensure`]: [`COMMAND`] (the `gen_scenes` program of this crate),
 //! `scripts/ppm-vk` before a scene with meshes, and the tests that load them. Every file starts with
 //! [`STAMP`]; a file whose first line differs (absent, or from an older generator) is rewritten.
 
@@ -12,104 +13,37 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, Result};
 use glam::DVec3;
+pub use ppm_vk_engine::scene::generated::{DemoFile, COMMAND, FILES};
 
-/// The command that writes the demo meshes.
-pub const COMMAND: &str = "cargo run --release -p ppm-vk-engine --example gen_scenes";
-
-/// First line of every generated file; bump the version when the geometry changes.
+/// First line of every generated file; bump the version when the geometry changes. (It still names the
+/// generator's old path, crates/engine/src/scene/demo.rs: a new text would rewrite every generated file.)
 pub const STAMP: &str = "# ppm-vk demo mesh v1: written by crates/engine/src/scene/demo.rs (gen_scenes), do not edit";
 
-/// One generated file.
-pub struct DemoFile {
-    /// File name inside the meshes directory.
-    pub name: &'static str,
-    /// Committed to git (small); the others are ignored by git and written on demand.
-    pub committed: bool,
-    make: fn() -> String,
+/// The content of file `f` of [`FILES`].
+pub fn contents(f: &DemoFile) -> String {
+    let make: fn() -> String = match f.name {
+        "cornell-box.obj" => cornell_box_obj,
+        "cornell-box.mtl" => cornell_box_mtl,
+        "furnace-sphere.obj" => furnace_sphere_obj,
+        "furnace-sphere.mtl" => furnace_sphere_mtl,
+        "smooth-sphere.obj" => smooth_sphere_obj,
+        "glass-sphere.obj" => glass_sphere_obj,
+        "water.obj" => water_obj,
+        "dense-sphere.obj" => dense_sphere_obj,
+        "water.mtl" => water_mtl,
+        "glass-on-table.obj" => glass_on_table_obj,
+        "glass-on-table.mtl" => glass_on_table_mtl,
+        "gold-ring.obj" => gold_ring_obj,
+        name => panic!("no generator writes {name} (listed in the engine's scene/generated.rs)"),
+    };
+    make()
 }
-
-impl DemoFile {
-    /// The file's content.
-    pub fn contents(&self) -> String {
-        (self.make)()
-    }
-}
-
-pub const FILES: &[DemoFile] = &[
-    DemoFile {
-        name: "cornell-box.obj",
-        committed: true,
-        make: cornell_box_obj,
-    },
-    DemoFile {
-        name: "cornell-box.mtl",
-        committed: true,
-        make: cornell_box_mtl,
-    },
-    DemoFile {
-        name: "furnace-sphere.obj",
-        committed: true,
-        make: furnace_sphere_obj,
-    },
-    DemoFile {
-        name: "furnace-sphere.mtl",
-        committed: true,
-        make: furnace_sphere_mtl,
-    },
-    DemoFile {
-        name: "smooth-sphere.obj",
-        committed: true,
-        make: smooth_sphere_obj,
-    },
-    DemoFile {
-        name: "glass-sphere.obj",
-        committed: false,
-        make: glass_sphere_obj,
-    },
-    DemoFile {
-        name: "water.obj",
-        committed: false,
-        make: water_obj,
-    },
-    DemoFile {
-        name: "dense-sphere.obj",
-        committed: false,
-        make: dense_sphere_obj,
-    },
-    DemoFile {
-        name: "water.mtl",
-        committed: false,
-        make: water_mtl,
-    },
-    DemoFile {
-        name: "glass-on-table.obj",
-        committed: false,
-        make: glass_on_table_obj,
-    },
-    DemoFile {
-        name: "glass-on-table.mtl",
-        committed: false,
-        make: glass_on_table_mtl,
-    },
-    DemoFile {
-        name: "gold-ring.obj",
-        committed: false,
-        make: gold_ring_obj,
-    },
-];
 
 /// `scenes/meshes` of this repository, where the demo scenes look for their meshes.
 pub fn default_dir() -> PathBuf {
-    let engine = Path::new(env!("CARGO_MANIFEST_DIR"));
-    // crates/engine -> the repository root.
-    engine.ancestors().nth(2).unwrap_or(engine).join("scenes/meshes")
-}
-
-/// True when `path` names a file this module generates but git does not hold (for a hint in the
-/// error of a missing file).
-pub fn is_generated(path: &Path) -> bool {
-    let name = path.file_name().and_then(|n| n.to_str());
-    FILES.iter().any(|f| !f.committed && Some(f.name) == name)
+    let crate_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    // crates/scene-gen -> the repository root.
+    crate_dir.ancestors().nth(2).unwrap_or(crate_dir).join("scenes/meshes")
 }
 
 /// Writes every demo file into `dir` that is missing or was written by another generator version;
@@ -124,7 +58,7 @@ pub fn ensure(dir: &Path) -> Result<Vec<PathBuf>> {
             continue;
         }
         let tmp = dir.join(format!("{}.tmp.{}", f.name, std::process::id()));
-        std::fs::write(&tmp, f.contents()).with_context(|| format!("writing {}", tmp.display()))?;
+        std::fs::write(&tmp, contents(f)).with_context(|| format!("writing {}", tmp.display()))?;
         std::fs::rename(&tmp, &path).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
         written.push(path);
     }
@@ -593,8 +527,8 @@ fn gold_ring_obj() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Scene, Surface};
     use glam::Vec3;
+    use ppm_vk_engine::scene::{Scene, Surface};
     use std::collections::HashMap;
     use std::sync::OnceLock;
 
@@ -619,10 +553,8 @@ mod tests {
         for f in FILES.iter().filter(|f| f.committed) {
             let path = default_dir().join(f.name);
             let on_disk = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-            assert!(on_disk == f.contents(), "{} differs from the generator's", f.name);
+            assert!(on_disk == contents(f), "{} differs from the generator's", f.name);
         }
-        assert!(is_generated(Path::new("x/water.obj")));
-        assert!(!is_generated(Path::new("x/cornell-box.obj")));
     }
 
     #[test]
@@ -661,7 +593,7 @@ mod tests {
                         .iter()
                         .position(|m| m.name == *name)
                         .expect("sphere material");
-                    crate::scene::Sphere {
+                    ppm_vk_engine::scene::Sphere {
                         material: k as u32,
                         ..*s
                     }
@@ -811,7 +743,7 @@ mod tests {
 
     /// Per edge between two positions (by their bits): the triangles that use it, and how many more run
     /// along it one way than the other (0 where the two sides' windings agree).
-    fn edges(m: &crate::scene::Mesh) -> HashMap<([u32; 3], [u32; 3]), (u32, i32)> {
+    fn edges(m: &ppm_vk_engine::scene::Mesh) -> HashMap<([u32; 3], [u32; 3]), (u32, i32)> {
         let key = |p: Vec3| p.to_array().map(f32::to_bits);
         let mut edges: HashMap<([u32; 3], [u32; 3]), (u32, i32)> = HashMap::new();
         for t in m.triangles() {
@@ -829,7 +761,7 @@ mod tests {
         let s = demo_scene("gold-ring");
         assert_eq!(s.triangle_count(), 192 * 8);
         let m = &s.meshes[0];
-        let (eta, k) = crate::scene::conductors::named("Au").unwrap();
+        let (eta, k) = ppm_vk_engine::scene::conductors::named("Au").unwrap();
         assert!(m.materials.iter().all(|&i| s.materials[i as usize].surface
             == Surface::Conductor {
                 reflectance: Vec3::ONE,
@@ -848,13 +780,13 @@ mod tests {
     fn mesh_scenes_become_gpu_scenes_with_a_bvh() {
         for name in ["cornell-mesh", "furnace-mesh", "cornell-glass-mesh"] {
             let s = demo_scene(name);
-            let g = crate::gpu_scene::GpuScene::new(&s, &crate::Settings::default(), 1 << 16).unwrap();
+            let g = ppm_vk_engine::lower::GpuScene::new(&s, &ppm_vk_engine::Settings::default(), 1 << 16).unwrap();
             assert_eq!(g.params.num_triangles as usize, s.triangle_count(), "{name}");
             assert_eq!(g.bvh_triangles.len(), s.triangle_count(), "{name}");
             let tri_lights = g
                 .lights
                 .iter()
-                .filter(|l| l.kind == ppm_vk_kernels::layout::LIGHT_TRIANGLE)
+                .filter(|l| l.kind == ppm_vk_engine::layout::LIGHT_TRIANGLE)
                 .count();
             assert_eq!(tri_lights, s.emitting_triangles().len(), "{name}");
             let p: f64 = g.lights.iter().map(|l| l.prob as f64).sum();

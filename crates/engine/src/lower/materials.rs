@@ -1,0 +1,140 @@
+//! The material table: each scene material as the kernels' `Material` record (types.glsl says which
+//! fields each surface reads).
+
+use glam::Vec3;
+use ppm_vk_kernels::layout::{self, Material};
+
+use crate::scene::Microfacet;
+use crate::scene::{plastic, Scene, Surface};
+
+/// The records of `scene`'s materials, in order. `texture_at` is the texel of each texture's header;
+/// rough plastics' coat tables are appended to `textures`.
+pub fn materials(scene: &Scene, texture_at: &[u32], textures: &mut Vec<[u32; 4]>) -> Vec<Material> {
+    scene
+        .materials
+        .iter()
+        .map(|m| material(m, texture_at, textures))
+        .collect()
+}
+
+/// The record of material `m`: one arm per surface, each writing all the fields that surface reads;
+/// the others stay zero.
+fn material(m: &crate::scene::Material, texture_at: &[u32], textures: &mut Vec<[u32; 4]>) -> Material {
+    let base = Material {
+        emission: m.emission.to_array(),
+        texture: m.texture.map_or(0, |t| texture_at[t as usize] + 1),
+        ..Default::default()
+    };
+    match m.surface {
+        Surface::Diffuse { albedo } => Material {
+            color: albedo.to_array(),
+            surface: layout::SURFACE_DIFFUSE,
+            ior: 1.0,
+            ..base
+        },
+        Surface::Mirror { reflectance } => Material {
+            color: reflectance.to_array(),
+            surface: layout::SURFACE_MIRROR,
+            ior: 1.0,
+            ..base
+        },
+        Surface::Conductor { reflectance, eta, k } => Material {
+            color: reflectance.to_array(),
+            surface: layout::SURFACE_CONDUCTOR,
+            ior: 1.0,
+            lobe_a: eta.to_array(),
+            lobe_b: k.to_array(),
+            ..base
+        },
+        Surface::Glass { ior } => Material {
+            color: Vec3::ONE.to_array(),
+            surface: layout::SURFACE_GLASS,
+            ior,
+            ..base
+        },
+        Surface::Plastic {
+            diffuse,
+            specular,
+            ior,
+            nonlinear,
+            rough,
+        } => {
+            // The coat (scene/plastic.rs): a rough one's transmittance table goes after the textures.
+            let coat = plastic::coat(ior, rough);
+            let table = match coat.table.as_ref() {
+                Some(t) => push_table(textures, t),
+                None => 0,
+            };
+            Material {
+                color: plastic::diffuse_factor(diffuse, ior, nonlinear, coat.internal).to_array(),
+                surface: layout::SURFACE_PLASTIC,
+                ior,
+                lobe_a: specular.to_array(),
+                lobe_b: [
+                    plastic::diffuse_bound(diffuse, ior, nonlinear, &coat),
+                    coat.internal,
+                    nonlinear as u32 as f32,
+                ],
+                table,
+                ..with_microfacet(base, rough)
+            }
+        }
+        Surface::ThinDielectric {
+            ior,
+            reflectance,
+            transmittance,
+        } => Material {
+            color: reflectance.to_array(),
+            surface: layout::SURFACE_THIN,
+            ior,
+            lobe_a: transmittance.to_array(),
+            ..base
+        },
+        Surface::RoughConductor {
+            reflectance,
+            eta,
+            k,
+            rough,
+        } => Material {
+            color: reflectance.to_array(),
+            surface: layout::SURFACE_ROUGH_CONDUCTOR,
+            ior: 1.0,
+            lobe_a: eta.to_array(),
+            lobe_b: k.to_array(),
+            ..with_microfacet(base, Some(rough))
+        },
+        Surface::RoughGlass { ior, rough } => Material {
+            color: Vec3::ONE.to_array(),
+            surface: layout::SURFACE_ROUGH_GLASS,
+            ior,
+            ..with_microfacet(base, Some(rough))
+        },
+    }
+}
+
+/// `base` with a microfacet distribution's roughness and kind; a smooth surface (`None`) keeps zeros.
+fn with_microfacet(base: Material, rough: Option<Microfacet>) -> Material {
+    Material {
+        alpha_u: rough.map_or(0.0, |r| r.alpha),
+        alpha_v: rough.map_or(0.0, |r| r.alpha_v),
+        distribution: rough.map_or(0, |r| match r.ggx {
+            true => layout::MICROFACET_GGX,
+            false => layout::MICROFACET_BECKMANN,
+        }),
+        ..base
+    }
+}
+
+/// Appends a coat's transmittance table to the texture buffer, four values a texel (plastic.glsl's
+/// coat_transmittance reads it); returns 1 + its first texel (`Material::table`).
+fn push_table(textures: &mut Vec<[u32; 4]>, table: &[f32]) -> u32 {
+    let at = textures.len() as u32 + 1;
+    textures.extend(table.chunks(4).map(|c| {
+        let mut texel = [0u32; 4];
+        for (k, v) in c.iter().enumerate() {
+            texel[k] = v.to_bits();
+        }
+        texel
+    }));
+    at
+}
