@@ -7,10 +7,11 @@ use ppm_vk_kernels::layout::{
 };
 use ppm_vk_kernels::lookup::SCAN_BLOCK;
 use ppm_vk_kernels::specialize::MAX_INLINE_PRIMITIVES;
+use ppm_vk_materials::plastic;
 
 use crate::bvh::{self, BvhOptions, BvhStats, TriangleInput};
 use crate::error::{Error, Result};
-use crate::scene::{plastic, Scene, Surface};
+use crate::scene::{Scene, Surface};
 use crate::settings::Settings;
 
 /// Flattened scene plus the constants of one render.
@@ -136,7 +137,7 @@ fn triangle_texels(scene: &Scene, triangles: &[Triangle]) -> Vec<[u32; 4]> {
         })
         .collect();
     let bits = |x: f32| x.to_bits();
-    let oct = crate::reference::trace::oct_encode;
+    let oct = ppm_vk_materials::math::oct_encode;
     triangles
         .iter()
         .flat_map(|t| {

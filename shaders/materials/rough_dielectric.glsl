@@ -9,7 +9,7 @@
 // rough conductor's (rough_conductor.glsl). CPU twin: crates/engine/src/reference/rough_dielectric.rs.
 #ifndef ROUGH_DIELECTRIC_GLSL
 #define ROUGH_DIELECTRIC_GLSL
-#include "rough_conductor.glsl"
+#include "materials/rough_conductor.glsl"
 
 #ifdef SCENE_CONSTANTS
 #define HAS_ROUGH_GLASS SCENE_ROUGH_GLASS

@@ -10,7 +10,7 @@
 // crates/engine/src/reference/rough_conductor.rs. ROUGH_EVAL_ONLY (the gather) leaves the bounce out.
 #ifndef ROUGH_CONDUCTOR_GLSL
 #define ROUGH_CONDUCTOR_GLSL
-#include "microfacet.glsl"
+#include "materials/microfacet.glsl"
 
 #ifdef SCENE_CONSTANTS
 #define HAS_ROUGH_CONDUCTORS SCENE_ROUGH_CONDUCTORS

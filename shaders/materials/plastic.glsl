@@ -7,7 +7,7 @@
 // crates/engine/src/reference/plastic.rs.
 #ifndef PLASTIC_GLSL
 #define PLASTIC_GLSL
-#include "microfacet.glsl"
+#include "materials/microfacet.glsl"
 
 // A kernel compiled for one scene (SCENE_CONSTANTS) knows whether it has plastics; without them this
 // code is left out, as the conductors' is.
