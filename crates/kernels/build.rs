@@ -49,6 +49,7 @@ fn run() -> Result<()> {
         options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
         options.set_optimization_level(shaderc::OptimizationLevel::Performance);
         options.set_generate_debug_info(); // keeps OpName/OpMemberName for reflection
+
         // An include is found in the kernel's folder, in shaders/common, or by its path under shaders/
         // (`materials/plastic.glsl`: each BSDF's GLSL, beside the materials crate's module of its name).
         let common = shader_dir.join("common");

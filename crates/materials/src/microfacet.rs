@@ -108,7 +108,8 @@ impl Microfacet {
             (1.0, 0.0)
         };
         let s = beckmann_slopes(v.z, u);
-        let s = Vec2::new(cos_phi * s.x - sin_phi * s.y, sin_phi * s.x + cos_phi * s.y) * Vec2::new(self.alpha, self.alpha_v);
+        let s = Vec2::new(cos_phi * s.x - sin_phi * s.y, sin_phi * s.x + cos_phi * s.y)
+            * Vec2::new(self.alpha, self.alpha_v);
         Vec3::new(-s.x, -s.y, 1.0).normalize()
     }
 

@@ -27,7 +27,10 @@ fn every_bsdf_module_has_its_glsl_and_every_glsl_its_module() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let modules = stems(&root.join("src"), "rs");
     for name in NOT_BSDFS {
-        assert!(modules.contains(*name), "src/{name}.rs is listed as no BSDF but does not exist");
+        assert!(
+            modules.contains(*name),
+            "src/{name}.rs is listed as no BSDF but does not exist"
+        );
     }
     let bsdfs: BTreeSet<String> = modules
         .into_iter()

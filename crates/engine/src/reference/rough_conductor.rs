@@ -84,9 +84,10 @@ pub fn bounce(g: &GpuScene, m: &Material, pos: Vec3, nf: Vec3, dpdu: Vec3, u: Ve
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use ppm_vk_kernels::layout::{MICROFACET_BECKMANN, MICROFACET_GGX};
+    use ppm_vk_materials::conductor::named;
     use ppm_vk_materials::rough_conductor::pdf;
     use ppm_vk_materials::testing::{chi_square, dir, distributions, hemisphere, json_rgb as rgb, v};
-    use ppm_vk_kernels::layout::{MICROFACET_BECKMANN, MICROFACET_GGX};
 
     /// A case of rough-bsdfs.json as the material the kernels read (isotropic or not: the twin takes
     /// both).
@@ -94,10 +95,10 @@ pub(crate) mod tests {
         let num = |k: &str| bsdf.get(k).map(|v| v.as_f64().unwrap() as f32);
         let alpha = num("alpha").unwrap_or(0.1);
         let (eta, k) = match bsdf.get("material") {
-            Some(name) => crate::scene::conductors::named(name.as_str().unwrap()).unwrap(),
+            Some(name) => named(name.as_str().unwrap()).unwrap(),
             None => match (bsdf.get("eta"), bsdf.get("k")) {
                 (Some(e), Some(k)) => (rgb(e), rgb(k)),
-                _ => crate::scene::conductors::named("none").unwrap(),
+                _ => named("none").unwrap(),
             },
         };
         Material {
@@ -148,8 +149,7 @@ pub(crate) mod tests {
                     checked += 1;
                 }
                 let n = if mf.alpha.min(mf.alpha_v) < 0.1 { 1500 } else { 500 };
-                let ours = [0, 1, 2]
-                    .map(|c| hemisphere(n, |wo| eval(&m, &mf, wi, wo)[c] as f64));
+                let ours = [0, 1, 2].map(|c| hemisphere(n, |wo| eval(&m, &mf, wi, wo)[c] as f64));
                 let want = rgb(&s["albedo"]);
                 let se = rgb(&s["albedo_stderr"]);
                 for c in 0..3 {

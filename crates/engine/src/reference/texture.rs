@@ -5,8 +5,8 @@ use glam::{IVec2, Vec2, Vec3};
 use ppm_vk_kernels::layout::{
     Material, FILTER_NEAREST, SURFACE_PLASTIC, TEXTURE_CHECKERBOARD, WRAP_CLAMP, WRAP_MIRROR,
 };
-
 use ppm_vk_materials::math::v3;
+
 use crate::gpu_scene::GpuScene;
 
 fn texel_rgb(t: [u32; 4]) -> Vec3 {
