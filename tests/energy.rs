@@ -263,13 +263,13 @@ fn a_path_cap_shows_as_a_loss_and_is_counted() {
 
 /// A copper floor under an emitting sky, seen at angles from 6 to 46 degrees below the horizon: each pixel
 /// sees the sky in the floor, L = specular_reflectance x F(cos theta) x Le, with F the conductor's Fresnel
-/// term (checked against Mitsuba's own conductor in reference/conductor.rs) and theta from this test's own
+/// term (checked against Mitsuba's own conductor in ppm_vk_materials::conductor) and theta from this test's own
 /// pinhole camera. The emission samples are jittered over the pixel, so each pixel is compared with the
 /// closed form averaged over its area (32 x 32 points), within 5 sigma of the sample mean's spread there.
 #[test]
 fn a_conductor_floor_reflects_the_sky_by_its_fresnel_term() {
     use glam::Vec3;
-    use ppm_vk_engine::reference::conductor::fresnel_conductor;
+    use ppm_vk_materials::conductor::fresnel_conductor;
     let (w, h) = (24u32, 16u32);
     let text = format!(
         "[camera]\neye = [0.0, 0.5, 0.0]\nlook_at = [0.0, 0.0, -1.0]\nup = [0.0, 1.0, 0.0]\nvfov = 40.0\n\

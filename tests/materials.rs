@@ -306,12 +306,11 @@ fn a_rough_metal_furnace_matches_its_mitsuba_reference() {
 /// (specular_reflectance F(1) Le: the camera's rays reflect back up into it) plus the base's
 /// D (1 - F(1)) / pi Le times the integral over the light of (1 - F(cos_i)) cos_i cos_l / d^2, the latter
 /// by a 512 x 512 midpoint rule here. 60 passes of 200k photons, PPM. Both direct-light modes: by photons the records' (1 - F(cos_i))
-/// carries the base's share, by shadow rays the light sample's. F and D are the CPU twin's, itself checked
-/// against Mitsuba's plastic (reference::plastic's tests).
+/// carries the base's share, by shadow rays the light sample's. F and D are the host's
+/// (ppm_vk_materials::plastic), checked against Mitsuba's plastic (reference::plastic's tests).
 #[test]
 fn plastic_under_a_square_light_matches_its_closed_form() {
-    use ppm_vk_engine::reference::plastic::coat_fresnel;
-    use ppm_vk_engine::scene::plastic::diffuse_factor;
+    use ppm_vk_materials::plastic::{self, coat_fresnel, diffuse_factor};
     let scene = Scene::parse(
         &OPEN_FLOOR.replace("diffuse = [0.5, 0.5, 0.5]", "plastic = { diffuse = [0.5, 0.5, 0.5] }"),
         "open-plastic-floor.toml",
@@ -330,13 +329,7 @@ fn plastic_under_a_square_light_matches_its_closed_form() {
             integral += (1.0 - fresnel(cos)) * cos * cos / d2 * cell * cell;
         }
     }
-    let d = diffuse_factor(
-        Vec3::splat(0.5),
-        ior,
-        false,
-        ppm_vk_engine::scene::plastic::coat(ior, None).internal,
-    )
-    .x as f64;
+    let d = diffuse_factor(Vec3::splat(0.5), ior, false, plastic::coat(ior, None).internal).x as f64;
     let coat = fresnel(1.0) * le;
     let base = d * (1.0 - fresnel(1.0)) / std::f64::consts::PI * le * integral;
     let want = coat + base;

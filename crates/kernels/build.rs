@@ -49,10 +49,14 @@ fn run() -> Result<()> {
         options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
         options.set_optimization_level(shaderc::OptimizationLevel::Performance);
         options.set_generate_debug_info(); // keeps OpName/OpMemberName for reflection
+
+        // An include is found in the kernel's folder, in shaders/common, or by its path under shaders/
+        // (`materials/plastic.glsl`: each BSDF's GLSL, beside the materials crate's module of its name).
         let common = shader_dir.join("common");
+        let root = shader_dir.clone();
         let parent = path.parent().unwrap().to_path_buf();
         options.set_include_callback(move |requested, _kind, requester, _depth| {
-            let candidates = [parent.join(requested), common.join(requested)];
+            let candidates = [parent.join(requested), common.join(requested), root.join(requested)];
             for c in &candidates {
                 if let Ok(content) = std::fs::read_to_string(c) {
                     return Ok(shaderc::ResolvedInclude {
@@ -62,7 +66,7 @@ fn run() -> Result<()> {
                 }
             }
             Err(format!(
-                "{requester}: cannot find include {requested:?} (looked in the kernel's folder and shaders/common)"
+                "{requester}: cannot find include {requested:?} (looked in the kernel's folder, shaders/common and shaders/)"
             ))
         });
         let artifact = compiler

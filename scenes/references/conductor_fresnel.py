@@ -2,7 +2,7 @@
 """Mitsuba 3's conductor, as its RGB variants define it, for ppm-vk's tests and tables.
 
 Prints (1) the named materials' RGB eta and k that Mitsuba's scalar_rgb variant loads from its spectral
-data (crates/engine/src/scene/conductors.rs holds them), and (2) writes conductor-fresnel.json beside this
+data (crates/materials/src/conductor.rs holds them), and (2) writes conductor-fresnel.json beside this
 script: the weight Mitsuba's conductor BSDF returns when sampled (specular_reflectance times the conductor
 Fresnel term) at several angles, for named and explicit eta/k, which the engine's tests compare its own
 Fresnel term against.

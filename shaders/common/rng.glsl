@@ -1,5 +1,5 @@
-// PCG32 (O'Neill), one independent stream per photon or pixel. The CPU reference (crates/engine/src/
-// reference/rng.rs) is the same integer arithmetic, so both see identical random numbers.
+// PCG32 (O'Neill), one independent stream per photon or pixel. The CPU reference (crates/materials/src/
+// rng.rs) is the same integer arithmetic, so both see identical random numbers.
 #ifndef RNG_GLSL
 #define RNG_GLSL
 struct Rng { uint64_t state; uint64_t inc; };

@@ -74,7 +74,7 @@ vec3 texture_value(uint at, vec2 uv) {
 
 // Material m (material() read it) at hit h with its texture applied: a diffuse surface's albedo, or a
 // plastic's diffuse factor from the texture's diffuse_reflectance (as the host makes Material.color for
-// a constant one: scene/plastic.rs).
+// a constant one: crates/materials/src/plastic.rs).
 void apply_texture(inout Material m, Hit h) {
     if (!HAS_TEXTURES || m.texture == 0u) return;
     vec3 value = texture_value(m.texture - 1u, surface_uv(h));

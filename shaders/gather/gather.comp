@@ -40,9 +40,9 @@ layout(push_constant) uniform GatherPush {
 #include "neighbours.glsl"
 #include "invocation.glsl"
 #include "materials.glsl"
-#include "conductor.glsl"
+#include "materials/conductor.glsl"
 #define ROUGH_EVAL_ONLY
-#include "rough_conductor.glsl"
+#include "materials/rough_conductor.glsl"
 
 // Each member's sums over the photons it received.
 uint m[GROUP];

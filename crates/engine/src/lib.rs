@@ -45,12 +45,9 @@ pub mod lower;
 #[cfg(not(feature = "test-hooks"))]
 #[allow(dead_code)]
 mod lower;
-#[cfg(feature = "test-hooks")]
+// The CPU twin of the kernels: the tests' alone (the host's material math is ppm_vk_materials).
+#[cfg(any(test, feature = "test-hooks"))]
 pub mod reference;
-// The host uses the microfacet code (scene/rough_plastic.rs's tables); the rest is the tests'.
-#[cfg(not(feature = "test-hooks"))]
-#[allow(dead_code)]
-mod reference;
 #[cfg(feature = "test-hooks")]
 pub use ppm_vk_kernels::layout;
 

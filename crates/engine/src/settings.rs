@@ -90,7 +90,7 @@ pub struct Settings {
     /// Glossy hit points: rough conductors of at least this roughness (alpha) end the eye paths with a hit
     /// point whose gather evaluates their BRDF per photon, and the photons leave records on them;
     /// rougher is closer to diffuse, where photons serve best. `None`: every rough lobe is sampled through
-    /// by the eye paths (shaders/common/rough_conductor.glsl; docs/accuracy.md compares the two).
+    /// by the eye paths (shaders/materials/rough_conductor.glsl; docs/accuracy.md compares the two).
     #[serde(default = "default_glossy_hits")]
     pub glossy_hits: Option<f32>,
     /// Compile the tracing kernels with the scene inlined as constants (faster; same results up to the

@@ -213,7 +213,12 @@ pub fn compile_with(kernel: &KernelInfo, defines: &[(&str, &str)], constants: &s
                 content: constants.clone(),
             });
         }
-        for candidate in [format!("{stage_dir}/{requested}"), format!("common/{requested}")] {
+        // As build.rs resolves them: the kernel's folder, common/, then the path under shaders/.
+        for candidate in [
+            format!("{stage_dir}/{requested}"),
+            format!("common/{requested}"),
+            requested.to_string(),
+        ] {
             if let Some(content) = source(&candidate) {
                 return Ok(shaderc::ResolvedInclude {
                     resolved_name: candidate,

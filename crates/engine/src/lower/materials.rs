@@ -5,7 +5,9 @@ use glam::Vec3;
 use ppm_vk_kernels::layout::{self, Material};
 
 use crate::scene::Microfacet;
-use crate::scene::{plastic, Scene, Surface};
+use ppm_vk_materials::plastic;
+
+use crate::scene::{Scene, Surface};
 
 /// The records of `scene`'s materials, in order. `texture_at` is the texel of each texture's header;
 /// rough plastics' coat tables are appended to `textures`.
@@ -59,7 +61,7 @@ fn material(m: &crate::scene::Material, texture_at: &[u32], textures: &mut Vec<[
             nonlinear,
             rough,
         } => {
-            // The coat (scene/plastic.rs): a rough one's transmittance table goes after the textures.
+            // The coat (ppm_vk_materials::plastic): a rough one's transmittance table goes after the textures.
             let coat = plastic::coat(ior, rough);
             let table = match coat.table.as_ref() {
                 Some(t) => push_table(textures, t),

@@ -75,7 +75,7 @@ pub fn triangle_texels(scene: &Scene, triangles: &[Triangle]) -> Vec<[u32; 4]> {
         })
         .collect();
     let bits = |x: f32| x.to_bits();
-    let oct = crate::reference::trace::oct_encode;
+    let oct = ppm_vk_materials::math::oct_encode;
     triangles
         .iter()
         .flat_map(|t| {

@@ -5,8 +5,7 @@
 
 use glam::{Vec2, Vec3};
 use ppm_vk_kernels::layout::{BvhNode, Triangle, BVH_EMPTY, BVH_LEAF};
-
-use super::trace::v3;
+use ppm_vk_materials::math::v3;
 
 /// `BVH_ROBUST`: 1 + 2 gamma(3), the slab test's far distance widened by its rounding error bound (the
 /// same literal as bvh.glsl).

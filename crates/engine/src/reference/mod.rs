@@ -6,7 +6,8 @@ pub mod bvh;
 pub mod conductor;
 pub mod microfacet;
 pub mod plastic;
-pub mod rng;
+/// The kernels' random numbers (rng.glsl), a leaf of the materials crate, whose samplers' tests use them too.
+pub use ppm_vk_materials::rng;
 pub mod rough_conductor;
 pub mod rough_dielectric;
 pub mod shading;
@@ -21,14 +22,12 @@ use ppm_vk_kernels::layout::{
 };
 use ppm_vk_kernels::photon::SALT_EMISSION;
 use ppm_vk_kernels::ray::RayPush;
+use ppm_vk_materials::math::{cosine_direction, fresnel_dielectric, oct_decode, oct_encode, reflect, v3, PI};
 
 use crate::lower::GpuScene;
 use crate::settings::ProbeMode;
 use rng::Rng;
-use trace::{
-    cosine_direction, fresnel_dielectric, glass_branch, intersect_scene, oct_decode, oct_encode, offset_ray, reflect,
-    v3, PI,
-};
+use trace::{glass_branch, intersect_scene, offset_ray};
 
 /// The camera ray through point `jitter` of pixel (px, py), as ray.comp's `camera_ray`.
 fn camera_ray(g: &GpuScene, px: u32, py: u32, j: [f32; 2]) -> Vec3 {
@@ -817,20 +816,6 @@ pub fn probe(
             (ratio, r * r)
         })
         .collect()
-}
-
-/// A colour as the tests' JSON files (made with Mitsuba) write it: a number, an [r, g, b] array, or
-/// Mitsuba's {"type": "rgb", "value": ..}.
-#[cfg(test)]
-pub(crate) fn json_rgb(v: &serde_json::Value) -> Vec3 {
-    match v {
-        serde_json::Value::Number(n) => Vec3::splat(n.as_f64().unwrap() as f32),
-        serde_json::Value::Array(a) => {
-            Vec3::from_slice(&a.iter().map(|x| x.as_f64().unwrap() as f32).collect::<Vec<_>>())
-        }
-        serde_json::Value::Object(o) => json_rgb(&o["value"]),
-        other => panic!("not a colour: {other}"),
-    }
 }
 
 #[cfg(test)]

@@ -1,4 +1,4 @@
-//! CPU twin of shaders/common/plastic.glsl: Mitsuba's `plastic`, a diffuse base under a smooth dielectric
+//! CPU twin of shaders/materials/plastic.glsl: Mitsuba's `plastic`, a diffuse base under a smooth dielectric
 //! coat. Its BSDF is a specular lobe, `specular_reflectance` times the coat's Fresnel term F(cos_i), and a
 //! diffuse lobe `D (1 - F(cos_i)) (1 - F(cos_o)) / pi` whose factor D = diffuse_reflectance / (1 - fdr_int)
 //! / eta^2 (`nonlinear`: diffuse_reflectance / (1 - diffuse_reflectance fdr_int) / eta^2) counts the light
@@ -6,23 +6,18 @@
 //! lobe is a product of a term of the incoming and one of the outgoing direction, which is what lets the
 //! photon estimate carry it without evaluating a BSDF per photon: a photon leaves its record with its flux
 //! times (1 - F(cos_i)), and the hit point weighs what it gathers by D (1 - F(cos_o)) / pi. D and the
-//! photons' bound are the host's (scene/plastic.rs). Checked against Mitsuba's own plastic in the tests
+//! photons' bound are the host's (ppm_vk_materials::plastic). Checked against Mitsuba's own plastic in the tests
 //! below.
 
 use glam::{Vec2, Vec3};
 use ppm_vk_kernels::layout::Material;
+use ppm_vk_materials::math::{cosine_direction, fresnel_dielectric, onb, reflect, to_local, v3};
+use ppm_vk_materials::plastic::coat_fresnel;
 
-use super::microfacet::Microfacet;
+use super::microfacet;
 use super::rng::Rng;
-use super::rough_conductor::to_local;
-use super::trace::{cosine_direction, fresnel_dielectric, offset_ray, onb, reflect, v3};
+use super::trace::offset_ray;
 use crate::lower::GpuScene;
-
-/// The coat's Fresnel reflectance for light arriving from outside at incidence `cos_i`, `ior` the
-/// index inside over the index outside.
-pub fn coat_fresnel(cos_i: f32, ior: f32) -> f32 {
-    fresnel_dielectric(cos_i.clamp(0.0, 1.0), 1.0 / ior).0
-}
 
 /// plastic.glsl's `plastic_lobes`: seen from (or lit from) incidence `cos_o`, the specular lobe's weight
 /// specular_reflectance F(cos_o) and the diffuse lobe's D (1 - F(cos_o)), whose f_r is that over pi times
@@ -56,7 +51,7 @@ pub fn plastic_lobes(g: &GpuScene, m: &Material, nf: Vec3, rng: &mut Rng, d: Vec
     let u = Vec2::new(rng.float(), rng.float());
     let (t, b) = onb(nf);
     let wi = -to_local(d, t, b, nf);
-    let mf = Microfacet::of(m);
+    let mf = microfacet::of(m);
     let h = mf.sample_visible(wi, u);
     let wo = reflect(-wi, h);
     let spec = match wi.z > 0.0 && wo.z > 0.0 {
@@ -98,7 +93,7 @@ pub fn scatter(
     if wi.z <= 0.0 {
         return None;
     }
-    let mf = Microfacet::of(m);
+    let mf = microfacet::of(m);
     let h = mf.sample_visible(wi, v);
     let cos_h = wi.dot(h);
     let (fi, cos_t) = fresnel_dielectric(cos_h, 1.0 / m.ior);
@@ -127,17 +122,15 @@ pub fn scatter(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::reference::trace::PI;
-    use crate::scene::plastic::{
-        coat, diffuse_bound, diffuse_factor, fresnel_diffuse_reflectance, max_diffuse_reflectance,
-    };
+    use ppm_vk_materials::math::PI;
+    use ppm_vk_materials::plastic::{coat, diffuse_bound, diffuse_factor};
 
     fn json() -> serde_json::Value {
         let text = include_str!("../../../../scenes/references/coated-bsdfs.json");
         serde_json::from_str(text).unwrap()
     }
 
-    use crate::reference::json_rgb as rgb;
+    use ppm_vk_materials::testing::json_rgb as rgb;
 
     /// A case of coated-bsdfs.json as the material the kernels read.
     fn material(case: &serde_json::Value) -> (Material, Vec3, f32, bool) {
@@ -155,16 +148,6 @@ mod tests {
             ..Default::default()
         };
         (m, diffuse, ior, nonlinear)
-    }
-
-    #[test]
-    fn diffuse_fresnel_fits_match_mitsubas() {
-        for row in json()["fresnel_diffuse_reflectance"].as_array().unwrap() {
-            let eta = row["eta"].as_f64().unwrap() as f32;
-            let want = row["fdr"].as_f64().unwrap() as f32;
-            let got = fresnel_diffuse_reflectance(eta);
-            assert!((got - want).abs() < 1e-5, "eta {eta}: {got} against Mitsuba's {want}");
-        }
     }
 
     /// Mitsuba's plastic at 7 x 7 (incident, outgoing) cosines in 4 cases: the specular lobe's weight, the
@@ -222,22 +205,5 @@ mod tests {
             "largest relative differences: specular {:.2e}, eval {:.2e}, albedo {:.2e}",
             worst[0], worst[1], worst[2]
         );
-    }
-
-    /// The bound the photons rely on: no cosine-sampled diffuse bounce weighs more than diffuse_bound, and
-    /// at max_diffuse_reflectance the bound is 1.
-    #[test]
-    fn the_diffuse_bound_holds() {
-        for (ior, nonlinear) in [(1.49, false), (1.5, true), (1.2, false), (2.5, true)] {
-            let c = coat(ior, None);
-            let rd = max_diffuse_reflectance(ior, nonlinear, &c);
-            let b = diffuse_bound(Vec3::splat(rd), ior, nonlinear, &c);
-            assert!((b - 1.0).abs() < 1e-4 || rd == 1.0, "ior {ior}: bound {b} at {rd}");
-            let d = diffuse_factor(Vec3::splat(rd), ior, nonlinear, c.internal).x;
-            for k in 0..=100 {
-                let w = d * (1.0 - coat_fresnel(k as f32 / 100.0, ior));
-                assert!(w <= b * (1.0 + 1e-6), "weight {w} above the bound {b}");
-            }
-        }
     }
 }

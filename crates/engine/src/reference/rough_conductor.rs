@@ -1,5 +1,6 @@
-//! CPU twin of shaders/common/rough_conductor.glsl: Mitsuba's `roughconductor`, smooth-conductor facets
-//! (conductor.rs) oriented by a microfacet distribution (microfacet.rs). f(wi, wo) = F(wi.h) D(h) G1(wi, h)
+//! CPU twin of shaders/materials/rough_conductor.glsl: Mitsuba's `roughconductor`, smooth-conductor facets
+//! (conductor.rs) oriented by a microfacet distribution (microfacet.rs; the math of both, its density and
+//! its bound are ppm_vk_materials'). f(wi, wo) = F(wi.h) D(h) G1(wi, h)
 //! G1(wo, h) / (4 cos_i cos_o) times specular_reflectance, h the half vector; sampled by the visible
 //! normals, whose weight f cos_o / pdf is F(wi.h) G1(wo, h) specular_reflectance. Checked against Mitsuba's
 //! own roughconductor in the tests below (values, densities, directional albedo), and its sampler against
@@ -8,15 +9,14 @@
 use glam::{Vec2, Vec3};
 use ppm_vk_kernels::layout::Material;
 
-use super::conductor::fresnel_conductor;
-use super::microfacet::Microfacet;
-use super::trace::{frame, offset_ray, onb, reflect, v3, PI};
-use crate::lower::GpuScene;
+use ppm_vk_materials::conductor::fresnel_conductor;
+use ppm_vk_materials::math::{frame, onb, reflect, to_local, v3};
+use ppm_vk_materials::rough_conductor::bound;
+use ppm_vk_materials::Microfacet;
 
-/// `d` in the local frame (t, b, nf).
-pub fn to_local(d: Vec3, t: Vec3, b: Vec3, nf: Vec3) -> Vec3 {
-    Vec3::new(d.dot(t), d.dot(b), d.dot(nf))
-}
+use super::microfacet;
+use super::trace::offset_ray;
+use crate::lower::GpuScene;
 
 /// The BSDF times cos_o, in the local frame (wi, wo pointing away from the surface).
 pub fn eval(m: &Material, mf: &Microfacet, wi: Vec3, wo: Vec3) -> Vec3 {
@@ -26,16 +26,6 @@ pub fn eval(m: &Material, mf: &Microfacet, wi: Vec3, wo: Vec3) -> Vec3 {
     let h = (wi + wo).normalize();
     let f = v3(m.color) * fresnel_conductor(wi.dot(h).clamp(0.0, 1.0), v3(m.lobe_a), v3(m.lobe_b));
     f * (mf.d(h) * mf.g1(wi, h) * mf.g1(wo, h) / (4.0 * wi.z))
-}
-
-/// The density of [`sample`]'s wo: the visible normals' density times the reflection's Jacobian 1 / (4
-/// wo.h).
-pub fn pdf(mf: &Microfacet, wi: Vec3, wo: Vec3) -> f32 {
-    if wi.z <= 0.0 || wo.z <= 0.0 {
-        return 0.0;
-    }
-    let h = (wi + wo).normalize();
-    mf.visible_pdf(wi, h) / (4.0 * wo.dot(h))
 }
 
 /// A direction wo and its weight f cos_o / pdf, or None where the reflection goes below the surface.
@@ -52,26 +42,6 @@ pub fn sample(m: &Material, mf: &Microfacet, wi: Vec3, u: Vec2) -> Option<(Vec3,
     Some((wo, f * mf.g1(wo, h)))
 }
 
-/// The bound of a glossy hit point's BRDF over ks / (4 cos_o): D's peak (1 / (pi alpha^2) for smooth
-/// enough distributions) times the supremum of G1(v) / cos_v (2 / min(alpha, 2) for GGX; 3.535 / alpha + 1
-/// for Beckmann's fit), as rough_conductor.glsl's `rough_conductor_bound`.
-pub fn bound(mf: &Microfacet) -> f32 {
-    let a2 = mf.au * mf.av;
-    // D's peak over 1 / (pi alpha^2): at the normal for GGX up to alpha 1 and Beckmann up to 1 / sqrt(2),
-    // beyond at grazing (GGX: alpha^4) or at tan^2 = 2 alpha^2 - 1 (Beckmann).
-    let peak = match (mf.ggx, a2 > 0.5) {
-        (true, _) => (a2 * a2).max(1.0),
-        (false, true) => 4.0 * a2 * a2 * (1.0 / a2 - 2.0).exp(),
-        (false, false) => 1.0,
-    };
-    let gb = if mf.ggx {
-        2.0 / mf.au.min(2.0)
-    } else {
-        3.535 / mf.au + 1.0
-    };
-    gb * peak / (PI * a2)
-}
-
 /// `rough_conductor_terms`: D G1(wi) G1(wo) / cos_i and F per channel, for unit wi, wo leaving the surface
 /// of unit normal n (world space); 0 where either is below it.
 pub fn terms(m: &Material, wi: Vec3, wo: Vec3, n: Vec3) -> (f32, Vec3) {
@@ -80,7 +50,7 @@ pub fn terms(m: &Material, wi: Vec3, wo: Vec3, n: Vec3) -> (f32, Vec3) {
     if li.z <= 0.0 || lo.z <= 0.0 {
         return (0.0, Vec3::ZERO);
     }
-    let mf = Microfacet::of(m);
+    let mf = microfacet::of(m);
     let h = (li + lo).normalize();
     let f = fresnel_conductor(li.dot(h).clamp(0.0, 1.0), v3(m.lobe_a), v3(m.lobe_b));
     (mf.d(h) * mf.g1(li, h) * mf.g1(lo, h) / li.z, f)
@@ -89,14 +59,14 @@ pub fn terms(m: &Material, wi: Vec3, wo: Vec3, n: Vec3) -> (f32, Vec3) {
 /// `rough_conductor_hit_weight`: a glossy hit point's weight, throughput times ks times the bound over 4
 /// cos_o.
 pub fn hit_weight(m: &Material, thr: Vec3, cos_o: f32) -> Vec3 {
-    thr * v3(m.color) * (bound(&Microfacet::of(m)) / (4.0 * cos_o))
+    thr * v3(m.color) * (bound(&microfacet::of(m)) / (4.0 * cos_o))
 }
 
 /// `rough_conductor_ratio`: what a photon arriving along -wi gives a glossy hit point seen from wo, per
 /// unit flux: f(wi, wo) over the hit point's weight per unit throughput, at most 1 per channel.
 pub fn ratio(m: &Material, wi: Vec3, wo: Vec3, n: Vec3) -> Vec3 {
     let (s, f) = terms(m, wi, wo, n);
-    (f * (s / bound(&Microfacet::of(m)))).min(Vec3::ONE)
+    (f * (s / bound(&microfacet::of(m)))).min(Vec3::ONE)
 }
 
 /// rough_conductor.glsl's `rough_conductor_bounce`: the new origin, direction and weight of a path
@@ -105,7 +75,7 @@ pub fn ratio(m: &Material, wi: Vec3, wo: Vec3, n: Vec3) -> Vec3 {
 pub fn bounce(g: &GpuScene, m: &Material, pos: Vec3, nf: Vec3, dpdu: Vec3, u: Vec2, d: Vec3) -> (Vec3, Vec3, Vec3) {
     let (t, b) = frame(nf, dpdu);
     let wi = -to_local(d, t, b, nf);
-    match sample(m, &Microfacet::of(m), wi, u) {
+    match sample(m, &microfacet::of(m), wi, u) {
         Some((wo, w)) => (offset_ray(g, pos, nf), (wo.x * t + wo.y * b + wo.z * nf).normalize(), w),
         None => (pos, d, Vec3::ZERO),
     }
@@ -114,9 +84,10 @@ pub fn bounce(g: &GpuScene, m: &Material, pos: Vec3, nf: Vec3, dpdu: Vec3, u: Ve
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::reference::json_rgb as rgb;
-    use crate::reference::microfacet::tests::{chi_square, dir, distributions};
     use ppm_vk_kernels::layout::{MICROFACET_BECKMANN, MICROFACET_GGX};
+    use ppm_vk_materials::conductor::named;
+    use ppm_vk_materials::rough_conductor::pdf;
+    use ppm_vk_materials::testing::{chi_square, dir, distributions, hemisphere, json_rgb as rgb, v};
 
     /// A case of rough-bsdfs.json as the material the kernels read (isotropic or not: the twin takes
     /// both).
@@ -124,10 +95,10 @@ pub(crate) mod tests {
         let num = |k: &str| bsdf.get(k).map(|v| v.as_f64().unwrap() as f32);
         let alpha = num("alpha").unwrap_or(0.1);
         let (eta, k) = match bsdf.get("material") {
-            Some(name) => crate::scene::conductors::named(name.as_str().unwrap()).unwrap(),
+            Some(name) => named(name.as_str().unwrap()).unwrap(),
             None => match (bsdf.get("eta"), bsdf.get("k")) {
                 (Some(e), Some(k)) => (rgb(e), rgb(k)),
-                _ => crate::scene::conductors::named("none").unwrap(),
+                _ => named("none").unwrap(),
             },
         };
         Material {
@@ -149,15 +120,6 @@ pub(crate) mod tests {
         serde_json::from_str(text).unwrap()
     }
 
-    pub(crate) fn v(x: &serde_json::Value) -> Vec3 {
-        let a = x.as_array().unwrap();
-        Vec3::new(
-            a[0].as_f64().unwrap() as f32,
-            a[1].as_f64().unwrap() as f32,
-            a[2].as_f64().unwrap() as f32,
-        )
-    }
-
     /// Mitsuba's roughconductor in 6 cases (both distributions, anisotropic ones, named metals and
     /// given eta, k): the BSDF's value and density at 25-26 outgoing directions for each of 6 incident
     /// ones, and the directional albedo (the mean of 2^20 of Mitsuba's sampled weights) against ours,
@@ -169,7 +131,7 @@ pub(crate) mod tests {
         for case in json()["roughconductor"].as_array().unwrap() {
             let bsdf = &case["bsdf"];
             let m = material(bsdf);
-            let mf = Microfacet::of(&m);
+            let mf = microfacet::of(&m);
             for s in case["samples"].as_array().unwrap() {
                 let wi = v(&s["wi"]);
                 for e in s["eval"].as_array().unwrap() {
@@ -186,9 +148,8 @@ pub(crate) mod tests {
                     assert!(err < 2e-3, "{bsdf} wi {wi} wo {wo}: pdf {got} against Mitsuba's {want}");
                     checked += 1;
                 }
-                let n = if mf.au.min(mf.av) < 0.1 { 1500 } else { 500 };
-                let ours = [0, 1, 2]
-                    .map(|c| crate::reference::microfacet::tests::hemisphere(n, |wo| eval(&m, &mf, wi, wo)[c] as f64));
+                let n = if mf.alpha.min(mf.alpha_v) < 0.1 { 1500 } else { 500 };
+                let ours = [0, 1, 2].map(|c| hemisphere(n, |wo| eval(&m, &mf, wi, wo)[c] as f64));
                 let want = rgb(&s["albedo"]);
                 let se = rgb(&s["albedo_stderr"]);
                 for c in 0..3 {
@@ -220,8 +181,8 @@ pub(crate) mod tests {
         };
         for mf in distributions() {
             let m = Material {
-                alpha_u: mf.au,
-                alpha_v: mf.av,
+                alpha_u: mf.alpha,
+                alpha_v: mf.alpha_v,
                 distribution: if mf.ggx { MICROFACET_GGX } else { MICROFACET_BECKMANN },
                 ..m0
             };
@@ -276,7 +237,7 @@ pub(crate) mod tests {
                         // wo at the mirror azimuth, where the half vector comes closest to the normal.
                         let (wi, wo) = (dir(ci, 0.0), dir(co, std::f32::consts::PI));
                         let (s, f) = terms(&m, wi, wo, n);
-                        let r = (f * (s / bound(&Microfacet::of(&m)))).max_element();
+                        let r = (f * (s / bound(&microfacet::of(&m)))).max_element();
                         most = most.max(r);
                     }
                 }
@@ -298,7 +259,7 @@ pub(crate) mod tests {
             distribution: MICROFACET_GGX,
             ..Default::default()
         };
-        let mf = Microfacet::of(&m);
+        let mf = microfacet::of(&m);
         for (a, b) in [(0.9, 0.2), (0.5, 0.7), (0.1, 0.95)] {
             let (wi, wo) = (dir(a, 0.4), dir(b, 2.9));
             let f1 = eval(&m, &mf, wi, wo) / wo.z;

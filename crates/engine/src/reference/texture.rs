@@ -5,8 +5,8 @@ use glam::{IVec2, Vec2, Vec3};
 use ppm_vk_kernels::layout::{
     Material, FILTER_NEAREST, SURFACE_PLASTIC, TEXTURE_CHECKERBOARD, WRAP_CLAMP, WRAP_MIRROR,
 };
+use ppm_vk_materials::math::v3;
 
-use super::trace::v3;
 use crate::lower::GpuScene;
 
 fn texel_rgb(t: [u32; 4]) -> Vec3 {
@@ -86,7 +86,7 @@ mod tests {
 
     const REFERENCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/references");
 
-    use crate::reference::json_rgb as rgb;
+    use ppm_vk_materials::testing::json_rgb as rgb;
 
     /// Mitsuba's bitmap and checkerboard evaluated at 30-34 texture coordinates each (inside, on pixel
     /// centres and between them, outside [0, 1] both ways) in 25 cases: three images (8-bit sRGB RGB, a

@@ -1,20 +1,14 @@
-//! CPU twin of shaders/common/thin_dielectric.glsl: Mitsuba's `thindielectric`, a pane thin enough that
-//! light leaves it where it entered: it reflects with probability R' = 2 R / (1 + R) (R the Fresnel
-//! reflectance at its face, R' summing the light reflected inside it any number of times) and passes
-//! straight through otherwise, each branch weighted by specular_reflectance or specular_transmittance.
-//! Checked against Mitsuba's own in the tests below.
+//! CPU twin of shaders/materials/thin_dielectric.glsl's branch: Mitsuba's `thindielectric` at a hit, its
+//! reflection probability (checked against Mitsuba's there) ppm_vk_materials::thin_dielectric's.
 
 use glam::Vec3;
 use ppm_vk_kernels::layout::Material;
+use ppm_vk_materials::math::{reflect, v3};
+/// The reflection probability, where the twin's eye pass splits a pane's two branches.
+pub use ppm_vk_materials::thin_dielectric::reflectance;
 
-use super::trace::{fresnel_dielectric, offset_ray, reflect, v3};
+use super::trace::offset_ray;
 use crate::lower::GpuScene;
-
-/// The probability of reflection at incidence `cos_i` (either side: the pane is symmetric).
-pub fn reflectance(cos_i: f32, ior: f32) -> f32 {
-    let r = fresnel_dielectric(cos_i.abs().min(1.0), 1.0 / ior).0;
-    r * 2.0 / (1.0 + r)
-}
 
 /// thin_dielectric.glsl's `thin_branch`: for uniform `u`, reflection (weight specular_reflectance, in
 /// `Material::color`) or transmission straight on (specular_transmittance, `Material::lobe_a`), `nf`
@@ -24,31 +18,5 @@ pub fn branch(g: &GpuScene, m: &Material, pos: Vec3, nf: Vec3, u: f32, d: Vec3) 
         (offset_ray(g, pos, nf), reflect(d, nf), v3(m.color))
     } else {
         (offset_ray(g, pos, -nf), d, v3(m.lobe_a))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn thin_dielectric_matches_mitsubas() {
-        let text = include_str!("../../../../scenes/references/coated-bsdfs.json");
-        let json: serde_json::Value = serde_json::from_str(text).unwrap();
-        let num = |v: Option<&serde_json::Value>, default: f32| v.map_or(default, |v| v.as_f64().unwrap() as f32);
-        let mut worst = 0f32;
-        for case in json["thindielectric"].as_array().unwrap() {
-            let b = &case["bsdf"];
-            let ior = num(b.get("int_ior"), 1.5046) / num(b.get("ext_ior"), 1.000277);
-            for s in case["samples"].as_array().unwrap() {
-                let cos = s["cos"].as_f64().unwrap() as f32;
-                let want = s["reflect_prob"].as_f64().unwrap() as f32;
-                let got = reflectance(cos, ior);
-                worst = worst.max((got / want - 1.0).abs());
-                assert!((got / want - 1.0).abs() < 1e-4, "{b}: cos {cos}: {got} against {want}");
-                assert_eq!(reflectance(-cos, ior), got, "the pane is the same from both sides");
-            }
-        }
-        println!("largest relative difference {worst:.2e}");
     }
 }

@@ -7,15 +7,16 @@
 //! or imported is checked the same way; the TOML loader maps a failed check's field path
 //! (`sphere[1].radius`) back to the line and column it came from.
 
-pub mod conductors;
 pub mod generated;
 mod mitsuba;
 mod obj;
-pub mod plastic;
 mod ply;
-pub mod rough_plastic;
 pub mod texture;
 mod toml;
+
+// The materials' host-side math, by the paths the loaders name it.
+pub use ppm_vk_materials::conductor as conductors;
+pub use ppm_vk_materials::{plastic, Microfacet};
 
 use std::fmt;
 use std::path::Path;
@@ -65,11 +66,11 @@ pub enum Surface {
     Mirror { reflectance: Vec3 },
     /// Smooth conductor (Mitsuba's `conductor`): a specular reflector whose reflectance is `reflectance`
     /// times the unpolarised Fresnel term of a metal of complex index `eta + i k` per RGB channel
-    /// (shaders/common/conductor.glsl, reference/conductor.rs).
+    /// (shaders/materials/conductor.glsl, ppm_vk_materials::conductor).
     Conductor { reflectance: Vec3, eta: Vec3, k: Vec3 },
     /// Smooth dielectric; `ior` is the index inside, the outside is 1.
     Glass { ior: f32 },
-    /// Mitsuba's `plastic` (reference/plastic.rs): a diffuse base of reflectance `diffuse` under a smooth
+    /// Mitsuba's `plastic` (ppm_vk_materials::plastic): a diffuse base of reflectance `diffuse` under a smooth
     /// dielectric coat of relative index `ior` (inside over outside) whose mirror reflection is `specular`
     /// times its Fresnel term; `nonlinear` darkens and saturates the base as light bounces between it and
     /// the coat. Its diffuse reflectance is bounded by [`plastic::max_diffuse_reflectance`].
@@ -78,10 +79,10 @@ pub enum Surface {
         specular: Vec3,
         ior: f32,
         nonlinear: bool,
-        /// Mitsuba's `roughplastic`: the coat a microfacet distribution (scene/rough_plastic.rs).
+        /// Mitsuba's `roughplastic`: the coat a microfacet distribution (ppm_vk_materials::rough_plastic).
         rough: Option<Microfacet>,
     },
-    /// Mitsuba's `roughconductor` (reference/rough_conductor.rs): the conductor's facets, oriented by a
+    /// Mitsuba's `roughconductor` (ppm_vk_materials::rough_conductor): the conductor's facets, oriented by a
     /// microfacet distribution.
     RoughConductor {
         reflectance: Vec3,
@@ -89,47 +90,16 @@ pub enum Surface {
         k: Vec3,
         rough: Microfacet,
     },
-    /// Mitsuba's `roughdielectric` (reference/rough_dielectric.rs): the glass's facets, oriented by a
+    /// Mitsuba's `roughdielectric` (ppm_vk_materials::rough_dielectric): the glass's facets, oriented by a
     /// microfacet distribution; `ior` is the index inside over the index outside.
     RoughGlass { ior: f32, rough: Microfacet },
-    /// Mitsuba's `thindielectric` (reference/thin_dielectric.rs): a pane of relative index `ior` that
+    /// Mitsuba's `thindielectric` (ppm_vk_materials::thin_dielectric): a pane of relative index `ior` that
     /// reflects (times `reflectance`) or lets light through without bending it (times `transmittance`).
     ThinDielectric {
         ior: f32,
         reflectance: Vec3,
         transmittance: Vec3,
     },
-}
-
-/// A microfacet distribution (reference/microfacet.rs): Mitsuba's `distribution` and its roughness
-/// `alpha` (isotropic: the readers refuse `alpha_u` != `alpha_v`, which needs surface tangents).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Microfacet {
-    pub ggx: bool,
-    /// Roughness along the surface's tangent (Mitsuba's alpha_u; its alpha when isotropic).
-    pub alpha: f32,
-    /// Roughness along the bitangent (alpha_v): equal to `alpha` but on anisotropic surfaces, whose
-    /// tangent is Mitsuba's dp/du (docs/mitsuba.md).
-    pub alpha_v: f32,
-}
-
-impl Microfacet {
-    /// The same roughness in every direction.
-    pub fn isotropic(ggx: bool, alpha: f32) -> Microfacet {
-        Microfacet {
-            ggx,
-            alpha,
-            alpha_v: alpha,
-        }
-    }
-
-    pub fn is_anisotropic(&self) -> bool {
-        self.alpha != self.alpha_v
-    }
-
-    /// Mitsuba's floor on alpha (its MicrofacetDistribution clamps to it): below it the lobe is narrower
-    /// than f32 directions resolve.
-    pub const MIN_ALPHA: f32 = 1e-4;
 }
 
 impl Surface {
@@ -716,8 +686,10 @@ impl Scene {
         check_camera(&self.camera)?;
         // Textures first: a bad pixel is named rather than the constant it made.
         self.check_textures()?;
+        // One coat per distinct plastic coat, however many materials share it.
+        let mut coats = plastic::Coats::default();
         for m in &self.materials {
-            check_material(m)?;
+            check_material(m, &mut coats)?;
         }
         let material = |path: &str, i: u32| -> Result<&Material, Invalid> {
             self.materials.get(i as usize).ok_or_else(|| {
@@ -976,7 +948,7 @@ fn roughness(rough: Microfacet, path: &str) -> Result<(), Invalid> {
     Ok(())
 }
 
-fn check_material(m: &Material) -> Result<(), Invalid> {
+fn check_material(m: &Material, coats: &mut plastic::Coats) -> Result<(), Invalid> {
     let p = format!("materials.{}", m.name);
     let ep = format!("{p}.emission");
     finite_vec(m.emission, &ep)?;
@@ -1012,7 +984,7 @@ fn check_material(m: &Material) -> Result<(), Invalid> {
             }
             let path = format!("{p}.plastic.diffuse");
             unit_vec(diffuse, &path)?;
-            let most = plastic::max_diffuse_reflectance(ior, nonlinear, &plastic::coat(ior, rough));
+            let most = plastic::max_diffuse_reflectance(ior, nonlinear, coats.coat(ior, rough));
             if diffuse.max_element() > most {
                 return Err(invalid(
                     path,

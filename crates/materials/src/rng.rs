@@ -1,4 +1,5 @@
-//! PCG32, the same integer arithmetic as `shaders/common/rng.glsl`.
+//! PCG32, the same integer arithmetic as `shaders/common/rng.glsl`. The CPU twin draws the kernels' random
+//! numbers from it; it lives here, a leaf, because the samplers' own tests draw from it too.
 
 pub struct Rng {
     state: u64,

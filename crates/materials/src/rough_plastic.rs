@@ -4,14 +4,14 @@
 //! over the cosine as Mitsuba tabulates it (64 points, a Gauss-Legendre quadrature over its visible-normal
 //! sampler), and D' the base's reflectance with what the coat reflects back into it (Mitsuba's internal
 //! reflectance, the same kind of table from inside). The diffuse lobe is a product of a term per direction,
-//! as smooth plastic's is (scene/plastic.rs). This module computes the tables on the host; it is checked
+//! as smooth plastic's is (plastic.rs). This module computes the tables on the host; it is checked
 //! against Mitsuba's own roughplastic below. The kernels do not render it yet: the readers render
 //! roughplastic as smooth plastic, with a warning.
 
 use glam::{Vec2, Vec3};
 
-use crate::reference::microfacet::Microfacet;
-use crate::reference::trace::{fresnel_dielectric, reflect, PI};
+use crate::math::{fresnel_dielectric, reflect, PI};
+use crate::Microfacet;
 
 /// Points of Mitsuba's transmittance table over the cosine (MI_ROUGH_TRANSMITTANCE_RES).
 pub const TABLE_POINTS: usize = 64;
@@ -42,13 +42,13 @@ fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
 }
 
 /// Mitsuba's visible-normal sampler, with its own warp of the unit square (for GGX the concentric disk
-/// of its `sample_visible_11`; for Beckmann the same slope inversion as reference::microfacet): the
+/// of its `sample_visible_11`; for Beckmann the same slope inversion as microfacet.rs): the
 /// tables integrate over it, so the same quadrature nodes land where Mitsuba's do.
 fn mitsuba_visible_normal(mf: &Microfacet, wi: Vec3, u: Vec2) -> Vec3 {
     if !mf.ggx {
         return mf.sample_visible(wi, u);
     }
-    let v = Vec3::new(mf.au * wi.x, mf.av * wi.y, wi.z).normalize();
+    let v = Vec3::new(mf.alpha * wi.x, mf.alpha_v * wi.y, wi.z).normalize();
     let sin_theta = (1.0 - v.z * v.z).max(0.0).sqrt();
     let (cos_phi, sin_phi) = if sin_theta > 0.0 {
         (v.x / sin_theta, v.y / sin_theta)
@@ -73,7 +73,7 @@ fn mitsuba_visible_normal(mf: &Microfacet, wi: Vec3, u: Vec2) -> Vec3 {
     let slope = Vec2::new(
         cos_phi * slope.x - sin_phi * slope.y,
         sin_phi * slope.x + cos_phi * slope.y,
-    ) * Vec2::new(mf.au, mf.av);
+    ) * Vec2::new(mf.alpha, mf.alpha_v);
     Vec3::new(-slope.x, -slope.y, 1.0).normalize()
 }
 
@@ -115,8 +115,8 @@ fn coat_albedo(mf: &Microfacet, wi: Vec3, eta: f32, reflection: bool, nodes: &[(
 pub fn tables(ggx: bool, alpha: f32, ior: f32) -> (Vec<f32>, f32) {
     let mf = Microfacet {
         ggx,
-        au: alpha,
-        av: alpha,
+        alpha,
+        alpha_v: alpha,
     };
     let (outside, inside) = (coat_nodes(ior), coat_nodes(1.0 / ior));
     let mut transmittance = Vec::with_capacity(TABLE_POINTS);
@@ -141,7 +141,7 @@ pub fn lookup(table: &[f32], x: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::reference::json_rgb as rgb;
+    use crate::testing::{json_rgb as rgb, v};
 
     #[test]
     fn gauss_legendre_integrates_polynomials_exactly() {
@@ -159,7 +159,7 @@ mod tests {
     /// (coat and base) at 25 directions for each of 6 incident cosines, against ours from the tables.
     #[test]
     fn rough_plastic_matches_mitsubas() {
-        let text = include_str!("../../../../scenes/references/roughplastic-bsdf.json");
+        let text = include_str!("../../../scenes/references/roughplastic-bsdf.json");
         let json: serde_json::Value = serde_json::from_str(text).unwrap();
         let (mut worst_diffuse, mut worst_value) = (0f32, 0f32);
         for case in json["roughplastic"].as_array().unwrap() {
@@ -172,7 +172,7 @@ mod tests {
             let ks = bsdf.get("specular_reflectance").map_or(Vec3::ONE, rgb);
             let nonlinear = bsdf.get("nonlinear").is_some_and(|v| v.as_bool().unwrap());
             let (t, internal) = tables(ggx, alpha, ior);
-            let d = super::super::plastic::diffuse_factor(diffuse, ior, nonlinear, internal);
+            let d = crate::plastic::diffuse_factor(diffuse, ior, nonlinear, internal);
             for row in case["diffuse_directional"].as_array().unwrap() {
                 let mu = row["mu"].as_f64().unwrap() as f32;
                 let want = rgb(&row["value"]);
@@ -183,13 +183,13 @@ mod tests {
             }
             let mf = Microfacet {
                 ggx,
-                au: alpha,
-                av: alpha,
+                alpha,
+                alpha_v: alpha,
             };
             for s in case["samples"].as_array().unwrap() {
-                let wi = crate::reference::rough_conductor::tests::v(&s["wi"]);
+                let wi = v(&s["wi"]);
                 for e in s["eval"].as_array().unwrap() {
-                    let wo = crate::reference::rough_conductor::tests::v(&e["wo"]);
+                    let wo = v(&e["wo"]);
                     let want = rgb(&e["value"]);
                     let mut got = Vec3::ZERO;
                     if wi.z > 0.0 && wo.z > 0.0 {

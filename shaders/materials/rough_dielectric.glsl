@@ -6,10 +6,11 @@
 // squared index ratio where it crosses, as smooth glass leaves it (geometry.glsl's glass_branch): the
 // factors of a path's entry and exit cancel, so what is seen of glass from outside is exact; with it the
 // weight is the same for photons and eye paths. Its vertices are S in ray.comp's path notation, as the
-// rough conductor's (rough_conductor.glsl). CPU twin: crates/engine/src/reference/rough_dielectric.rs.
+// rough conductor's (rough_conductor.glsl). CPU twin: crates/materials/src/rough_dielectric.rs and
+// crates/engine/src/reference/rough_dielectric.rs (a bounce).
 #ifndef ROUGH_DIELECTRIC_GLSL
 #define ROUGH_DIELECTRIC_GLSL
-#include "rough_conductor.glsl"
+#include "materials/rough_conductor.glsl"
 
 #ifdef SCENE_CONSTANTS
 #define HAS_ROUGH_GLASS SCENE_ROUGH_GLASS

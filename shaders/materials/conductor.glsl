@@ -1,7 +1,8 @@
 // Mitsuba's `conductor` BSDF (and ppm-vk's mirror): a specular reflector. The mirror reflects a constant
 // fraction; the conductor its specular_reflectance times the unpolarised Fresnel reflectance of a metal of
 // complex index eta + i k, per RGB channel (the exact formula Mitsuba's fresnel_conductor evaluates, after
-// K. D. Moeller, "Optics", 1988). CPU twin: crates/engine/src/reference/conductor.rs.
+// K. D. Moeller, "Optics", 1988). CPU twin: crates/materials/src/conductor.rs (its Fresnel term) and
+// crates/engine/src/reference/conductor.rs (a bounce).
 #ifndef CONDUCTOR_GLSL
 #define CONDUCTOR_GLSL
 

@@ -7,10 +7,11 @@
 // notation): no hit point and no photon record there, its lobe sampled by both path kinds with the exact
 // weight; the BSDF is reciprocal, so the photons' weight is the eye paths'. Rough enough conductors
 // (RenderParams.glossy_alpha) may instead hold hit points, below. CPU twin:
-// crates/engine/src/reference/rough_conductor.rs. ROUGH_EVAL_ONLY (the gather) leaves the bounce out.
+// crates/engine/src/reference/rough_conductor.rs (density and bound: crates/materials/src/rough_conductor.rs).
+// ROUGH_EVAL_ONLY (the gather) leaves the bounce out.
 #ifndef ROUGH_CONDUCTOR_GLSL
 #define ROUGH_CONDUCTOR_GLSL
-#include "microfacet.glsl"
+#include "materials/microfacet.glsl"
 
 #ifdef SCENE_CONSTANTS
 #define HAS_ROUGH_CONDUCTORS SCENE_ROUGH_CONDUCTORS

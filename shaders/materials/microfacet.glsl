@@ -3,7 +3,7 @@
 // and sampling of the normals visible from a direction (Heitz 2018, "Sampling the GGX Distribution of
 // Visible Normals"; for Beckmann the slope inversion of Jakob 2014, "An Improved Visible Normal Sampling
 // Routine for the Beckmann Distribution"). Directions are in the local frame: z the macro-surface normal
-// on the side of the incoming direction, x the tangent. CPU twin: crates/engine/src/reference/microfacet.rs.
+// on the side of the incoming direction, x the tangent. CPU twin: crates/materials/src/microfacet.rs.
 #ifndef MICROFACET_GLSL
 #define MICROFACET_GLSL
 

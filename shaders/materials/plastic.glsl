@@ -4,10 +4,10 @@
 // host). The diffuse lobe is a product of a term of each direction, so the photon estimate needs no BSDF
 // per photon: a photon's record carries its flux times (1 - F(cos_i)) (photon.comp), and a hit point on
 // the plastic weighs what it gathers by D (1 - F(cos_o)) / pi (ray.comp). CPU twin:
-// crates/engine/src/reference/plastic.rs.
+// crates/engine/src/reference/plastic.rs (the host's side: crates/materials/src/plastic.rs).
 #ifndef PLASTIC_GLSL
 #define PLASTIC_GLSL
-#include "microfacet.glsl"
+#include "materials/microfacet.glsl"
 
 // A kernel compiled for one scene (SCENE_CONSTANTS) knows whether it has plastics; without them this
 // code is left out, as the conductors' is.
@@ -32,7 +32,7 @@ float coat_fresnel(float cos_i, float ior) {
 
 // The coat's transmittance from outside at incidence cos: 1 - F for a smooth coat (table 0), else a rough
 // coat's table (Material.table: 64 values over the cosine, four a texel of texture_texels), linearly
-// interpolated as Mitsuba's roughplastic reads it (scene/rough_plastic.rs made it).
+// interpolated as Mitsuba's roughplastic reads it (crates/materials/src/rough_plastic.rs made it).
 float coat_transmittance(uint table, float cos_i, float ior) {
     if (!HAS_ROUGH_PLASTICS || table == 0u) return 1.0 - coat_fresnel(cos_i, ior);
     float x = clamp(cos_i, 0.0, 1.0) * 63.0;
