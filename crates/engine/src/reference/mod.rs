@@ -394,12 +394,9 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
             while let Some((mut o, mut d, mut thr, mut depth)) = stack.pop() {
                 // The last vertex's normals (shading.glsl); a branch is stacked only where d suits them.
                 let (mut vng, mut vns) = (d, d);
-                loop {
-                    let Some(EyeVertex { h, m, front, ng, nf }) =
-                        eye_vertex(g, o, d, depth, &mut vng, &mut vns, &mut out.cut)
-                    else {
-                        break;
-                    };
+                while let Some(EyeVertex { h, m, front, ng, nf }) =
+                    eye_vertex(g, o, d, depth, &mut vng, &mut vns, &mut out.cut)
+                {
                     let m = &m;
                     let diffuse = m.surface == SURFACE_DIFFUSE;
                     if diffuse || m.surface == SURFACE_PLASTIC {
