@@ -173,6 +173,50 @@ fn coat_probability(spec: Vec3, diff: Vec3) -> Option<f32> {
     (total > 0.0).then(|| spec.max_element() / total)
 }
 
+/// An eye vertex as ray.comp's `eye_vertex` finds it: the hit, its material with the texture applied, the
+/// side the ray arrives on (`front`), and the true normal `ng` and shading normal `nf` on that side.
+struct EyeVertex {
+    h: trace::Hit,
+    m: Material,
+    front: bool,
+    ng: Vec3,
+    nf: Vec3,
+}
+
+/// ray.comp's `eye_vertex`, the start of every eye vertex on both eye paths: the ray o + t d of a path
+/// `depth` bounces long must leave the last vertex on the side of both its normals `vng`, `vns`
+/// (shading.glsl), be within the depth backstop and hit something, and d must lie on the same side of the
+/// hit's normals too, which then become `vng`, `vns`. `None`: the path ends here; `cut` counts a path
+/// ended at the backstop (checked second: past it, a direction the last vertex refuses ends the path
+/// uncounted).
+fn eye_vertex(
+    g: &GpuScene,
+    o: Vec3,
+    d: Vec3,
+    depth: u32,
+    vng: &mut Vec3,
+    vns: &mut Vec3,
+    cut: &mut u32,
+) -> Option<EyeVertex> {
+    if !shading::valid(d, *vng, *vns) {
+        return None;
+    }
+    if depth >= g.params.max_eye_depth {
+        *cut += 1;
+        return None;
+    }
+    let h = intersect_scene(g, o, d, 0.0, 1e30)?;
+    let m = texture::apply(g, &g.materials[h.material as usize], h.uv);
+    let front = d.dot(h.normal) < 0.0;
+    let ng = if front { h.normal } else { -h.normal };
+    let nf = shading::normal(&h, ng);
+    if !shading::valid(d, ng, nf) {
+        return None;
+    }
+    (*vng, *vns) = (ng, nf);
+    Some(EyeVertex { h, m, front, ng, nf })
+}
+
 /// One emission eye sample of ray.comp's `emission_sample`: the emission met along the specular chain
 /// through a random point of the pixel, one Fresnel branch chosen with probability f, and with direct light
 /// sampled (`RenderParams::direct_light`) term (d) at its diffuse end. `cut` counts a path ended at the
@@ -195,21 +239,11 @@ fn emission_sample(
     let mut sum = Vec3::ZERO;
     // The last vertex's normals, which d must lie on the same side of (shading.glsl).
     let (mut vng, mut vns) = (d, d);
-    for _ in 0..g.params.max_eye_depth {
-        if !shading::valid(d, vng, vns) {
-            return sum;
-        }
-        let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
-            return sum;
+    for depth in 0.. {
+        let Some(EyeVertex { h, m, front, ng, nf }) = eye_vertex(g, o, d, depth, &mut vng, &mut vns, cut) else {
+            break;
         };
-        let m = &texture::apply(g, &g.materials[h.material as usize], h.uv);
-        let front = d.dot(h.normal) < 0.0;
-        let ng = if front { h.normal } else { -h.normal };
-        let nf = shading::normal(&h, ng);
-        if !shading::valid(d, ng, nf) {
-            return sum;
-        }
-        (vng, vns) = (ng, nf);
+        let m = &m;
         if m.surface == SURFACE_DIFFUSE {
             let mut e = if front { thr * v3(m.emission) } else { Vec3::ZERO };
             *seen |= e.max_element() > 0.0;
@@ -264,10 +298,6 @@ fn emission_sample(
             continue;
         }
         (o, d) = glass_branch(g, h.pos, nf, front, m.ior, rng.float(), d);
-    }
-    // Past the backstop, a direction the last vertex refuses ends the path there, uncounted (ray.comp).
-    if shading::valid(d, vng, vns) {
-        *cut += 1;
     }
     sum
 }
@@ -363,25 +393,10 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
             while let Some((mut o, mut d, mut thr, mut depth)) = stack.pop() {
                 // The last vertex's normals (shading.glsl); a branch is stacked only where d suits them.
                 let (mut vng, mut vns) = (d, d);
-                loop {
-                    if !shading::valid(d, vng, vns) {
-                        break;
-                    }
-                    if depth >= p.max_eye_depth {
-                        out.cut += 1;
-                        break;
-                    }
-                    let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
-                        break;
-                    };
-                    let m = &texture::apply(g, &g.materials[h.material as usize], h.uv);
-                    let front = d.dot(h.normal) < 0.0;
-                    let ng = if front { h.normal } else { -h.normal };
-                    let nf = shading::normal(&h, ng);
-                    if !shading::valid(d, ng, nf) {
-                        break;
-                    }
-                    (vng, vns) = (ng, nf);
+                while let Some(EyeVertex { h, m, front, ng, nf }) =
+                    eye_vertex(g, o, d, depth, &mut vng, &mut vns, &mut out.cut)
+                {
+                    let m = &m;
                     let diffuse = m.surface == SURFACE_DIFFUSE;
                     if diffuse || m.surface == SURFACE_PLASTIC {
                         // ray.comp: a diffuse surface, or a plastic's base and coat (both lobes while
