@@ -31,8 +31,9 @@ pub mod metrics;
 pub mod present;
 mod renderer;
 pub mod report;
-pub mod scene;
 pub mod settings;
+/// The scene crate ([`ppm_vk_scene`]): the format-neutral scene and its readers.
+pub use ppm_vk_scene as scene;
 mod stats;
 
 #[cfg(feature = "test-hooks")]

@@ -18,27 +18,8 @@ pub struct ErrorStats {
     pub pixels: u64,
 }
 
-/// A named rectangle of pixels (origin top left), in the reference's full resolution.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Region {
-    pub name: String,
-    pub x0: u32,
-    pub y0: u32,
-    pub w: u32,
-    pub h: u32,
-}
-
-impl Region {
-    pub fn new(name: &str, x0: u32, y0: u32, w: u32, h: u32) -> Self {
-        Self {
-            name: name.to_owned(),
-            x0,
-            y0,
-            w,
-            h,
-        }
-    }
-}
+/// A named rectangle of pixels: the scene crate's, where scene files name their regions.
+pub use ppm_vk_scene::Region;
 
 pub struct Reference {
     pub image: RgbImage,

@@ -369,7 +369,7 @@ mod tests {
 
     #[test]
     fn images_are_read_top_row_first_and_decoded() {
-        let dir = crate::scene::TempDir::new("texture-read");
+        let dir = crate::TempDir::new("texture-read");
         let path = dir.0.join("a.png");
         // 2 x 1: a red pixel then a grey one of code 188.
         write_png(&path, 2, 1, &[255, 0, 0, 188, 188, 188]);

@@ -8,7 +8,7 @@ use glam::Vec3;
 use super::properties::Props;
 use super::xml::Elem;
 use super::Builder;
-use crate::scene::texture::{self, Filter, Pattern, Texture, Wrap};
+use crate::texture::{self, Filter, Pattern, Texture, Wrap};
 
 /// A texture with the element it was read from (to locate what a later check finds wrong with it).
 #[derive(Debug)]
@@ -89,7 +89,7 @@ impl Builder {
 mod tests {
     use super::super::tests::{load_in, write_texture};
     use super::*;
-    use crate::scene::{Material, Microfacet, Scene, Surface, TempDir};
+    use crate::{Material, Microfacet, Scene, Surface, TempDir};
 
     fn material_of_quad(s: &Scene, quad: usize) -> &Material {
         &s.materials[s.quads[quad].material as usize]
@@ -197,8 +197,8 @@ mod tests {
         assert_ne!(p.texture, a.texture);
         assert_eq!(s.textures.len(), 2);
         let ior = (1.49f64 / 1.000277) as f32;
-        let coat = crate::scene::plastic::coat(ior, Some(Microfacet::isotropic(false, 0.1)));
-        let most = crate::scene::plastic::max_diffuse_reflectance(ior, false, &coat);
+        let coat = crate::plastic::coat(ior, Some(Microfacet::isotropic(false, 0.1)));
+        let most = crate::plastic::max_diffuse_reflectance(ior, false, &coat);
         assert_eq!(s.textures[p.texture.unwrap() as usize].max(), Vec3::splat(most));
         assert!(matches!(p.surface, Surface::Plastic { diffuse, .. } if diffuse == Vec3::splat(most)));
         assert!(

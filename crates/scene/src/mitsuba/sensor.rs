@@ -8,7 +8,7 @@ use glam::{DMat3, DVec3};
 use super::properties::{number, Props};
 use super::xml::Elem;
 use super::Builder;
-use crate::scene::Camera;
+use crate::Camera;
 
 impl Builder {
     /// The scene's camera from the first `<sensor>` (kept by the document walk); a scene without one is
@@ -190,7 +190,7 @@ mod tests {
 
     use super::super::load;
     use super::*;
-    use crate::scene::TempDir;
+    use crate::TempDir;
 
     fn camera(sensor_body: &str, film: &str) -> Result<Camera> {
         let dir = TempDir::new("mitsuba-cam");

@@ -206,8 +206,8 @@ mod tests {
     //! `error`, `write_texture`).
 
     use super::*;
-    use crate::scene::texture;
-    use crate::scene::TempDir;
+    use crate::texture;
+    use crate::TempDir;
 
     /// A camera and a light, so that a scene with one more shape validates.
     const HEAD: &str = r#"<scene version="3.0.0">

@@ -14,9 +14,9 @@ use super::properties::Props;
 use super::texture::Tex;
 use super::xml::Elem;
 use super::Builder;
-use crate::scene::obj::{self, RawMesh};
-use crate::scene::texture::{self, Texture};
-use crate::scene::{ply, Mesh, ObjImport, Quad, Sphere, Surface, MAX_TRIANGLES};
+use crate::obj::{self, RawMesh};
+use crate::texture::{self, Texture};
+use crate::{ply, Mesh, ObjImport, Quad, Sphere, Surface, MAX_TRIANGLES};
 
 /// Triangles in the fan a `disk` becomes. The polygon's radius is enlarged so that its area is the
 /// disk's exactly (an emitting disk keeps its power); its outline then lies between 2.6e-5 of the
@@ -499,7 +499,7 @@ mod tests {
 
     use super::super::tests::{error, load_body, load_in, write_texture};
     use super::*;
-    use crate::scene::{Scene, TempDir};
+    use crate::{Scene, TempDir};
 
     /// The TOML quads of `quads` (inline tables) after the same camera and light as `HEAD`.
     fn toml_quads(quads: &str) -> Vec<Quad> {

@@ -767,8 +767,8 @@ const THIN_IOR: f32 = 1.5046 / 1.000277;
 fn conductor(src: &Source, p: &str, c: &Spanned<RawConductor>) -> Result<Surface> {
     let fail = |message: String| src.error(c.span(), Some(p), message);
     let named = |name: &str| {
-        crate::scene::conductors::named(name).ok_or_else(|| {
-            let known: Vec<&str> = crate::scene::conductors::names().collect();
+        crate::conductors::named(name).ok_or_else(|| {
+            let known: Vec<&str> = crate::conductors::names().collect();
             fail(format!(
                 "unknown conductor \"{name}\" (Mitsuba's names: {})",
                 known.join(", ")
@@ -956,7 +956,7 @@ fn mesh_transform(src: &Source, r: &RawMesh, p: &str) -> Result<DAffine3> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::TempDir;
+    use crate::TempDir;
 
     const CORNELL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/cornell-spheres.toml");
     const FURNACE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/furnace.toml");
@@ -1068,14 +1068,8 @@ material = "light"
             }]
         );
         // 64 x 48 pixels: x 16-31, all rows; at 6 x 4 the edge at 1.5 pixels rounds outward.
-        assert_eq!(
-            s.regions[0].pixels(64, 48),
-            crate::metrics::Region::new("left", 16, 0, 16, 48)
-        );
-        assert_eq!(
-            s.regions[0].pixels(6, 4),
-            crate::metrics::Region::new("left", 1, 0, 2, 4)
-        );
+        assert_eq!(s.regions[0].pixels(64, 48), crate::Region::new("left", 16, 0, 16, 48));
+        assert_eq!(s.regions[0].pixels(6, 4), crate::Region::new("left", 1, 0, 2, 4));
         // The region's table starts on line 38 (BASE has 36 lines and a blank one follows): x0 is line 40.
         assert_err(&region("0.5", "left"), 40, "region[0].x0", "0 <= x0 < x1 <= 1");
         assert_err(&region("-0.1", "left"), 40, "region[0].x0", "got x0 = -0.1");
@@ -1588,7 +1582,7 @@ material = "light"
                 rough: Microfacet::isotropic(true, 0.3)
             }
         );
-        let (au_eta, au_k) = crate::scene::conductors::named("Au").unwrap();
+        let (au_eta, au_k) = crate::conductors::named("Au").unwrap();
         assert_eq!(
             surface(r#"conductor = { material = "Au", alpha = 0.2, distribution = "ggx" }"#),
             Surface::RoughConductor {
@@ -1662,7 +1656,7 @@ material = "light"
             let s = Scene::parse(&text, "t.toml").unwrap_or_else(|e| panic!("{line}: {e}"));
             s.materials.iter().find(|m| m.name == "glass").unwrap().surface
         };
-        let (eta, k) = crate::scene::conductors::named("Au").unwrap();
+        let (eta, k) = crate::conductors::named("Au").unwrap();
         assert_eq!(
             surface("conductor = \"Au\""),
             Surface::Conductor {

@@ -10,7 +10,7 @@ use std::rc::Rc;
 use anyhow::{anyhow, bail, Result};
 
 use crate::error::Error;
-use crate::scene::{read_bounded, MAX_SCENE_BYTES};
+use crate::{read_bounded, MAX_SCENE_BYTES};
 
 /// Deepest `<include>` nesting, Mitsuba's own limit (`ParserConfig::max_include_depth`).
 pub const MAX_INCLUDE_DEPTH: usize = 15;
@@ -361,7 +361,7 @@ struct Src<'a, 'input> {
 #[cfg(test)]
 mod tests {
     use super::super::tests::load_in;
-    use crate::scene::{Scene, Surface, TempDir};
+    use crate::{Scene, Surface, TempDir};
 
     #[test]
     fn defaults_overrides_refs_and_includes() {

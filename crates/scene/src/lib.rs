@@ -7,6 +7,7 @@
 //! or imported is checked the same way; the TOML loader maps a failed check's field path
 //! (`sphere[1].radius`) back to the line and column it came from.
 
+pub mod error;
 pub mod generated;
 mod mitsuba;
 mod obj;
@@ -25,7 +26,7 @@ use glam::{DVec3, Vec3};
 
 pub use mitsuba::{parse_define, DISK_SEGMENTS, MAX_INCLUDE_DEPTH, MAX_NESTING};
 
-use crate::error::{Error, Result};
+pub use crate::error::{Error, Result};
 
 pub use obj::ObjImport;
 
@@ -344,6 +345,28 @@ pub struct Scene {
     pub warnings: Vec<String>,
 }
 
+/// A named rectangle of pixels (origin top left), in the reference's full resolution.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Region {
+    pub name: String,
+    pub x0: u32,
+    pub y0: u32,
+    pub w: u32,
+    pub h: u32,
+}
+
+impl Region {
+    pub fn new(name: &str, x0: u32, y0: u32, w: u32, h: u32) -> Self {
+        Self {
+            name: name.to_owned(),
+            x0,
+            y0,
+            w,
+            h,
+        }
+    }
+}
+
 /// A named part of the image, scored on its own against a reference image: its edges as fractions of
 /// the image's width and height (origin top left; x0 < x1, y0 < y1, all in [0, 1]), so it names the
 /// same part of the picture at any resolution.
@@ -359,14 +382,14 @@ pub struct ImageRegion {
 impl ImageRegion {
     /// The pixels it covers in a `width` x `height` image (a reference's), its edges rounded outward to
     /// whole pixels: exactly its edges where they fall on pixel edges (k / 512 at 512 x 512).
-    pub fn pixels(&self, width: u32, height: u32) -> crate::metrics::Region {
+    pub fn pixels(&self, width: u32, height: u32) -> Region {
         // A millionth of a pixel of slack, so that a fraction such as 1/3 at 300 pixels, not exactly
         // 100 in floating point, is not widened by one.
         let low = |f: f64, n: u32| ((f * f64::from(n) + 1e-6).floor().max(0.0) as u32).min(n);
         let high = |f: f64, n: u32| ((f * f64::from(n) - 1e-6).ceil().max(0.0) as u32).min(n);
         let (x0, y0) = (low(self.x0, width), low(self.y0, height));
         let (x1, y1) = (high(self.x1, width).max(x0 + 1), high(self.y1, height).max(y0 + 1));
-        crate::metrics::Region::new(&self.name, x0, y0, x1 - x0, y1 - y0)
+        Region::new(&self.name, x0, y0, x1 - x0, y1 - y0)
     }
 
     fn check(&self, path: &str) -> Result<(), Invalid> {
@@ -528,7 +551,7 @@ impl Scene {
     }
 
     /// SHA-256 (hex) of everything [`Scene::content_sha256`] covers except the camera: what a renderer
-    /// keeps when only the camera moves ([`crate::Renderer::set_camera`]).
+    /// keeps when only the camera moves (the engine's `Renderer::set_camera`).
     pub fn geometry_sha256(&self) -> String {
         use sha2::Digest;
         use std::fmt::Write as _;
@@ -847,7 +870,7 @@ fn hex(h: sha2::Sha256) -> String {
 }
 
 /// [`Scene::content_sha256`] from its camera and [`Scene::geometry_sha256`].
-pub(crate) fn camera_sha256(camera: &Camera, geometry_sha256: &str) -> String {
+pub fn camera_sha256(camera: &Camera, geometry_sha256: &str) -> String {
     use std::fmt::Write as _;
     let mut h = <sha2::Sha256 as sha2::Digest>::new();
     let _ = write!(Feed(&mut h), "{camera:?}{geometry_sha256}");

@@ -12,8 +12,8 @@ use super::properties::{color, number, Props};
 use super::texture::{same_texture, Tex};
 use super::xml::Elem;
 use super::Builder;
-use crate::scene::texture::{self, Pattern};
-use crate::scene::{conductors, Material, Microfacet, Surface};
+use crate::texture::{self, Pattern};
+use crate::{conductors, Material, Microfacet, Surface};
 
 /// A BSDF as ppm-vk reads it.
 #[derive(Clone, Debug)]
@@ -147,8 +147,8 @@ impl Builder {
         };
         // A texture above the photons' bound is lowered per pixel, as Surface::plastic lowers a
         // constant (which then stays within it).
-        let coat = crate::scene::plastic::coat((int / ext) as f32, rough);
-        let most = crate::scene::plastic::max_diffuse_reflectance((int / ext) as f32, nonlinear, &coat);
+        let coat = crate::plastic::coat((int / ext) as f32, rough);
+        let most = crate::plastic::max_diffuse_reflectance((int / ext) as f32, nonlinear, &coat);
         if let Some(t) = &texture {
             if let Some((lowered, n)) = t.texture.lowered(most) {
                 let what = match lowered.pattern {
@@ -442,7 +442,7 @@ fn ior_named(e: &Elem, name: &str) -> Result<f64> {
 mod tests {
     use super::super::tests::load_body;
     use super::*;
-    use crate::scene::Scene;
+    use crate::Scene;
 
     fn surface_of(s: &Scene, sphere: usize) -> Surface {
         s.materials[s.spheres[sphere].material as usize].surface
@@ -676,7 +676,7 @@ mod tests {
         // a smooth one at normal incidence, so it may allow 0.99).
         let ior = (1.49f64 / 1.000277) as f32;
         let rough = Some(Microfacet::isotropic(false, 0.2));
-        let most = crate::scene::plastic::max_diffuse_reflectance(ior, false, &crate::scene::plastic::coat(ior, rough));
+        let most = crate::plastic::max_diffuse_reflectance(ior, false, &crate::plastic::coat(ior, rough));
         let lowered = most < 0.99;
         assert!(
             s.warnings.len() == lowered as usize

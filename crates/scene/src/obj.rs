@@ -861,7 +861,7 @@ fn convert(m: &tobj::Material, name: String, mtl: &str) -> Result<(Material, Vec
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Camera, TempDir};
+    use crate::{Camera, TempDir};
     use glam::{DMat3, DVec3};
 
     /// A scene with a camera and one material ("white"), nothing else.
@@ -1016,12 +1016,12 @@ newmtl plain\nNs 10\n";
         )
         .expect("loads");
         let rough = |i: usize| r.materials[r.meshes[0].materials[i] as usize].surface;
-        let (eta, k) = crate::scene::conductors::named("none").unwrap();
+        let (eta, k) = crate::conductors::named("none").unwrap();
         let rc = |reflectance: f32, alpha: f32| Surface::RoughConductor {
             reflectance: Vec3::splat(reflectance),
             eta,
             k,
-            rough: crate::scene::Microfacet::isotropic(true, alpha),
+            rough: crate::Microfacet::isotropic(true, alpha),
         };
         assert_eq!(rough(0), rc(1.0, 0.25), "Ns 250: roughness 0.5");
         assert!(
