@@ -1,16 +1,17 @@
 //! The GLSL BVH traversal (`shaders/common/bvh.glsl`, through the test kernel `bvh_trace.comp`) against its
-//! CPU twin `ppm_vk_engine::reference::bvh` on the very same nodes, and the loop budget that keeps
+//! CPU twin `ppm_vk_reference::bvh` on the very same nodes, and the loop budget that keeps
 //! lavapipe from cutting a traversal short without a word.
 
 mod common;
 
 use common::*;
 use glam::Vec3;
-use ppm_vk_engine::bvh::{self, meshes, Bvh, BvhOptions, BvhTracer, DeviceBvh, TriangleInput, MAX_DEPTH, STACK};
+use ppm_vk_engine::bvh::{self, Bvh, BvhOptions, BvhTracer, DeviceBvh, TriangleInput, MAX_DEPTH, STACK};
 use ppm_vk_engine::layout::{BvhNode, Triangle};
-use ppm_vk_engine::reference::bvh::{brute_force, intersect, normal, Traversal};
-use ppm_vk_engine::reference::rng::Rng;
 use ppm_vk_kernels::bvh_trace::{TraceHit, TraceRay, MAX_BUDGET, NO_HIT};
+use ppm_vk_reference::bvh::{brute_force, intersect, normal, Traversal};
+use ppm_vk_reference::meshes;
+use ppm_vk_reference::rng::Rng;
 
 fn ray(o: Vec3, d: Vec3) -> TraceRay {
     TraceRay {
@@ -390,7 +391,7 @@ fn bvh_gpu_stack_at_its_bound() {
     assert!(format!("{err:#}").contains("stack entries"), "{err:#}");
     // What makes STACK enough for every built tree: the wide tree's stack needs at most three entries per
     // binary level, and build() keeps to MAX_DEPTH levels. A deep chain (39 levels) shows the bound.
-    let b = built(&bvh::meshes::growing_chain(100, 2.0));
+    let b = built(&meshes::growing_chain(100, 2.0));
     println!("chain of 100: {:?}", b.stats);
     assert!(
         b.stats.depth > 32 && b.stats.stack_bound <= 3 * b.stats.depth,

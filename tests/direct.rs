@@ -79,7 +79,7 @@ fn photons_leave_their_first_landing_to_the_shadow_rays() {
         };
         let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
         let gpu = sorted_records(r.trace_and_gather(0, photons).unwrap());
-        let cpu = ppm_vk_engine::reference::photon_pass(r.gpu_scene(), 0, photons, ppm_vk_kernels::photon::SALT_PHOTON);
+        let cpu = ppm_vk_reference::photon_pass(r.gpu_scene(), 0, photons, ppm_vk_kernels::photon::SALT_PHOTON);
         (gpu, cpu.len())
     };
     let (sampled, sampled_cpu) = records(DirectLight::Sample);
@@ -132,10 +132,7 @@ fn pixels_no_pilot_shadow_ray_lit_take_one_path() {
     for (name, scene, lit_share) in [("penumbra", &scene, 0.5..1.0), ("light facing away", &away, 0.0..1e-9)] {
         let mut r = Renderer::new(&ctx, scene, settings.clone()).unwrap();
         let marks = r.read_busy().unwrap();
-        let lit = marks
-            .iter()
-            .filter(|&&m| m & ppm_vk_engine::reference::MARK_LIT != 0)
-            .count();
+        let lit = marks.iter().filter(|&&m| m & ppm_vk_reference::MARK_LIT != 0).count();
         let share = lit as f64 / marks.len() as f64;
         // Pass 1 uses the pilot's eye pass (its jittered hit-point path is a sample); pass 2 traces eye pass 1.
         r.pass().unwrap();

@@ -1,4 +1,4 @@
-//! Every kernel against its CPU twin in `ppm_vk_engine::reference`, on identical inputs.
+//! Every kernel against its CPU twin in `ppm_vk_reference`, on identical inputs.
 //!
 //! The CPU reference traces in f32 with the same operations and the same random numbers as the GLSL, so
 //! paths agree except where a last-bit difference (lavapipe fuses multiply-adds, its `sqrt`/division need
@@ -14,10 +14,10 @@ use std::collections::HashMap;
 use common::*;
 use glam::Vec3;
 use ppm_vk_engine::layout::{HitPoint, HitStats, PassAccum, Photon};
-use ppm_vk_engine::reference::{self, trace};
 use ppm_vk_engine::scene::Surface;
 use ppm_vk_engine::{DirectLight, Mode, ProbeMode, Renderer, Settings};
 use ppm_vk_kernels::photon::SALT_PHOTON;
+use ppm_vk_reference::{self as reference, trace};
 
 const RES: u32 = 32;
 const PHOTONS: u32 = 20_000;

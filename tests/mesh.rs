@@ -254,7 +254,7 @@ fn a_small_mesh_written_into_the_kernels_traces_what_the_bvh_traces() {
         let inline = r.gpu_scene().triangles_inline;
         let hits = r.read_hit_points().unwrap();
         let records = r.trace_and_gather(0, photons).unwrap();
-        let cpu = ppm_vk_engine::reference::photon_pass(r.gpu_scene(), 0, photons, ppm_vk_kernels::photon::SALT_PHOTON);
+        let cpu = ppm_vk_reference::photon_pass(r.gpu_scene(), 0, photons, ppm_vk_kernels::photon::SALT_PHOTON);
         let matched = match_records(&records, &cpu, 1e-4 * (s.bounds().1 - s.bounds().0).max_element());
         (inline, hits, sorted_records(records), (cpu.len(), matched))
     };

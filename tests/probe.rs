@@ -5,9 +5,9 @@ mod common;
 
 use common::{assert_clean, cornell, ctx};
 use ppm_vk_engine::layout::{HitPoint, HitStats};
-use ppm_vk_engine::reference;
 use ppm_vk_engine::{ProbeMode, Renderer, Settings};
 use ppm_vk_kernels::photon::SALT_PROBE;
+use ppm_vk_reference as reference;
 
 const RES: u32 = 32;
 const PROBE_PHOTONS: u32 = 20_000;

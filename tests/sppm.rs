@@ -7,7 +7,8 @@ use std::path::Path;
 
 use common::*;
 use ppm_vk_engine::metrics::{compare, Reference};
-use ppm_vk_engine::{reference, Mode, Renderer, Settings};
+use ppm_vk_engine::{Mode, Renderer, Settings};
+use ppm_vk_reference as reference;
 
 const RES: u32 = 32;
 

@@ -5,8 +5,9 @@ mod common;
 
 use common::*;
 use ppm_vk_engine::layout::{HitStats, PassAccum};
-use ppm_vk_engine::{reference, DirectLight, Renderer, RgbImage, Scene, Settings};
+use ppm_vk_engine::{DirectLight, Renderer, RgbImage, Scene, Settings};
 use ppm_vk_kernels::photon::SALT_PHOTON;
+use ppm_vk_reference as reference;
 
 fn small(photons: u32) -> Settings {
     Settings {

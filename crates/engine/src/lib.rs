@@ -20,9 +20,9 @@
 //! on: a scene error with its file, line, column and field, a device limit with what to lower, an I/O
 //! error with its path, a device failure, a cancelled pass ([`CancelToken`]).
 //!
-//! The `test-hooks` feature makes public what only the tests need: the CPU twin of every kernel
-//! (`reference`), the BVH builder, the flattened GPU scene, the record layouts and the renderer's hooks
-//! that read and write device state.
+//! The `test-hooks` feature makes public what only the tests and the CPU twin of every kernel (the
+//! dev-only crate `ppm-vk-reference`) need: the record layouts and the renderer's hooks that read and write
+//! device state.
 
 pub mod checkpoint;
 mod error;
@@ -36,19 +36,10 @@ pub mod settings;
 pub use ppm_vk_scene as scene;
 mod stats;
 
-#[cfg(feature = "test-hooks")]
+/// The BVH over a scene's triangles (binned SAH, widened to 4): public for the CPU twin and tools.
 pub mod bvh;
-#[cfg(not(feature = "test-hooks"))]
-#[allow(dead_code)] // what only the tests use
-mod bvh;
-#[cfg(feature = "test-hooks")]
+/// The scene lowered to the kernels' records (`GpuScene`): public for the CPU twin and tools.
 pub mod lower;
-#[cfg(not(feature = "test-hooks"))]
-#[allow(dead_code)]
-mod lower;
-// The CPU twin of the kernels: the tests' alone (the host's material math is ppm_vk_materials).
-#[cfg(any(test, feature = "test-hooks"))]
-pub mod reference;
 #[cfg(feature = "test-hooks")]
 pub use ppm_vk_kernels::layout;
 

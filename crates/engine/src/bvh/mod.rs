@@ -25,15 +25,11 @@ use ppm_vk_kernels::bvh_trace;
 use ppm_vk_kernels::layout::{BvhNode, Triangle, BVH_EMPTY};
 
 mod build;
-// Only the tests and the examples upload a BVH of their own or trace it alone.
-#[cfg(any(test, feature = "test-hooks"))]
+// A BVH uploaded and traced alone, by the traversal's test kernel (the tests and the examples).
 mod device;
-#[cfg(any(test, feature = "test-hooks"))]
-pub mod meshes;
 mod widen;
 
-pub use build::build;
-#[cfg(any(test, feature = "test-hooks"))]
+pub use build::{build, levels_needed};
 pub use device::{BvhTracer, DeviceBvh};
 pub use widen::{stack_bound, widen};
 

@@ -8,7 +8,7 @@ use ppm_vk_materials::rough_dielectric::sample;
 
 use super::microfacet;
 use super::trace::offset_ray;
-use crate::lower::GpuScene;
+use ppm_vk_engine::lower::GpuScene;
 
 /// rough_dielectric.glsl's `rough_dielectric_bounce`: the new origin, direction and weight of a path
 /// arriving along `d` at `pos` (`nf` facing it, `front` if from outside); a zero weight ends the path.

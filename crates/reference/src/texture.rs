@@ -7,7 +7,7 @@ use ppm_vk_kernels::layout::{
 };
 use ppm_vk_materials::math::v3;
 
-use crate::lower::GpuScene;
+use ppm_vk_engine::lower::GpuScene;
 
 fn texel_rgb(t: [u32; 4]) -> Vec3 {
     Vec3::new(f32::from_bits(t[0]), f32::from_bits(t[1]), f32::from_bits(t[2]))
@@ -81,8 +81,8 @@ pub fn apply(g: &GpuScene, m: &Material, uv: Vec2) -> Material {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lower::texture_texels;
-    use crate::scene::texture::{read_image, Filter, Pattern, Texture, Wrap};
+    use ppm_vk_engine::lower::texture_texels;
+    use ppm_vk_engine::scene::texture::{read_image, Filter, Pattern, Texture, Wrap};
 
     const REFERENCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/references");
 

@@ -1,9 +1,15 @@
 //! The CPU reference of every kernel, in plain Rust. Tracing follows the GLSL operation for operation in
 //! f32 and draws the same random numbers, so both produce the same paths (up to the last bit of a fused
 //! multiply-add); sums and the progressive update are in f64. The tests run both on identical inputs.
+//!
+//! A crate of its own, `publish = false`, that only tests and examples depend on: no production build
+//! compiles it (`cargo tree -e normal -p ppm-vk` does not list it). It reads the engine's lowered scene
+//! (`ppm_vk_engine::lower::GpuScene`) and takes the BSDFs' math from `ppm_vk_materials`, as the kernels do.
 
 pub mod bvh;
 pub mod conductor;
+/// Generated meshes for the BVH's tests and benchmarks.
+pub mod meshes;
 pub mod microfacet;
 pub mod plastic;
 /// The kernels' random numbers (rng.glsl), a leaf of the materials crate, whose samplers' tests use them too.
@@ -24,8 +30,8 @@ use ppm_vk_kernels::photon::SALT_EMISSION;
 use ppm_vk_kernels::ray::RayPush;
 use ppm_vk_materials::math::{cosine_direction, fresnel_dielectric, oct_decode, oct_encode, reflect, v3, PI};
 
-use crate::lower::GpuScene;
-use crate::settings::ProbeMode;
+use ppm_vk_engine::lower::GpuScene;
+use ppm_vk_engine::settings::ProbeMode;
 use rng::Rng;
 use trace::{glass_branch, intersect_scene, offset_ray};
 

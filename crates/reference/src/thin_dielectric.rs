@@ -8,7 +8,7 @@ use ppm_vk_materials::math::{reflect, v3};
 pub use ppm_vk_materials::thin_dielectric::reflectance;
 
 use super::trace::offset_ray;
-use crate::lower::GpuScene;
+use ppm_vk_engine::lower::GpuScene;
 
 /// thin_dielectric.glsl's `thin_branch`: for uniform `u`, reflection (weight specular_reflectance, in
 /// `Material::color`) or transmission straight on (specular_transmittance, `Material::lobe_a`), `nf`

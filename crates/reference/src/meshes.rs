@@ -5,8 +5,8 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
-use super::TriangleInput;
-use crate::reference::rng::Rng;
+use crate::rng::Rng;
+use ppm_vk_engine::bvh::TriangleInput;
 
 fn tri(a: Vec3, b: Vec3, c: Vec3, material: u32) -> TriangleInput {
     TriangleInput { v: [a, b, c], material }

@@ -5,7 +5,7 @@
 use glam::{Vec2, Vec3};
 use ppm_vk_materials::math::{fresnel_dielectric, oct_decode, reflect, PI};
 
-use crate::lower::GpuScene;
+use ppm_vk_engine::lower::GpuScene;
 
 /// Also here for the BVH's tests and the bvh_trace example, which import them by this path.
 pub use ppm_vk_materials::math::{cosine_direction, v3};
@@ -200,9 +200,9 @@ mod tests {
     #[test]
     fn anisotropic_frames_are_mitsubas() {
         let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/references/");
-        let scene = crate::Scene::load(format!("{root}tangents.xml")).unwrap_or_else(|e| panic!("{e:#}"));
-        let g = GpuScene::new(&scene, &crate::Settings::default(), 1 << 10).unwrap();
-        let text = include_str!("../../../../scenes/references/tangents.json");
+        let scene = ppm_vk_engine::Scene::load(format!("{root}tangents.xml")).unwrap_or_else(|e| panic!("{e:#}"));
+        let g = GpuScene::new(&scene, &ppm_vk_engine::Settings::default(), 1 << 10).unwrap();
+        let text = include_str!("../../../scenes/references/tangents.json");
         let doc: serde_json::Value = serde_json::from_str(text).unwrap();
         let vec = |v: &serde_json::Value| {
             let a: Vec<f32> = v

@@ -177,7 +177,7 @@ fn traverse(
     let mut hit = None;
     let mut steps = 0u32;
     let mut cut = false;
-    let mut stack = [(0u32, 0f32); crate::bvh::STACK as usize];
+    let mut stack = [(0u32, 0f32); ppm_vk_engine::bvh::STACK as usize];
     let mut sp = 0usize;
     let mut stack_peak = 0;
     let mut next = 0u32;
@@ -340,13 +340,13 @@ mod tests {
         let line = |prefix: &str| glsl.lines().find(|l| l.starts_with(prefix)).unwrap();
         assert_eq!(
             line("const uint BVH_MAX_DEPTH = "),
-            format!("const uint BVH_MAX_DEPTH = {}u;", crate::bvh::MAX_DEPTH)
+            format!("const uint BVH_MAX_DEPTH = {}u;", ppm_vk_engine::bvh::MAX_DEPTH)
         );
         assert_eq!(
             line("const uint BVH_STACK = "),
             "const uint BVH_STACK = 3u * BVH_MAX_DEPTH;"
         );
-        assert_eq!(crate::bvh::STACK, 3 * crate::bvh::MAX_DEPTH);
+        assert_eq!(ppm_vk_engine::bvh::STACK, 3 * ppm_vk_engine::bvh::MAX_DEPTH);
         for (name, v) in [
             ("BVH_EMPTY", ppm_vk_kernels::layout::BVH_EMPTY),
             ("BVH_LEAF", ppm_vk_kernels::layout::BVH_LEAF),

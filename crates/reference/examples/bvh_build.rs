@@ -6,10 +6,11 @@
 
 use anyhow::{bail, Context as _, Result};
 use glam::Vec3;
-use ppm_vk_engine::bvh::{self, meshes, Bvh, BvhOptions, DeviceBvh, TriangleInput};
-use ppm_vk_engine::reference::rng::Rng;
+use ppm_vk_engine::bvh::{self, Bvh, BvhOptions, DeviceBvh, TriangleInput};
 use ppm_vk_engine::{Context, ContextOptions};
 use ppm_vk_kernels::bvh_trace::{self, TraceHit, TracePush, TraceRay};
+use ppm_vk_reference::meshes;
+use ppm_vk_reference::rng::Rng;
 
 fn main() -> Result<()> {
     let mut triangles = 1_000_000usize;

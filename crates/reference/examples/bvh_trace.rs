@@ -7,9 +7,9 @@
 
 use anyhow::{bail, Context as _, Result};
 use ppm_vk_engine::bvh::{self, BvhOptions, DeviceBvh, TriangleInput};
-use ppm_vk_engine::reference::rng::Rng;
 use ppm_vk_engine::{Context, ContextOptions, Scene};
 use ppm_vk_kernels::bvh_trace::{self, TraceHit, TracePush, TraceRay};
+use ppm_vk_reference::rng::Rng;
 
 fn main() -> Result<()> {
     let mut path = None;
@@ -75,7 +75,7 @@ fn main() -> Result<()> {
             }
             let p = t.v[0] + a * (t.v[1] - t.v[0]) + c * (t.v[2] - t.v[0]);
             let nrm = (t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]).normalize();
-            let d = ppm_vk_engine::reference::trace::cosine_direction(nrm, rng.float(), rng.float());
+            let d = ppm_vk_reference::trace::cosine_direction(nrm, rng.float(), rng.float());
             TraceRay {
                 origin: (p + eps * nrm).to_array(),
                 tmin: 0.0,

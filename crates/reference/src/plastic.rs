@@ -17,7 +17,7 @@ use ppm_vk_materials::plastic::coat_fresnel;
 use super::microfacet;
 use super::rng::Rng;
 use super::trace::offset_ray;
-use crate::lower::GpuScene;
+use ppm_vk_engine::lower::GpuScene;
 
 /// plastic.glsl's `plastic_lobes`: seen from (or lit from) incidence `cos_o`, the specular lobe's weight
 /// specular_reflectance F(cos_o) and the diffuse lobe's D (1 - F(cos_o)), whose f_r is that over pi times
@@ -126,7 +126,7 @@ mod tests {
     use ppm_vk_materials::plastic::{coat, diffuse_bound, diffuse_factor};
 
     fn json() -> serde_json::Value {
-        let text = include_str!("../../../../scenes/references/coated-bsdfs.json");
+        let text = include_str!("../../../scenes/references/coated-bsdfs.json");
         serde_json::from_str(text).unwrap()
     }
 

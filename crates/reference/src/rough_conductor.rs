@@ -16,7 +16,7 @@ use ppm_vk_materials::Microfacet;
 
 use super::microfacet;
 use super::trace::offset_ray;
-use crate::lower::GpuScene;
+use ppm_vk_engine::lower::GpuScene;
 
 /// The BSDF times cos_o, in the local frame (wi, wo pointing away from the surface).
 pub fn eval(m: &Material, mf: &Microfacet, wi: Vec3, wo: Vec3) -> Vec3 {
@@ -116,7 +116,7 @@ pub(crate) mod tests {
     }
 
     fn json() -> serde_json::Value {
-        let text = include_str!("../../../../scenes/references/rough-bsdfs.json");
+        let text = include_str!("../../../scenes/references/rough-bsdfs.json");
         serde_json::from_str(text).unwrap()
     }
 
