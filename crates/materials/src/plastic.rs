@@ -64,8 +64,15 @@ pub fn coat(ior: f32, rough: Option<Microfacet>) -> Coat {
 }
 
 /// The coats of one scene, each made once by [`coat`] and shared by every material with the same one: a
-/// rough coat's tables take over a million visible-normal samples. Held for one scene load or lowering;
-/// keyed by the index and (a rough coat) the distribution and alpha, all [`coat`] reads.
+/// rough coat's tables take over a million visible-normal samples. Keyed by the index and (a rough coat)
+/// the distribution and alpha, all [`coat`] reads, so a cached coat is the one [`coat`] would make.
+///
+/// Who holds one, passed by `&mut`, no global: a scene reader for the whole file (the Mitsuba reader's
+/// bsdfs bound their diffuse reflectance with it, then the scene's validation reads the same one), and
+/// the engine's lowering for the whole scene. Loading and lowering do not share one: that would take a
+/// loader that hands its cache out and a renderer that takes it (new public API on both), or a field of
+/// `Scene` (which would change its `Debug` and every literal of it); so a load plus a lowering make each
+/// distinct coat twice.
 #[derive(Debug, Default)]
 pub struct Coats {
     made: HashMap<(u32, Option<(bool, u32)>), Coat>,

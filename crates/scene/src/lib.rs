@@ -133,7 +133,19 @@ impl Surface {
         nonlinear: bool,
         rough: Option<Microfacet>,
     ) -> (Surface, Option<String>) {
-        let most = plastic::max_diffuse_reflectance(ior, nonlinear, &plastic::coat(ior, rough));
+        Surface::plastic_in(diffuse, specular, ior, nonlinear, rough, &mut plastic::Coats::default())
+    }
+
+    /// [`Surface::plastic`] with its coat taken from `coats`: a reader keeps one for the whole file.
+    pub(crate) fn plastic_in(
+        diffuse: Vec3,
+        specular: Vec3,
+        ior: f32,
+        nonlinear: bool,
+        rough: Option<Microfacet>,
+        coats: &mut plastic::Coats,
+    ) -> (Surface, Option<String>) {
+        let most = plastic::max_diffuse_reflectance(ior, nonlinear, coats.coat(ior, rough));
         let kept = diffuse.min(Vec3::splat(most));
         let warning = (kept != diffuse).then(|| {
             format!(
@@ -706,13 +718,17 @@ impl Scene {
 
     /// [`Scene::validate`] with the field path kept apart, for loaders that can locate it.
     pub(crate) fn check(&self) -> Result<(), Invalid> {
+        self.check_with(&mut plastic::Coats::default())
+    }
+
+    /// [`Scene::check`] taking the plastics' coats from `coats`, one per distinct coat however many
+    /// materials share it: a reader that made them already passes its own.
+    pub(crate) fn check_with(&self, coats: &mut plastic::Coats) -> Result<(), Invalid> {
         check_camera(&self.camera)?;
         // Textures first: a bad pixel is named rather than the constant it made.
         self.check_textures()?;
-        // One coat per distinct plastic coat, however many materials share it.
-        let mut coats = plastic::Coats::default();
         for m in &self.materials {
-            check_material(m, &mut coats)?;
+            check_material(m, coats)?;
         }
         let material = |path: &str, i: u32| -> Result<&Material, Invalid> {
             self.materials.get(i as usize).ok_or_else(|| {

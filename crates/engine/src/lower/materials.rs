@@ -10,18 +10,24 @@ use ppm_vk_materials::plastic;
 use crate::scene::{Scene, Surface};
 
 /// The records of `scene`'s materials, in order. `texture_at` is the texel of each texture's header;
-/// rough plastics' coat tables are appended to `textures`.
+/// rough plastics' coat tables are appended to `textures`, one per material (each distinct coat made once).
 pub fn materials(scene: &Scene, texture_at: &[u32], textures: &mut Vec<[u32; 4]>) -> Vec<Material> {
+    let mut coats = plastic::Coats::default();
     scene
         .materials
         .iter()
-        .map(|m| material(m, texture_at, textures))
+        .map(|m| material(m, texture_at, textures, &mut coats))
         .collect()
 }
 
 /// The record of material `m`: one arm per surface, each writing all the fields that surface reads;
-/// the others stay zero.
-fn material(m: &crate::scene::Material, texture_at: &[u32], textures: &mut Vec<[u32; 4]>) -> Material {
+/// the others stay zero. A plastic's coat comes from `coats`.
+fn material(
+    m: &crate::scene::Material,
+    texture_at: &[u32],
+    textures: &mut Vec<[u32; 4]>,
+    coats: &mut plastic::Coats,
+) -> Material {
     let base = Material {
         emission: m.emission.to_array(),
         texture: m.texture.map_or(0, |t| texture_at[t as usize] + 1),
@@ -62,7 +68,7 @@ fn material(m: &crate::scene::Material, texture_at: &[u32], textures: &mut Vec<[
             rough,
         } => {
             // The coat (ppm_vk_materials::plastic): a rough one's transmittance table goes after the textures.
-            let coat = plastic::coat(ior, rough);
+            let coat = coats.coat(ior, rough);
             let table = match coat.table.as_ref() {
                 Some(t) => push_table(textures, t),
                 None => 0,
@@ -73,7 +79,7 @@ fn material(m: &crate::scene::Material, texture_at: &[u32], textures: &mut Vec<[
                 ior,
                 lobe_a: specular.to_array(),
                 lobe_b: [
-                    plastic::diffuse_bound(diffuse, ior, nonlinear, &coat),
+                    plastic::diffuse_bound(diffuse, ior, nonlinear, coat),
                     coat.internal,
                     nonlinear as u32 as f32,
                 ],

@@ -147,8 +147,8 @@ impl Builder {
         };
         // A texture above the photons' bound is lowered per pixel, as Surface::plastic lowers a
         // constant (which then stays within it).
-        let coat = crate::plastic::coat((int / ext) as f32, rough);
-        let most = crate::plastic::max_diffuse_reflectance((int / ext) as f32, nonlinear, &coat);
+        let coat = self.coats.coat((int / ext) as f32, rough);
+        let most = crate::plastic::max_diffuse_reflectance((int / ext) as f32, nonlinear, coat);
         if let Some(t) = &texture {
             if let Some((lowered, n)) = t.texture.lowered(most) {
                 let what = match lowered.pattern {
@@ -172,7 +172,8 @@ impl Builder {
                 }));
             }
         }
-        let (surface, lowered) = Surface::plastic(diffuse, specular, (int / ext) as f32, nonlinear, rough);
+        let (surface, lowered) =
+            Surface::plastic_in(diffuse, specular, (int / ext) as f32, nonlinear, rough, &mut self.coats);
         if let Some(message) = lowered {
             self.warn(e, message);
         }

@@ -44,6 +44,7 @@ use self::bsdf::Bsdf;
 use self::properties::Props;
 use self::texture::Tex;
 use self::xml::Elem;
+use super::plastic::Coats;
 use super::{Camera, Scene};
 
 pub use self::shape::DISK_SEGMENTS;
@@ -84,6 +85,9 @@ struct Builder {
     origins: HashMap<String, Elem>,
     sensor: Option<Elem>,
     shapes: usize,
+    /// The plastics' coats, each made once for the whole file: the bsdfs' bounds and the final check
+    /// read them.
+    coats: Coats,
 }
 
 impl Builder {
@@ -113,6 +117,7 @@ impl Builder {
             origins: HashMap::new(),
             sensor: None,
             shapes: 0,
+            coats: Coats::default(),
         }
     }
 
@@ -182,7 +187,7 @@ impl Builder {
     fn finish(mut self) -> Result<Scene> {
         self.camera()?;
         let root = self.root.clone();
-        self.scene.check().map_err(|inv| {
+        self.scene.check_with(&mut self.coats).map_err(|inv| {
             // The element of the field path's longest known prefix (`quad[3]` for `quad[3].edge_v`).
             let mut path = inv.path.as_str();
             let at = loop {
