@@ -28,6 +28,7 @@ DEBIAN_PACKAGES=(
   "libxkbcommon-x11-0:keyboard layouts on X11 (ppm-vk view)"
   "libwayland-client0:Wayland client library (ppm-vk view on Wayland)"
   "xvfb:a headless X server the viewer's tests open their windows on"
+  "python3:the layering check of scripts/test (scripts/import-cycles.py)"
 )
 
 if ! command -v cargo >/dev/null 2>&1; then

@@ -7,7 +7,7 @@ probability), the BSDF's value (times the outgoing cosine, as Mitsuba's eval ret
 cosines, and the directional albedo of the diffuse lobe (eval integrated over the hemisphere: it does not
 depend on the azimuth, so a midpoint rule over the outgoing cosine with 4096 points); for each thin
 dielectric case the probability of reflection (Fresnel with its internal reflections) and both weights.
-ppm-vk's tests compare against it (crates/engine/src/reference/plastic.rs, crates/materials/src/plastic.rs and
+ppm-vk's tests compare against it (crates/reference/src/plastic.rs, crates/materials/src/plastic.rs and
 thin_dielectric.rs).
 
 Run: pip install mitsuba numpy; python3 scenes/references/coated_bsdfs.py

@@ -1,5 +1,5 @@
 // Test kernel: the nearest triangle hit of each ray of a buffer, through shaders/common/bvh.glsl. It is how
-// the GLSL traversal is checked against the CPU reference (crates/engine/src/reference/bvh.rs). It also
+// the GLSL traversal is checked against the CPU reference (crates/reference/src/bvh.rs). It also
 // binds the nodes and triangles a second time as storage buffers of typed records (bindings 4 and 5), so
 // that build.rs reflects the BvhNode and Triangle layouts the traversal's texel reads assume, and the
 // hit's normal and the root's first child, read that way, check those reads.

@@ -1,5 +1,5 @@
 // Scene bindings shared by the kernels that trace rays (ray, photon): always bindings 0-7, in this order
-// (4 and 5: the triangle BVH, crates/engine/src/bvh.rs; one empty leaf in scenes without meshes).
+// (4 and 5: the triangle BVH, crates/engine/src/bvh/; one empty leaf in scenes without meshes).
 // The intersection loops read the scene through SPHERE(i), QUAD(i), INLINE_TRIANGLE(i), NUM_SPHERES,
 // NUM_QUADS and NUM_INLINE_TRIANGLES, and traverse the BVH when NUM_TRIANGLES > 0. Built as shipped, they
 // read the buffers; the renderer recompiles the tracing kernels with SCENE_CONSTANTS defined and the

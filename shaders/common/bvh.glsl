@@ -1,6 +1,6 @@
-// Ray traversal of the triangle BVH built by crates/engine/src/bvh.rs, with the watertight ray/triangle test
+// Ray traversal of the triangle BVH built by crates/engine/src/bvh/, with the watertight ray/triangle test
 // of Woop, Benthin and Wald 2013 ("Watertight Ray/Triangle Intersection", JCGT 2(1)).
-// crates/engine/src/reference/bvh.rs is the same code in Rust, operation for operation: the tests compare
+// crates/reference/src/bvh.rs is the same code in Rust, operation for operation: the tests compare
 // hits and step counts.
 //
 // The including kernel declares, before including this file (at bindings of its choosing), the BVH's

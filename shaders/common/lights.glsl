@@ -1,5 +1,5 @@
-// The lights: emitting quads and triangles, chosen in proportion to their power (crates/engine/src/
-// gpu_scene.rs builds the table). photon.comp starts photons from them; ray.comp samples them for the
+// The lights: emitting quads and triangles, chosen in proportion to their power
+// (crates/engine/src/lower/lights.rs builds the table). photon.comp starts photons from them; ray.comp samples them for the
 // direct light at its eye paths' first diffuse points. The including kernel declares, before this file,
 //   layout(std430, binding = N) readonly buffer Lights { Light lights[]; };
 // (read only where the lights are not compiled in, SCENE_INLINE_LIGHTS).

@@ -110,7 +110,7 @@ void visit_window(ivec3 lo, ivec3 hi, uint select) {
 }
 
 // Each member's window is the cells its sphere's bounding box overlaps (3x3x3 at most: cells are 1.5
-// times the largest radius wide, gpu_scene.rs: CELL_PER_RADIUS). Members close together share one
+// times the largest radius wide, lower/grid.rs: CELL_PER_RADIUS). Members close together share one
 // window, the union of theirs; where the union is larger than their windows together (members on
 // different surfaces), each gets its own.
 void for_each_photon_near_group() {

@@ -1,5 +1,5 @@
 // Smooth shading: a mesh's vertex normals interpolated across its triangles, and the adjoint BSDF that
-// photons must use with them (Veach 1997, section 5.3). CPU twin: crates/engine/src/reference/shading.rs.
+// photons must use with them (Veach 1997, section 5.3). CPU twin: crates/reference/src/shading.rs.
 //
 // At a hit, ng is the geometric normal and ns the shading normal, both turned to the side the ray arrives
 // from. Every BSDF is evaluated and sampled about ns. A direction w takes part only where it lies on the

@@ -1,6 +1,6 @@
 // Textures (Mitsuba's bitmap and checkerboard): the diffuse reflectance of a material with one, at the
-// texture coordinates of the hit. CPU twin: crates/engine/src/reference/texture.rs; what each texture
-// holds: crates/engine/src/scene/texture.rs, laid out by crates/engine/src/gpu_scene.rs.
+// texture coordinates of the hit. CPU twin: crates/reference/src/texture.rs; what each texture
+// holds: crates/scene/src/texture.rs, laid out by crates/engine/src/lower/.
 //
 // A texture in texture_texels: a header of TEXTURE_HEADER texels,
 //   0: kind | filter << 4 | wrap << 8, width, height, the texel of its first pixel (a bitmap)

@@ -234,7 +234,7 @@ struct PhotonState {
     uint pad1;
 };
 
-// A node of the 4-wide BVH (crates/engine/src/bvh.rs collapses the binary SAH tree into it), 64 bytes:
+// A node of the 4-wide BVH (crates/engine/src/bvh/widen.rs collapses the binary SAH tree into it), 64 bytes:
 // the boxes of its (up to) four children quantized to 8 bits per bound (Ylitie, Karras and Laine 2017), and
 // each child's reference: BVH_EMPTY, an interior node's index, or BVH_LEAF | (count - 1) << BVH_COUNT_SHIFT
 // | its first triangle in the leaf-ordered triangle buffer. On each axis a bound is origin + q 2^e with q

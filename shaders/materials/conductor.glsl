@@ -2,7 +2,7 @@
 // fraction; the conductor its specular_reflectance times the unpolarised Fresnel reflectance of a metal of
 // complex index eta + i k, per RGB channel (the exact formula Mitsuba's fresnel_conductor evaluates, after
 // K. D. Moeller, "Optics", 1988). CPU twin: crates/materials/src/conductor.rs (its Fresnel term) and
-// crates/engine/src/reference/conductor.rs (a bounce).
+// crates/reference/src/conductor.rs (a bounce).
 #ifndef CONDUCTOR_GLSL
 #define CONDUCTOR_GLSL
 

@@ -4,7 +4,7 @@
 // host). The diffuse lobe is a product of a term of each direction, so the photon estimate needs no BSDF
 // per photon: a photon's record carries its flux times (1 - F(cos_i)) (photon.comp), and a hit point on
 // the plastic weighs what it gathers by D (1 - F(cos_o)) / pi (ray.comp). CPU twin:
-// crates/engine/src/reference/plastic.rs (the host's side: crates/materials/src/plastic.rs).
+// crates/reference/src/plastic.rs (the host's side: crates/materials/src/plastic.rs).
 #ifndef PLASTIC_GLSL
 #define PLASTIC_GLSL
 #include "materials/microfacet.glsl"

@@ -7,7 +7,7 @@
 // notation): no hit point and no photon record there, its lobe sampled by both path kinds with the exact
 // weight; the BSDF is reciprocal, so the photons' weight is the eye paths'. Rough enough conductors
 // (RenderParams.glossy_alpha) may instead hold hit points, below. CPU twin:
-// crates/engine/src/reference/rough_conductor.rs (density and bound: crates/materials/src/rough_conductor.rs).
+// crates/reference/src/rough_conductor.rs (density and bound: crates/materials/src/rough_conductor.rs).
 // ROUGH_EVAL_ONLY (the gather) leaves the bounce out.
 #ifndef ROUGH_CONDUCTOR_GLSL
 #define ROUGH_CONDUCTOR_GLSL

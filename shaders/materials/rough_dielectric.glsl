@@ -7,7 +7,7 @@
 // factors of a path's entry and exit cancel, so what is seen of glass from outside is exact; with it the
 // weight is the same for photons and eye paths. Its vertices are S in ray.comp's path notation, as the
 // rough conductor's (rough_conductor.glsl). CPU twin: crates/materials/src/rough_dielectric.rs and
-// crates/engine/src/reference/rough_dielectric.rs (a bounce).
+// crates/reference/src/rough_dielectric.rs (a bounce).
 #ifndef ROUGH_DIELECTRIC_GLSL
 #define ROUGH_DIELECTRIC_GLSL
 #include "materials/rough_conductor.glsl"

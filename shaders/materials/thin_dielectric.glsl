@@ -3,7 +3,7 @@
 // inside it any number of times), and lets light through without bending it otherwise; each branch is
 // weighted by specular_reflectance (Material.color) or specular_transmittance (Material.lobe_a). The same
 // from both sides. CPU twin: crates/materials/src/thin_dielectric.rs and
-// crates/engine/src/reference/thin_dielectric.rs (a branch).
+// crates/reference/src/thin_dielectric.rs (a branch).
 #ifndef THIN_DIELECTRIC_GLSL
 #define THIN_DIELECTRIC_GLSL
 

@@ -270,7 +270,7 @@ impl Context {
         }
         let staging = Buffer::new(self, "staging readback", bytes, BufferKind::Readback)?;
         self.run(|cmd| {
-            crate::barrier(self, cmd);
+            crate::context::barrier(self, cmd);
             src.cmd_copy_to(cmd, &staging, bytes);
             Ok(())
         })?;

@@ -730,6 +730,36 @@ impl Drop for Inner {
     }
 }
 
+/// Records a full memory barrier between commands: every earlier compute or transfer write becomes
+/// visible to every later compute, transfer, indirect-dispatch or host access. Kernels here run strictly one after another,
+/// so one kind of barrier serves all.
+pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer) {
+    let mb = [vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(
+            vk::AccessFlags::SHADER_READ
+                | vk::AccessFlags::SHADER_WRITE
+                | vk::AccessFlags::TRANSFER_READ
+                | vk::AccessFlags::TRANSFER_WRITE
+                | vk::AccessFlags::HOST_READ
+                | vk::AccessFlags::INDIRECT_COMMAND_READ,
+        )];
+    unsafe {
+        ctx.device().cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::COMPUTE_SHADER
+                | vk::PipelineStageFlags::TRANSFER
+                | vk::PipelineStageFlags::HOST
+                | vk::PipelineStageFlags::DRAW_INDIRECT,
+            vk::DependencyFlags::empty(),
+            &mb,
+            &[],
+            &[],
+        )
+    };
+}
+
 #[cfg(test)]
 mod tests {
     use super::debug_name;

@@ -15,8 +15,8 @@ mod profiler;
 mod swapchain;
 
 pub use buffer::{Buffer, BufferKind};
-pub use context::{Context, ContextOptions, DeviceInfo, MemoryUsage};
-pub use pipeline::{barrier, ComputePipeline, PipelineDesc};
+pub use context::{barrier, Context, ContextOptions, DeviceInfo, MemoryUsage};
+pub use pipeline::{ComputePipeline, PipelineDesc};
 pub use profiler::{Profiler, ScopeTiming};
 pub use raw_window_handle;
 pub use swapchain::{Presented, Swapchain};

@@ -163,3 +163,8 @@ fn chain(e: &(dyn std::error::Error + 'static)) -> String {
     }
     s
 }
+
+/// A vector as messages show it: `[x, y, z]`.
+pub(crate) fn fmt_vec(v: [f32; 3]) -> String {
+    format!("[{}, {}, {}]", v[0], v[1], v[2])
+}

@@ -15,7 +15,9 @@ use anyhow::{anyhow, bail, Result};
 use glam::{DAffine3, DVec3, Vec2, Vec3};
 
 use super::texture::{self, Filter, Texture, Wrap};
-use super::{fmt_vec, generated, Material, Mesh, Scene, Surface, Triangle};
+use super::{generated, Material, Mesh, Scene, Surface, Triangle};
+use crate::error::fmt_vec;
+use crate::files::{read_bounded, MAX_MESH_BYTES};
 
 /// How [`Scene::import_obj`] places and dresses an OBJ.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,7 +55,7 @@ pub(super) fn import(
     flip_tex_coords: bool,
 ) -> Result<usize> {
     let shown = path.display().to_string();
-    let text = super::read_bounded(path, super::MAX_MESH_BYTES, "OBJ file").map_err(|e| {
+    let text = read_bounded(path, MAX_MESH_BYTES, "OBJ file").map_err(|e| {
         let hint = if generated::is_generated(path) {
             format!(" (a generated demo mesh: run `{}` to write it)", generated::COMMAND)
         } else {

@@ -1,7 +1,7 @@
 //! Textures (Mitsuba's `bitmap` and `checkerboard`): a reflectance that varies over a surface with its
 //! texture coordinates. A material with a texture takes its diffuse reflectance (a diffuse surface's
 //! albedo, a plastic's diffuse_reflectance) from it at each point; shaders/common/texture.glsl evaluates
-//! it, crates/engine/src/reference/texture.rs is its CPU twin. Texture coordinates follow Mitsuba: (0, 0)
+//! it, crates/reference/src/texture.rs is its CPU twin. Texture coordinates follow Mitsuba: (0, 0)
 //! is the top-left corner of an image, v grows downwards; a rectangle's are its local (x, y) mapped from
 //! [-1, 1] to [0, 1], a sphere's its longitude and colatitude, a mesh's its vertices'.
 
@@ -200,13 +200,13 @@ impl Texture {
                 let (x, y) = (k % w, k / w);
                 format!(
                     "pixel ({x}, {y}) (column, row from the top) is {}",
-                    super::fmt_vec(pixels[k].to_array())
+                    crate::error::fmt_vec(pixels[k].to_array())
                 )
             }),
             Pattern::Checkerboard { color0, color1 } => [("color0", color0), ("color1", color1)]
                 .into_iter()
                 .find(|(_, c)| bad(c))
-                .map(|(n, c)| format!("{n} is {}", super::fmt_vec(c.to_array()))),
+                .map(|(n, c)| format!("{n} is {}", crate::error::fmt_vec(c.to_array()))),
         }
     }
 

@@ -763,7 +763,7 @@ const PLASTIC_IOR: f32 = 1.49 / 1.000277;
 /// Mitsuba's default thin and rough dielectric: BK7 (1.5046) in air.
 const THIN_IOR: f32 = 1.5046 / 1.000277;
 
-/// A `conductor` entry: a named metal (Mitsuba's names and RGB values, scene/conductors.rs) or eta and k.
+/// A `conductor` entry: a named metal (Mitsuba's names and RGB values, crates/materials/src/conductor.rs) or eta and k.
 fn conductor(src: &Source, p: &str, c: &Spanned<RawConductor>) -> Result<Surface> {
     let fail = |message: String| src.error(c.span(), Some(p), message);
     let named = |name: &str| {

@@ -291,7 +291,7 @@ fn rough_conductor(e: &Elem, props: &Props) -> Result<Bsdf> {
 
 /// A conductor's specular reflectance, eta and k.
 fn metal(e: &Elem, props: &Props) -> Result<(Vec3, Vec3, Vec3)> {
-    // Mitsuba's conductor: a named metal (its RGB eta and k, scene/conductors.rs), or eta and
+    // Mitsuba's conductor: a named metal (its RGB eta and k, crates/materials/src/conductor.rs), or eta and
     // k given (both default to the "none" material's: a perfect mirror).
     let (none_eta, none_k) = conductors::named("none").expect("the default conductor");
     let (eta, k) = match props.string("material")? {

@@ -21,7 +21,7 @@
 //!
 //! Uses run one way: the children use this file's [`Builder`], `xml.rs`'s [`Elem`] and `properties.rs`;
 //! `shape.rs` uses `bsdf.rs`, `emitter.rs` and `texture.rs`, and `bsdf.rs` uses `texture.rs`; this file
-//! calls into them. Mesh files are read by `scene/obj.rs` (OBJ) and `scene/ply.rs` (PLY).
+//! calls into them. Mesh files are read by `obj.rs` (OBJ) and `ply.rs` (PLY).
 
 mod bsdf;
 mod emitter;

@@ -10,7 +10,7 @@ use std::rc::Rc;
 use anyhow::{anyhow, bail, Result};
 
 use crate::error::Error;
-use crate::{read_bounded, MAX_SCENE_BYTES};
+use crate::files::{read_bounded, MAX_SCENE_BYTES};
 
 /// Deepest `<include>` nesting, Mitsuba's own limit (`ParserConfig::max_include_depth`).
 pub const MAX_INCLUDE_DEPTH: usize = 15;
