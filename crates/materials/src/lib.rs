@@ -2,7 +2,7 @@
 //! pdf) and the tables derived from it, one module per BSDF beside its GLSL of the same name in
 //! `shaders/materials/` (tests/pairs.rs holds them to it), and the leaf math they share (`math`, `rng`).
 //! It depends on glam alone: the scene reads materials into these types, the engine lowers them for the
-//! kernels, and the engine's CPU twin (its `reference`) walks a scene with them, so nothing here knows a
+//! kernels, and the CPU twin of the kernels (crates/reference) walks a scene with them, so nothing here knows a
 //! scene or the kernels' record layout.
 
 pub mod conductor;

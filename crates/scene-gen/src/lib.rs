@@ -1,6 +1,6 @@
 //! The demo meshes of `scenes/`: OBJ and MTL files generated here, so that nothing is downloaded and
-//! the large ones need not be committed. A dev-only crate: the engine keeps only the list of these files
-//! and the command that writes them (`ppm_vk_engine::scene::generated`), which this crate reads.
+//! the large ones need not be committed. A dev-only crate: the scene crate keeps only the list of these files
+//! and the command that writes them (`ppm_vk_scene::generated`), which this crate reads.
 //!
 //! The small files (`cornell-box`, `furnace-sphere`) are committed; a test checks that they are what
 //! this crate writes. The large ones (`water`, ~207k triangles; `glass-sphere`, 20k; `glass-on-table`)
@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, Result};
 use glam::DVec3;
-pub use ppm_vk_engine::scene::generated::{DemoFile, COMMAND, FILES};
+pub use ppm_vk_scene::generated::{DemoFile, COMMAND, FILES};
 
 /// First line of every generated file; bump the version when the geometry changes. (It still names the
 /// generator's old path, crates/engine/src/scene/demo.rs: a new text would rewrite every generated file.)
