@@ -148,34 +148,6 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint co
     return l;
 }
 
-// The start of every eye vertex, on both eye paths: the ray o + t d of a path `depth` bounces long must
-// leave the last vertex on the side of both its normals vng, vns (shading.glsl), be within the depth
-// backstop and hit something; then h, its material m (textured), the side it arrives on (front), the true
-// normal ng and the shading normal nf on that side, which d must lie on the same side of too; vng, vns
-// become them. False: the path ends here. A path cut at the backstop or by a traversal out of steps
-// (geometry.glsl: bvh_cut, bvh_spent) is counted here; `spent`: the latter, no budget is left for the rest.
-// The caller runs bvh_sync() just before, at the top of its loop's body.
-bool eye_vertex(vec3 o, vec3 d, uint depth, inout vec3 vng, inout vec3 vns, out Hit h, out Material m,
-                out bool front, out vec3 ng, out vec3 nf, out bool spent) {
-    spent = false;
-    if (HAS_SHADING_NORMALS && !shading_valid(d, vng, vns)) return false;
-    if (depth >= params.max_eye_depth) { atomicAdd(cut.eye_paths, 1u); return false; }
-    if (!intersect_scene(o, d, 0.0, 1e30, h)) {
-        if (bvh_cut) atomicAdd(cut.traversal_cut, 1u);
-        if (bvh_spent) { atomicAdd(cut.eye_paths, 1u); spent = true; }
-        return false;
-    }
-    m = material(h.material);
-    apply_texture(m, h);
-    front = dot(d, h.normal) < 0.0;
-    ng = front ? h.normal : -h.normal;
-    nf = shading_normal(h, ng);
-    if (HAS_SHADING_NORMALS && !shading_valid(d, ng, nf)) return false;
-    vng = ng;
-    vns = nf;
-    return true;
-}
-
 // One emission sample: the emission met along the specular chain from the eye through `jitter`, and with
 // direct light sampled, term (d) at the chain's diffuse end. `seen`: set if the path met the front of an
 // emitter; `lit`: set if its shadow ray reached a light.
@@ -188,11 +160,22 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
     vec3 vng = d, vns = d; // the last vertex's normals, which d must lie on the same side of (shading.glsl)
     for (uint depth = 0u;; depth++) {
         bvh_sync();
+        if (HAS_SHADING_NORMALS && !shading_valid(d, vng, vns)) break;
+        if (depth >= params.max_eye_depth) { atomicAdd(cut.eye_paths, 1u); break; }
         Hit h;
-        Material m;
-        bool front, spent;
-        vec3 ng, nf;
-        if (!eye_vertex(o, d, depth, vng, vns, h, m, front, ng, nf, spent)) break;
+        if (!intersect_scene(o, d, 0.0, 1e30, h)) {
+            if (bvh_cut) atomicAdd(cut.traversal_cut, 1u);
+            if (bvh_spent) atomicAdd(cut.eye_paths, 1u);
+            break;
+        }
+        Material m = material(h.material);
+        apply_texture(m, h);
+        bool front = dot(d, h.normal) < 0.0;
+        vec3 ng = front ? h.normal : -h.normal;
+        vec3 nf = shading_normal(h, ng);
+        if (HAS_SHADING_NORMALS && !shading_valid(d, ng, nf)) break;
+        vng = ng;
+        vns = nf;
         if (m.surface == SURFACE_DIFFUSE) {
             vec3 e = front ? thr * m.emission : vec3(0.0); // emitters are one-sided
             if (max(e.r, max(e.g, e.b)) > 0.0) seen = true;
@@ -286,14 +269,22 @@ void main() {
             vec3 vng = r.d, vns = r.d;
             for (;;) {
                 bvh_sync();
+                if (HAS_SHADING_NORMALS && !shading_valid(r.d, vng, vns)) break;
+                if (r.depth >= params.max_eye_depth) { atomicAdd(cut.eye_paths, 1u); break; }
                 Hit h;
-                Material m;
-                bool front, spent;
-                vec3 ng, nf;
-                if (!eye_vertex(r.o, r.d, r.depth, vng, vns, h, m, front, ng, nf, spent)) {
-                    if (spent) sp = 0u; // counted there; no budget for the rest
+                if (!intersect_scene(r.o, r.d, 0.0, 1e30, h)) {
+                    if (bvh_cut) atomicAdd(cut.traversal_cut, 1u);
+                    if (bvh_spent) { atomicAdd(cut.eye_paths, 1u); sp = 0u; } // no budget for the rest
                     break;
                 }
+                Material m = material(h.material);
+                apply_texture(m, h);
+                bool front = dot(r.d, h.normal) < 0.0;
+                vec3 ng = front ? h.normal : -h.normal;
+                vec3 nf = shading_normal(h, ng);
+                if (HAS_SHADING_NORMALS && !shading_valid(r.d, ng, nf)) break;
+                vng = ng;
+                vns = nf;
                 bool diffuse = m.surface == SURFACE_DIFFUSE;
                 if (diffuse || (HAS_PLASTICS && m.surface == SURFACE_PLASTIC)) {
                     // A diffuse surface, or a plastic's base under its coat: the hit point and term (d).

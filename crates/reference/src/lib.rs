@@ -179,7 +179,7 @@ fn coat_probability(spec: Vec3, diff: Vec3) -> Option<f32> {
     (total > 0.0).then(|| spec.max_element() / total)
 }
 
-/// An eye vertex as ray.comp's `eye_vertex` finds it: the hit, its material with the texture applied, the
+/// An eye vertex as ray.comp's eye paths find it: the hit, its material with the texture applied, the
 /// side the ray arrives on (`front`), and the true normal `ng` and shading normal `nf` on that side.
 struct EyeVertex {
     h: trace::Hit,
@@ -189,7 +189,9 @@ struct EyeVertex {
     nf: Vec3,
 }
 
-/// ray.comp's `eye_vertex`, the start of every eye vertex on both eye paths: the ray o + t d of a path
+/// The start of every eye vertex on both of ray.comp's eye paths (which write it out twice: as one GLSL
+/// function with out-parameters it cost lavapipe 5-8% of the eye pass on glass-on-table,
+/// docs/performance.md, "Crates"): the ray o + t d of a path
 /// `depth` bounces long must leave the last vertex on the side of both its normals `vng`, `vns`
 /// (shading.glsl), be within the depth backstop and hit something, and d must lie on the same side of the
 /// hit's normals too, which then become `vng`, `vns`. `None`: the path ends here; `cut` counts a path
