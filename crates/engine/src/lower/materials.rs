@@ -3,11 +3,9 @@
 
 use glam::Vec3;
 use ppm_vk_kernels::layout::{self, Material};
-
-use crate::scene::Microfacet;
 use ppm_vk_materials::plastic;
 
-use crate::scene::{Scene, Surface};
+use crate::scene::{Microfacet, Scene, Surface};
 
 /// The records of `scene`'s materials, in order. `texture_at` is the texel of each texture's header;
 /// rough plastics' coat tables are appended to `textures`, one per material (each distinct coat made once).

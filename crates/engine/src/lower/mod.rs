@@ -18,10 +18,7 @@ mod lights;
 mod materials;
 mod textures;
 
-// Only the tests read eq. 8's radius alone.
-#[cfg(feature = "test-hooks")]
-pub use grid::default_radius;
-pub use grid::{grid_buckets, CELL_PER_RADIUS};
+pub use grid::{default_radius, grid_buckets, CELL_PER_RADIUS};
 pub use textures::texture_texels;
 
 /// Flattened scene plus the constants of one render.
