@@ -9,6 +9,7 @@
 //! path (`sphere[1].radius`) back to the line and column it came from. This file only declares the modules
 //! and re-exports what a user names; no file imports one that imports it back.
 
+pub mod emitter;
 pub mod error;
 mod files;
 pub mod generated;
@@ -27,6 +28,7 @@ pub use ppm_vk_materials::{plastic, Microfacet};
 pub use mitsuba::{parse_define, DISK_SEGMENTS, MAX_INCLUDE_DEPTH, MAX_NESTING};
 
 pub use crate::error::{Error, Result};
+pub use emitter::{Emitter, EnvMap, Environment};
 #[cfg(test)]
 use files::TempDir;
 pub use files::{MAX_MESH_BYTES, MAX_SCENE_BYTES};

@@ -7,6 +7,7 @@ use std::fmt;
 
 use glam::{DVec3, Vec3};
 
+use crate::emitter::{Emitter, Environment};
 use crate::error::fmt_vec;
 use crate::error::{Error, Result};
 use crate::texture;
@@ -328,6 +329,9 @@ pub struct Scene {
     pub meshes: Vec<Mesh>,
     /// The textures materials read (`Material::texture`).
     pub textures: Vec<texture::Texture>,
+    /// Lights with no surface of their own: points, spots, the sun, environments (emitter.rs). Emitting
+    /// quads, triangles and spheres are materials with `emission`.
+    pub emitters: Vec<Emitter>,
     /// Parts of the image scored on their own against a reference (`[[region]]` in a TOML scene); a
     /// Mitsuba scene has none.
     pub regions: Vec<ImageRegion>,
@@ -543,6 +547,22 @@ impl Scene {
             );
             h.update(m.materials.iter().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>());
         }
+        // Only scenes with such lights hash them, so that every other scene keeps its hash.
+        for e in &self.emitters {
+            match e {
+                Emitter::Environment(Environment {
+                    scale,
+                    map: Some(map),
+                    to_world,
+                }) => {
+                    let _ = write!(Feed(&mut h), "envmap{:?}", (scale, to_world, map.width, map.height));
+                    h.update(floats(&map.pixels));
+                }
+                other => {
+                    let _ = write!(Feed(&mut h), "{other:?}");
+                }
+            }
+        }
         hex(h)
     }
 
@@ -576,6 +596,7 @@ impl Scene {
         for p in out.meshes.iter_mut().flat_map(|m| &mut m.positions) {
             *p *= s;
         }
+        out.emitters = self.emitters.iter().map(|e| e.scaled(s)).collect();
         out
     }
 
@@ -591,8 +612,8 @@ impl Scene {
     /// Checks everything the renderer relies on: finite values, camera, material ranges (emission only
     /// on diffuse surfaces), textures (values in [0, 1], read by diffuse and plastic surfaces only, on
     /// meshes only with texture coordinates), sphere radii, non-degenerate quads and triangles, indices
-    /// in range, at most [`MAX_TRIANGLES`], no emitting sphere, and at least one light (an emitting quad
-    /// or mesh triangle). The error is [`Error::Scene`] with the field's path, the scene's name as its `file`
+    /// in range, at most [`MAX_TRIANGLES`], the lights' values, and at least one light (an emitting quad,
+    /// sphere or mesh triangle, or an [`Emitter`] that emits). The error is [`Error::Scene`] with the field's path, the scene's name as its `file`
     /// and no line (a loader that knows where the field was written locates it instead).
     pub fn validate(&self) -> Result<()> {
         self.check()
@@ -681,18 +702,7 @@ impl Scene {
                     format!("must be positive and finite, got {}", s.radius),
                 ));
             }
-            let mp = format!("{p}.material");
-            let m = material(&mp, s.material)?;
-            if m.is_light() {
-                return Err(invalid(
-                    mp,
-                    format!(
-                        "material \"{}\" emits light, but spheres cannot be emitters \
-                         (only quads and mesh triangles can)",
-                        m.name
-                    ),
-                ));
-            }
+            material(&format!("{p}.material"), s.material)?;
         }
         for (i, q) in self.quads.iter().enumerate() {
             check_quad(q, &format!("quad[{i}]"))?;
@@ -741,12 +751,21 @@ impl Scene {
                 format!("{triangles} triangles, more than MAX_TRIANGLES = {MAX_TRIANGLES}"),
             ));
         }
+        for (i, e) in self.emitters.iter().enumerate() {
+            e.check(&format!("emitter[{i}]"))
+                .map_err(|(path, message)| invalid(path, message))?;
+        }
         let emitting_triangle = self.meshes.iter().any(|m| m.materials.iter().any(|&k| self.emits(k)));
-        if self.lights().is_empty() && !emitting_triangle {
+        let emitting_sphere = self.spheres.iter().any(|s| self.emits(s.material));
+        if self.lights().is_empty()
+            && !emitting_triangle
+            && !emitting_sphere
+            && !self.emitters.iter().any(Emitter::emits)
+        {
             return Err(invalid(
                 "",
-                "no emitting quad or triangle: nothing to render (give a quad or a mesh a material \
-                 with positive `emission`, or Ke in its MTL)",
+                "no light: nothing to render (give a quad, sphere or mesh a material with positive \
+                 `emission`, or Ke in its MTL, or add a light)",
             ));
         }
         Ok(())
@@ -1119,6 +1138,7 @@ mod tests {
             )],
             textures: vec![],
             regions: vec![],
+            emitters: vec![],
             warnings: vec![],
         }
     }

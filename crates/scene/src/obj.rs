@@ -891,6 +891,7 @@ mod tests {
             meshes: vec![],
             textures: vec![],
             regions: vec![],
+            emitters: Vec::new(),
             warnings: vec![],
         }
     }

@@ -482,6 +482,7 @@ fn build(src: &Source, raw: RawScene, base: &Path) -> Result<Scene> {
         textures,
         regions,
         warnings: Vec::new(),
+        emitters: Vec::new(),
     };
     for (i, m) in raw.mesh.iter().enumerate() {
         import_mesh(src, &mut scene, i, m, base, toml_materials, &mut spans)?;

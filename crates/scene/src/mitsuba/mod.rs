@@ -109,6 +109,7 @@ impl Builder {
                 quads: Vec::new(),
                 meshes: Vec::new(),
                 regions: Vec::new(),
+                emitters: Vec::new(),
                 warnings: Vec::new(),
             },
             root,
