@@ -1480,3 +1480,98 @@ fn ray_pass_matches_reference_with_textures_unspecialized() {
 fn photon_records_match_reference_with_textures() {
     photon_records_match_reference_on(cornell_textured(), true, 1e-3);
 }
+
+/// An open scene with every kind of light beyond quads and triangles: a glowing sphere, a point light, a
+/// spot, the sun and an environment map (turned), over a floor with a diffuse and a glass sphere.
+fn every_light() -> ppm_vk_engine::Scene {
+    use ppm_vk_engine::scene::{Emitter, EnvMap, Environment};
+    let text = r#"name = "every-light"
+[camera]
+eye = [0.0, 2.5, 3.5]
+look_at = [0.0, 0.3, 0.0]
+up = [0.0, 1.0, 0.0]
+vfov = 45.0
+resolution = [32, 32]
+[materials.floor]
+diffuse = [0.6, 0.5, 0.4]
+[materials.white]
+diffuse = [0.8, 0.8, 0.8]
+[materials.glass]
+glass = 1.5
+[materials.glow]
+emission = [4.0, 3.0, 2.0]
+[[quad]]
+origin = [-2.0, 0.0, -2.0]
+edge_u = [0.0, 0.0, 4.0]
+edge_v = [4.0, 0.0, 0.0]
+material = "floor"
+[[sphere]]
+center = [-0.6, 0.4, 0.0]
+radius = 0.4
+material = "white"
+[[sphere]]
+center = [0.6, 0.4, 0.2]
+radius = 0.4
+material = "glass"
+[[sphere]]
+center = [0.0, 1.4, -0.8]
+radius = 0.15
+material = "glow"
+"#;
+    let mut scene = ppm_vk_engine::Scene::parse(text, "every-light.toml").unwrap();
+    let (w, h) = (32u32, 17u32);
+    let pixels = (0..w * h)
+        .map(|k| {
+            let (r, c) = (k / w, k % w);
+            Vec3::new(0.3 + 0.01 * c as f32, 0.4, 0.2 + 0.05 * r as f32) * if (r, c) == (4, 9) { 50.0 } else { 1.0 }
+        })
+        .collect();
+    scene.emitters = vec![
+        Emitter::Environment(Environment {
+            scale: Vec3::splat(0.5),
+            map: Some(EnvMap {
+                name: "test".into(),
+                width: w,
+                height: h,
+                pixels,
+            }),
+            to_world: glam::Mat3::from_rotation_y(0.5),
+        }),
+        Emitter::Point {
+            position: Vec3::new(-1.0, 1.5, 1.0),
+            intensity: Vec3::new(1.0, 2.0, 3.0),
+        },
+        Emitter::Spot {
+            position: Vec3::new(1.0, 2.0, 0.5),
+            direction: Vec3::new(-0.3, -1.0, -0.2).normalize(),
+            intensity: Vec3::splat(8.0),
+            cutoff: 0.5,
+            beam: 0.3,
+        },
+        Emitter::Directional {
+            direction: Vec3::new(0.4, -1.0, 0.3).normalize(),
+            irradiance: Vec3::splat(1.5),
+        },
+    ];
+    scene.validate().unwrap();
+    scene
+}
+
+#[test]
+fn ray_pass_matches_reference_with_every_kind_of_light() {
+    for specialize in [true, false] {
+        ray_pass_matches_reference_on(every_light(), specialize, DirectLight::Sample);
+    }
+}
+
+#[test]
+fn photon_records_match_reference_with_every_kind_of_light() {
+    for specialize in [true, false] {
+        // Flux: the environment's photons carry L / pdf of the map, bilinear: 1e-4.
+        let settings = Settings {
+            specialize,
+            ..settings()
+        };
+        photon_records_match_reference_within(every_light(), settings, 1e-4, 0.99);
+    }
+}

@@ -1,11 +1,33 @@
-// The lights: emitting quads and triangles, chosen in proportion to their power
-// (crates/engine/src/lower/lights.rs builds the table). photon.comp starts photons from them; ray.comp samples them for the
-// direct light at its eye paths' first diffuse points. The including kernel declares, before this file,
+// The lights: emitting quads, triangles and spheres, points, spots, the sun (directional) and an
+// environment, chosen in proportion to their power (crates/engine/src/lower/lights.rs builds the table).
+// photon.comp starts photons from them (emit_photon); ray.comp samples them for the direct light at its
+// eye paths' diffuse points (light_sample) and looks the environment up where an eye path leaves the
+// scene (environment_radiance). The including kernel declares, before this file,
 //   layout(std430, binding = N) readonly buffer Lights { Light lights[]; };
-// (read only where the lights are not compiled in, SCENE_INLINE_LIGHTS).
+// (read only where the lights are not compiled in, SCENE_INLINE_LIGHTS). An environment, if any, is light 0.
+// CPU twin: crates/reference/src/lights.rs.
 #ifndef LIGHTS_GLSL
 #define LIGHTS_GLSL
 #include "bvh.glsl"
+
+// The Emitter of a light record (its quad or triangle read from the scene).
+Emitter emitter_of(Light light) {
+    vec3 flux = (light.kind == LIGHT_SPOT ? light.flux : light.power) / light.prob;
+    if (light.kind == LIGHT_TRIANGLE) {
+        Triangle tr = bvh_triangle(light.index);
+        return Emitter(tr.v0, tr.v1 - tr.v0, tr.v2 - tr.v0, bvh_normal(tr), flux, light.cdf, LIGHT_TRIANGLE,
+                       vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, 0u);
+    }
+    if (light.kind == LIGHT_QUAD) {
+        Quad q = quads[light.index];
+        return Emitter(q.origin, q.edge_u, q.edge_v, q.normal, flux, light.cdf, LIGHT_QUAD, vec3(0.0), 0.0, 0.0,
+                       0.0, 0.0, 0.0, 0u);
+    }
+    vec3 value = light.kind == LIGHT_ENVIRONMENT ? light.value : light.value / light.prob;
+    return Emitter(light.origin, light.edge_u, cross(light.edge_u, light.normal), light.normal, flux, light.cdf,
+                   light.kind, value, light.radius, light.cos_cutoff, light.cos_beam,
+                   light.cutoff, light.inv_width, light.index);
+}
 
 // The light for the uniform number u: the first whose running cdf exceeds u.
 #ifdef SCENE_INLINE_LIGHTS
@@ -17,9 +39,12 @@ Emitter choose_emitter(float u) {
     [[unroll]] for (uint i = 1u; i < NUM_LIGHTS; i++) {
         if (u >= SCENE_EMITTERS[i - 1u].cdf) e = SCENE_EMITTERS[i];
     }
-    if (e.triangle) e.normal = triangle_normal(e.edge_u, e.edge_v);
+    if (e.kind == LIGHT_TRIANGLE) e.normal = triangle_normal(e.edge_u, e.edge_v);
     return e;
 }
+
+// Light 0, which is the environment when the scene has one.
+Emitter first_emitter() { return SCENE_EMITTERS[0]; }
 #else
 // Binary search for the first light whose cdf exceeds u (the same light as a linear scan: cdfs never
 // decrease), in ceil(log2 n) steps: scenes may have 100k emitting triangles.
@@ -30,24 +55,247 @@ Emitter choose_emitter(float u) {
         uint mid = (lo + hi) / 2u;
         if (u >= lights[mid].cdf) lo = mid + 1u; else hi = mid;
     }
-    Light light = lights[lo];
-    vec3 flux = light.power / light.prob;
-    if (light.kind == LIGHT_TRIANGLE) {
-        Triangle tr = bvh_triangle(light.index);
-        return Emitter(tr.v0, tr.v1 - tr.v0, tr.v2 - tr.v0, bvh_normal(tr), flux, light.cdf, true);
-    }
-    Quad q = quads[light.index];
-    return Emitter(q.origin, q.edge_u, q.edge_v, q.normal, flux, light.cdf, false);
+    return emitter_of(lights[lo]);
 }
+
+Emitter first_emitter() { return emitter_of(lights[0]); }
 #endif
 
 // The point of emitter e at uniform numbers (a, b), uniform in its area: a triangle folds the unit square
 // onto the half below its diagonal.
 vec3 emitter_point(Emitter e, float a, float b) {
-    if (e.triangle && a + b > 1.0) {
+    if (e.kind == LIGHT_TRIANGLE && a + b > 1.0) {
         a = 1.0 - a;
         b = 1.0 - b;
     }
     return e.origin + a * e.edge_u + b * e.edge_v;
+}
+
+// A quad or triangle: sampled by emitter_point and the cosine about its normal (the code every scene had
+// before the other kinds, kept apart so that scenes with only these compile to what they did).
+bool is_area(Emitter e) { return e.kind <= LIGHT_TRIANGLE; }
+
+// Uniform on the unit sphere.
+vec3 uniform_sphere(float a, float b) {
+    float z = 1.0 - 2.0 * a;
+    float r = sqrt(max(0.0, 1.0 - z * z));
+    float phi = 2.0 * PI * b;
+    return vec3(r * cos(phi), r * sin(phi), z);
+}
+
+// Direction at (cos_theta, phi) about unit axis n, in the frame (t, b, n).
+vec3 about(vec3 t, vec3 b, vec3 n, float cos_theta, float sin_theta, float phi) {
+    return sin_theta * cos(phi) * t + sin_theta * sin(phi) * b + cos_theta * n;
+}
+
+// A spot's intensity profile at cos_theta from its axis (Mitsuba's spot): 1 inside the beam, falling
+// linearly in the angle to 0 at the cutoff.
+float spot_falloff(Emitter e, float cos_theta) {
+    if (!(cos_theta > e.cos_cutoff)) return 0.0;
+    if (cos_theta >= e.cos_beam) return 1.0;
+    return (e.cutoff - acos(cos_theta)) * e.inv_width;
+}
+
+// --- The environment: a constant, or a latitude-longitude map of w x h pixels (Mitsuba's envmap).
+// Table (texture_texels, from texel e.table; lower/lights.rs writes it): texel 0 (w, h); then the pixels
+// (rgb), row by row from the top (v = 0, local +y); then the inclusive cdf of the h - 1 row bands (x);
+// then per band the inclusive cdf of its w cells (x). Pixel (i, j) sits at u = (j + 0.5) / w, v = i / (h - 1)
+// and radiance is bilinear between them (u wraps), as Mitsuba's envmap evaluates it; a cell is the patch
+// between four pixels, and sampling picks a band, a cell in it, and a point uniform in the cell's (u, v).
+
+float table_float(uint at) { return uintBitsToFloat(texelFetch(texture_texels, int(at)).x); }
+
+vec3 env_pixel(uint first, uint w, uint row, uint col) {
+    return uintBitsToFloat(texelFetch(texture_texels, int(first + row * w + col)).xyz);
+}
+
+// The first of the n inclusive cdf entries from `first` that exceeds u, and u's place in its interval.
+uint cdf_search(uint first, uint n, float u, out float t, out float p) {
+    uint lo = 0u;
+    uint hi = n - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (u >= table_float(first + mid)) lo = mid + 1u; else hi = mid;
+    }
+    float before = lo > 0u ? table_float(first + lo - 1u) : 0.0;
+    p = table_float(first + lo) - before;
+    t = clamp((u - before) / p, 0.0, 0.99999994);
+    return lo;
+}
+
+// Local direction of map coordinates (u, v): Mitsuba's (local y up, u = 0 towards -z).
+vec3 envmap_direction(float u, float v) {
+    float phi = 2.0 * PI * u;
+    float theta = PI * v;
+    return vec3(sin(phi) * sin(theta), cos(theta), -cos(phi) * sin(theta));
+}
+
+// World to the environment's local frame (its rotation's transpose).
+vec3 env_local(Emitter e, vec3 d) { return vec3(dot(e.edge_u, d), dot(e.normal, d), dot(e.edge_v, d)); }
+
+// The map's cell under local direction d: its band and column, and where in the pixel grid d falls.
+void env_cell(uint w, uint h, vec3 d, out uint band, out uint col, out vec2 f) {
+    float u = atan(d.x, -d.z) * (0.5 / PI);
+    float v = acos(clamp(d.y, -1.0, 1.0)) * (1.0 / PI);
+    float x = u * float(w) - 0.5;
+    x -= float(w) * floor(x / float(w)); // in [0, w)
+    float y = v * float(h - 1u);
+    col = min(uint(x), w - 1u);
+    band = min(uint(y), h - 2u);
+    f = vec2(x - float(col), y - float(band));
+}
+
+// The radiance arriving from world direction d.
+vec3 environment_radiance(Emitter e, vec3 d) {
+    if (e.table == 0xffffffffu) return e.value;
+    uvec2 size = texelFetch(texture_texels, int(e.table)).xy;
+    uint band, col;
+    vec2 f;
+    env_cell(size.x, size.y, env_local(e, d), band, col, f);
+    uint first = e.table + 1u;
+    uint next = col + 1u == size.x ? 0u : col + 1u;
+    vec3 c00 = env_pixel(first, size.x, band, col);
+    vec3 c01 = env_pixel(first, size.x, band, next);
+    vec3 c10 = env_pixel(first, size.x, band + 1u, col);
+    vec3 c11 = env_pixel(first, size.x, band + 1u, next);
+    return e.value * ((1.0 - f.y) * ((1.0 - f.x) * c00 + f.x * c01) + f.y * ((1.0 - f.x) * c10 + f.x * c11));
+}
+
+// The solid-angle density with which env_sample draws world direction d.
+float environment_pdf(Emitter e, vec3 d) {
+    if (e.table == 0xffffffffu) return 1.0 / (4.0 * PI);
+    uvec2 size = texelFetch(texture_texels, int(e.table)).xy;
+    uint band, col;
+    vec2 f;
+    vec3 l = env_local(e, d);
+    env_cell(size.x, size.y, l, band, col, f);
+    uint rows = e.table + 1u + size.x * size.y;
+    uint cols = rows + size.y - 1u + band * size.x;
+    float p_band = table_float(rows + band) - (band > 0u ? table_float(rows + band - 1u) : 0.0);
+    float p_col = table_float(cols + col) - (col > 0u ? table_float(cols + col - 1u) : 0.0);
+    float sin_theta = sqrt(max(0.0, 1.0 - l.y * l.y));
+    // Uniform in the cell's (u, v): a density of cells = w (h - 1) over the unit square, and du dv =
+    // dw / (2 pi^2 sin theta).
+    return sin_theta > 0.0 ? p_band * p_col * float(size.x * (size.y - 1u)) / (2.0 * PI * PI * sin_theta) : 0.0;
+}
+
+// A world direction towards the environment for uniform (a, b), and its solid-angle density.
+vec3 env_sample(Emitter e, float a, float b, out float pdf) {
+    if (e.table == 0xffffffffu) {
+        pdf = 1.0 / (4.0 * PI);
+        return uniform_sphere(a, b);
+    }
+    uvec2 size = texelFetch(texture_texels, int(e.table)).xy;
+    uint rows = e.table + 1u + size.x * size.y;
+    float ty, tx, p_band, p_col;
+    uint band = cdf_search(rows, size.y - 1u, a, ty, p_band);
+    uint col = cdf_search(rows + size.y - 1u + band * size.x, size.x, b, tx, p_col);
+    float u = (float(col) + tx + 0.5) / float(size.x);
+    float v = (float(band) + ty) / float(size.y - 1u);
+    vec3 l = envmap_direction(u - floor(u), v);
+    float sin_theta = sin(PI * v);
+    pdf = sin_theta > 0.0 ? p_band * p_col * float(size.x * (size.y - 1u)) / (2.0 * PI * PI * sin_theta) : 0.0;
+    return l.x * e.edge_u + l.y * e.normal + l.z * e.edge_v;
+}
+
+// --- Shadow rays: light other than a quad's or triangle's reaching the ray origin o (offset from its
+// surface), for uniform (a, b): the unit direction w towards it, how far the shadow ray goes, and li, the
+// radiance (or intensity / d^2, or irradiance) divided by the density of w and by prob, so that the
+// estimate of the reflected light is f_r li cos_p. pdf: w's solid-angle density times prob, for an
+// environment's multiple importance sampling (0 for a delta light). False: nothing arrives.
+bool light_sample(Emitter e, vec3 o, float a, float b, out vec3 w, out float dist, out vec3 li, out float pdf) {
+    pdf = 0.0;
+    if (HAS_SPHERE_LIGHTS && e.kind == LIGHT_SPHERE) {
+        // Uniform in the solid angle of the cap the sphere covers seen from o (emission leaves the outside
+        // only: from inside nothing arrives).
+        vec3 dc = e.origin - o;
+        float dist2 = dot(dc, dc);
+        float r2 = e.radius * e.radius;
+        if (!(dist2 > r2)) return false;
+        float dc_len = sqrt(dist2);
+        float sin2_max = r2 / dist2;
+        float cos_max = sqrt(max(0.0, 1.0 - sin2_max));
+        float cap = sin2_max / (1.0 + cos_max); // 1 - cos_max, without cancellation
+        float one_minus = a * cap;               // 1 - cos_theta
+        float cos_theta = 1.0 - one_minus;
+        float sin_theta = sqrt(max(0.0, one_minus * (2.0 - one_minus)));
+        vec3 n = dc / dc_len;
+        vec3 t, bt;
+        onb(n, t, bt);
+        w = about(t, bt, n, cos_theta, sin_theta, 2.0 * PI * b);
+        float near = dc_len * cos_theta - sqrt(max(0.0, r2 - dist2 * sin_theta * sin_theta));
+        vec3 y = o + near * w;
+        vec3 y_off = offset_ray(y, normalize(y - e.origin)); // short of the sphere, which the ray must not hit
+        dist = dot(y_off - o, w);
+        li = e.value * (2.0 * PI * cap);
+        return dist > 0.0;
+    }
+    if (HAS_DELTA_LIGHTS && (e.kind == LIGHT_POINT || e.kind == LIGHT_SPOT)) {
+        vec3 to = e.origin - o;
+        float d2 = dot(to, to);
+        dist = sqrt(d2);
+        w = to / dist;
+        li = e.value / d2;
+        if (e.kind == LIGHT_SPOT) li *= spot_falloff(e, -dot(w, e.normal));
+        return d2 > 0.0;
+    }
+    // Infinite lights: the shadow ray runs past the scene's bounding sphere.
+    dist = 2.0 * (e.radius + length(o - e.origin));
+    if (HAS_DELTA_LIGHTS && e.kind == LIGHT_DIRECTIONAL) {
+        w = -e.normal;
+        li = e.value;
+        return true;
+    }
+    if (HAS_ENVIRONMENT && e.kind == LIGHT_ENVIRONMENT) {
+        float p;
+        w = env_sample(e, a, b, p);
+        if (!(p > 0.0)) return false;
+        pdf = p * e.cdf; // the environment is light 0: its prob is its cdf
+        li = environment_radiance(e, w) / pdf;
+        return true;
+    }
+    return false;
+}
+
+// --- Photons from a light other than a quad or triangle: origin o, direction d and flux, from uniform
+// (a, b) and, for the infinite lights, two more numbers of rng. A sphere returns its surface point and
+// normal instead (false), for the caller's cosine draw, as a quad's.
+bool emit_photon(Emitter e, float a, float b, inout Rng rng, out vec3 o, out vec3 d, out vec3 flux) {
+    flux = e.flux;
+    if (HAS_SPHERE_LIGHTS && e.kind == LIGHT_SPHERE) {
+        d = uniform_sphere(a, b); // the normal, about which the caller draws the direction
+        o = offset_ray(e.origin + e.radius * d, d);
+        return false;
+    }
+    if (HAS_DELTA_LIGHTS && e.kind == LIGHT_POINT) {
+        o = e.origin;
+        d = uniform_sphere(a, b);
+        return true;
+    }
+    if (HAS_DELTA_LIGHTS && e.kind == LIGHT_SPOT) {
+        // Uniform in the cone to the cutoff; the flux carries the falloff (flux = I 2 pi (1 - cos_cutoff)).
+        float cos_theta = 1.0 - a * (1.0 - e.cos_cutoff);
+        float sin_theta = sqrt(max(0.0, 1.0 - cos_theta * cos_theta));
+        o = e.origin;
+        d = about(e.edge_u, e.edge_v, e.normal, cos_theta, sin_theta, 2.0 * PI * b);
+        flux *= spot_falloff(e, cos_theta);
+        return true;
+    }
+    // Infinite lights: from a disk of the bounding sphere's radius facing the direction of travel, outside
+    // the sphere (the flux through it: E pi R^2 for the sun, L pi R^2 / pdf for a direction of the sky).
+    float r = e.radius * sqrt(rng_float(rng));
+    float phi = 2.0 * PI * rng_float(rng);
+    if (HAS_ENVIRONMENT && e.kind == LIGHT_ENVIRONMENT) {
+        float p;
+        vec3 towards = env_sample(e, a, b, p);
+        d = -towards;
+        flux = p > 0.0 ? environment_radiance(e, towards) * (PI * e.radius * e.radius / (p * e.cdf)) : vec3(0.0);
+    } else {
+        d = e.normal;
+    }
+    vec3 t, bt;
+    onb(d, t, bt);
+    o = e.origin - e.radius * d + r * cos(phi) * t + r * sin(phi) * bt;
+    return true;
 }
 #endif

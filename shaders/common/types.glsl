@@ -69,29 +69,62 @@ struct Quad {
     float pad1;
 };
 
-// A light as the photon kernel samples it: its quad and the flux a photon leaves it with (power / prob).
+// A light as the kernels sample it (lights.glsl), made from its Light (and its quad, triangle or sphere).
 // Never stored in a buffer: the scene-specialised kernels hold their lights as constants of this type.
+// What each field holds depends on the kind:
+//   quad, triangle: the parallelogram origin + a edge_u + b edge_v (a triangle: a + b <= 1), its normal;
+//   sphere: its centre (origin) and radius;
+//   point: its position (origin); spot: its position, axis (normal) and a frame about it (edge_u, edge_v);
+//   directional: the scene's bounding sphere (origin, radius), the direction the light travels (normal) and
+//     a frame about it;
+//   environment: the bounding sphere, and to_world's columns x, y, z (edge_u, normal, edge_v).
 struct Emitter {
     vec3 origin;
     vec3 edge_u;
     vec3 edge_v;
     vec3 normal;
-    vec3 flux;
+    vec3 flux;       // the flux a photon leaves with (power / prob); a spot's before its falloff
     float cdf;
-    bool triangle;   // origin + a edge_u + b edge_v with a + b <= 1 (a quad: a, b in [0, 1])
+    uint kind;       // LIGHT_*
+    vec3 value;      // a sphere's radiance, a point's or spot's intensity, a directional light's irradiance,
+                     // each divided by prob; an environment's radiance or scale (its prob is its cdf: light 0)
+    float radius;
+    float cos_cutoff; // a spot's: where its falloff reaches 0, and where it starts (cos_beam), the cutoff
+    float cos_beam;   // angle in radians, and 1 / (cutoff - beam) (falloff linear in the angle, as Mitsuba's)
+    float cutoff;
+    float inv_width;
+    uint table;      // an environment map's first texel in texture_texels (lights.glsl); 0xffffffff: constant
 };
 
 const uint LIGHT_QUAD = 0u;
 const uint LIGHT_TRIANGLE = 1u;
+const uint LIGHT_SPHERE = 2u;
+const uint LIGHT_POINT = 3u;
+const uint LIGHT_SPOT = 4u;
+const uint LIGHT_DIRECTIONAL = 5u;
+const uint LIGHT_ENVIRONMENT = 6u;
 
-// A light to emit photons from, chosen with probability `prob` (proportional to power).
+// A light to emit photons from, chosen with probability `prob` (proportional to power). The fields after
+// `power` are the Emitter's of the same names (zero for quads and triangles).
 struct Light {
-    uint index;      // into the quads (LIGHT_QUAD) or the BVH's leaf-ordered triangles (LIGHT_TRIANGLE)
+    uint index;      // into the quads (LIGHT_QUAD), the BVH's leaf-ordered triangles (LIGHT_TRIANGLE) or the
+                     // spheres (LIGHT_SPHERE); an environment map's table (Emitter::table)
     float cdf;       // inclusive running sum of prob
     float prob;      // the probability the f32 cdf gives it: cdf - the previous cdf
     uint kind;       // LIGHT_*
-    vec3 power;      // emission * area * pi: the flux a photon carries is power / prob
-    float pad1;
+    vec3 power;      // what the light emits (an area light's emission * area * pi): the flux a photon carries
+                     // is power / prob (Emitter::flux)
+    float radius;
+    vec3 origin;
+    float cos_cutoff;
+    vec3 normal;
+    float cos_beam;
+    vec3 edge_u;
+    float cutoff;
+    vec3 value;      // not yet divided by prob
+    float inv_width;
+    vec3 flux;       // Emitter::flux, when it is not power / prob (a spot's)
+    float pad0;
 };
 
 // Constants of one render, written once by the host.

@@ -80,7 +80,8 @@ void emit(Photon rec) {
 // spheres, quads and written-out triangles in intersect_scene (counted as loops even where they are
 // unrolled), and choosing a light (its binary search; counted on every step a lane starts a photon).
 #define PATH_STEP_LOOPS (NUM_SPHERES + NUM_QUADS + NUM_INLINE_TRIANGLES + 3u)
-#define LIGHT_LOOPS (findMSB(params.num_lights) + 2u)
+// An environment map's sampling adds two binary searches (at most 2 x 23 steps: MAX_ENVMAP_PIXELS).
+#define LIGHT_LOOPS (findMSB(params.num_lights) + 2u + (HAS_ENVIRONMENT ? 48u : 0u))
 
 // A photon's path is its own: the numbers it draws come from its own stream (its global index), so which
 // thread traces it, and when, changes nothing but the order of the records.
@@ -164,13 +165,23 @@ void main() {
             Emitter e = choose_emitter(rng_float(rng));
             float a = rng_float(rng);
             float b = rng_float(rng);
-            o = offset_ray(emitter_point(e, a, b), e.normal);
-            lobe = e.normal;
-            vng = lobe;
-            vns = lobe;
+            if (HAS_OTHER_LIGHTS && !is_area(e)) {
+                // lights.glsl: a sphere gives its point and normal (the cosine draw below, as an area
+                // light's); the other kinds a direction of their own.
+                vec3 dir;
+                pending = !emit_photon(e, a, b, rng, o, dir, flux);
+                if (pending) lobe = dir; else d = dir;
+                vng = dir;
+                vns = dir;
+            } else {
+                o = offset_ray(emitter_point(e, a, b), e.normal);
+                lobe = e.normal;
+                vng = lobe;
+                vns = lobe;
+                pending = true;
+                flux = e.flux;
+            }
             leave = false;
-            pending = true;
-            flux = e.flux;
             depth = 0u;
             alive = true;
         }

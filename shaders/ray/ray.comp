@@ -38,6 +38,12 @@
 //                    shadow rays;
 //   E S* D (S|D)+ L  everything that bounced before reaching it: the photon estimate at the hit points.
 // With `--direct photons` (the paper's estimator) (d) stays with the photons and these paths take (a) only.
+// Every kind of light keeps this partition (lights.glsl): a glowing sphere is an emitter that eye paths
+// meet (a) and shadow rays sample by the solid angle of its cap (d); points, spots and the sun no eye path
+// meets (no (a)), shadow rays reach them (d); the environment is (a) where an eye path leaves the scene, and
+// its (d) is two strategies weighted by the power heuristic, direct_light's sample of the map and
+// environment_by_bsdf's cosine direction that leaves the scene: the weights sum to one in every direction,
+// so together they are one unbiased estimate of (d). Photons from every kind skip their first landing alike.
 // A plastic is both an S (its coat's reflection) and a D (its base, plastic.glsl): an emission-sample path
 // takes the base's term (d) there and goes on along the coat, without choosing between them. Rough
 // conductors and rough glass are S too: every path samples one direction of their lobes, with the exact
@@ -121,14 +127,33 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint co
     float a = rng_float(rng);
     float b = rng_float(rng);
     vec3 o = offset_ray(p, nf);
-    vec3 y = offset_ray(emitter_point(e, a, b), e.normal); // short of the emitter, which the ray must not hit
-    vec3 w = y - o;
-    float d2 = dot(w, w);
-    float d = sqrt(d2);
-    w /= d;
-    float cos_p = dot(nf, w);
-    float cos_y = -dot(e.normal, w);
-    if (cos_p <= 0.0 || cos_y <= 0.0 || d2 <= 0.0) return vec3(0.0);
+    // The light reaching p along w from as far as d: the estimate is f_r lflux s (with cos_p in s).
+    vec3 w, lflux;
+    float d, s, cos_p;
+    float weight = 1.0; // an environment's multiple-importance weight against environment_by_bsdf
+    if (HAS_OTHER_LIGHTS && !is_area(e)) {
+        // Spheres, points, spots, the sun, the environment (lights.glsl): li / pdf per unit cos_p.
+        float pdf;
+        if (!light_sample(e, o, a, b, w, d, lflux, pdf)) return vec3(0.0);
+        cos_p = dot(nf, w);
+        if (!(cos_p > 0.0)) return vec3(0.0);
+        s = cos_p;
+        if (HAS_ENVIRONMENT && pdf > 0.0 && rough == 0u) {
+            float pb = cos_p / PI; // the cosine-weighted direction's density (environment_by_bsdf)
+            weight = pdf * pdf / (pdf * pdf + pb * pb); // power heuristic
+        }
+    } else {
+        vec3 y = offset_ray(emitter_point(e, a, b), e.normal); // short of the emitter, which the ray must not hit
+        w = y - o;
+        float d2 = dot(w, w);
+        d = sqrt(d2);
+        w /= d;
+        cos_p = dot(nf, w);
+        float cos_y = -dot(e.normal, w);
+        if (cos_p <= 0.0 || cos_y <= 0.0 || d2 <= 0.0) return vec3(0.0);
+        lflux = e.flux;
+        s = cos_p * cos_y / (PI * d2);
+    }
     if (HAS_SHADING_NORMALS && !shading_valid(w, ng, nf)) return vec3(0.0);
     bool was_cut = bvh_cut;
     bool was_spent = bvh_spent;
@@ -140,12 +165,59 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint co
     vec3 fr = albedo / PI;
     if (HAS_ROUGH_CONDUCTORS && rough != 0u) {
         vec3 f;
-        float s = rough_conductor_terms(rough_view(rough - 1u, wo, nf), w, nf, f);
-        fr = albedo * f * (s / (4.0 * dot(wo, nf)));
+        float sr = rough_conductor_terms(rough_view(rough - 1u, wo, nf), w, nf, f);
+        fr = albedo * f * (sr / (4.0 * dot(wo, nf)));
     }
-    vec3 l = fr * e.flux * (cos_p * cos_y / (PI * d2));
+    vec3 l = fr * lflux * s;
+    if (HAS_PLASTICS && coat_ior > 0.0) l *= coat_transmittance(coat_table, cos_p, coat_ior);
+    if (HAS_ENVIRONMENT) l *= weight;
+    return l;
+}
+
+// The environment's light at diffuse point p by the other strategy: a cosine-weighted direction (the
+// diffuse BRDF's) that leaves the scene, weighted against direct_light's environment samples by the
+// power heuristic, so that the two together are one estimate of the environment's direct light (term
+// (d)) with the lower variance of each where it is better: the map's bright spots by direct_light, the
+// broad sky by this. Same arguments as direct_light's (a diffuse or plastic base only: a glossy hit point
+// takes the environment by direct_light alone, at weight 1).
+vec3 environment_by_bsdf(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, inout Rng rng) {
+    Emitter e = first_emitter();
+    if (e.kind != LIGHT_ENVIRONMENT) return vec3(0.0);
+    float u1 = rng_float(rng);
+    float u2 = rng_float(rng);
+    vec3 w = cosine_direction(nf, u1, u2);
+    float cos_p = dot(nf, w);
+    if (!(cos_p > 0.0)) return vec3(0.0);
+    if (HAS_SHADING_NORMALS && !shading_valid(w, ng, nf)) return vec3(0.0);
+    vec3 o = offset_ray(p, nf);
+    bool was_cut = bvh_cut;
+    bool was_spent = bvh_spent;
+    if (occluded(o, w, 2.0 * (e.radius + length(o - e.origin)))) {
+        if (bvh_cut && !was_cut) atomicAdd(cut.traversal_cut, 1u);
+        if (bvh_spent && !was_spent) atomicAdd(cut.eye_paths, 1u);
+        return vec3(0.0);
+    }
+    float pb = cos_p / PI;
+    float pl = environment_pdf(e, w) * e.cdf;
+    // f_r L cos_p / pb = albedo L.
+    vec3 l = albedo * environment_radiance(e, w) * (pb * pb / (pb * pb + pl * pl));
     if (HAS_PLASTICS && coat_ior > 0.0) l *= coat_transmittance(coat_table, cos_p, coat_ior);
     return l;
+}
+
+// Term (d) at a diffuse point or a plastic's base: direct_light, and with an environment its other
+// strategy.
+vec3 direct_diffuse(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, inout Rng rng) {
+    vec3 l = direct_light(p, nf, ng, albedo, coat_ior, coat_table, 0u, vec3(0.0), rng);
+    if (HAS_ENVIRONMENT) l += environment_by_bsdf(p, nf, ng, albedo, coat_ior, coat_table, rng);
+    return l;
+}
+
+// The environment seen along d where an eye path leaves the scene (term (a)); 0 without one.
+vec3 escaped(vec3 d) {
+    if (!HAS_ENVIRONMENT) return vec3(0.0);
+    Emitter e = first_emitter();
+    return e.kind == LIGHT_ENVIRONMENT ? environment_radiance(e, d) : vec3(0.0);
 }
 
 // One emission sample: the emission met along the specular chain from the eye through `jitter`, and with
@@ -166,6 +238,11 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
         if (!intersect_scene(o, d, 0.0, 1e30, h)) {
             if (bvh_cut) atomicAdd(cut.traversal_cut, 1u);
             if (bvh_spent) atomicAdd(cut.eye_paths, 1u);
+            if (HAS_ENVIRONMENT && !bvh_cut && !bvh_spent) {
+                vec3 e = thr * escaped(d);
+                if (max3(e) > 0.0) seen = true;
+                sum += e;
+            }
             break;
         }
         Material m = material(h.material);
@@ -180,7 +257,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             vec3 e = front ? thr * m.emission : vec3(0.0); // emitters are one-sided
             if (max(e.r, max(e.g, e.b)) > 0.0) seen = true;
             if (params.direct_light != 0u) {
-                vec3 l = direct_light(h.pos, nf, ng, m.color, 0.0, 0u, 0u, vec3(0.0), rng);
+                vec3 l = direct_diffuse(h.pos, nf, ng, m.color, 0.0, 0u, rng);
                 if (max(l.r, max(l.g, l.b)) > 0.0) lit = true;
                 e += thr * l;
             }
@@ -211,7 +288,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             vec3 coat_d = d;
             plastic_lobes(h.material, m, table, nf, rng, coat_d, spec, diff);
             if (params.direct_light != 0u) {
-                vec3 l = direct_light(h.pos, nf, ng, diff, m.ior, table, 0u, vec3(0.0), rng);
+                vec3 l = direct_diffuse(h.pos, nf, ng, diff, m.ior, table, rng);
                 if (max3(l) > 0.0) lit = true;
                 sum += thr * l;
             }
@@ -275,6 +352,7 @@ void main() {
                 if (!intersect_scene(r.o, r.d, 0.0, 1e30, h)) {
                     if (bvh_cut) atomicAdd(cut.traversal_cut, 1u);
                     if (bvh_spent) { atomicAdd(cut.eye_paths, 1u); sp = 0u; } // no budget for the rest
+                    if (HAS_ENVIRONMENT) hit_emitted += r.thr * escaped(r.d); // term (a) (dropped if cut)
                     break;
                 }
                 Material m = material(h.material);
@@ -313,7 +391,7 @@ void main() {
                     if (base) {
                         // Term (d) for this path, where it is one of the samples (below).
                         if (params.direct_light != 0u && hit_is_sample) {
-                            hit_emitted += r.thr * direct_light(h.pos, nf, ng, diff, diffuse ? 0.0 : m.ior, table, 0u, vec3(0.0), rng);
+                            hit_emitted += r.thr * direct_diffuse(h.pos, nf, ng, diff, diffuse ? 0.0 : m.ior, table, rng);
                             if (bvh_spent) sp = 0u; // counted there; no budget for the rest
                         }
                         if (max3(diff) > 0.0 && slot < params.hit_slots) {

@@ -274,8 +274,8 @@ impl Renderer {
         let limits = limits(
             budget,
             gpu.params.num_spheres + gpu.params.num_quads + inline_triangles,
-            // choose_emitter's binary search
-            u32::BITS - gpu.params.num_lights.leading_zeros() + 1,
+            // choose_emitter's binary search, and an environment map's two (photon.comp's LIGHT_LOOPS)
+            u32::BITS - gpu.params.num_lights.leading_zeros() + 1 + if gpu.has_environment { 48 } else { 0 },
             settings.slots(),
             settings.emission_samples.max(settings.unmarked_samples()),
             settings.max_photon_depth,
@@ -1410,6 +1410,7 @@ fn tracing_pipeline(
             rough_plastics: gpu.materials.iter().any(|m| m.table != 0),
             shading_normals: gpu.smooth_shading(),
             anisotropic: gpu.materials.iter().any(|m| m.alpha_u != m.alpha_v),
+            light_kinds: gpu.light_kinds,
         });
         let defines = [&[("SCENE_CONSTANTS", "1")][..], defines].concat();
         pipeline_from(ctx, k, &specialize::compile_with(k, &defines, &constants)?)

@@ -122,13 +122,32 @@ gpu_struct!(Quad {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Light {
-    /// Into the quads ([`LIGHT_QUAD`]) or the BVH's leaf-ordered triangles ([`LIGHT_TRIANGLE`]).
+    /// Into the quads ([`LIGHT_QUAD`]), the BVH's leaf-ordered triangles ([`LIGHT_TRIANGLE`]) or the spheres
+    /// ([`LIGHT_SPHERE`]); an environment map's first texel in the texture texels ([`LIGHT_ENVIRONMENT`]).
     pub index: u32,
     pub cdf: f32,
     pub prob: f32,
     pub kind: u32,
+    /// What the light emits: a photon's flux is `power / prob` (but a spot's, `flux`).
     pub power: [f32; 3],
-    pub pad1: f32,
+    /// A sphere's radius; the scene's bounding sphere's (directional lights and environments).
+    pub radius: f32,
+    /// A point's or spot's position; the bounding sphere's centre; a sphere's centre.
+    pub origin: [f32; 3],
+    pub cos_cutoff: f32,
+    /// A spot's axis; the direction a directional light travels; an environment's local +y in the world.
+    pub normal: [f32; 3],
+    pub cos_beam: f32,
+    /// A unit vector perpendicular to `normal` (an environment's local +x); the third axis is
+    /// `edge_u x normal` (types.glsl's Emitter: edge_v).
+    pub edge_u: [f32; 3],
+    pub cutoff: f32,
+    /// Radiance, intensity or irradiance (types.glsl's Emitter::value), not yet divided by `prob`.
+    pub value: [f32; 3],
+    pub inv_width: f32,
+    /// A spot's photon flux before its falloff (zero for the other kinds: power / prob).
+    pub flux: [f32; 3],
+    pub pad0: f32,
 }
 gpu_struct!(Light {
     index,
@@ -136,10 +155,22 @@ gpu_struct!(Light {
     prob,
     kind,
     power,
-    pad1
+    radius,
+    origin,
+    cos_cutoff,
+    normal,
+    cos_beam,
+    edge_u,
+    cutoff,
+    value,
+    inv_width,
+    flux,
+    pad0
 });
 /// `Light::kind` (types.glsl).
-pub use crate::reflected::constants::{LIGHT_QUAD, LIGHT_TRIANGLE};
+pub use crate::reflected::constants::{
+    LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_QUAD, LIGHT_SPHERE, LIGHT_SPOT, LIGHT_TRIANGLE,
+};
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -7,8 +7,9 @@
 use anyhow::{anyhow, Context as _, Result};
 
 use crate::layout::{
-    Light, Quad, Sphere, Triangle, LIGHT_TRIANGLE, SURFACE_CONDUCTOR, SURFACE_PLASTIC, SURFACE_ROUGH_CONDUCTOR,
-    SURFACE_ROUGH_GLASS, SURFACE_THIN,
+    Light, Quad, Sphere, Triangle, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_QUAD, LIGHT_SPHERE,
+    LIGHT_SPOT, LIGHT_TRIANGLE, SURFACE_CONDUCTOR, SURFACE_PLASTIC, SURFACE_ROUGH_CONDUCTOR, SURFACE_ROUGH_GLASS,
+    SURFACE_THIN,
 };
 use crate::reflected::{KernelInfo, SOURCES};
 
@@ -43,6 +44,9 @@ pub struct SceneConstants<'a> {
     /// Whether any rough surface is anisotropic (geometry.glsl's surface_tangent): without one no
     /// tangent is taken.
     pub anisotropic: bool,
+    /// The kinds of light in `lights`, as bits `1 << LIGHT_*`: lights.glsl leaves out the code of glowing
+    /// spheres, delta lights (point, spot, directional) and environments where there are none.
+    pub light_kinds: u32,
 }
 
 /// An f32 written so GLSL reads back exactly the same bits: nine significant digits name an f32 uniquely
@@ -93,6 +97,13 @@ pub fn scene_constants(c: &SceneConstants) -> String {
     s += &format!("const bool SCENE_ROUGH_PLASTICS = {};\n", c.rough_plastics);
     s += &format!("const bool SCENE_SHADING_NORMALS = {};\n", c.shading_normals);
     s += &format!("const bool SCENE_ANISOTROPIC = {};\n", c.anisotropic);
+    let kind = |k: u32| c.light_kinds & (1 << k) != 0;
+    s += &format!(
+        "const bool SCENE_SPHERE_LIGHTS = {};\nconst bool SCENE_DELTA_LIGHTS = {};\nconst bool SCENE_ENVIRONMENT = {};\n",
+        kind(LIGHT_SPHERE),
+        kind(LIGHT_POINT) || kind(LIGHT_SPOT) || kind(LIGHT_DIRECTIONAL),
+        kind(LIGHT_ENVIRONMENT)
+    );
     s += &format!(
         "const uint NUM_INLINE_TRIANGLES = {}u;\nconst bool SCENE_BVH = {};\n",
         inline.len(),
@@ -154,6 +165,15 @@ pub fn scene_constants(c: &SceneConstants) -> String {
         lights.len()
     );
     let sub = |a: [f32; 3], b: [f32; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross = |a: [f32; 3], b: [f32; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    // The fields after the kind, zero for quads and triangles (lights.glsl's emitter_of fills them alike).
+    const NO_MORE: &str = "vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, 0u";
     s += &array(
         "Emitter",
         "SCENE_EMITTERS",
@@ -161,13 +181,13 @@ pub fn scene_constants(c: &SceneConstants) -> String {
             .iter()
             .map(|l| {
                 // The flux a photon starts with, divided here exactly as photon.comp would (f32).
-                let flux = l.power.map(|p| p / l.prob);
+                let flux = if l.kind == LIGHT_SPOT { l.flux } else { l.power }.map(|p| p / l.prob);
                 if l.kind == LIGHT_TRIANGLE {
                     // Edges subtracted in f32 as photon.comp's buffer path does; the normal is computed
                     // there from them (choose_emitter), not written here.
                     let t = &c.triangles[l.index as usize];
                     return format!(
-                        "Emitter({}, {}, {}, vec3(0.0), {}, {}, true)",
+                        "Emitter({}, {}, {}, vec3(0.0), {}, {}, {LIGHT_TRIANGLE}u, {NO_MORE})",
                         v(t.v0),
                         v(sub(t.v1, t.v0)),
                         v(sub(t.v2, t.v0)),
@@ -175,19 +195,44 @@ pub fn scene_constants(c: &SceneConstants) -> String {
                         f(l.cdf)
                     );
                 }
-                let q = &quads[l.index as usize];
+                if l.kind == LIGHT_QUAD {
+                    let q = &quads[l.index as usize];
+                    return format!(
+                        "Emitter({}, {}, {}, {}, {}, {}, {LIGHT_QUAD}u, {NO_MORE})",
+                        v(q.origin),
+                        v(q.edge_u),
+                        v(q.edge_v),
+                        v(q.normal),
+                        v(flux),
+                        f(l.cdf)
+                    );
+                }
+                // As emitter_of: an environment's value is not divided by its prob (its cdf, as light 0).
+                let value = if l.kind == LIGHT_ENVIRONMENT {
+                    l.value
+                } else {
+                    l.value.map(|x| x / l.prob)
+                };
                 format!(
-                    "Emitter({}, {}, {}, {}, {}, {}, false)",
-                    v(q.origin),
-                    v(q.edge_u),
-                    v(q.edge_v),
-                    v(q.normal),
+                    "Emitter({}, {}, {}, {}, {}, {}, {}u, {}, {}, {}, {}, {}, {}, {}u)",
+                    v(l.origin),
+                    v(l.edge_u),
+                    v(cross(l.edge_u, l.normal)),
+                    v(l.normal),
                     v(flux),
-                    f(l.cdf)
+                    f(l.cdf),
+                    l.kind,
+                    v(value),
+                    f(l.radius),
+                    f(l.cos_cutoff),
+                    f(l.cos_beam),
+                    f(l.cutoff),
+                    f(l.inv_width),
+                    l.index
                 )
             })
             .collect(),
-        "Emitter(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), 0.0, false)",
+        &format!("Emitter(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0u, {NO_MORE})"),
     );
     s
 }

@@ -8,6 +8,7 @@
 
 pub mod bvh;
 pub mod conductor;
+pub mod lights;
 /// Generated meshes for the BVH's tests and benchmarks.
 pub mod meshes;
 pub mod microfacet;
@@ -23,13 +24,14 @@ pub mod trace;
 
 use glam::{DVec3, Vec2, Vec3};
 use ppm_vk_kernels::layout::{
-    HitPoint, HitStats, Material, PassAccum, Photon, EMPTY_SLOT, LIGHT_TRIANGLE, SURFACE_DIFFUSE, SURFACE_PLASTIC,
+    HitPoint, HitStats, Material, PassAccum, Photon, EMPTY_SLOT, LIGHT_ENVIRONMENT, SURFACE_DIFFUSE, SURFACE_PLASTIC,
     SURFACE_ROUGH_CONDUCTOR, SURFACE_ROUGH_GLASS, SURFACE_THIN,
 };
 use ppm_vk_kernels::photon::SALT_EMISSION;
 use ppm_vk_kernels::ray::RayPush;
 use ppm_vk_materials::math::{cosine_direction, fresnel_dielectric, oct_decode, oct_encode, reflect, v3, PI};
 
+use lights::{choose_emitter, emitter_point, first_emitter, is_area, light_sample, LightSample};
 use ppm_vk_engine::lower::GpuScene;
 use ppm_vk_engine::settings::ProbeMode;
 use rng::Rng;
@@ -41,56 +43,6 @@ fn camera_ray(g: &GpuScene, px: u32, py: u32, j: [f32; 2]) -> Vec3 {
     let sx = (2.0 * (px as f32 + j[0]) / p.width as f32 - 1.0) * p.aspect * p.tan_half_fov;
     let sy = (1.0 - 2.0 * (py as f32 + j[1]) / p.height as f32) * p.tan_half_fov;
     (v3(p.forward) + sx * v3(p.right) + sy * v3(p.up)).normalize()
-}
-
-/// A light as lights.glsl's `Emitter`: its parallelogram or triangle (origin, edges), front normal, and the
-/// flux a photon leaves it with (power / prob).
-pub struct Emitter {
-    pub origin: Vec3,
-    pub edge_u: Vec3,
-    pub edge_v: Vec3,
-    pub normal: Vec3,
-    pub flux: Vec3,
-    pub triangle: bool,
-}
-
-/// lights.glsl's `choose_emitter`: the first light whose running cdf exceeds u.
-pub fn choose_emitter(g: &GpuScene, u: f32) -> Emitter {
-    let mut li = 0usize;
-    while li + 1 < g.lights.len() && u >= g.lights[li].cdf {
-        li += 1;
-    }
-    let light = &g.lights[li];
-    let flux = v3(light.power) / light.prob;
-    if light.kind == LIGHT_TRIANGLE {
-        let t = &g.bvh_triangles[light.index as usize];
-        let (e1, e2) = (v3(t.v1) - v3(t.v0), v3(t.v2) - v3(t.v0));
-        return Emitter {
-            origin: v3(t.v0),
-            edge_u: e1,
-            edge_v: e2,
-            normal: bvh::normal(t),
-            flux,
-            triangle: true,
-        };
-    }
-    let q = &g.quads[light.index as usize];
-    Emitter {
-        origin: v3(q.origin),
-        edge_u: v3(q.edge_u),
-        edge_v: v3(q.edge_v),
-        normal: v3(q.normal),
-        flux,
-        triangle: false,
-    }
-}
-
-/// lights.glsl's `emitter_point`: uniform in the emitter's area for uniform (a, b).
-pub fn emitter_point(e: &Emitter, mut a: f32, mut b: f32) -> Vec3 {
-    if e.triangle && a + b > 1.0 {
-        (a, b) = (1.0 - a, 1.0 - b);
-    }
-    e.origin + a * e.edge_u + b * e.edge_v
 }
 
 /// ray.comp's `direct_light`: term (d) at diffuse point p, one light sample with its shadow ray;
@@ -112,14 +64,39 @@ fn direct_light(
     let a = rng.float();
     let b = rng.float();
     let o = offset_ray(g, p, nf);
-    let y = offset_ray(g, emitter_point(&e, a, b), e.normal);
-    let mut w = y - o;
-    let d2 = w.dot(w);
-    let d = d2.sqrt();
-    w /= d;
-    let cos_p = nf.dot(w);
-    let cos_y = -e.normal.dot(w);
-    if cos_p <= 0.0 || cos_y <= 0.0 || d2 <= 0.0 || !shading::valid(w, ng, nf) {
+    // The light reaching p along w from as far as d: the estimate is f_r lflux s (ray.comp).
+    let (w, d, lflux, s, cos_p);
+    let mut weight = 1.0;
+    if !is_area(&e) {
+        let Some(LightSample { w: w2, dist, li, pdf }) = light_sample(g, &e, o, a, b) else {
+            return Vec3::ZERO;
+        };
+        (w, d, lflux) = (w2, dist, li);
+        cos_p = nf.dot(w);
+        if !(cos_p > 0.0) {
+            return Vec3::ZERO;
+        }
+        s = cos_p;
+        if pdf > 0.0 && rough.is_none() {
+            let pb = cos_p / PI;
+            weight = pdf * pdf / (pdf * pdf + pb * pb);
+        }
+    } else {
+        let y = offset_ray(g, emitter_point(&e, a, b), e.normal);
+        let mut w2 = y - o;
+        let d2 = w2.dot(w2);
+        d = d2.sqrt();
+        w2 /= d;
+        w = w2;
+        cos_p = nf.dot(w);
+        let cos_y = -e.normal.dot(w);
+        if cos_p <= 0.0 || cos_y <= 0.0 || d2 <= 0.0 {
+            return Vec3::ZERO;
+        }
+        lflux = e.flux;
+        s = cos_p * cos_y / (PI * d2);
+    }
+    if !shading::valid(w, ng, nf) {
         return Vec3::ZERO;
     }
     if intersect_scene(g, o, w, 0.0, d).is_some() {
@@ -127,16 +104,80 @@ fn direct_light(
     }
     let fr = match rough {
         Some((m, wo)) => {
-            let (s, f) = rough_conductor::terms(m, w, wo, nf);
-            albedo * f * (s / (4.0 * wo.dot(nf)))
+            let (sr, f) = rough_conductor::terms(m, w, wo, nf);
+            albedo * f * (sr / (4.0 * wo.dot(nf)))
         }
         None => albedo / PI,
     };
-    let l = fr * e.flux * (cos_p * cos_y / (PI * d2));
+    let l = fr * lflux * s;
+    let l = match coat {
+        Some(m) => l * plastic::coat_transmittance(g, m.table, cos_p, m.ior),
+        None => l,
+    };
+    l * weight
+}
+
+/// ray.comp's `environment_by_bsdf`: the environment's light at diffuse point p by a cosine-weighted
+/// direction, weighted against direct_light's environment samples (power heuristic).
+fn environment_by_bsdf(
+    g: &GpuScene,
+    p: Vec3,
+    nf: Vec3,
+    ng: Vec3,
+    albedo: Vec3,
+    coat: Option<&Material>,
+    rng: &mut Rng,
+) -> Vec3 {
+    let e = first_emitter(g);
+    if e.kind != LIGHT_ENVIRONMENT {
+        return Vec3::ZERO;
+    }
+    let u1 = rng.float();
+    let u2 = rng.float();
+    let w = cosine_direction(nf, u1, u2);
+    let cos_p = nf.dot(w);
+    if !(cos_p > 0.0) || !shading::valid(w, ng, nf) {
+        return Vec3::ZERO;
+    }
+    let o = offset_ray(g, p, nf);
+    if intersect_scene(g, o, w, 0.0, 2.0 * (e.radius + (o - e.origin).length())).is_some() {
+        return Vec3::ZERO;
+    }
+    let pb = cos_p / PI;
+    let pl = lights::environment_pdf(g, &e, w) * e.cdf;
+    let l = albedo * lights::environment_radiance(g, &e, w) * (pb * pb / (pb * pb + pl * pl));
     match coat {
         Some(m) => l * plastic::coat_transmittance(g, m.table, cos_p, m.ior),
         None => l,
     }
+}
+
+/// ray.comp's `direct_diffuse`: direct_light at a diffuse point or plastic base, and with an environment
+/// its other strategy.
+fn direct_diffuse(
+    g: &GpuScene,
+    p: Vec3,
+    nf: Vec3,
+    ng: Vec3,
+    albedo: Vec3,
+    coat: Option<&Material>,
+    rng: &mut Rng,
+) -> Vec3 {
+    let l = direct_light(g, p, nf, ng, albedo, coat, None, rng);
+    if g.has_environment {
+        l + environment_by_bsdf(g, p, nf, ng, albedo, coat, rng)
+    } else {
+        l
+    }
+}
+
+/// ray.comp's `escaped`: the environment seen along d where an eye path leaves the scene.
+fn escaped(g: &GpuScene, d: Vec3) -> Vec3 {
+    if !g.has_environment {
+        return Vec3::ZERO;
+    }
+    let e = first_emitter(g);
+    lights::environment_radiance(g, &e, d)
 }
 
 /// rough_conductor.glsl's `glossy_hit`: a rough conductor of roughness at least `glossy_alpha`.
@@ -196,7 +237,8 @@ struct EyeVertex {
 /// (shading.glsl), be within the depth backstop and hit something, and d must lie on the same side of the
 /// hit's normals too, which then become `vng`, `vns`. `None`: the path ends here; `cut` counts a path
 /// ended at the backstop (checked second: past it, a direction the last vertex refuses ends the path
-/// uncounted).
+/// uncounted); `escaped` is set where the ray leaves the scene (its environment is term (a)).
+#[allow(clippy::too_many_arguments)]
 fn eye_vertex(
     g: &GpuScene,
     o: Vec3,
@@ -205,6 +247,7 @@ fn eye_vertex(
     vng: &mut Vec3,
     vns: &mut Vec3,
     cut: &mut u32,
+    escaped: &mut bool,
 ) -> Option<EyeVertex> {
     if !shading::valid(d, *vng, *vns) {
         return None;
@@ -213,7 +256,10 @@ fn eye_vertex(
         *cut += 1;
         return None;
     }
-    let h = intersect_scene(g, o, d, 0.0, 1e30)?;
+    let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
+        *escaped = true;
+        return None;
+    };
     let m = texture::apply(g, &g.materials[h.material as usize], h.uv);
     let front = d.dot(h.normal) < 0.0;
     let ng = if front { h.normal } else { -h.normal };
@@ -248,7 +294,14 @@ fn emission_sample(
     // The last vertex's normals, which d must lie on the same side of (shading.glsl).
     let (mut vng, mut vns) = (d, d);
     for depth in 0.. {
-        let Some(EyeVertex { h, m, front, ng, nf }) = eye_vertex(g, o, d, depth, &mut vng, &mut vns, cut) else {
+        let mut out = false;
+        let Some(EyeVertex { h, m, front, ng, nf }) = eye_vertex(g, o, d, depth, &mut vng, &mut vns, cut, &mut out)
+        else {
+            if out {
+                let e = thr * escaped(g, d);
+                *seen |= e.max_element() > 0.0;
+                sum += e;
+            }
             break;
         };
         let m = &m;
@@ -256,7 +309,7 @@ fn emission_sample(
             let mut e = if front { thr * v3(m.emission) } else { Vec3::ZERO };
             *seen |= e.max_element() > 0.0;
             if g.params.direct_light != 0 {
-                let l = direct_light(g, h.pos, nf, ng, v3(m.color), None, None, rng);
+                let l = direct_diffuse(g, h.pos, nf, ng, v3(m.color), None, rng);
                 *lit |= l.max_element() > 0.0;
                 e += thr * l;
             }
@@ -282,7 +335,7 @@ fn emission_sample(
             // Both lobes: the base's term (d) here, the path on along the coat.
             let (coat_d, spec, diff) = plastic::plastic_lobes(g, m, nf, rng, d);
             if g.params.direct_light != 0 {
-                let l = direct_light(g, h.pos, nf, ng, diff, Some(m), None, rng);
+                let l = direct_diffuse(g, h.pos, nf, ng, diff, Some(m), rng);
                 *lit |= l.max_element() > 0.0;
                 sum += thr * l;
             }
@@ -401,8 +454,9 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
             while let Some((mut o, mut d, mut thr, mut depth)) = stack.pop() {
                 // The last vertex's normals (shading.glsl); a branch is stacked only where d suits them.
                 let (mut vng, mut vns) = (d, d);
+                let mut out_of_scene = false;
                 while let Some(EyeVertex { h, m, front, ng, nf }) =
-                    eye_vertex(g, o, d, depth, &mut vng, &mut vns, &mut out.cut)
+                    eye_vertex(g, o, d, depth, &mut vng, &mut vns, &mut out.cut, &mut out_of_scene)
                 {
                     let m = &m;
                     let diffuse = m.surface == SURFACE_DIFFUSE;
@@ -435,7 +489,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         if on_base {
                             if p.direct_light != 0 && hit_is_sample {
                                 let coat = (!diffuse).then_some(m);
-                                hit_emitted += thr * direct_light(g, h.pos, nf, ng, diff, coat, None, &mut rng);
+                                hit_emitted += thr * direct_diffuse(g, h.pos, nf, ng, diff, coat, &mut rng);
                             }
                             if diff.max_element() > 0.0 && slot < slots {
                                 out.hits[base + slot] = HitPoint {
@@ -535,6 +589,9 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         o = offset_ray(g, h.pos, -nf);
                     }
                 }
+                if out_of_scene {
+                    hit_emitted += thr * escaped(g, d); // term (a)
+                }
             }
             for s in slot..slots {
                 out.hits[base + s] = HitPoint {
@@ -590,11 +647,25 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
     let e = choose_emitter(g, rng.float());
     let a = rng.float();
     let b = rng.float();
-    let mut o = offset_ray(g, emitter_point(&e, a, b), e.normal);
-    let u1 = rng.float();
-    let u2 = rng.float();
-    let mut d = cosine_direction(e.normal, u1, u2);
-    let mut flux = e.flux;
+    let (mut o, mut d, mut flux);
+    if !is_area(&e) {
+        // lights.glsl's emit_photon: a sphere gives its point and normal, for the cosine draw below.
+        let (o2, dir, f, direction_given) = lights::emit_photon(g, &e, a, b, &mut rng);
+        (o, flux) = (o2, f);
+        d = if direction_given {
+            dir
+        } else {
+            let u1 = rng.float();
+            let u2 = rng.float();
+            cosine_direction(dir, u1, u2)
+        };
+    } else {
+        o = offset_ray(g, emitter_point(&e, a, b), e.normal);
+        let u1 = rng.float();
+        let u2 = rng.float();
+        d = cosine_direction(e.normal, u1, u2);
+        flux = e.flux;
+    }
     // photon.comp's `capped`, without its count.
     let cap = |f: Vec3| shading::capped(f, p.flux_fixed).0;
     for depth in 1..=p.max_photon_depth {

@@ -1,84 +1,372 @@
-//! The light table (lights.glsl): emitting quads and triangles chosen in proportion to their power, and
-//! the fixed-point scale of the photon flux sums, which the lights' power bounds.
+//! The light table (lights.glsl): every light, chosen in proportion to its power, for photons and shadow
+//! rays alike; an environment map's sampling tables (written after the textures); and the fixed-point
+//! scale of the photon flux sums, which the most flux one photon can carry bounds.
 
-use glam::Vec3;
-use ppm_vk_kernels::layout::{Light, Triangle, LIGHT_QUAD, LIGHT_TRIANGLE};
+use std::f64::consts::PI;
+
+use glam::{DVec3, Vec3};
+use ppm_vk_kernels::layout::{
+    Light, Triangle, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_QUAD, LIGHT_SPHERE, LIGHT_SPOT,
+    LIGHT_TRIANGLE,
+};
 
 use crate::error::{Error, Result};
-use crate::scene::Scene;
+use crate::scene::{Emitter, EnvMap, Environment, Scene};
 
-/// The lights of `scene` (`triangles`: its BVH's, in leaf order) and their total emitted power per channel.
-pub fn lights(scene: &Scene, triangles: &[Triangle]) -> Result<(Vec<Light>, [f64; 3])> {
-    // Lights: emitting quads and triangles, chosen in proportion to their power (summed over RGB).
-    // A Lambertian emitter of radiance L and area A emits L A pi.
-    let mut lights = Vec::new();
-    let mut total_power = [0f64; 3];
-    let mut add = |index: u32, kind: u32, emission: Vec3, area: f32| {
+/// What [`lights`] builds.
+pub struct LightTable {
+    pub lights: Vec<Light>,
+    /// Total emitted power per channel (W; an environment's: what crosses the scene's bounding disk).
+    pub total_power: [f64; 3],
+    /// The most flux one photon can leave a light with (any channel): bounds the fixed-point sums.
+    pub max_flux: f64,
+    /// The kinds present, as bits `1 << LIGHT_*` (the kernels leave out the code of the others).
+    pub kinds: u32,
+}
+
+/// A light before the table's probabilities: its record (power, kind, geometry) and, per unit of
+/// 1 / prob, the most flux one of its photons carries.
+struct Entry {
+    light: Light,
+    flux_bound: f64,
+}
+
+fn max3(v: [f32; 3]) -> f64 {
+    v.iter().fold(0f64, |m, &x| m.max(x as f64))
+}
+
+/// The lights of `scene` (`triangles`: its BVH's, in leaf order), in this order: the environment (light 0,
+/// which lights.glsl's first_emitter reads), emitting quads, triangles, spheres, then the other emitters.
+/// An environment map's tables are appended to `textures` (lights.glsl reads them there).
+pub fn lights(scene: &Scene, triangles: &[Triangle], textures: &mut Vec<[u32; 4]>) -> Result<LightTable> {
+    let (lo, hi) = scene.bounds();
+    // The scene's bounding sphere, a little larger (Mitsuba's, for the same reason: photons from the sun
+    // and the sky start outside it).
+    let centre = 0.5 * (lo + hi);
+    let radius = (0.5 * (hi - lo).length() * (1.0 + 1e-3))
+        .max(1e-6 * centre.abs().max_element())
+        .max(1e-20);
+    let mut entries = Vec::new();
+    // Lambertian emitters of radiance L and area A emit L A pi.
+    let area_light = |index: u32, kind: u32, emission: Vec3, area: f32| {
         let power = emission * area * std::f32::consts::PI;
-        for c in 0..3 {
-            total_power[c] += power[c] as f64;
+        Entry {
+            light: Light {
+                index,
+                kind,
+                power: power.to_array(),
+                ..Default::default()
+            },
+            flux_bound: max3(power.to_array()),
         }
-        lights.push(Light {
-            index,
-            kind,
-            power: power.to_array(),
-            ..Default::default()
-        });
     };
+    let environment = scene.emitters.iter().find_map(|e| match e {
+        Emitter::Environment(env) => Some(env),
+        _ => None,
+    });
+    if let Some(env) = environment {
+        entries.push(environment_light(env, centre, radius, textures)?);
+    }
     for qi in scene.lights() {
         let q = &scene.quads[qi as usize];
-        add(qi, LIGHT_QUAD, scene.materials[q.material as usize].emission, q.area());
+        entries.push(area_light(
+            qi,
+            LIGHT_QUAD,
+            scene.materials[q.material as usize].emission,
+            q.area(),
+        ));
     }
     for (ti, t) in triangles.iter().enumerate() {
         let e = scene.materials[t.material as usize].emission;
         if e.max_element() > 0.0 {
             let (v0, v1, v2) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
-            add(ti as u32, LIGHT_TRIANGLE, e, 0.5 * (v1 - v0).cross(v2 - v0).length());
+            entries.push(area_light(
+                ti as u32,
+                LIGHT_TRIANGLE,
+                e,
+                0.5 * (v1 - v0).cross(v2 - v0).length(),
+            ));
         }
     }
-    let sum: f64 = lights
+    for (si, s) in scene.spheres.iter().enumerate() {
+        let e = scene.materials[s.material as usize].emission;
+        if e.max_element() > 0.0 {
+            let area = 4.0 * std::f32::consts::PI * s.radius * s.radius;
+            let mut entry = area_light(si as u32, LIGHT_SPHERE, e, area);
+            entry.light.origin = s.center.to_array();
+            entry.light.radius = s.radius;
+            entry.light.value = e.to_array();
+            entries.push(entry);
+        }
+    }
+    for e in &scene.emitters {
+        if let Some(entry) = delta_light(e, centre, radius) {
+            entries.push(entry);
+        }
+    }
+    entries.retain(|e| e.light.power.iter().any(|&p| p > 0.0));
+    let sum: f64 = entries
         .iter()
-        .map(|l| l.power.iter().map(|&p| p as f64).sum::<f64>())
+        .map(|e| e.light.power.iter().map(|&p| p as f64).sum::<f64>())
         .sum();
-    if lights.is_empty() || sum <= 0.0 {
+    if entries.is_empty() || !(sum > 0.0) {
         return Err(Error::scene(&scene.name, 0, 0, "", "no light emits power"));
     }
     let mut run = 0f64;
-    for l in &mut lights {
-        run += l.power.iter().map(|&p| p as f64).sum::<f64>() / sum;
-        l.cdf = run as f32;
+    for e in &mut entries {
+        run += e.light.power.iter().map(|&p| p as f64).sum::<f64>() / sum;
+        e.light.cdf = run as f32;
     }
-    if let Some(last) = lights.last_mut() {
-        last.cdf = 1.0; // no photon may fall past the last light through rounding
+    if let Some(last) = entries.last_mut() {
+        last.light.cdf = 1.0; // no photon may fall past the last light through rounding
     }
     // Each light's probability is the share of [0, 1) its f32 cdf gives it, so that power / prob stays
     // unbiased where 100k lights make the rounding of the running sum matter.
     let mut previous = 0f64;
-    for l in &mut lights {
-        l.prob = (l.cdf as f64 - previous) as f32;
-        previous = l.cdf as f64;
+    for e in &mut entries {
+        e.light.prob = (e.light.cdf as f64 - previous) as f32;
+        previous = e.light.cdf as f64;
     }
-    if let Some(i) = lights.iter().position(|l| l.prob.is_nan() || l.prob <= 0.0) {
+    if let Some(i) = entries
+        .iter()
+        .position(|e| e.light.prob.is_nan() || e.light.prob <= 0.0)
+    {
         let message = format!(
             "light {i} of {} has too small a share of the total power to be chosen in an f32 light table \
              (split the scene's lights more evenly)",
-            lights.len()
+            entries.len()
         );
         return Err(Error::scene(&scene.name, 0, 0, "", message));
     }
-    Ok((lights, total_power))
+    let mut total_power = [0f64; 3];
+    for e in &entries {
+        for c in 0..3 {
+            total_power[c] += e.light.power[c] as f64;
+        }
+    }
+    let max_flux = entries
+        .iter()
+        .map(|e| e.flux_bound / e.light.prob as f64)
+        .fold(0f64, f64::max);
+    let kinds = entries.iter().fold(0, |k, e| k | 1 << e.light.kind);
+    Ok(LightTable {
+        lights: entries.into_iter().map(|e| e.light).collect(),
+        total_power,
+        max_flux,
+        kinds,
+    })
+}
+
+/// A unit vector perpendicular to unit n (any one: the frames lights.glsl draws directions in).
+fn perpendicular(n: Vec3) -> Vec3 {
+    let a = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+    n.cross(a).normalize()
+}
+
+/// A point, spot or directional light's entry (None for an environment, which is light 0).
+fn delta_light(e: &Emitter, centre: Vec3, radius: f32) -> Option<Entry> {
+    let four_pi = 4.0 * std::f32::consts::PI;
+    let (light, flux_bound) = match *e {
+        Emitter::Point { position, intensity } => {
+            let power = intensity * four_pi;
+            let light = Light {
+                kind: LIGHT_POINT,
+                power: power.to_array(),
+                origin: position.to_array(),
+                value: intensity.to_array(),
+                ..Default::default()
+            };
+            (light, max3(power.to_array()))
+        }
+        Emitter::Spot {
+            position,
+            direction,
+            intensity,
+            cutoff,
+            beam,
+        } => {
+            // Power: I times the falloff's integral over the sphere, 2 pi [(1 - cos b) + the linear ramp's
+            // part] = 2 pi (1 + (sin b - sin c) / (c - b)) (1 - cos c where b = c). Photons leave uniform
+            // in the cone, each with I 2 pi (1 - cos c) times the falloff in its direction.
+            let (b, c) = (beam as f64, cutoff as f64);
+            let solid = if c - b > 1e-6 {
+                2.0 * PI * (1.0 + (b.sin() - c.sin()) / (c - b))
+            } else {
+                2.0 * PI * (1.0 - c.cos())
+            };
+            let cone = 2.0 * PI * (1.0 - c.cos());
+            let i = intensity.as_dvec3();
+            let light = Light {
+                kind: LIGHT_SPOT,
+                power: (i * solid).as_vec3().to_array(),
+                origin: position.to_array(),
+                normal: direction.to_array(),
+                edge_u: perpendicular(direction).to_array(),
+                value: intensity.to_array(),
+                flux: (i * cone).as_vec3().to_array(),
+                cos_cutoff: cutoff.cos(),
+                cos_beam: beam.cos(),
+                cutoff,
+                inv_width: if cutoff > beam { 1.0 / (cutoff - beam) } else { 0.0 },
+                ..Default::default()
+            };
+            (light, i.max_element() * cone)
+        }
+        Emitter::Directional { direction, irradiance } => {
+            // The flux through the bounding sphere's disk facing it.
+            let power = irradiance * (std::f32::consts::PI * radius * radius);
+            let light = Light {
+                kind: LIGHT_DIRECTIONAL,
+                power: power.to_array(),
+                origin: centre.to_array(),
+                radius,
+                normal: direction.to_array(),
+                edge_u: perpendicular(direction).to_array(),
+                value: irradiance.to_array(),
+                ..Default::default()
+            };
+            (light, max3(power.to_array()))
+        }
+        Emitter::Environment(_) => return None,
+    };
+    Some(Entry { light, flux_bound })
+}
+
+/// The environment's entry, its map's sampling tables appended to `textures` (lights.glsl's layout).
+fn environment_light(env: &Environment, centre: Vec3, radius: f32, textures: &mut Vec<[u32; 4]>) -> Result<Entry> {
+    let disk = PI * radius as f64 * radius as f64;
+    let to_world = env.to_world;
+    let mut light = Light {
+        kind: LIGHT_ENVIRONMENT,
+        index: u32::MAX,
+        origin: centre.to_array(),
+        radius,
+        normal: to_world.y_axis.to_array(),
+        edge_u: to_world.x_axis.to_array(),
+        value: env.scale.to_array(),
+        ..Default::default()
+    };
+    let scale = env.scale.as_dvec3();
+    let Some(map) = &env.map else {
+        // Uniform directions: L 4 pi through the disk of area pi R^2.
+        let power = scale * (4.0 * PI * disk);
+        light.power = power.as_vec3().to_array();
+        return Ok(Entry {
+            light,
+            flux_bound: power.max_element(),
+        });
+    };
+    light.index = u32::try_from(textures.len()).map_err(|_| limit_error(map))?;
+    let (table, integral, bound) = envmap_table(map);
+    if textures.len() + table.len() > i32::MAX as usize {
+        return Err(limit_error(map));
+    }
+    textures.extend(table);
+    // Power: pi R^2 times the integral of L over the sphere; a photon's flux L pi R^2 / pdf is at most
+    // pi R^2 times `bound` (per unit of scale).
+    light.power = (scale * integral * disk).as_vec3().to_array();
+    Ok(Entry {
+        light,
+        flux_bound: scale.max_element() * bound * disk,
+    })
+}
+
+fn limit_error(map: &EnvMap) -> Error {
+    Error::scene(
+        &map.name,
+        0,
+        0,
+        "filename",
+        "the environment map and the textures together exceed the texel buffer's 2^31 texels",
+    )
+}
+
+/// An environment map's texels (lights.glsl's table), the integral of its radiance over the sphere (per
+/// channel; bilinear pixels, by the midpoint of each cell), and the largest L / pdf a sample can have
+/// (any channel), from the f32 cdfs the kernels read.
+fn envmap_table(map: &EnvMap) -> (Vec<[u32; 4]>, DVec3, f64) {
+    let (w, h) = (map.width as usize, map.height as usize);
+    let px = |row: usize, col: usize| map.pixels[row * w + col % w];
+    let bands = h - 1;
+    let band_angle = PI / bands as f64;
+    // A cell (band i, column j) is the patch between pixels (i, j), (i, j + 1), (i + 1, j), (i + 1, j + 1);
+    // its radiance, bilinear, is at most the largest of their channels, and sin theta at most s_i, so a
+    // weight m s_i bounds L sin theta everywhere in it: pdf > 0 wherever L > 0, and L / pdf stays bounded.
+    let mut weights = vec![0f64; bands * w];
+    let mut integral = DVec3::ZERO;
+    for i in 0..bands {
+        let (t0, t1) = (i as f64 * band_angle, (i + 1) as f64 * band_angle);
+        let s_max = if t0 <= PI / 2.0 && PI / 2.0 <= t1 {
+            1.0
+        } else {
+            t0.sin().max(t1.sin())
+        };
+        let s_mid = (0.5 * (t0 + t1)).sin();
+        for j in 0..w {
+            let corners = [px(i, j), px(i, j + 1), px(i + 1, j), px(i + 1, j + 1)];
+            let m = corners.iter().fold(0f32, |m, c| m.max(c.max_element())) as f64;
+            weights[i * w + j] = m * s_max;
+            let mean = corners.iter().fold(DVec3::ZERO, |s, c| s + c.as_dvec3()) / 4.0;
+            integral += mean * s_mid * band_angle * (2.0 * PI / w as f64);
+        }
+    }
+    let mut out = Vec::with_capacity(1 + w * h + bands + bands * w);
+    out.push([w as u32, h as u32, 0, 0]);
+    out.extend(map.pixels.iter().map(|p| {
+        let [r, g, b] = p.to_array().map(f32::to_bits);
+        [r, g, b, 0]
+    }));
+    let band_sums: Vec<f64> = weights.chunks(w).map(|row| row.iter().sum()).collect();
+    let band_cdf = inclusive_cdf(&band_sums);
+    out.extend(band_cdf.iter().map(|&c| [c.to_bits(), 0, 0, 0]));
+    let mut bound = 0f64;
+    for i in 0..bands {
+        let row = &weights[i * w..(i + 1) * w];
+        let col_cdf = inclusive_cdf(row);
+        out.extend(col_cdf.iter().map(|&c| [c.to_bits(), 0, 0, 0]));
+        let p_band = band_cdf[i] - if i > 0 { band_cdf[i - 1] } else { 0.0 };
+        for j in 0..w {
+            let p_col = col_cdf[j] - if j > 0 { col_cdf[j - 1] } else { 0.0 };
+            if row[j] > 0.0 && p_band > 0.0 && p_col > 0.0 {
+                // L / pdf <= m 2 pi^2 sin theta / (p_band p_col w (h - 1)) <= weight 2 pi^2 / (...).
+                let pdf_uv = p_band as f64 * p_col as f64 * (w * bands) as f64;
+                bound = bound.max(row[j] * 2.0 * PI * PI / pdf_uv);
+            }
+        }
+    }
+    (out, integral, bound)
+}
+
+/// Inclusive f32 running sums of `weights` divided by their total, the last exactly 1 (uniform where the
+/// total is 0: such a band is never chosen).
+fn inclusive_cdf(weights: &[f64]) -> Vec<f32> {
+    let total: f64 = weights.iter().sum();
+    let n = weights.len();
+    let mut run = 0f64;
+    let mut out: Vec<f32> = weights
+        .iter()
+        .enumerate()
+        .map(|(k, &x)| {
+            run += x;
+            if total > 0.0 {
+                (run / total) as f32
+            } else {
+                (k + 1) as f32 / n as f32
+            }
+        })
+        .collect();
+    if let Some(last) = out.last_mut() {
+        *last = 1.0;
+    }
+    out
 }
 
 /// The fixed-point scale of the photon flux sums (`RenderParams::flux_fixed`): a power of two that keeps
 /// the most flux one photon carries under 2^30.
-pub fn flux_fixed(scene: &Scene, lights: &[Light]) -> Result<f32> {
+pub fn flux_fixed(scene: &Scene, max_flux: f64) -> Result<f32> {
     // No photon carries more flux than it leaves its light with (roulette divides by the largest
     // albedo, mirrors, glass and thin panes never amplify, a plastic's branches weigh at most 1:
     // plastic.glsl), so this bounds one photon's share of a fixed-point sum.
-    let max_flux = lights
-        .iter()
-        .flat_map(|l| l.power.map(|p| p as f64 / l.prob as f64))
-        .fold(0f64, f64::max);
     let flux_fixed = 2f64.powi((2f64.powi(30) / max_flux).log2().floor() as i32) as f32;
     if !(flux_fixed.is_finite() && flux_fixed > 0.0) {
         return Err(Error::scene(

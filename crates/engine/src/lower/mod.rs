@@ -48,6 +48,10 @@ pub struct GpuScene {
     pub initial_radius: f32,
     /// Total emitted power of all lights, per channel (W, un-normalised photon flux sums to this).
     pub total_power: [f64; 3],
+    /// The kinds of light the scene has, as bits `1 << LIGHT_*` (specialize.rs leaves the others' code out).
+    pub light_kinds: u32,
+    /// Whether light 0 is an environment (lights.glsl's first_emitter).
+    pub has_environment: bool,
     /// Lower corner of the scene's bounds.
     pub lo: [f32; 3],
     /// Area of all surfaces (photons land only on them): sizes the grid's hash table.
@@ -79,8 +83,9 @@ impl GpuScene {
         let spheres = spheres(scene);
         let quads = quads(scene);
         let built = triangles(scene)?;
-        let (lights, total_power) = lights::lights(scene, &built.triangles)?;
-        let flux_fixed = lights::flux_fixed(scene, &lights)?;
+        let table = lights::lights(scene, &built.triangles, &mut textures)?;
+        let flux_fixed = lights::flux_fixed(scene, table.max_flux)?;
+        let (lights, total_power, light_kinds) = (table.lights, table.total_power, table.kinds);
         let (lo, hi) = scene.bounds();
         let extent = (hi - lo).max_element();
         let initial_radius = grid::initial_radius(scene, settings)?;
@@ -132,6 +137,8 @@ impl GpuScene {
             bvh_stats: built.stats,
             initial_radius,
             total_power,
+            light_kinds,
+            has_environment: light_kinds & (1 << layout::LIGHT_ENVIRONMENT) != 0,
             lo: lo.to_array(),
             surface_area,
             fixed_buckets: settings.grid_buckets,
