@@ -2869,4 +2869,23 @@ material = "light"
             assert_located(&e, *line, path, needle);
         }
     }
+
+    /// The `[[light]]` examples of docs/scene-format.md load as written.
+    #[test]
+    fn the_documented_light_examples_load() {
+        let doc = include_str!("../../../docs/scene-format.md");
+        let block = doc
+            .split("Examples, one of each:\n\n```toml\n")
+            .nth(1)
+            .and_then(|rest| rest.split("```").next())
+            .expect("the examples in docs/scene-format.md");
+        let dir = TempDir::new("toml-light-docs");
+        std::fs::create_dir_all(dir.0.join("maps")).unwrap();
+        image::Rgb32FImage::from_pixel(4, 2, image::Rgb([1.0, 2.0, 4.0]))
+            .save(dir.0.join("maps/sky.hdr"))
+            .unwrap();
+        let s = with_lights(&dir, block).unwrap_or_else(|e| panic!("{e:#}"));
+        let kinds: Vec<&str> = s.emitters.iter().map(Emitter::kind).collect();
+        assert_eq!(kinds, ["point", "spot", "directional", "constant", "envmap"]);
+    }
 }
