@@ -1,5 +1,6 @@
-//! The scene file: a small TOML file with a camera, named materials, spheres, quads (parallelograms)
-//! and `[[mesh]]` entries that import OBJ files. See `docs/scene-format.md` for the user-facing spec.
+//! The scene file: a small TOML file with a camera, named materials, spheres, quads (parallelograms),
+//! `[[mesh]]` entries that import OBJ files and `[[light]]`s with no surface (points, spots, the sun,
+//! environments). See `docs/scene-format.md` for the user-facing spec.
 //!
 //! Parsing is two-stage: serde deserialises the file into `Raw*` structs whose leaves are
 //! `toml::Spanned` (so every value keeps its byte range), read through serde_path_to_error (so a type
@@ -14,9 +15,10 @@ use std::ops::Range;
 use std::path::Path;
 
 use ::toml::Spanned;
-use glam::{DAffine3, DMat3, DVec3, Vec3};
+use glam::{DAffine3, DMat3, DVec3, Mat3, Vec3};
 use serde::Deserialize;
 
+use crate::emitter::{Emitter, EnvMap, Environment};
 use crate::error::{Error, Result};
 
 use super::texture::{self, Filter, Pattern, Texture, Wrap};
@@ -57,6 +59,8 @@ struct RawScene {
     mesh: Vec<Spanned<RawMesh>>,
     #[serde(default)]
     region: Vec<Spanned<RawRegion>>,
+    #[serde(default)]
+    light: Vec<Spanned<RawLight>>,
 }
 
 #[derive(Deserialize)]
@@ -269,6 +273,62 @@ struct RawMesh {
     material: Option<Spanned<String>>,
     /// Flat shading even where the OBJ gives vertex normals (Mitsuba's `face_normals`).
     face_normals: Option<bool>,
+}
+
+/// `[[light]]`: a light with no surface (Mitsuba's point, spot, directional, constant and envmap), one
+/// table for every type; [`LIGHT_FIELDS`] says which fields each type reads.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLight {
+    #[serde(rename = "type")]
+    kind: Spanned<String>,
+    position: Option<Spanned<[f32; 3]>>,
+    direction: Option<Spanned<[f32; 3]>>,
+    target: Option<Spanned<[f32; 3]>>,
+    intensity: Option<Spanned<RawColour>>,
+    irradiance: Option<Spanned<RawColour>>,
+    radiance: Option<Spanned<RawColour>>,
+    cutoff_angle: Option<Spanned<f32>>,
+    beam_width: Option<Spanned<f32>>,
+    filename: Option<Spanned<String>>,
+    scale: Option<Spanned<f32>>,
+    rotate: Option<Spanned<[f64; 3]>>,
+}
+
+/// Each light type with the fields it reads (besides `type`).
+const LIGHT_FIELDS: &[(&str, &[&str])] = &[
+    ("point", &["position", "intensity"]),
+    (
+        "spot",
+        &[
+            "position",
+            "direction",
+            "target",
+            "intensity",
+            "cutoff_angle",
+            "beam_width",
+        ],
+    ),
+    ("directional", &["direction", "irradiance"]),
+    ("constant", &["radiance"]),
+    ("envmap", &["filename", "scale", "rotate"]),
+];
+
+/// A light's colour: one number (grey) or `[r, g, b]`.
+#[derive(Deserialize, Clone, Copy)]
+#[serde(untagged, expecting = "a number or an array of 3 numbers [r, g, b]")]
+enum RawColour {
+    Grey(f32),
+    Rgb([f32; 3]),
+}
+
+impl RawColour {
+    fn rgb(self) -> Vec3 {
+        match self {
+            RawColour::Grey(x) => Vec3::splat(x),
+            RawColour::Rgb(c) => Vec3::from_array(c),
+        }
+    }
 }
 
 #[derive(Deserialize)]
@@ -487,15 +547,211 @@ fn build(src: &Source, raw: RawScene, base: &Path) -> Result<Scene> {
     for (i, m) in raw.mesh.iter().enumerate() {
         import_mesh(src, &mut scene, i, m, base, toml_materials, &mut spans)?;
     }
+    // `light[i]` is `emitter[i]` of the scene; `shown` names check paths as the file wrote them.
+    let mut shown = HashMap::new();
+    for (i, l) in raw.light.iter().enumerate() {
+        scene.emitters.push(light(src, i, l, base, &mut spans, &mut shown)?);
+    }
 
     // A problem of the whole scene (no light, too many triangles) points at the first quad, else the
     // first mesh, else line 1.
     let first = raw.quad.first().map(|q| q.span());
     spans.insert("", first.or(raw.mesh.first().map(|m| m.span())).unwrap_or(0..0));
-    scene
-        .check()
-        .map_err(|e| src.error(spans.find(&e.path), Some(&e.path), &e.message))?;
+    scene.check().map_err(|e| {
+        let path = match shown.get(&e.path) {
+            Some(p) => p.clone(),
+            None => e.path.replacen("emitter[", "light[", 1),
+        };
+        src.error(spans.find(&e.path), Some(&path), &e.message)
+    })?;
     Ok(scene)
+}
+
+/// `[[light]]` number `i`: its type's fields (others refused), Mitsuba's defaults, the map of an envmap
+/// read (relative to the scene file). Its fields' spans go into `spans` under the check's paths
+/// (`emitter[i].<field>`); `shown` names those whose field is written differently (`light[i].rotate`
+/// for `emitter[i].to_world`).
+fn light(
+    src: &Source,
+    i: usize,
+    l: &Spanned<RawLight>,
+    base: &Path,
+    spans: &mut Spans,
+    shown: &mut HashMap<String, String>,
+) -> Result<Emitter> {
+    let p = format!("light[{i}]");
+    let e = format!("emitter[{i}]");
+    let r = l.get_ref();
+    let kind = r.kind.get_ref().as_str();
+    let Some((_, fields)) = LIGHT_FIELDS.iter().find(|(k, _)| *k == kind) else {
+        let known: Vec<&str> = LIGHT_FIELDS.iter().map(|(k, _)| *k).collect();
+        return Err(src.error(
+            r.kind.span(),
+            Some(&format!("{p}.type")),
+            format!("unknown light type \"{kind}\" (known: {})", known.join(", ")),
+        ));
+    };
+    let given: [(&str, Option<Range<usize>>); 11] = [
+        ("position", r.position.as_ref().map(Spanned::span)),
+        ("direction", r.direction.as_ref().map(Spanned::span)),
+        ("target", r.target.as_ref().map(Spanned::span)),
+        ("intensity", r.intensity.as_ref().map(Spanned::span)),
+        ("irradiance", r.irradiance.as_ref().map(Spanned::span)),
+        ("radiance", r.radiance.as_ref().map(Spanned::span)),
+        ("cutoff_angle", r.cutoff_angle.as_ref().map(Spanned::span)),
+        ("beam_width", r.beam_width.as_ref().map(Spanned::span)),
+        ("filename", r.filename.as_ref().map(Spanned::span)),
+        ("scale", r.scale.as_ref().map(Spanned::span)),
+        ("rotate", r.rotate.as_ref().map(Spanned::span)),
+    ];
+    for (field, span) in &given {
+        if let Some(span) = span {
+            if !fields.contains(field) {
+                return Err(src.error(
+                    span.clone(),
+                    Some(&format!("{p}.{field}")),
+                    format!(
+                        "not a field of a {kind} light (its fields: type, {})",
+                        fields.join(", ")
+                    ),
+                ));
+            }
+            spans.insert(format!("{e}.{field}"), span.clone());
+        }
+    }
+    spans.insert(e.clone(), l.span());
+    shown.insert(e.clone(), p.clone());
+    let required = |v: Option<&Spanned<[f32; 3]>>, field: &str| {
+        v.map(vec3)
+            .ok_or_else(|| src.error(l.span(), Some(&p), format!("a {kind} light needs `{field}`")))
+    };
+    let colour = |c: &Option<Spanned<RawColour>>| c.as_ref().map_or(Vec3::ONE, |c| c.get_ref().rgb());
+    // A direction as written, made unit (zero or not finite refused here: the check wants it unit).
+    let unit = |d: Vec3, span: Range<usize>, field: &str| {
+        let n = d.normalize_or_zero();
+        if n == Vec3::ZERO {
+            return Err(src.error(
+                span,
+                Some(&format!("{p}.{field}")),
+                format!("must be a finite non-zero vector, got {d}"),
+            ));
+        }
+        Ok(n)
+    };
+    Ok(match kind {
+        "point" => Emitter::Point {
+            position: required(r.position.as_ref(), "position")?,
+            intensity: colour(&r.intensity),
+        },
+        "spot" => {
+            let position = required(r.position.as_ref(), "position")?;
+            let direction = match (&r.direction, &r.target) {
+                (Some(d), None) => unit(vec3(d), d.span(), "direction")?,
+                (None, Some(t)) => {
+                    // The check's `direction` is the target the file gave.
+                    spans.insert(format!("{e}.direction"), t.span());
+                    shown.insert(format!("{e}.direction"), format!("{p}.target"));
+                    // Blame a position that is not finite, not the axis it spoils.
+                    if !position.is_finite() {
+                        let at = r.position.as_ref().map_or(l.span(), Spanned::span);
+                        return Err(src.error(
+                            at,
+                            Some(&format!("{p}.position")),
+                            format!("must be finite, got {position}"),
+                        ));
+                    }
+                    if vec3(t) == position {
+                        return Err(src.error(
+                            t.span(),
+                            Some(&format!("{p}.target")),
+                            "equals position: the spot's axis runs from position towards target",
+                        ));
+                    }
+                    unit(vec3(t) - position, t.span(), "target")?
+                }
+                (Some(d), Some(_)) => {
+                    return Err(src.error(
+                        d.span(),
+                        Some(&format!("{p}.direction")),
+                        "give direction or target, not both",
+                    ))
+                }
+                (None, None) => {
+                    return Err(src.error(
+                        l.span(),
+                        Some(&p),
+                        "a spot light needs `direction` (its axis) or `target` (a point on it)",
+                    ))
+                }
+            };
+            let cutoff = r.cutoff_angle.as_ref().map_or(20.0, |c| *c.get_ref());
+            let beam = r.beam_width.as_ref().map_or(cutoff * 0.75, |b| *b.get_ref());
+            Emitter::Spot {
+                position,
+                direction,
+                intensity: colour(&r.intensity),
+                cutoff: cutoff.to_radians(),
+                beam: beam.to_radians(),
+            }
+        }
+        "directional" => {
+            let d = r.direction.as_ref().ok_or_else(|| {
+                src.error(
+                    l.span(),
+                    Some(&p),
+                    "a directional light needs `direction` (the way its light travels)",
+                )
+            })?;
+            Emitter::Directional {
+                direction: unit(vec3(d), d.span(), "direction")?,
+                irradiance: colour(&r.irradiance),
+            }
+        }
+        "constant" => Emitter::Environment(Environment {
+            scale: colour(&r.radiance),
+            map: None,
+            to_world: Mat3::IDENTITY,
+        }),
+        _ => {
+            let file = r.filename.as_ref().ok_or_else(|| {
+                src.error(
+                    l.span(),
+                    Some(&p),
+                    "an envmap light needs `filename` (a latitude-longitude image)",
+                )
+            })?;
+            let to_world = match &r.rotate {
+                Some(a) => {
+                    finite_all(src, a.get_ref(), a.span(), &format!("{p}.rotate"))?;
+                    spans.insert(format!("{e}.to_world"), a.span());
+                    shown.insert(format!("{e}.to_world"), format!("{p}.rotate"));
+                    rotation(*a.get_ref()).as_mat3()
+                }
+                None => Mat3::IDENTITY,
+            };
+            let path = base.join(file.get_ref());
+            let name = path.display().to_string();
+            // As Mitsuba: 8- and 16-bit images are sRGB-encoded, EXR and HDR (RGBE) linear.
+            let (width, height, pixels) = texture::read_image(&path, false)
+                .map_err(|m| src.error(file.span(), Some(&format!("{p}.filename")), format!("{name}: {m}")))?;
+            Emitter::Environment(Environment {
+                scale: Vec3::splat(r.scale.as_ref().map_or(1.0, |s| *s.get_ref())),
+                map: Some(EnvMap {
+                    name,
+                    width,
+                    height,
+                    pixels,
+                }),
+                to_world,
+            })
+        }
+    })
+}
+
+/// `rotate = [x, y, z]` (degrees): about x, then y, then z (as a mesh's).
+fn rotation(degrees: [f64; 3]) -> DMat3 {
+    let [x, y, z] = degrees.map(f64::to_radians);
+    DMat3::from_rotation_z(z) * DMat3::from_rotation_y(y) * DMat3::from_rotation_x(x)
 }
 
 /// Index of the material `r` names among `materials`.
@@ -928,8 +1184,7 @@ fn mesh_transform(src: &Source, r: &RawMesh, p: &str) -> Result<DAffine3> {
     let rotate = match &r.rotate {
         Some(a) => {
             finite_all(src, a.get_ref(), a.span(), &format!("{p}.rotate"))?;
-            let [x, y, z] = a.get_ref().map(f64::to_radians);
-            DMat3::from_rotation_z(z) * DMat3::from_rotation_y(y) * DMat3::from_rotation_x(x)
+            rotation(*a.get_ref())
         }
         None => DMat3::IDENTITY,
     };
@@ -1449,8 +1704,9 @@ material = "light"
             "diffuse = [0.5, 0.5, 0.5]",
             "diffuse = [0.5, 0.5, 0.5]\nemission = [1.0, 1.0, 1.0]",
         );
-        // Sphere 1 (line 24, one line lower now) uses "white", which now emits.
-        assert_err(&text, 25, "sphere[1].material", "spheres cannot be emitters");
+        // Sphere 1 (line 24, one line lower now) uses "white", which now emits: a glowing sphere.
+        let s = Scene::parse(&text, "t.toml").expect("an emitting sphere");
+        assert!(s.materials[s.spheres[1].material as usize].is_light());
         let text = text.replace(
             "radius = 0.25\nmaterial = \"white\"",
             "radius = 0.25\nmaterial = \"glass\"",
@@ -1467,13 +1723,17 @@ material = "light"
     }
 
     #[test]
-    fn emitting_sphere_refused() {
-        assert_err(
-            &edit(19, "material = \"light\""),
-            19,
-            "sphere[0].material",
-            "spheres cannot be emitters",
-        );
+    fn emitting_spheres_load() {
+        let s = Scene::parse(&edit(19, "material = \"light\""), "t.toml").expect("a glowing sphere");
+        let m = &s.materials[s.spheres[0].material as usize];
+        assert_eq!(m.emission, Vec3::splat(10.0));
+        assert_eq!(m.surface, Surface::Diffuse { albedo: Vec3::ZERO });
+        // Without the emitting quad, the sphere alone lights the scene.
+        let mut lines: Vec<&str> = BASE.lines().collect();
+        lines[18] = "material = \"light\"";
+        lines[35] = "material = \"white\"";
+        let s = Scene::parse(&lines.join("\n"), "t.toml").expect("a sphere is the only light");
+        assert!(s.lights().is_empty() && s.materials[s.spheres[0].material as usize].is_light());
     }
 
     #[test]
@@ -1793,11 +2053,11 @@ material = "light"
     #[test]
     fn no_light() {
         let e = err(&edit(36, "material = \"white\""));
-        assert!(e.contains("no emitting quad or triangle: nothing to render"), "{e}");
+        assert!(e.contains("no light: nothing to render"), "{e}");
         assert!(e.starts_with("t.toml:"), "{e}");
         // No quads at all: same message.
         let text = BASE.split("[[quad]]").next().unwrap_or("").to_string();
-        assert!(err(&text).contains("no emitting quad"));
+        assert!(err(&text).contains("no light: nothing to render"));
     }
 
     #[test]
@@ -1950,7 +2210,7 @@ material = "light"
             "{:#}",
             Scene::parse(&text, &dir.0.join("t.toml").display().to_string()).unwrap_err()
         );
-        assert!(e.contains("t.toml:26:1: no emitting quad or triangle"), "{e}");
+        assert!(e.contains("t.toml:26:1: no light"), "{e}");
     }
 
     /// An OBJ's vertex normals shade it smooth; `face_normals = true` shades it flat; an OBJ without
@@ -2320,5 +2580,312 @@ material = "light"
                 && e.contains("a.obj: material \"white\" reads a texture, but the mesh has no texture coordinates"),
             "{e}"
         );
+    }
+
+    /// BASE with `lights` appended (its first line is line 38), parsed as `<dir>/t.toml`.
+    fn with_lights(dir: &TempDir, lights: &str) -> Result<Scene> {
+        Scene::parse(
+            &format!("{BASE}\n{lights}"),
+            &dir.0.join("t.toml").display().to_string(),
+        )
+    }
+
+    fn lights(text: &str) -> Vec<Emitter> {
+        with_lights(&TempDir::new("toml-lights"), text)
+            .unwrap_or_else(|e| panic!("{e:#}"))
+            .emitters
+    }
+
+    #[test]
+    fn each_light_with_mitsubas_defaults() {
+        let got = lights(
+            "[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\n\
+             [[light]]\ntype = \"spot\"\nposition = [0, 2, 0]\ndirection = [0, -1, 0]\n\
+             [[light]]\ntype = \"directional\"\ndirection = [0, 0, -3]\n\
+             [[light]]\ntype = \"constant\"\n",
+        );
+        assert_eq!(
+            got,
+            [
+                Emitter::Point {
+                    position: Vec3::new(0.0, 2.0, 0.0),
+                    intensity: Vec3::ONE
+                },
+                Emitter::Spot {
+                    position: Vec3::new(0.0, 2.0, 0.0),
+                    direction: Vec3::NEG_Y,
+                    intensity: Vec3::ONE,
+                    cutoff: 20f32.to_radians(),
+                    beam: 15f32.to_radians()
+                },
+                Emitter::Directional {
+                    direction: Vec3::NEG_Z,
+                    irradiance: Vec3::ONE
+                },
+                Emitter::Environment(Environment {
+                    scale: Vec3::ONE,
+                    map: None,
+                    to_world: Mat3::IDENTITY
+                }),
+            ]
+        );
+    }
+
+    #[test]
+    fn each_light_with_every_field() {
+        let got = lights(
+            "[[light]]\ntype = \"point\"\nposition = [1, 2, 3]\nintensity = 4\n\
+             [[light]]\ntype = \"spot\"\nposition = [1, 4, 1]\ntarget = [1, 0, 1]\nintensity = [1, 2, 3]\n\
+             cutoff_angle = 40\nbeam_width = 10\n\
+             [[light]]\ntype = \"spot\"\nposition = [0, 0, 0]\ndirection = [1, 0, 0]\ncutoff_angle = 60\n\
+             [[light]]\ntype = \"directional\"\ndirection = [1, -1, 0]\nirradiance = [0.5, 1, 2]\n\
+             [[light]]\ntype = \"constant\"\nradiance = 0.25\n",
+        );
+        assert_eq!(
+            got[0],
+            Emitter::Point {
+                position: Vec3::new(1.0, 2.0, 3.0),
+                intensity: Vec3::splat(4.0)
+            }
+        );
+        assert_eq!(
+            got[1],
+            Emitter::Spot {
+                position: Vec3::new(1.0, 4.0, 1.0),
+                direction: Vec3::NEG_Y,
+                intensity: Vec3::new(1.0, 2.0, 3.0),
+                cutoff: 40f32.to_radians(),
+                beam: 10f32.to_radians()
+            }
+        );
+        // The beam's default follows the cutoff given.
+        let Emitter::Spot {
+            direction,
+            cutoff,
+            beam,
+            ..
+        } = got[2]
+        else {
+            panic!("{:?}", got[2])
+        };
+        assert_eq!(
+            (direction, cutoff, beam),
+            (Vec3::X, 60f32.to_radians(), 45f32.to_radians())
+        );
+        let Emitter::Directional { direction, irradiance } = got[3] else {
+            panic!("{:?}", got[3])
+        };
+        assert!(
+            direction.distance(Vec3::new(1.0, -1.0, 0.0).normalize()) < 1e-6,
+            "{direction}"
+        );
+        assert_eq!(irradiance, Vec3::new(0.5, 1.0, 2.0));
+        assert_eq!(
+            got[4],
+            Emitter::Environment(Environment {
+                scale: Vec3::splat(0.25),
+                map: None,
+                to_world: Mat3::IDENTITY
+            })
+        );
+    }
+
+    #[test]
+    fn envmaps_read_back_from_exr_hdr_and_png() {
+        let dir = TempDir::new("toml-envmap");
+        std::fs::create_dir_all(dir.0.join("maps")).unwrap();
+        // Powers of two within a factor 256 of each pixel's largest: exact in RGBE too.
+        let value = |x: u32, y: u32| [(1 << x) as f32, 0.5 * (y + 1) as f32, 0.25];
+        let img = image::Rgb32FImage::from_fn(4, 2, |x, y| image::Rgb(value(x, y)));
+        for ext in ["exr", "hdr"] {
+            img.save(dir.0.join(format!("maps/sky.{ext}"))).unwrap();
+            let s = with_lights(
+                &dir,
+                &format!("[[light]]\ntype = \"envmap\"\nfilename = \"maps/sky.{ext}\"\n"),
+            )
+            .unwrap_or_else(|e| panic!("{ext}: {e:#}"));
+            let [Emitter::Environment(env)] = &s.emitters[..] else {
+                panic!("{:?}", s.emitters)
+            };
+            assert_eq!((env.scale, env.to_world), (Vec3::ONE, Mat3::IDENTITY), "{ext}");
+            let map = env.map.as_ref().expect("a map");
+            assert_eq!((map.width, map.height), (4, 2), "{ext}");
+            for (k, p) in map.pixels.iter().enumerate() {
+                let want = Vec3::from_array(value(k as u32 % 4, k as u32 / 4));
+                assert!(p.distance(want) < 1e-6, "{ext}: pixel {k} is {p}, want {want}");
+            }
+        }
+        // PNG: sRGB-encoded, decoded to linear; scale and rotate (about y by 90 degrees: local +z is world +x).
+        texture::write_png(&dir.0.join("maps/sky.png"), 2, 2, &[255, 128, 0].repeat(4));
+        let s = with_lights(
+            &dir,
+            "[[light]]\ntype = \"envmap\"\nfilename = \"maps/sky.png\"\nscale = 3\nrotate = [0, 90, 0]\n",
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        let [Emitter::Environment(env)] = &s.emitters[..] else {
+            panic!("{:?}", s.emitters)
+        };
+        assert_eq!(env.scale, Vec3::splat(3.0));
+        assert!((env.to_world * Vec3::Z).distance(Vec3::X) < 1e-6, "{}", env.to_world);
+        let want = Vec3::new(1.0, texture::srgb_to_linear(128.0 / 255.0), 0.0);
+        let map = env.map.as_ref().unwrap();
+        assert!(map.pixels.iter().all(|p| p.distance(want) < 1e-6), "{:?}", map.pixels);
+    }
+
+    #[test]
+    fn light_errors_name_line_and_field() {
+        let dir = TempDir::new("toml-light-errors");
+        texture::write_png(&dir.0.join("one.png"), 1, 1, &[1, 2, 3]);
+        // (the lights, line, field, what is said); the first [[light]] is line 38.
+        let cases: &[(&str, usize, &str, &str)] = &[
+            (
+                "[[light]]\ntype = \"area\"",
+                39,
+                "light[0].type",
+                "unknown light type \"area\" (known: point, spot",
+            ),
+            (
+                "[[light]]\ntype = \"point\"\nposition = [0, 1, 0]\ncutoff_angle = 10",
+                41,
+                "light[0].cutoff_angle",
+                "not a field of a point light (its fields: type, position, intensity)",
+            ),
+            (
+                "[[light]]\ntype = \"point\"",
+                38,
+                "light[0]",
+                "a point light needs `position`",
+            ),
+            (
+                "[[light]]\ntype = \"point\"\nposition = [0, 1, 0]\npower = 1",
+                41,
+                "light[0].power",
+                "unknown field `power`",
+            ),
+            (
+                "[[light]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = [1, -1, 1]",
+                41,
+                "light[0].intensity",
+                "every component must be finite and >= 0, got [1, -1, 1]",
+            ),
+            (
+                "[[light]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = \"bright\"",
+                41,
+                "light[0].intensity",
+                "a number or an array of 3 numbers [r, g, b]",
+            ),
+            (
+                "[[light]]\ntype = \"point\"\nposition = [0, 1, 0]\n[[light]]\ntype = \"spot\"\nposition = [0, 1, 0]\n\
+                 direction = [0, -1, 0]\ncutoff_angle = 20\nbeam_width = 30",
+                46,
+                "light[1].beam_width",
+                "must be in (0, cutoff_angle = 20] degrees, got 30",
+            ),
+            (
+                "[[light]]\ntype = \"spot\"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\ncutoff_angle = 100",
+                42,
+                "light[0].cutoff_angle",
+                "must be in (0, 90] degrees, got 100",
+            ),
+            (
+                "[[light]]\ntype = \"spot\"\nposition = [0, 1, 0]",
+                38,
+                "light[0]",
+                "needs `direction` (its axis) or `target`",
+            ),
+            (
+                "[[light]]\ntype = \"spot\"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\ntarget = [0, 0, 0]",
+                41,
+                "light[0].direction",
+                "give direction or target, not both",
+            ),
+            (
+                "[[light]]\ntype = \"spot\"\nposition = [0, 1, 0]\ntarget = [0, 1, 0]",
+                41,
+                "light[0].target",
+                "equals position",
+            ),
+            (
+                "[[light]]\ntype = \"spot\"\nposition = [0, nan, 0]\ntarget = [0, 0, 0]",
+                40,
+                "light[0].position",
+                "must be finite, got [0, NaN, 0]",
+            ),
+            (
+                "[[light]]\ntype = \"spot\"\nposition = [0, inf, 0]\ndirection = [0, -1, 0]",
+                40,
+                "light[0].position",
+                "must be finite",
+            ),
+            (
+                "[[light]]\ntype = \"directional\"\ndirection = [0, 0, 0]",
+                40,
+                "light[0].direction",
+                "must be a finite non-zero vector, got [0, 0, 0]",
+            ),
+            (
+                "[[light]]\ntype = \"directional\"",
+                38,
+                "light[0]",
+                "needs `direction` (the way its light travels)",
+            ),
+            (
+                "[[light]]\ntype = \"constant\"\nradiance = -1",
+                40,
+                "light[0].radiance",
+                ">= 0",
+            ),
+            ("[[light]]\ntype = \"envmap\"", 38, "light[0]", "needs `filename`"),
+            (
+                "[[light]]\ntype = \"envmap\"\nfilename = \"none.exr\"",
+                40,
+                "light[0].filename",
+                "none.exr: cannot open the image",
+            ),
+            (
+                "[[light]]\ntype = \"envmap\"\nfilename = \"one.png\"",
+                40,
+                "light[0].filename",
+                "one.png: 1 x 1 with 1 pixels: an environment map needs at least 2 x 2",
+            ),
+            (
+                "[[light]]\ntype = \"envmap\"\nfilename = \"one.png\"\nrotate = [0, nan, 0]",
+                41,
+                "light[0].rotate",
+                "every component must be finite",
+            ),
+            (
+                "[[light]]\ntype = \"envmap\"\nfilename = \"one.png\"\nscale = [1, 2, 3]",
+                41,
+                "light[0].scale",
+                "invalid type",
+            ),
+        ];
+        for (text, line, path, needle) in cases {
+            let e = match with_lights(&dir, text) {
+                Ok(_) => panic!("expected an error for {text}"),
+                Err(e) => format!("{e:#}").replace(&format!("{}/", dir.0.display()), ""),
+            };
+            assert_located(&e, *line, path, needle);
+        }
+    }
+
+    /// The `[[light]]` examples of docs/scene-format.md load as written.
+    #[test]
+    fn the_documented_light_examples_load() {
+        let doc = include_str!("../../../docs/scene-format.md");
+        let block = doc
+            .split("Examples, one of each:\n\n```toml\n")
+            .nth(1)
+            .and_then(|rest| rest.split("```").next())
+            .expect("the examples in docs/scene-format.md");
+        let dir = TempDir::new("toml-light-docs");
+        std::fs::create_dir_all(dir.0.join("maps")).unwrap();
+        image::Rgb32FImage::from_pixel(4, 2, image::Rgb([1.0, 2.0, 4.0]))
+            .save(dir.0.join("maps/sky.hdr"))
+            .unwrap();
+        let s = with_lights(&dir, block).unwrap_or_else(|e| panic!("{e:#}"));
+        let kinds: Vec<&str> = s.emitters.iter().map(Emitter::kind).collect();
+        assert_eq!(kinds, ["point", "spot", "directional", "constant", "envmap"]);
     }
 }

@@ -316,13 +316,25 @@ mod tests {
                 r#"<emitter type="envmap"/>"#,
                 r#"<emitter type="envmap">"#,
                 12,
-                "only area emitters",
+                "needs <string name=\"filename\"",
             ),
             (
-                r#"<shape type="sphere"><emitter type="area"/></shape>"#,
+                r#"<emitter type="sunsky"/>"#,
+                r#"<emitter type="sunsky">"#,
+                12,
+                "unsupported emitter",
+            ),
+            (
+                r#"<shape type="cube"><emitter type="point"/></shape>"#,
+                r#"<emitter type="point">"#,
+                12,
+                "only area emitters belong on shapes",
+            ),
+            (
+                r#"<shape type="sphere"><boolean name="flip_normals" value="true"/><emitter type="area"/></shape>"#,
                 r#"<emitter type="area">"#,
                 12,
-                "emitting sphere",
+                "flip_normals on an emitting sphere",
             ),
             (
                 r#"<shape type="cube"><float name="radiuss" value="1"/></shape>"#,

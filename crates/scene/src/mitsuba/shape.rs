@@ -70,7 +70,12 @@ impl Builder {
                     };
                     bsdf = Some((b, o));
                 }
-                "emitter" => emission = Some((emitter::area(o)?, o)),
+                "emitter" => {
+                    if emission.is_some() {
+                        return Err(o.err("a second emitter: a shape has one (as in Mitsuba)"));
+                    }
+                    emission = Some((emitter::area(o)?, o));
+                }
                 "medium" => return Err(o.err("participating media are not supported")),
                 _ => return Err(o.err(format!("not expected inside {}", e.what()))),
             }
@@ -337,8 +342,9 @@ impl Builder {
         if off.iter().any(|x| x.abs() > 1e-6 * s2) {
             return Err(e.err("to_world scales the sphere non-uniformly (an ellipsoid): not supported"));
         }
-        if emission.max_element() > 0.0 {
-            return Err(emitter_at.err("an emitting sphere: ppm-vk lights are quads and triangles (use a mesh)"));
+        // Mitsuba's flipped sphere lights only its inside; ppm-vk's emitting spheres light outwards.
+        if flip && emission.max_element() > 0.0 {
+            return Err(emitter_at.err("flip_normals on an emitting sphere (lighting its inside) is not supported"));
         }
         if flip && matches!(surface, Surface::Glass { .. }) {
             return Err(e.err("flip_normals on a dielectric sphere (its inside outside) is not supported"));
