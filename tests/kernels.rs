@@ -140,6 +140,12 @@ fn ray_pass_matches_reference_on(scene: ppm_vk_engine::Scene, specialize: bool, 
 }
 
 fn ray_pass_matches_reference_with(scene: ppm_vk_engine::Scene, settings: Settings) {
+    ray_pass_matches_reference_within(scene, settings, 1e-4)
+}
+
+/// `direct_rel`: how close a pixel's emission sums must be to the twin's (relative; see
+/// emission_passes_match_reference).
+fn ray_pass_matches_reference_within(scene: ppm_vk_engine::Scene, settings: Settings, direct_rel: f64) {
     let ctx = ctx();
     let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
     let g = r.gpu_scene().clone();
@@ -204,7 +210,7 @@ fn ray_pass_matches_reference_with(scene: ppm_vk_engine::Scene, settings: Settin
     // PPM's pass 0 adds no emission: its samples are the pilot's, and its centre sample would bias the
     // box filter.
     assert!(gpu_direct.iter().chain(&cpu_direct).all(|d| d[3] == 0.0));
-    emission_passes_match_reference(&mut r);
+    emission_passes_match_reference(&mut r, direct_rel);
     assert_clean(&ctx);
 }
 
@@ -213,7 +219,7 @@ fn ray_pass_matches_reference_with(scene: ppm_vk_engine::Scene, settings: Settin
 /// with direct light sampled `light_samples`; each then with its shadow ray).
 /// Sums are the same throughput products in f32: 1e-4 relative (of at least 1) is ~1000 ulps of slack; a
 /// pixel may differ only where a path diverged at a threshold.
-fn emission_passes_match_reference(r: &mut Renderer) {
+fn emission_passes_match_reference(r: &mut Renderer, direct_rel: f64) {
     let g = r.gpu_scene().clone();
     let pixels = g.pixels() as usize;
     let mut busy = vec![0u32; pixels];
@@ -254,7 +260,7 @@ fn emission_passes_match_reference(r: &mut Renderer) {
     let ok = gpu
         .iter()
         .zip(&cpu)
-        .filter(|(a, b)| (0..4).all(|c| close(a[c], b[c], 1e-4, 1e-4)))
+        .filter(|(a, b)| (0..4).all(|c| close(a[c], b[c], direct_rel, 1e-4)))
         .count();
     let lit = gpu.iter().filter(|d| d[0] > 0.0).count();
     println!("direct: {ok} of {pixels} pixels agree, {lit} see the light");
@@ -461,9 +467,10 @@ fn photon_records_match_reference_within(
     let g = r.gpu_scene().clone();
     let cpu = reference::photon_pass(&g, 0, PHOTONS, SALT_PHOTON);
     println!("photon records: GPU {}, CPU {}", gpu.len(), cpu.len());
+    // A closed scene leaves several records a photon; an open one (every_light) about one in five.
     assert!(
-        cpu.len() > PHOTONS as usize,
-        "fewer records than photons: {}",
+        cpu.len() > PHOTONS as usize / 5,
+        "too few records to compare: {}",
         cpu.len()
     );
     // 0.5%: a path diverging at a roulette or Fresnel threshold changes its record count by a few; at
@@ -483,7 +490,16 @@ fn photon_records_match_reference_within(
     let eps = 1e-5 * scene_extent(&scene);
     let start = match g.smooth_shading() {
         true => [(ppm_vk_kernels::layout::FLUX_CAP_FIXED / g.params.flux_fixed as f64) as f32; 3],
-        false => g.lights[0].power.map(|p| p / g.lights[0].prob),
+        // Lights of one kind start every photon with the same flux; other kinds vary it (a spot's
+        // falloff, an environment's L / pdf) up to the bound the fixed-point scale was set from.
+        false
+            if g.lights
+                .iter()
+                .all(|l| l.kind <= ppm_vk_kernels::layout::LIGHT_TRIANGLE) =>
+        {
+            g.lights[0].power.map(|p| p / g.lights[0].prob)
+        }
+        false => [(2f64.powi(30) / g.params.flux_fixed as f64) as f32; 3],
     };
     let mut cell_ok = 0usize;
     for (i, p) in gpu.iter().enumerate() {
@@ -1328,7 +1344,7 @@ fn photon_records_match_reference_with_one_photon_per_thread() {
     if ctx.info().loop_budget.is_some() {
         assert!(pushes.len() > 1, "the eye pass was expected to need several dispatches");
     }
-    emission_passes_match_reference(&mut r);
+    emission_passes_match_reference(&mut r, 1e-4);
     drop(r);
     // The photons' whole paths, first landings included (the measured match below is for those).
     let settings = Settings {
@@ -1482,13 +1498,13 @@ fn photon_records_match_reference_with_textures() {
 }
 
 /// An open scene with every kind of light beyond quads and triangles: a glowing sphere, a point light, a
-/// spot, the sun and an environment map (turned), over a floor with a diffuse and a glass sphere.
+/// spot, the sun and an environment map (turned), over a floor with a diffuse and a mirror sphere.
 fn every_light() -> ppm_vk_engine::Scene {
     use ppm_vk_engine::scene::{Emitter, EnvMap, Environment};
     let text = r#"name = "every-light"
 [camera]
-eye = [0.0, 2.5, 3.5]
-look_at = [0.0, 0.3, 0.0]
+eye = [0.0, 2.5, 2.5]
+look_at = [0.0, 0.0, 0.0]
 up = [0.0, 1.0, 0.0]
 vfov = 45.0
 resolution = [32, 32]
@@ -1496,14 +1512,14 @@ resolution = [32, 32]
 diffuse = [0.6, 0.5, 0.4]
 [materials.white]
 diffuse = [0.8, 0.8, 0.8]
-[materials.glass]
-glass = 1.5
+[materials.mirror]
+mirror = [0.9, 0.9, 0.9]
 [materials.glow]
 emission = [4.0, 3.0, 2.0]
 [[quad]]
-origin = [-2.0, 0.0, -2.0]
-edge_u = [0.0, 0.0, 4.0]
-edge_v = [4.0, 0.0, 0.0]
+origin = [-4.0, 0.0, -4.0]
+edge_u = [0.0, 0.0, 8.0]
+edge_v = [8.0, 0.0, 0.0]
 material = "floor"
 [[sphere]]
 center = [-0.6, 0.4, 0.0]
@@ -1512,7 +1528,7 @@ material = "white"
 [[sphere]]
 center = [0.6, 0.4, 0.2]
 radius = 0.4
-material = "glass"
+material = "mirror"
 [[sphere]]
 center = [0.0, 1.4, -0.8]
 radius = 0.15
@@ -1557,19 +1573,30 @@ material = "glow"
     scene
 }
 
+/// The emission sums to 1e-3: an environment looked up in a direction (where an eye path leaves the scene,
+/// and the cosine directions of its multiple importance sampling) goes through atan and acos, which
+/// lavapipe computes to fewer bits than Rust; across a map's steep gradient (a pixel 50x its neighbours)
+/// that moves the bilinear weights by up to a few 1e-4.
 #[test]
 fn ray_pass_matches_reference_with_every_kind_of_light() {
     for specialize in [true, false] {
-        ray_pass_matches_reference_on(every_light(), specialize, DirectLight::Sample);
+        let settings = Settings {
+            specialize,
+            direct: DirectLight::Sample,
+            ..settings()
+        };
+        ray_pass_matches_reference_within(every_light(), settings, 1e-3);
     }
 }
 
 #[test]
 fn photon_records_match_reference_with_every_kind_of_light() {
     for specialize in [true, false] {
-        // Flux: the environment's photons carry L / pdf of the map, bilinear: 1e-4.
+        // Flux: the environment's photons carry L / pdf of the map, bilinear: 1e-4. Every landing
+        // recorded (an open scene leaves few records after the first).
         let settings = Settings {
             specialize,
+            direct: DirectLight::Photons,
             ..settings()
         };
         photon_records_match_reference_within(every_light(), settings, 1e-4, 0.99);

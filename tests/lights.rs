@@ -45,21 +45,25 @@ material = "placeholder"
     );
     let mut scene = Scene::parse(&text, "lights-test.toml").unwrap_or_else(|e| panic!("{e:#}"));
     scene.quads.pop();
+    let check = !emitters.is_empty(); // else the caller adds its light and checks
     scene.emitters = emitters;
-    scene.validate().unwrap_or_else(|e| panic!("{e:#}"));
+    if check {
+        scene.validate().unwrap_or_else(|e| panic!("{e:#}"));
+    }
     scene
 }
 
-/// Where the centre of pixel (px, py) of `scene`'s camera meets the plane y = 0 (ray.comp's camera_ray).
-fn floor_point(scene: &Scene, px: u32, py: u32) -> Vec3 {
+/// Where the point (px + jx, py + jy) of the image of `scene`'s camera meets the plane y = 0 (ray.comp's
+/// camera_ray).
+fn floor_point(scene: &Scene, px: f32, py: f32) -> Vec3 {
     let c = &scene.camera;
     let forward = (c.look_at - c.eye).normalize();
     let right = forward.cross(c.up).normalize();
     let up = right.cross(forward);
     let t = (c.vfov_deg.to_radians() * 0.5).tan();
     let aspect = c.width as f32 / c.height as f32;
-    let sx = (2.0 * (px as f32 + 0.5) / c.width as f32 - 1.0) * aspect * t;
-    let sy = (1.0 - 2.0 * (py as f32 + 0.5) / c.height as f32) * t;
+    let sx = (2.0 * px / c.width as f32 - 1.0) * aspect * t;
+    let sy = (1.0 - 2.0 * py / c.height as f32) * t;
     let d = (forward + sx * right + sy * up).normalize();
     c.eye + d * (-c.eye.y / d.y)
 }
@@ -84,20 +88,24 @@ fn block(image: &RgbImage, b: u32, bx: u32, by: u32) -> f64 {
     sum / (b * b) as f64
 }
 
-/// The closed form averaged over the same block (at its pixels' centres).
+/// The closed form averaged over the same block, as the pixels' box filter averages it (8 x 8 points a
+/// pixel).
 fn block_expected(scene: &Scene, b: u32, bx: u32, by: u32, f: &dyn Fn(Vec3) -> f64) -> f64 {
+    const K: u32 = 8;
     let mut sum = 0f64;
-    for y in by * b..(by + 1) * b {
-        for x in bx * b..(bx + 1) * b {
-            sum += f(floor_point(scene, x, y));
+    for y in by * b * K..(by + 1) * b * K {
+        for x in bx * b * K..(bx + 1) * b * K {
+            let (px, py) = ((x as f32 + 0.5) / K as f32, (y as f32 + 0.5) / K as f32);
+            sum += f(floor_point(scene, px, py));
         }
     }
-    sum / (b * b) as f64
+    sum / (b * b * K * K) as f64
 }
 
 /// Compares every b x b block of the image with the closed form: relative error within `rel` where the
-/// expected value is at least `floor` of the largest, absolute within rel * largest elsewhere.
-fn check_blocks(name: &str, image: &RgbImage, scene: &Scene, b: u32, rel: f64, f: &dyn Fn(Vec3) -> f64) {
+/// expected value is at least a tenth of the largest, absolute within rel * largest elsewhere (and
+/// everywhere with `of_peak`: the photons' kernel blurs an edge by its radius).
+fn check_blocks(name: &str, image: &RgbImage, scene: &Scene, b: u32, rel: f64, of_peak: bool, f: &dyn Fn(Vec3) -> f64) {
     let n = scene.camera.width / b;
     let mut worst = 0f64;
     let mut most = 0f64;
@@ -109,7 +117,7 @@ fn check_blocks(name: &str, image: &RgbImage, scene: &Scene, b: u32, rel: f64, f
     for by in 0..n {
         for bx in 0..n {
             let (got, want) = (block(image, b, bx, by), block_expected(scene, b, bx, by, f));
-            let err = if want > 0.1 * most {
+            let err = if want > 0.1 * most && !of_peak {
                 (got / want - 1.0).abs()
             } else {
                 (got - want).abs() / most
@@ -126,7 +134,8 @@ fn check_blocks(name: &str, image: &RgbImage, scene: &Scene, b: u32, rel: f64, f
 }
 
 /// A point light 1 m over the floor: L = (rho / pi) I cos / d^2 at every point, by shadow rays to within
-/// the pixel's footprint (0.5%) and by photons alone to within their kernel's blur over 4 x 4 blocks (5%).
+/// the noise of the pixels' box filter and by photons alone to within their kernel's blur over 4 x 4 blocks
+/// (5%).
 #[test]
 fn a_point_light_over_a_plane_gives_i_cos_over_d_squared() {
     let ctx = ctx();
@@ -144,10 +153,12 @@ fn a_point_light_over_a_plane_gives_i_cos_over_d_squared() {
         let d2 = d.length_squared() as f64;
         RHO as f64 / std::f64::consts::PI * i as f64 * (d.y as f64 / d2.sqrt()) / d2
     };
-    let sampled = render(&ctx, &scene, settings(DirectLight::Sample, 20_000), 4);
-    check_blocks("point, shadow rays", &sampled, &scene, 1, 0.01, &f);
+    // Each pixel's value is a mean over random points of it (the box filter), noisy by the closed form's
+    // change across a pixel: 2 x 2 blocks after 16 passes are within 1.5% (measured: 0.9% at most).
+    let sampled = render(&ctx, &scene, settings(DirectLight::Sample, 20_000), 16);
+    check_blocks("point, shadow rays", &sampled, &scene, 2, 0.015, false, &f);
     let photons = render(&ctx, &scene, settings(DirectLight::Photons, 200_000), 16);
-    check_blocks("point, photons", &photons, &scene, 4, 0.05, &f);
+    check_blocks("point, photons", &photons, &scene, 4, 0.05, false, &f);
     assert_clean(&ctx);
 }
 
@@ -183,12 +194,13 @@ fn a_spot_falls_off_across_its_cone_as_mitsubas() {
         };
         RHO as f64 / std::f64::consts::PI * i as f64 * falloff * cos / d2
     };
-    // The cone's edge crosses pixels: a pixel's value is the mean over its footprint, the closed form at
-    // its centre; 1% of the peak covers that at 64 pixels.
-    let sampled = render(&ctx, &scene, settings(DirectLight::Sample, 20_000), 8);
-    check_blocks("spot, shadow rays", &sampled, &scene, 2, 0.03, &f);
-    let photons = render(&ctx, &scene, settings(DirectLight::Photons, 200_000), 16);
-    check_blocks("spot, photons", &photons, &scene, 4, 0.08, &f);
+    // The falloff's ramp and the cone's edge cross pixels, whose box filter draws random points of them:
+    // 4 x 4 blocks after 16 passes.
+    let sampled = render(&ctx, &scene, settings(DirectLight::Sample, 20_000), 16);
+    check_blocks("spot, shadow rays", &sampled, &scene, 4, 0.03, false, &f);
+    // All photons land in the cone: 50k a pass keeps the lookups inside lavapipe's loop budget (issue 39).
+    let photons = render(&ctx, &scene, settings(DirectLight::Photons, 50_000), 48);
+    check_blocks("spot, photons", &photons, &scene, 4, 0.04, true, &f);
     assert_clean(&ctx);
 }
 

@@ -93,7 +93,7 @@ vec3 about(vec3 t, vec3 b, vec3 n, float cos_theta, float sin_theta, float phi) 
 float spot_falloff(Emitter e, float cos_theta) {
     if (!(cos_theta > e.cos_cutoff)) return 0.0;
     if (cos_theta >= e.cos_beam) return 1.0;
-    return (e.cutoff - acos(cos_theta)) * e.inv_width;
+    return max(0.0, (e.cutoff - acos(cos_theta)) * e.inv_width); // acos rounds: never below 0
 }
 
 // --- The environment: a constant, or a latitude-longitude map of w x h pixels (Mitsuba's envmap).
@@ -145,6 +145,17 @@ void env_cell(uint w, uint h, vec3 d, out uint band, out uint col, out vec2 f) {
     f = vec2(x - float(col), y - float(band));
 }
 
+// The bilinear radiance of cell (band, col) at f in it, times the scale.
+vec3 env_bilinear(Emitter e, uint w, uint band, uint col, vec2 f) {
+    uint first = e.table + 1u;
+    uint next = col + 1u == w ? 0u : col + 1u;
+    vec3 c00 = env_pixel(first, w, band, col);
+    vec3 c01 = env_pixel(first, w, band, next);
+    vec3 c10 = env_pixel(first, w, band + 1u, col);
+    vec3 c11 = env_pixel(first, w, band + 1u, next);
+    return e.value * ((1.0 - f.y) * ((1.0 - f.x) * c00 + f.x * c01) + f.y * ((1.0 - f.x) * c10 + f.x * c11));
+}
+
 // The radiance arriving from world direction d.
 vec3 environment_radiance(Emitter e, vec3 d) {
     if (e.table == 0xffffffffu) return e.value;
@@ -152,13 +163,7 @@ vec3 environment_radiance(Emitter e, vec3 d) {
     uint band, col;
     vec2 f;
     env_cell(size.x, size.y, env_local(e, d), band, col, f);
-    uint first = e.table + 1u;
-    uint next = col + 1u == size.x ? 0u : col + 1u;
-    vec3 c00 = env_pixel(first, size.x, band, col);
-    vec3 c01 = env_pixel(first, size.x, band, next);
-    vec3 c10 = env_pixel(first, size.x, band + 1u, col);
-    vec3 c11 = env_pixel(first, size.x, band + 1u, next);
-    return e.value * ((1.0 - f.y) * ((1.0 - f.x) * c00 + f.x * c01) + f.y * ((1.0 - f.x) * c10 + f.x * c11));
+    return env_bilinear(e, size.x, band, col, f);
 }
 
 // The solid-angle density with which env_sample draws world direction d.
@@ -179,10 +184,12 @@ float environment_pdf(Emitter e, vec3 d) {
     return sin_theta > 0.0 ? p_band * p_col * float(size.x * (size.y - 1u)) / (2.0 * PI * PI * sin_theta) : 0.0;
 }
 
-// A world direction towards the environment for uniform (a, b), and its solid-angle density.
-vec3 env_sample(Emitter e, float a, float b, out float pdf) {
+// A world direction towards the environment for uniform (a, b), its solid-angle density, and the radiance
+// from it (read from the cell drawn, not looked up again from the direction).
+vec3 env_sample(Emitter e, float a, float b, out float pdf, out vec3 radiance) {
     if (e.table == 0xffffffffu) {
         pdf = 1.0 / (4.0 * PI);
+        radiance = e.value;
         return uniform_sphere(a, b);
     }
     uvec2 size = texelFetch(texture_texels, int(e.table)).xy;
@@ -195,6 +202,7 @@ vec3 env_sample(Emitter e, float a, float b, out float pdf) {
     vec3 l = envmap_direction(u - floor(u), v);
     float sin_theta = sin(PI * v);
     pdf = sin_theta > 0.0 ? p_band * p_col * float(size.x * (size.y - 1u)) / (2.0 * PI * PI * sin_theta) : 0.0;
+    radiance = env_bilinear(e, size.x, band, col, vec2(tx, ty));
     return l.x * e.edge_u + l.y * e.normal + l.z * e.edge_v;
 }
 
@@ -248,10 +256,11 @@ bool light_sample(Emitter e, vec3 o, float a, float b, out vec3 w, out float dis
     }
     if (HAS_ENVIRONMENT && e.kind == LIGHT_ENVIRONMENT) {
         float p;
-        w = env_sample(e, a, b, p);
+        vec3 radiance;
+        w = env_sample(e, a, b, p, radiance);
         if (!(p > 0.0)) return false;
         pdf = p * e.cdf; // the environment is light 0: its prob is its cdf
-        li = environment_radiance(e, w) / pdf;
+        li = radiance / pdf;
         return true;
     }
     return false;
@@ -287,9 +296,10 @@ bool emit_photon(Emitter e, float a, float b, inout Rng rng, out vec3 o, out vec
     float phi = 2.0 * PI * rng_float(rng);
     if (HAS_ENVIRONMENT && e.kind == LIGHT_ENVIRONMENT) {
         float p;
-        vec3 towards = env_sample(e, a, b, p);
+        vec3 radiance;
+        vec3 towards = env_sample(e, a, b, p, radiance);
         d = -towards;
-        flux = p > 0.0 ? environment_radiance(e, towards) * (PI * e.radius * e.radius / (p * e.cdf)) : vec3(0.0);
+        flux = p > 0.0 ? radiance * (PI * e.radius * e.radius / (p * e.cdf)) : vec3(0.0);
     } else {
         d = e.normal;
     }

@@ -6,6 +6,9 @@
 //! compiles it (`cargo tree -e normal -p ppm-vk` does not list it). It reads the engine's lowered scene
 //! (`ppm_vk_engine::lower::GpuScene`) and takes the BSDFs' math from `ppm_vk_materials`, as the kernels do.
 
+// The kernels test `!(x > y)` so that a NaN ends a path; the twin mirrors them as written.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod bvh;
 pub mod conductor;
 pub mod lights;

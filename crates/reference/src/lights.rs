@@ -127,7 +127,7 @@ pub fn spot_falloff(e: &Emitter, cos_theta: f32) -> f32 {
     if cos_theta >= e.cos_beam {
         return 1.0;
     }
-    (e.cutoff - cos_theta.acos()) * e.inv_width
+    ((e.cutoff - cos_theta.acos()) * e.inv_width).max(0.0)
 }
 
 fn table_float(g: &GpuScene, at: u32) -> f32 {
@@ -176,13 +176,8 @@ fn env_cell(w: u32, h: u32, d: Vec3) -> (u32, u32, [f32; 2]) {
     (band, col, [x - col as f32, y - band as f32])
 }
 
-/// lights.glsl's `environment_radiance`.
-pub fn environment_radiance(g: &GpuScene, e: &Emitter, d: Vec3) -> Vec3 {
-    if e.table == u32::MAX {
-        return e.value;
-    }
-    let (w, h) = env_size(g, e);
-    let (band, col, f) = env_cell(w, h, env_local(e, d));
+/// lights.glsl's `env_bilinear`.
+fn env_bilinear(g: &GpuScene, e: &Emitter, w: u32, band: u32, col: u32, f: [f32; 2]) -> Vec3 {
     let first = e.table + 1;
     let next = if col + 1 == w { 0 } else { col + 1 };
     let c00 = env_pixel(g, first, w, band, col);
@@ -190,6 +185,16 @@ pub fn environment_radiance(g: &GpuScene, e: &Emitter, d: Vec3) -> Vec3 {
     let c10 = env_pixel(g, first, w, band + 1, col);
     let c11 = env_pixel(g, first, w, band + 1, next);
     e.value * ((1.0 - f[1]) * ((1.0 - f[0]) * c00 + f[0] * c01) + f[1] * ((1.0 - f[0]) * c10 + f[0] * c11))
+}
+
+/// lights.glsl's `environment_radiance`.
+pub fn environment_radiance(g: &GpuScene, e: &Emitter, d: Vec3) -> Vec3 {
+    if e.table == u32::MAX {
+        return e.value;
+    }
+    let (w, h) = env_size(g, e);
+    let (band, col, f) = env_cell(w, h, env_local(e, d));
+    env_bilinear(g, e, w, band, col, f)
 }
 
 /// lights.glsl's `environment_pdf`.
@@ -212,10 +217,10 @@ pub fn environment_pdf(g: &GpuScene, e: &Emitter, d: Vec3) -> f32 {
     }
 }
 
-/// lights.glsl's `env_sample`: (world direction, solid-angle density).
-pub fn env_sample(g: &GpuScene, e: &Emitter, a: f32, b: f32) -> (Vec3, f32) {
+/// lights.glsl's `env_sample`: (world direction, solid-angle density, radiance).
+pub fn env_sample(g: &GpuScene, e: &Emitter, a: f32, b: f32) -> (Vec3, f32, Vec3) {
     if e.table == u32::MAX {
-        return (uniform_sphere(a, b), 1.0 / (4.0 * PI));
+        return (uniform_sphere(a, b), 1.0 / (4.0 * PI), e.value);
     }
     let (w, h) = env_size(g, e);
     let rows = e.table + 1 + w * h;
@@ -230,7 +235,8 @@ pub fn env_sample(g: &GpuScene, e: &Emitter, a: f32, b: f32) -> (Vec3, f32) {
     } else {
         0.0
     };
-    (l.x * e.edge_u + l.y * e.normal + l.z * e.edge_v, pdf)
+    let radiance = env_bilinear(g, e, w, band, col, [tx, ty]);
+    (l.x * e.edge_u + l.y * e.normal + l.z * e.edge_v, pdf, radiance)
 }
 
 /// A shadow-ray sample of a light other than a quad or triangle (lights.glsl's `light_sample`): the
@@ -291,7 +297,7 @@ pub fn light_sample(g: &GpuScene, e: &Emitter, o: Vec3, a: f32, b: f32) -> Optio
             pdf: 0.0,
         }),
         LIGHT_ENVIRONMENT => {
-            let (w, p) = env_sample(g, e, a, b);
+            let (w, p, radiance) = env_sample(g, e, a, b);
             if !(p > 0.0) {
                 return None;
             }
@@ -299,7 +305,7 @@ pub fn light_sample(g: &GpuScene, e: &Emitter, o: Vec3, a: f32, b: f32) -> Optio
             Some(LightSample {
                 w,
                 dist: 2.0 * (e.radius + (o - e.origin).length()),
-                li: environment_radiance(g, e, w) / pdf,
+                li: radiance / pdf,
                 pdf,
             })
         }
@@ -330,9 +336,9 @@ pub fn emit_photon(g: &GpuScene, e: &Emitter, a: f32, b: f32, rng: &mut Rng) -> 
     let r = e.radius * rng.float().sqrt();
     let phi = 2.0 * PI * rng.float();
     let d = if e.kind == LIGHT_ENVIRONMENT {
-        let (towards, p) = env_sample(g, e, a, b);
+        let (towards, p, radiance) = env_sample(g, e, a, b);
         flux = if p > 0.0 {
-            environment_radiance(g, e, towards) * (PI * e.radius * e.radius / (p * e.cdf))
+            radiance * (PI * e.radius * e.radius / (p * e.cdf))
         } else {
             Vec3::ZERO
         };
@@ -452,7 +458,7 @@ material = "lamp"
         let inverse = Mat3::from_cols(e.edge_u, e.normal, e.edge_v).transpose();
         for _ in 0..n {
             let (a, b) = (rng.float(), rng.float());
-            let (d, pdf) = env_sample(&g, &e, a, b);
+            let (d, pdf, radiance) = env_sample(&g, &e, a, b);
             let (u, v) = envmap_uv(inverse * d);
             let mut x = u * w as f32 - 0.5;
             x -= w as f32 * (x / w as f32).floor();
@@ -462,7 +468,13 @@ material = "lamp"
             if (again / pdf - 1.0).abs() > 1e-3 {
                 mismatched += 1;
             }
-            sum += (environment_radiance(&g, &e, d) / pdf).as_dvec3();
+            // The radiance of the cell drawn is the map's in that direction.
+            let again_l = environment_radiance(&g, &e, d);
+            assert!(
+                (again_l - radiance).abs().max_element() <= 1e-3 * radiance.max_element().max(1e-3),
+                "{again_l} {radiance}"
+            );
+            sum += (radiance / pdf).as_dvec3();
         }
         let mut chi2 = 0f64;
         let mut dof = 0;

@@ -1340,7 +1340,7 @@ mod tests {
         s.materials[1].emission = Vec3::ZERO;
         let e = check_err(&s);
         assert_eq!(e.path, "");
-        assert!(e.message.starts_with("no emitting quad or triangle"), "{e}");
+        assert!(e.message.starts_with("no light: nothing to render"), "{e}");
         // An emitting quad alone is enough, as before meshes.
         s.meshes.clear();
         s.quads[0].material = 1;
@@ -1375,9 +1375,8 @@ mod tests {
             radius: 0.5,
             material: 1,
         });
-        let e = check_err(&s);
-        assert_eq!(e.path, "sphere[0].material");
-        assert!(e.message.contains("spheres cannot be emitters"), "{e}");
+        // A glowing sphere is a light like any other.
+        s.validate().unwrap();
         s.spheres[0].material = 2;
         assert!(check_err(&s).message.contains("material index 2 out of range"));
         let mut s = small_scene();

@@ -1518,7 +1518,7 @@ newmtl plain\nNs 10\n";
         assert!(notes("wood").is_empty() && notes("bare").is_empty(), "{:?}", s.warnings);
         s.validate().unwrap_err(); // no light: everything else is valid
         let e = format!("{:#}", s.validate().unwrap_err());
-        assert!(e.contains("no emitting quad or triangle"), "{e}");
+        assert!(e.contains("no light: nothing to render"), "{e}");
         // Imported again: the same textures and materials.
         let (textures, materials) = (s.textures.len(), s.materials.len());
         s.import_obj(&path, &ObjImport::default()).unwrap();

@@ -109,7 +109,7 @@ pub fn lights(scene: &Scene, triangles: &[Triangle], textures: &mut Vec<[u32; 4]
         .iter()
         .map(|e| e.light.power.iter().map(|&p| p as f64).sum::<f64>())
         .sum();
-    if entries.is_empty() || !(sum > 0.0) {
+    if entries.is_empty() || sum.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(Error::scene(&scene.name, 0, 0, "", "no light emits power"));
     }
     let mut run = 0f64;
@@ -140,8 +140,8 @@ pub fn lights(scene: &Scene, triangles: &[Triangle], textures: &mut Vec<[u32; 4]
     }
     let mut total_power = [0f64; 3];
     for e in &entries {
-        for c in 0..3 {
-            total_power[c] += e.light.power[c] as f64;
+        for (total, &p) in total_power.iter_mut().zip(&e.light.power) {
+            *total += p as f64;
         }
     }
     let max_flux = entries
