@@ -29,17 +29,23 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
     // A quad's planar coordinates, a triangle's barycentric weights of v1 and v2.
     let mut local = Vec2::ZERO;
     for (i, s) in g.spheres.iter().enumerate() {
+        // geometry.glsl: the discriminant without cancellation, the near root as c / q.
         let oc = o - v3(s.center);
         let b = oc.dot(d);
-        let c = oc.dot(oc) - s.radius * s.radius;
-        let disc = b * b - c;
+        let f = oc - b * d;
+        let r2 = s.radius * s.radius;
+        let disc = r2 - f.dot(f);
         if disc < 0.0 {
             continue;
         }
-        let sq = disc.sqrt();
-        let mut t = -b - sq;
+        let q = -(b + if b >= 0.0 { disc.sqrt() } else { -disc.sqrt() });
+        if q == 0.0 {
+            continue;
+        }
+        let t0 = (oc.dot(oc) - r2) / q;
+        let mut t = t0.min(q);
         if t <= tmin {
-            t = -b + sq;
+            t = t0.max(q);
         }
         if t > tmin && t < best {
             best = t;
