@@ -424,3 +424,47 @@ fn a_glowing_sphere_matches_a_tessellated_one() {
     }
     assert_clean(&ctx);
 }
+
+/// Scale invariance with every kind of light: the floor scene with a point, a spot, the sun and a sky,
+/// scaled by 1e-3 and 1e3 (a point's and a spot's intensity by s^2, Scene::scaled), renders the same image
+/// mean: nothing in the lights' sampling depends on the scene's units.
+#[test]
+fn every_light_is_scale_free() {
+    let ctx = ctx();
+    let scene = floor_scene(
+        16,
+        vec![
+            Emitter::Point {
+                position: Vec3::new(0.3, 1.0, -0.2),
+                intensity: Vec3::splat(2.0),
+            },
+            Emitter::Spot {
+                position: Vec3::new(-0.5, 1.5, 0.5),
+                direction: Vec3::new(0.2, -1.0, 0.1).normalize(),
+                intensity: Vec3::splat(5.0),
+                cutoff: 0.6,
+                beam: 0.4,
+            },
+            Emitter::Directional {
+                direction: Vec3::new(0.3, -1.0, 0.2).normalize(),
+                irradiance: Vec3::splat(1.0),
+            },
+            Emitter::Environment(Environment {
+                scale: Vec3::splat(0.2),
+                map: None,
+                to_world: Mat3::IDENTITY,
+            }),
+        ],
+        "[materials.white]\ndiffuse = [0.8, 0.8, 0.8]\n[materials.glow]\nemission = [3.0, 3.0, 3.0]\n\
+         [[sphere]]\ncenter = [0.4, 0.3, 0.3]\nradius = 0.3\nmaterial = \"white\"\n\
+         [[sphere]]\ncenter = [-0.6, 0.8, -0.4]\nradius = 0.1\nmaterial = \"glow\"\n",
+    );
+    let mean = |s: &Scene| render(&ctx, s, settings(DirectLight::Sample, 50_000), 8).mean()[0];
+    let base = mean(&scene);
+    for k in [1e-3f32, 1e3] {
+        let m = mean(&scene.scaled(k));
+        println!("scaled by {k}: mean {m:.5} against {base:.5}");
+        assert!((m / base - 1.0).abs() < 0.01, "scaled by {k}: {m} against {base}");
+    }
+    assert_clean(&ctx);
+}
