@@ -41,7 +41,9 @@ pub fn lights(scene: &Scene, triangles: &[Triangle]) -> Result<(Vec<Light>, [f64
         .map(|l| l.power.iter().map(|&p| p as f64).sum::<f64>())
         .sum();
     if lights.is_empty() || sum <= 0.0 {
-        return Err(Error::scene(&scene.name, 0, 0, "", "no light emits power"));
+        let what = "no light emits power: every emitter's emission x area x pi rounds to 0 in 32-bit floats \
+                    (raise the emission or the emitters' size)";
+        return Err(Error::scene(&scene.name, 0, 0, "", what));
     }
     let mut run = 0f64;
     for l in &mut lights {
