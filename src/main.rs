@@ -783,6 +783,14 @@ fn render(args: RenderArgs) -> Result<Ended> {
     }
     save(&mut renderer)?;
     check_validation(&ctx)?;
+    // Written all the same (it is what the scene gives), but a black image is rarely what was meant.
+    if image.mean() == [0.0; 3] {
+        eprintln!(
+            "warning: every pixel is 0 after {} passes: the camera sees nothing lit (is it looking away \
+             from the scene or from inside a shape, or do the lights face away from what it sees?)",
+            renderer.passes()
+        );
+    }
 
     let emitted = renderer.emitted();
     println!(

@@ -351,6 +351,27 @@ impl Renderer {
             ),
             ("the suspended photons", suspended_bytes),
         ];
+        // The textures are one buffer: when it cannot be bound, the images are the cause, not the
+        // resolution (an 8192 x 8192 image is 1 GiB of texels; lavapipe binds 128 MiB).
+        let texture_bytes = gpu.textures.len() as u64 * 16;
+        if texture_bytes > max_range {
+            let largest = scene.textures.iter().max_by_key(|t| t.pixel_count());
+            let lower = match largest {
+                Some(t) => format!(
+                    "the texture images' size (the largest, \"{}\", has {} pixels; this device binds {} in all)",
+                    t.name,
+                    t.pixel_count(),
+                    max_range / 16
+                ),
+                None => "the texture images' size".into(),
+            };
+            return Err(Error::limit(
+                "the textures (16 bytes a pixel, in one buffer)",
+                Some(texture_bytes),
+                max_range,
+                lower,
+            ));
+        }
         fits_device(&per_pixel, &others, max_range, ctx.info().memory_bytes, &advice)?;
         // The kernels read the textures as texels: each buffer within the device's texel buffer.
         let max_texels = ctx.limits().max_texel_buffer_elements as u64;
