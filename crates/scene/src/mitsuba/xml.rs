@@ -24,7 +24,7 @@ pub const MAX_INCLUDED_BYTES: u64 = 4 * MAX_SCENE_BYTES;
 
 /// Most bytes `$name` substitution may produce in all a scene's attribute values: ten `<default>`s each
 /// repeating the one before ten times made 10^10 bytes of a 1.6 KB file.
-pub const MAX_SUBSTITUTED_BYTES: u64 = 4 * MAX_SCENE_BYTES;
+pub const MAX_SUBSTITUTED_BYTES: u64 = MAX_SCENE_BYTES;
 
 /// Longest quotation of a value in a message.
 const QUOTED: usize = 60;
