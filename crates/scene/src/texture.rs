@@ -146,7 +146,7 @@ fn jpeg_is_complete(bytes: &[u8]) -> bool {
 /// names it with the scene line).
 pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), String> {
     use std::io::{BufReader, Cursor, Read as _, Seek as _};
-    let (file, _) = crate::files::open_bounded(path, crate::files::MAX_IMAGE_BYTES, "image").map_err(|e| match e {
+    let (file, _) = crate::files::open_bounded(path, crate::files::MAX_IMAGE_BYTES, "the image").map_err(|e| match e {
         crate::Error::Io { error, .. } => error.to_string(),
         e => e.to_string(),
     })?;
@@ -171,7 +171,7 @@ pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), Strin
         }
     }
     let image = match format {
-        None => return Err("not a PNG, JPEG or EXR image (its first bytes are none of theirs)".into()),
+        None => return Err("not a readable PNG, JPEG or EXR image: its first bytes are none of theirs".into()),
         Some(image::ImageFormat::Jpeg) => decode(Cursor::new(&jpeg[..]), image::ImageFormat::Jpeg)?,
         Some(f) => decode(reader, f)?,
     };
