@@ -129,6 +129,7 @@ impl Checkpoint {
         prefix.resize(16 + header_len, 0);
         file.read_exact(&mut prefix[16..]).context("reading the checkpoint")?;
         let header = parse_header(&prefix)?;
+        header.check_counters()?;
         if let Some((scene, settings, build)) = render {
             header.check(scene, settings, build)?;
             header.check_sections(scene)?;
@@ -161,6 +162,7 @@ impl Checkpoint {
             sha2::Sha256::digest(body)[..] == trailer[..],
             "the file does not match its checksum (damaged or edited)"
         );
+        header.check_counters()?;
         let mut rest = &body[16 + len..];
         let mut take = |n: u64| {
             let (a, b) = rest.split_at(n as usize);
@@ -210,7 +212,7 @@ fn check_prefix(bytes: &[u8], len: u64) -> Result<usize> {
     Ok(header as usize)
 }
 
-/// The header in `bytes` (the file's first 16 + its length), its counters checked.
+/// The header in `bytes` (the file's first 16 + its length); its counters are not checked yet.
 fn parse_header(bytes: &[u8]) -> Result<Header> {
     let header: Header = serde_json::from_slice(&bytes[16..]).context("parsing the header")?;
     ensure!(
@@ -218,7 +220,6 @@ fn parse_header(bytes: &[u8]) -> Result<Header> {
         "{} sections, expected 5",
         header.sections.len()
     );
-    header.check_counters()?;
     Ok(header)
 }
 
@@ -437,8 +438,8 @@ mod tests {
         assert!(e.contains("the counters disagree"), "{e}");
         let e = err(|h| h.batch = 0, "batch.ckpt");
         assert!(e.contains("batch 0 is outside"), "{e}");
-        let e = err(|h| h.grid_cell = f32::NAN, "cell.ckpt");
-        assert!(e.contains("grid cell NaN"), "{e}");
+        let e = err(|h| h.grid_cell = -1.0, "cell.ckpt");
+        assert!(e.contains("grid cell -1 is not a positive size"), "{e}");
     }
 
     /// `load` refuses a FIFO (without blocking on it) and a device file, and a file whose length is not
