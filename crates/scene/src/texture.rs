@@ -146,10 +146,11 @@ fn jpeg_is_complete(bytes: &[u8]) -> bool {
 /// names it with the scene line).
 pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), String> {
     use std::io::{BufReader, Cursor, Read as _, Seek as _};
-    let (file, _) = crate::files::open_bounded(path, crate::files::MAX_IMAGE_BYTES, "the image").map_err(|e| match e {
-        crate::Error::Io { error, .. } => error.to_string(),
-        e => e.to_string(),
-    })?;
+    let (file, _) =
+        crate::files::open_bounded(path, crate::files::MAX_IMAGE_BYTES, "the image").map_err(|e| match e {
+            crate::Error::Io { error, .. } => error.to_string(),
+            e => e.to_string(),
+        })?;
     let mut reader = BufReader::new(file);
     let format = image::ImageReader::new(&mut reader)
         .with_guessed_format()
