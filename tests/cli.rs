@@ -899,7 +899,7 @@ fn textured_scene(dir: &std::path::Path, texture: &str) -> PathBuf {
     path
 }
 
-/// A FIFO or a device given as a texture or as `--resume` ends the render within 10 s, under a 2 GiB
+/// A FIFO or a device given as a texture, `--resume` or `--reference` ends the render within 10 s, under a 2 GiB
 /// address-space limit, with an error naming it (the FIFO blocked in open() for ever, SIGINT and SIGTERM
 /// could not end it; `--resume /dev/zero` read until memory ran out); `--photons-per-pass 2147483648`
 /// (a pass of days that no signal ended) is refused, saying the limit.
@@ -912,9 +912,12 @@ fn fifos_devices_and_endless_passes_are_refused_at_once() {
     let scene = scene.to_str().unwrap();
     let e = fails_within(&["render", scene, "--out", "x.exr"], &dir, 10);
     assert!(e.contains("fifo") && e.contains("not a regular file"), "{e}");
-    for resume in ["fifo", "/dev/zero"] {
-        let e = fails_within(&["render", CORNELL, "--resume", resume, "--out", "x.exr"], &dir, 10);
-        assert!(e.contains(resume) && e.contains("not a regular file"), "{e}");
+    for (flag, file) in [("--resume", "fifo"), ("--resume", "/dev/zero"), ("--reference", "fifo")] {
+        let e = fails_within(&["render", CORNELL, flag, file, "--out", "x.exr"], &dir, 10);
+        assert!(
+            e.contains(file) && e.contains("not a regular file"),
+            "{flag} {file}: {e}"
+        );
     }
     let e = fails_within(&["render", CORNELL, "--photons-per-pass", "2147483648"], &dir, 10);
     assert!(e.contains("--photons-per-pass") && e.contains("16777216"), "{e}");
