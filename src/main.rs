@@ -135,9 +135,8 @@ pub(crate) struct SettingsArgs {
     /// filter; the lower error at equal time from 10 s on); `ppm`: hit points fixed at pixel centres.
     #[arg(long, value_enum, default_value_t = ModeArg::Sppm)]
     mode: ModeArg,
-    /// Photons emitted per pass, at most 16777216 (2^24: a pass is one submission a signal cannot cut
-    /// short) [default: 1000000; `view`: 100000, so a frame comes every few tenths of a second on a CPU
-    /// device].
+    /// Photons emitted per pass, at most 16777216 (2^24; more photons: more passes) [default: 1000000;
+    /// `view`: 100000, so a frame comes every few tenths of a second on a CPU device].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=ppm_vk_engine::settings::MAX_PHOTONS_PER_PASS as i64))]
     photons_per_pass: Option<u32>,
     /// Fraction of new photons kept per pass (eq. 3, 6), in (0, 1).

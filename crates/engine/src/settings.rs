@@ -3,9 +3,9 @@
 use crate::error::{Error, Result};
 use ppm_vk_kernels::lookup::SCAN_BLOCK;
 
-/// Most photons one pass (or the probe pass) may emit: 2^24. A pass's photons are traced in one
-/// submission, which a signal or a cancel cannot cut short: this keeps it to seconds on a CPU device
-/// (2^31 photons in one pass were days that Ctrl-C could not stop). More photons: more passes.
+/// Most photons one pass (or the probe pass) may emit: 2^24, 16 batches of `MAX_BATCH_PHOTONS` (a cancel
+/// ends a pass between batches; 2^31 photons in one pass were days that Ctrl-C could not stop, and the
+/// probe pass is never cut short). More photons: more passes.
 pub const MAX_PHOTONS_PER_PASS: u32 = 1 << 24;
 
 /// Most emission samples per pixel and eye pass (`Settings::emission_samples`).
@@ -192,8 +192,8 @@ impl Settings {
             false => Err(invalid(
                 field,
                 format!(
-                    "must be in 1..={MAX_PHOTONS_PER_PASS}, got {n} (a pass is one submission that a signal \
-                     cannot cut short; render more passes instead)"
+                    "must be in 1..={MAX_PHOTONS_PER_PASS}, got {n} (more photons: more passes, which a \
+                     signal can end between them)"
                 ),
             )),
         };
