@@ -11,7 +11,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use ppm_vk_engine::metrics::{compare, Reference, Region};
 use ppm_vk_engine::report::{PassRecord, RunHeader, RunReport, SCHEMA};
 use ppm_vk_engine::{
-    open_device, Checkpoint, Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene, Settings,
+    open_device, CancelToken, Checkpoint, Context, ContextOptions, Mode, PassStats, ProbeMode, Renderer, Scene,
+    Settings,
 };
 
 mod bench;
@@ -134,9 +135,9 @@ pub(crate) struct SettingsArgs {
     /// filter; the lower error at equal time from 10 s on); `ppm`: hit points fixed at pixel centres.
     #[arg(long, value_enum, default_value_t = ModeArg::Sppm)]
     mode: ModeArg,
-    /// Photons emitted per pass [default: 1000000; `view`: 100000, so a frame comes every few tenths of a
-    /// second on a CPU device].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Photons emitted per pass, at most 16777216 (2^24; more photons: more passes) [default: 1000000;
+    /// `view`: 100000, so a frame comes every few tenths of a second on a CPU device].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=ppm_vk_engine::settings::MAX_PHOTONS_PER_PASS as i64))]
     photons_per_pass: Option<u32>,
     /// Fraction of new photons kept per pass (eq. 3, 6), in (0, 1).
     #[arg(long, default_value_t = 0.7, value_parser = parse_fraction)]
@@ -182,7 +183,7 @@ pub(crate) struct SettingsArgs {
     #[arg(long, default_value_t = 0.2, value_parser = parse_fraction)]
     beta: f32,
     /// Photons the probe pass emits (default: --photons-per-pass, as in the paper).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=ppm_vk_engine::settings::MAX_PHOTONS_PER_PASS as i64))]
     probe_photons: Option<u32>,
     /// Cone filter (eq. 10-14): its constant k >= 1, or `off`.
     #[arg(long, default_value = "off", value_parser = parse_cone)]
@@ -525,9 +526,10 @@ enum Ended {
     Signal(i32),
 }
 
-/// The first SIGINT or SIGTERM is stored (its number) for the render loop to stop after the pass in flight;
-/// a second one exits at once, with 128 + its number.
-pub(crate) fn watch_signals() -> Result<Arc<AtomicUsize>> {
+/// The first SIGINT or SIGTERM is stored (its number) for the render loop to stop, and cancels `cancel`
+/// (if given) so the pass in flight ends at its next submission; a second one exits at once, with 128 +
+/// its number.
+pub(crate) fn watch_signals(cancel: Option<CancelToken>) -> Result<Arc<AtomicUsize>> {
     use signal_hook::consts::{SIGINT, SIGTERM};
     let first = Arc::new(AtomicUsize::new(0));
     let seen = Arc::new(AtomicBool::new(false));
@@ -537,11 +539,15 @@ pub(crate) fn watch_signals() -> Result<Arc<AtomicUsize>> {
             .context("installing the signal handlers")?;
         signal_hook::flag::register(sig, seen.clone()).context("installing the signal handlers")?;
         // compare_exchange keeps the first signal's number (a plain store would keep the last).
-        let first = first.clone();
-        // SAFETY: the action only does an atomic compare-exchange, which is async-signal-safe.
+        let (first, cancel) = (first.clone(), cancel.clone());
+        // SAFETY: the action only does an atomic compare-exchange and an atomic store (the cancel), which
+        // are async-signal-safe.
         unsafe {
             signal_hook::low_level::register(sig, move || {
                 let _ = first.compare_exchange(0, sig as usize, Ordering::SeqCst, Ordering::SeqCst);
+                if let Some(c) = &cancel {
+                    c.cancel();
+                }
             })
         }
         .context("installing the signal handlers")?;
@@ -584,7 +590,9 @@ fn save_all(image: &ppm_vk_engine::RgbImage, paths: &[PathBuf]) -> Result<()> {
 }
 
 fn render(args: RenderArgs) -> Result<Ended> {
-    let signal = watch_signals()?;
+    // The renderer's token: a signal ends the pass in flight between its submissions, not after it.
+    let cancel = CancelToken::new();
+    let signal = watch_signals(Some(cancel.clone()))?;
     let interrupted = || match signal.load(Ordering::SeqCst) {
         0 => None,
         s => Some(s as i32),
@@ -611,12 +619,7 @@ fn render(args: RenderArgs) -> Result<Ended> {
     let settings = args.settings.settings(1_000_000)?;
     // A checkpoint that does not fit is refused here, before the device opens.
     let resumed = match &args.resume {
-        Some(path) => {
-            let c = Checkpoint::load(path)?;
-            c.check(&scene, &settings, BUILD)
-                .with_context(|| format!("cannot resume from {}", path.display()))?;
-            Some(c)
-        }
+        Some(path) => Some(Checkpoint::load_for(path, &scene, &settings, BUILD)?),
         None => None,
     };
     let set_up_interrupted = |sig: i32| {
@@ -635,6 +638,7 @@ fn render(args: RenderArgs) -> Result<Ended> {
         Some(c) => Renderer::resume(&ctx, &scene, settings, c, BUILD)?,
         None => Renderer::new(&ctx, &scene, settings)?,
     };
+    renderer.set_cancel(cancel);
     let setup_s = started.elapsed().as_secs_f64();
     // Every kernel is compiled by now: keep them for the next run even if this one is killed.
     save_pipeline_cache(&ctx);
@@ -723,6 +727,12 @@ fn render(args: RenderArgs) -> Result<Ended> {
         }
         let s = match renderer.pass() {
             Ok(s) => s,
+            // A signal cancelled the pass in flight: the state is the passes before it.
+            Err(ppm_vk_engine::Error::Cancelled) if interrupted().is_some() => {
+                bar.println("interrupted during a pass: writing the image of the passes done before it");
+                ended = Ended::Signal(interrupted().unwrap_or_default());
+                break;
+            }
             Err(e) => return Err(save_after_failure(&mut renderer, &out, e.into())),
         };
         let elapsed = loop_start.elapsed().as_secs_f64();
@@ -772,6 +782,14 @@ fn render(args: RenderArgs) -> Result<Ended> {
     }
     save(&mut renderer)?;
     check_validation(&ctx)?;
+    // Written all the same (it is what the scene gives), but a black image is rarely what was meant.
+    if image.mean() == [0.0; 3] {
+        eprintln!(
+            "warning: every pixel is 0 after {} passes: the camera sees nothing lit (is it looking away \
+             from the scene or from inside a shape, or do the lights face away from what it sees?)",
+            renderer.passes()
+        );
+    }
 
     let emitted = renderer.emitted();
     println!(

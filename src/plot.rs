@@ -35,7 +35,9 @@ pub struct PeerPoint {
 /// Reads a peer's points: one `seconds,error[,label]` line each (the label defaults to "peer"); blank
 /// lines and lines starting with `#` are skipped. Errors name the file and line.
 pub fn read_peer(path: &Path) -> Result<Vec<PeerPoint>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading the peer file {}", path.display()))?;
+    // Bounded, and a regular file only (a FIFO would block for ever).
+    let bytes = ppm_vk_engine::scene::read_bounded_bytes(path, ppm_vk_engine::scene::MAX_SCENE_BYTES, "peer file")?;
+    let text = String::from_utf8(bytes).with_context(|| format!("reading the peer file {}", path.display()))?;
     let mut points = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();

@@ -132,7 +132,7 @@ pub fn run(args: ViewArgs) -> Result<Ended> {
                 .into(),
         ));
     }
-    let signal = watch_signals()?;
+    let signal = watch_signals(None)?;
     let event_loop = match EventLoop::<Note>::with_user_event().build() {
         Ok(l) => l,
         Err(e) => {

@@ -829,3 +829,275 @@ fn every_option_has_help_and_sizes_are_checked() {
     assert!(e.contains("peer.csv:3") && e.contains("positive"), "{e}");
     std::fs::remove_dir_all(peer.parent().unwrap()).ok();
 }
+
+/// Runs the binary with `args` in `dir` under a 2 GiB address-space limit, expecting it to fail within
+/// `secs` seconds (it is killed and the test fails otherwise); returns its stderr.
+fn fails_within(args: &[&str], dir: &std::path::Path, secs: u64) -> String {
+    use std::io::Read as _;
+    use std::os::unix::process::CommandExt as _;
+    let mut cmd = bin();
+    cmd.args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped());
+    // SAFETY: setrlimit is async-signal-safe; the closure allocates nothing.
+    unsafe {
+        cmd.pre_exec(|| {
+            let limit = libc::rlimit {
+                rlim_cur: 2 << 30,
+                rlim_max: 2 << 30,
+            };
+            match libc::setrlimit(libc::RLIMIT_AS, &limit) {
+                0 => Ok(()),
+                _ => Err(std::io::Error::last_os_error()),
+            }
+        });
+    }
+    let mut child = cmd.spawn().unwrap();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(secs);
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if std::time::Instant::now() > deadline {
+            child.kill().ok();
+            child.wait().ok();
+            panic!("{args:?} did not end within {secs} s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    let mut stderr = String::new();
+    child.stderr.take().unwrap().read_to_string(&mut stderr).unwrap();
+    assert!(!status.success(), "{args:?} should fail");
+    assert!(!stderr.contains("panicked"), "{args:?} panicked:\n{stderr}");
+    stderr
+}
+
+/// A FIFO at `path`, which no writer opens.
+fn mkfifo(path: &std::path::Path) {
+    let c = std::ffi::CString::new(path.as_os_str().as_encoded_bytes()).unwrap();
+    let _ = std::fs::remove_file(path);
+    // SAFETY: a NUL-terminated path and a mode.
+    assert_eq!(
+        unsafe { libc::mkfifo(c.as_ptr(), 0o600) },
+        0,
+        "mkfifo {}",
+        path.display()
+    );
+}
+
+/// A scene whose floor is textured with `texture` (a path relative to the scene), in `dir`.
+fn textured_scene(dir: &std::path::Path, texture: &str) -> PathBuf {
+    let text = std::fs::read_to_string(CORNELL).unwrap().replacen(
+        "[materials.white]\ndiffuse = [0.725, 0.71, 0.68]",
+        &format!("[materials.white]\ndiffuse = {{ texture = \"{texture}\" }}"),
+        1,
+    );
+    assert!(text.contains(texture), "the white material was not found");
+    let path = dir.join("textured.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// A FIFO or a device given as a texture, `--resume` or `--reference` ends the render within 10 s, under a 2 GiB
+/// address-space limit, with an error naming it (the FIFO blocked in open() for ever, SIGINT and SIGTERM
+/// could not end it; `--resume /dev/zero` read until memory ran out); `--photons-per-pass 2147483648`
+/// (a pass of days that no signal ended) is refused, saying the limit.
+#[test]
+fn fifos_devices_and_endless_passes_are_refused_at_once() {
+    let dir = scratch("fifos");
+    let fifo = dir.join("fifo");
+    mkfifo(&fifo);
+    let scene = textured_scene(&dir, "fifo");
+    let scene = scene.to_str().unwrap();
+    let e = fails_within(&["render", scene, "--out", "x.exr"], &dir, 10);
+    assert!(e.contains("fifo") && e.contains("not a regular file"), "{e}");
+    for (flag, file) in [("--resume", "fifo"), ("--resume", "/dev/zero"), ("--reference", "fifo")] {
+        let e = fails_within(&["render", CORNELL, flag, file, "--out", "x.exr"], &dir, 10);
+        assert!(
+            e.contains(file) && e.contains("not a regular file"),
+            "{flag} {file}: {e}"
+        );
+    }
+    let e = fails_within(&["render", CORNELL, "--photons-per-pass", "2147483648"], &dir, 10);
+    assert!(e.contains("--photons-per-pass") && e.contains("16777216"), "{e}");
+    assert!(!dir.join("x.exr").exists());
+}
+
+/// A checkpoint whose header was edited (`"passes": 18446744073709551615` resumed "after pass
+/// 18446744073709551615" and rendered another image) is refused: the checksum covers the header.
+#[test]
+fn an_edited_checkpoint_header_is_refused() {
+    let dir = scratch("edited-ckpt");
+    let base = [
+        "--resolution",
+        "8x8",
+        "--photons-per-pass",
+        "1000",
+        "--out",
+        "img.exr",
+        "--force",
+    ];
+    let run = bin()
+        .args(["render", CORNELL, "--passes", "1", "--checkpoint", "state.ckpt"])
+        .args(base)
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let mut bytes = std::fs::read(dir.join("state.ckpt")).unwrap();
+    let at = bytes
+        .windows(10)
+        .position(|w| w == b"\"passes\":1")
+        .expect("the header's passes");
+    bytes.splice(at + 9..at + 10, *b"18446744073709551615");
+    // The header's length as the editor would fix it (19 bytes more), so the header still parses.
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) + 19;
+    bytes[12..16].copy_from_slice(&len.to_le_bytes());
+    std::fs::write(dir.join("edited.ckpt"), &bytes).unwrap();
+    let args = [
+        &["render", CORNELL, "--passes", "2", "--resume", "edited.ckpt"][..],
+        &base,
+    ]
+    .concat();
+    let e = fails_within(&args, &dir, 30);
+    assert!(
+        e.contains("edited.ckpt") && e.contains("passes 18446744073709551615 is more than a render may have"),
+        "{e}"
+    );
+    // The same edit within the counters' range (1 pass to 2, and its photons) is caught by the checksum.
+    let mut bytes = std::fs::read(dir.join("state.ckpt")).unwrap();
+    let at = bytes.windows(10).position(|w| w == b"\"passes\":1").unwrap();
+    bytes[at + 9] = b'2';
+    let at = bytes
+        .windows(15)
+        .position(|w| w == b"\"emitted\":1000,")
+        .expect("the header's photons");
+    bytes[at + 10] = b'2';
+    std::fs::write(dir.join("edited.ckpt"), &bytes).unwrap();
+    let e = fails_within(&args, &dir, 30);
+    assert!(e.contains("edited.ckpt") && e.contains("checksum"), "{e}");
+}
+
+/// SIGTERM ends a long pass within seconds: a pass of 2^24 photons at 128x128 (about 50 s on a
+/// two-core lavapipe, in one submission before) is cancelled between its batches of 2^20 photons; the
+/// render exits 143 without writing a 0-pass image.
+#[test]
+fn sigterm_ends_a_long_pass_within_seconds() {
+    use std::io::BufRead as _;
+    let dir = scratch("long-pass");
+    let mut child = bin()
+        .args([
+            "render",
+            CORNELL,
+            "--resolution",
+            "128x128",
+            "--photons-per-pass",
+            "16777216",
+        ])
+        .args(["--passes", "1000", "--out", "img.exr"])
+        .current_dir(&dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    // The set-up ends with the scene line; the first pass starts right after it.
+    while !line.starts_with("scene ") {
+        line.clear();
+        assert!(
+            stderr.read_line(&mut line).unwrap() > 0,
+            "the render ended before its scene line"
+        );
+    }
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let sent = std::time::Instant::now();
+    signal(&child, libc::SIGTERM);
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if sent.elapsed() > std::time::Duration::from_secs(20) {
+            child.kill().ok();
+            panic!("SIGTERM did not end the pass within 20 s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    let elapsed = sent.elapsed();
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
+    assert_eq!(status.code(), Some(143), "{rest}");
+    assert!(
+        rest.contains("nothing written") && !dir.join("img.exr").exists(),
+        "{rest}"
+    );
+    println!("SIGTERM ended the pass after {elapsed:?}");
+}
+
+/// A camera that sees nothing lit renders an image of zeros: it is written (it is what the scene gives),
+/// with a warning saying so; cornell-spheres gets none.
+#[test]
+fn a_black_image_is_warned_about() {
+    let dir = scratch("black");
+    let away = std::fs::read_to_string(CORNELL)
+        .unwrap()
+        .replace("eye = [0.0, 1.0, 2.9]", "eye = [0.0, 1.0, 10.0]")
+        .replace("look_at = [0.0, 0.8, 0.0]", "look_at = [0.0, 1.0, 20.0]");
+    std::fs::write(dir.join("away.toml"), away).unwrap();
+    let warned = |scene: &str| {
+        let run = bin()
+            .args([
+                "render",
+                scene,
+                "--resolution",
+                "8x8",
+                "--passes",
+                "1",
+                "--photons-per-pass",
+                "1000",
+            ])
+            .args(["--out", "img.exr", "--force"])
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr).to_string();
+        assert!(run.status.success(), "{stderr}");
+        stderr.contains("warning: every pixel is 0 after 1 passes: the camera sees nothing lit")
+    };
+    assert!(warned("away.toml"));
+    assert!(!warned(CORNELL));
+}
+
+/// A texture larger than the device's storage buffer is named as the cause, not "the resolution or
+/// photons per pass": a 3000 x 3000 image (144 MB of texels; lavapipe binds 128 MiB). A device that
+/// binds it renders.
+#[test]
+fn a_texture_too_large_for_the_device_is_named() {
+    let dir = scratch("big-texture");
+    image::RgbImage::from_pixel(3000, 3000, image::Rgb([128, 128, 128]))
+        .save(dir.join("big.png"))
+        .unwrap();
+    let scene = textured_scene(&dir, "big.png");
+    let run = bin()
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "--resolution",
+            "8x8",
+            "--passes",
+            "1",
+        ])
+        .args(["--photons-per-pass", "1000", "--out", "img.exr"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!stderr.contains("photons per pass"), "{stderr}");
+    if !run.status.success() {
+        assert!(
+            stderr.contains("the textures") && stderr.contains("big.png\", has 9000000 pixels"),
+            "{stderr}"
+        );
+    }
+}

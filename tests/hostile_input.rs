@@ -376,3 +376,319 @@ fn scene_limits_hold_at_their_bounds() {
     );
     assert!(e.contains("/dev/zero") && e.contains("not a regular file"), "{e}");
 }
+
+/// Runs `load` on a thread of its own and returns its outcome, failing if it takes over `limit` (a load
+/// blocked in `open()` on a FIFO would otherwise hang the test) or allocates over `MAX_ALLOC` at once.
+fn bounded<T: Send + 'static>(what: &str, limit: Duration, load: impl FnOnce() -> T + Send + 'static) -> T {
+    bounded_to(what, limit, MAX_ALLOC, load)
+}
+
+/// [`bounded`] with an allocation bound of `max_alloc` bytes.
+fn bounded_to<T: Send + 'static>(
+    what: &str,
+    limit: Duration,
+    max_alloc: usize,
+    load: impl FnOnce() -> T + Send + 'static,
+) -> T {
+    let (send, recv) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        PEAK.with(|p| p.set(LIVE.with(Cell::get)));
+        let base = LIVE.with(Cell::get);
+        let out = load();
+        let peak = PEAK.with(Cell::get).saturating_sub(base);
+        let _ = send.send((out, peak));
+    });
+    let (out, peak) = recv
+        .recv_timeout(limit)
+        .unwrap_or_else(|_| panic!("{what}: no answer within {limit:?} (blocked?)"));
+    assert!(peak <= max_alloc, "{what}: allocated {peak} bytes at once");
+    out
+}
+
+/// A scene in `dir` whose floor's material is `material`, with `extra` appended (TOML).
+fn toml_scene(dir: &Path, name: &str, material: &str, extra: &str) -> PathBuf {
+    let text = format!(
+        "[camera]\neye = [0.0, 1.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\nvfov = 40.0\n\
+         resolution = [8, 8]\n\n[materials.floor]\n{material}\n\n[materials.light]\nemission = [1.0, 1.0, 1.0]\n\n\
+         [[quad]]\norigin = [-1.0, 0.0, -1.0]\nedge_u = [0.0, 0.0, 2.0]\nedge_v = [2.0, 0.0, 0.0]\n\
+         material = \"floor\"\n\n[[quad]]\norigin = [-0.1, 1.0, -0.1]\nedge_u = [0.2, 0.0, 0.0]\n\
+         edge_v = [0.0, 0.0, 0.2]\nmaterial = \"light\"\n{extra}"
+    );
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// A Mitsuba scene in `dir` with a camera, a light and `body`.
+fn xml_scene(dir: &Path, name: &str, body: &str) -> PathBuf {
+    let text = format!(
+        "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" value=\"40\"/>\
+         <transform name=\"to_world\"><lookat origin=\"0, 1, 3\" target=\"0, 0, 0\" up=\"0, 1, 0\"/></transform>\
+         <film type=\"hdrfilm\"><integer name=\"width\" value=\"8\"/><integer name=\"height\" value=\"8\"/></film>\
+         </sensor>\n<shape type=\"rectangle\"><transform name=\"to_world\"><rotate x=\"1\" angle=\"-90\"/>\
+         </transform><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape>\n{body}\n</scene>\n"
+    );
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// A FIFO at `path` (no writer ever opens it: reading it would block forever).
+fn mkfifo(path: &Path) {
+    let c = std::ffi::CString::new(path.as_os_str().as_encoded_bytes()).unwrap();
+    let _ = std::fs::remove_file(path);
+    // SAFETY: a NUL-terminated path and a mode.
+    assert_eq!(
+        unsafe { libc::mkfifo(c.as_ptr(), 0o600) },
+        0,
+        "mkfifo {}",
+        path.display()
+    );
+}
+
+/// The load's error (it must fail), under the time and allocation bounds.
+fn load_fails(path: PathBuf) -> String {
+    let what = path.display().to_string();
+    let out = bounded(&what, Duration::from_secs(5), move || {
+        Scene::load(&path).map(|_| ()).map_err(|e| e.to_string())
+    });
+    let e = out.expect_err(&what);
+    assert!(!e.contains("panicked"), "{e}");
+    e
+}
+
+/// Every file a scene names is opened only if it is a regular file, without blocking, and read within a
+/// size bound: a FIFO as a texture (TOML `texture`, XML bitmap `filename`, MTL `map_Kd`), a PLY
+/// `filename` or an `mtllib`, and /dev/zero as a PLY or an MTL, each end within 5 s (the FIFOs blocked
+/// in open() for ever, /dev/zero was read until memory ran out) with an error naming the path.
+#[test]
+fn fifos_and_devices_a_scene_names_are_refused_at_once() {
+    let dir = scratch("fifos");
+    let fifo = dir.join("fifo");
+    mkfifo(&fifo);
+    let tri = "usemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n";
+    std::fs::write(dir.join("fifo-lib.obj"), format!("mtllib fifo\n{tri}")).unwrap();
+    std::fs::write(dir.join("zero-lib.obj"), format!("mtllib /dev/zero\n{tri}")).unwrap();
+    std::fs::write(dir.join("map.obj"), format!("mtllib map.mtl\n{tri}")).unwrap();
+    std::fs::write(dir.join("map.mtl"), "newmtl m\nKd 0.5 0.5 0.5\nmap_Kd fifo\n").unwrap();
+    let refused = |path: PathBuf, named: &str| {
+        let e = load_fails(path);
+        assert!(e.contains(named) && e.contains("not a regular file"), "{e}");
+    };
+    refused(
+        toml_scene(&dir, "t.toml", "diffuse = { texture = \"fifo\" }", ""),
+        "fifo",
+    );
+    let bitmap = "<shape type=\"rectangle\"><bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\">\
+                  <string name=\"filename\" value=\"fifo\"/></texture></bsdf></shape>";
+    refused(xml_scene(&dir, "bitmap.xml", bitmap), "fifo");
+    let ply = |file: &str| format!("<shape type=\"ply\"><string name=\"filename\" value=\"{file}\"/></shape>");
+    refused(xml_scene(&dir, "ply-fifo.xml", &ply("fifo")), "fifo");
+    refused(xml_scene(&dir, "ply-zero.xml", &ply("/dev/zero")), "/dev/zero");
+    let mesh = |file: &str| format!("[[mesh]]\nfile = \"{file}\"\n");
+    let plain = "diffuse = [0.5, 0.5, 0.5]";
+    refused(toml_scene(&dir, "lib-fifo.toml", plain, &mesh("fifo-lib.obj")), "fifo");
+    refused(
+        toml_scene(&dir, "lib-zero.toml", plain, &mesh("zero-lib.obj")),
+        "/dev/zero",
+    );
+    refused(toml_scene(&dir, "obj-fifo.toml", plain, &mesh("fifo")), "fifo");
+    // An MTL's map_Kd that cannot be read is a warning (the constant Kd is used), as for a missing file.
+    let path = toml_scene(&dir, "map.toml", plain, &mesh("map.obj"));
+    let scene = bounded("map_Kd fifo", Duration::from_secs(5), move || {
+        Scene::load(&path).map_err(|e| e.to_string())
+    });
+    let warnings = scene.unwrap().warnings.join("\n");
+    assert!(
+        warnings.contains("map_Kd fifo ignored") && warnings.contains("not a regular file"),
+        "{warnings}"
+    );
+}
+
+/// Parameter expansion and includes have a total budget, not only a depth: ten `<default>`s each
+/// repeating the one before ten times (10^10 bytes from 1.6 KB) and ten includes a file eight files deep
+/// (10^8 files) end within 2 s with one short line; a six-level expansion used in a value is quoted short.
+#[test]
+fn expansion_and_include_bombs_end_fast_with_a_short_error() {
+    let dir = scratch("bombs");
+    let defaults = |levels: usize| {
+        let mut s = "<default name=\"p0\" value=\"xxxxxxxxxx\"/>\n".to_string();
+        for i in 1..=levels {
+            s += &format!(
+                "<default name=\"p{i}\" value=\"{}\"/>\n",
+                format!("$p{}", i - 1).repeat(10)
+            );
+        }
+        s
+    };
+    let e = load_fails(xml_scene(&dir, "bomb10.xml", &defaults(10)));
+    assert!(e.contains("MiB of attribute values in all") && e.len() < 500, "{e}");
+    // Used as a number, five levels (1 MB) are quoted cut short; six (10 MB, whose message was 10 MB
+    // long) are over the budget.
+    for (levels, says) in [(5, "is not a number"), (6, "MiB of attribute values in all")] {
+        let body = format!(
+            "{}<shape type=\"sphere\"><float name=\"radius\" value=\"$p{levels}\"/></shape>",
+            defaults(levels)
+        );
+        let e = load_fails(xml_scene(&dir, &format!("bomb{levels}.xml"), &body));
+        assert!(e.contains(says) && e.len() < 600, "{} bytes: {e:.600}", e.len());
+    }
+
+    for i in 0..8 {
+        let includes = format!("<include filename=\"inc{}.xml\"/>\n", i + 1).repeat(10);
+        std::fs::write(
+            dir.join(format!("inc{i}.xml")),
+            format!("<scene version=\"3.0.0\">{includes}</scene>"),
+        )
+        .unwrap();
+    }
+    std::fs::write(
+        dir.join("inc8.xml"),
+        "<scene version=\"3.0.0\"><bsdf type=\"diffuse\"/></scene>",
+    )
+    .unwrap();
+    let e = load_fails(dir.join("inc0.xml"));
+    assert!(e.contains("more than 1000 files") && e.len() < 500, "{e}");
+}
+
+/// `-D res=$res`: the value holds the parameter itself, which is not substituted again; the error says so
+/// rather than calling $res undefined and asking for the -D that was given.
+#[test]
+fn a_parameter_left_in_a_value_is_explained() {
+    let dir = scratch("define");
+    let path = xml_scene(&dir, "res.xml", "<default name=\"res\" value=\"8\"/>");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("name=\"width\" value=\"8\"", "name=\"width\" value=\"$res\"");
+    std::fs::write(&path, text).unwrap();
+    let defines = [("res".to_string(), "$res".to_string())];
+    let e = Scene::load_with(&path, &defines).unwrap_err().to_string();
+    assert!(
+        e.contains("$res is left after substitution")
+            && e.contains("not substituted again")
+            && !e.contains("undefined"),
+        "{e}"
+    );
+}
+
+/// Values that would render black without a word: a sphere beyond what f32 intersection holds (radius
+/// 1e30, its top the floor), a light whose power underflows (emission 1e-45), each an error naming the
+/// file, line and field (TOML) or the element (XML).
+#[test]
+fn geometry_beyond_f32_and_underflowing_lights_are_refused() {
+    let dir = scratch("f32");
+    let plain = "diffuse = [0.5, 0.5, 0.5]";
+    let sphere = "[[sphere]]\ncenter = [0.0, -1e30, 0.0]\nradius = 1e30\nmaterial = \"floor\"\n";
+    let e = load_fails(toml_scene(&dir, "s.toml", plain, sphere));
+    assert!(
+        e.contains("s.toml:27:10: sphere[0].radius: a sphere of radius 1e30") && e.contains("2^60"),
+        "{e}"
+    );
+    let body = "<shape type=\"sphere\"><float name=\"radius\" value=\"1e30\"/>\
+                <point name=\"center\" x=\"0\" y=\"-1e30\" z=\"0\"/></shape>";
+    let e = load_fails(xml_scene(&dir, "s.xml", body));
+    assert!(
+        e.contains("s.xml:4:1: <shape type=\"sphere\">") && e.contains("2^60"),
+        "{e}"
+    );
+    let path = toml_scene(&dir, "l.toml", plain, "");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("emission = [1.0, 1.0, 1.0]", "emission = [1e-45, 0, 0]");
+    std::fs::write(&path, text).unwrap();
+    let e = load_fails(path);
+    assert!(
+        e.contains("l.toml:12:12: materials.light.emission") && e.contains("would round to 0"),
+        "{e}"
+    );
+}
+
+/// PLY errors are sentences with the file and, for text, the line: not ply-rs's debug dump, and no
+/// "Line 17" inside binary data.
+#[test]
+fn ply_errors_are_sentences() {
+    let dir = scratch("ply");
+    let header = |format: &str| {
+        format!(
+            "ply\nformat {format} 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+             element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        )
+    };
+    std::fs::write(dir.join("a.ply"), header("ascii") + "0 0 0\n1 0 0\nzz 1 0\n3 0 1 2\n").unwrap();
+    let mut binary = header("binary_little_endian").into_bytes();
+    binary.extend_from_slice(&[0; 8]);
+    std::fs::write(dir.join("b.ply"), binary).unwrap();
+    let ply = |file: &str| format!("<shape type=\"ply\"><string name=\"filename\" value=\"{file}\"/></shape>");
+    let e = load_fails(xml_scene(&dir, "a.xml", &ply("a.ply")));
+    assert!(e.contains("a.ply:12: malformed PLY") && e.contains("\"zz 1 0\""), "{e}");
+    let text = e;
+    let e = load_fails(xml_scene(&dir, "b.xml", &ply("b.ply")));
+    assert!(
+        e.contains("b.ply: malformed PLY: in its binary data") && !e.contains("Line "),
+        "{e}"
+    );
+    for e in [&text, &e] {
+        assert!(!e.contains('{') && !e.contains('\n') && !e.contains("Custom"), "{e}");
+    }
+}
+
+/// A floor textured with the image file `name` in `dir`.
+fn textured(dir: &Path, name: &str) -> PathBuf {
+    let material = format!("diffuse = {{ texture = \"{name}\" }}");
+    toml_scene(dir, &format!("{name}.toml"), &material, "")
+}
+
+/// Damaged images are refused in sentences: a JPEG cut after its scan header (it decoded grey without a
+/// word) like a truncated PNG, a PNG with a bad checksum without the PNG decoder's debug dump.
+#[test]
+fn damaged_images_are_refused_in_sentences() {
+    let dir = scratch("images");
+    let rgb = image::RgbImage::from_fn(64, 64, |x, y| image::Rgb([(x * 4) as u8, (y * 4) as u8, 128]));
+    let mut jpeg = Vec::new();
+    image::codecs::jpeg::JpegEncoder::new(&mut jpeg)
+        .encode_image(&rgb)
+        .unwrap();
+    std::fs::write(dir.join("whole.jpg"), &jpeg).unwrap();
+    let path = textured(&dir, "whole.jpg");
+    bounded("a whole JPEG", Duration::from_secs(5), move || {
+        Scene::load(&path).map(drop).unwrap()
+    });
+    let sos = jpeg.windows(2).position(|w| w == [0xFF, 0xDA]).unwrap();
+    let header = u16::from_be_bytes([jpeg[sos + 2], jpeg[sos + 3]]) as usize;
+    std::fs::write(dir.join("cut.jpg"), &jpeg[..sos + 2 + header + 10]).unwrap();
+    let e = load_fails(textured(&dir, "cut.jpg"));
+    assert!(e.contains("cut.jpg") && e.contains("cut short"), "{e}");
+
+    let mut png = Vec::new();
+    rgb.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let idat = png.windows(4).position(|w| w == b"IDAT").unwrap();
+    let len = u32::from_be_bytes(png[idat - 4..idat].try_into().unwrap()) as usize;
+    png[idat + 4 + len] ^= 0xFF; // the first byte of the IDAT chunk's CRC
+    std::fs::write(dir.join("crc.png"), &png).unwrap();
+    let e = load_fails(textured(&dir, "crc.png"));
+    assert!(e.contains("crc.png") && e.contains("damaged"), "{e}");
+    assert!(!e.contains("ChunkType") && !e.contains('{'), "{e}");
+}
+
+/// An EXR of 16384 x 4096 pixels, at MAX_TEXTURE_SIDE and MAX_TEXTURE_PIXELS, loads (the image crate's
+/// default memory limit refused it with just "Memory limit exceeded"), within 2.5 GiB of allocation.
+#[test]
+fn an_exr_at_the_documented_pixel_limit_loads() {
+    use exr::prelude::*;
+    let dir = scratch("exr");
+    let path = dir.join("wide.exr");
+    let (w, h) = (16384usize, 4096usize);
+    assert_eq!(w as u64 * h as u64, ppm_vk_engine::scene::texture::MAX_TEXTURE_PIXELS);
+    let grey = f16::from_f32(0.5);
+    let channels = SpecificChannels::rgb(|_: Vec2<usize>| (grey, grey, grey));
+    let layer = Layer::new((w, h), LayerAttributes::named("rgb"), Encoding::FAST_LOSSLESS, channels);
+    Image::from_layer(layer).write().to_file(&path).unwrap();
+    let scene = textured(&dir, "wide.exr");
+    let loaded = bounded_to("a 16384 x 4096 EXR", Duration::from_secs(60), 5 << 29, move || {
+        Scene::load(&scene).map_err(|e| e.to_string())
+    });
+    let scene = loaded.unwrap();
+    assert_eq!(scene.textures[0].pixel_count(), w as u64 * h as u64);
+    std::fs::remove_file(&path).ok();
+}

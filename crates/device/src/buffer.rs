@@ -43,7 +43,7 @@ impl Buffer {
         if kind == BufferKind::Storage && size > max {
             bail!(
                 "buffer {name:?} needs {} MiB, more than this device's largest storage buffer ({} MiB): \
-                 lower the resolution or photons per pass",
+                 lower what fills it",
                 size >> 20,
                 max >> 20
             );

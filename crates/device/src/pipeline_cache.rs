@@ -135,7 +135,16 @@ impl DiskCache {
     /// Creates the pipeline cache, seeded from `dir`'s file for this device when that file checks out.
     pub fn open(device: &ash::Device, dir: &Path, key: CacheKey) -> Result<DiskCache> {
         let path = key.file_in(dir);
-        let (initial, note) = match std::fs::read(&path) {
+        // Only a regular file is read: a FIFO put there would block the start for ever.
+        let regular = std::fs::metadata(&path).map(|m| m.is_file());
+        let read = match regular {
+            Ok(false) => Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "not a regular file",
+            )),
+            _ => std::fs::read(&path),
+        };
+        let (initial, note) = match read {
             Ok(bytes) => match unwrap(&bytes, &key) {
                 Ok(data) => (data.to_vec(), None),
                 Err(why) => (

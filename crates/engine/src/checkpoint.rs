@@ -1,8 +1,11 @@
 //! Checkpoints: the whole state of a progressive render, so a render of hours survives the process.
 //!
 //! A file is `MAGIC`, the format version (u32 LE), the header's length (u32 LE), the header as JSON
-//! ([`Header`]: build, scene, settings, counters) and the raw device buffers it lists, in order. It is
-//! written through a temporary file and a rename, so it is either the old checkpoint or the new one.
+//! ([`Header`]: build, scene, settings, counters), the raw device buffers it lists, in order, and the
+//! SHA-256 of all the bytes before it, header included. It is written through a temporary file and a
+//! rename, so it is either the old checkpoint or the new one. A reader checks the magic bytes, the
+//! header and the length the header gives before it reads the buffers: a device file or a FIFO is
+//! refused before it is opened for reading, a file of another length before it is read.
 //! [`Renderer::checkpoint`](crate::Renderer::checkpoint) takes one and
 //! [`Renderer::resume`](crate::Renderer::resume) continues from it, bit for bit as if never stopped.
 
@@ -19,9 +22,13 @@ use crate::stats::ProbeReport;
 
 const MAGIC: &[u8; 8] = b"PPMVKCKP";
 /// Raised whenever the layout of the file or of a buffer in it changes.
-pub const FORMAT: u32 = 1;
+pub const FORMAT: u32 = 2;
 /// A header is a few KiB; anything larger is not a checkpoint.
 const MAX_HEADER: u32 = 1 << 20;
+/// Bytes of the file's checksum, after the buffers.
+const TRAILER: usize = 32;
+/// Most passes a checkpoint may count: eye passes index their random streams by the pass as a u32.
+pub const MAX_PASSES: u64 = u32::MAX as u64;
 
 /// What a checkpoint is of, and the renderer's counters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -42,8 +49,6 @@ pub struct Header {
     pub probe: Option<ProbeReport>,
     /// Bytes of each buffer after the header, in the order of [`Checkpoint`]'s fields.
     pub sections: Vec<u64>,
-    /// SHA-256 of those bytes, so a damaged file is refused rather than resumed.
-    pub payload_sha256: String,
 }
 
 /// A render's state: the header and the device buffers that carry it from pass to pass.
@@ -72,11 +77,9 @@ impl Checkpoint {
         ]
     }
 
-    /// Fills in the header's section sizes and checksum (called by `Renderer::checkpoint`).
+    /// Fills in the header's section sizes (called by `Renderer::checkpoint`).
     pub(crate) fn seal(mut self) -> Checkpoint {
-        let payload = self.payload();
-        let (sections, sha) = (payload.iter().map(|p| p.len() as u64).collect(), sha256(&payload));
-        (self.header.sections, self.header.payload_sha256) = (sections, sha);
+        self.header.sections = self.payload().iter().map(|p| p.len() as u64).collect();
         self
     }
 
@@ -85,50 +88,82 @@ impl Checkpoint {
         let header = serde_json::to_vec(&self.header).context("encoding the checkpoint header")?;
         crate::image_io::write_atomically(path, "ckpt", |w| {
             use std::io::Write as _;
-            w.write_all(MAGIC)?;
-            w.write_all(&FORMAT.to_le_bytes())?;
-            w.write_all(&(header.len() as u32).to_le_bytes())?;
-            w.write_all(&header)?;
-            for p in self.payload() {
+            let mut sha = sha2::Sha256::new();
+            let prefix = [
+                &MAGIC[..],
+                &FORMAT.to_le_bytes(),
+                &(header.len() as u32).to_le_bytes(),
+                &header,
+            ];
+            for p in prefix.into_iter().chain(self.payload()) {
                 w.write_all(p)?;
+                sha.update(p);
             }
+            w.write_all(&sha.finalize())?;
             Ok(())
         })
     }
 
     /// Reads a checkpoint, refusing another format version or a damaged file.
     pub fn load(path: &Path) -> Result<Checkpoint> {
-        let bytes = std::fs::read(path).with_context(|| format!("reading checkpoint {}", path.display()))?;
-        Checkpoint::parse(&bytes).with_context(|| format!("checkpoint {}", path.display()))
+        Checkpoint::read(path, None).with_context(|| format!("checkpoint {}", path.display()))
+    }
+
+    /// [`Checkpoint::load`] for a render of `scene` with `settings` by `build`: the header is checked
+    /// against them ([`Checkpoint::check`]) and its buffers' sizes against the render's, before the
+    /// buffers are read.
+    pub fn load_for(path: &Path, scene: &Scene, settings: &Settings, build: &str) -> Result<Checkpoint> {
+        Checkpoint::read(path, Some((scene, settings, build)))
+            .with_context(|| format!("cannot resume from {}", path.display()))
+    }
+
+    fn read(path: &Path, render: Option<(&Scene, &Settings, &str)>) -> Result<Checkpoint> {
+        use std::io::Read as _;
+        // A regular file only, opened without blocking: a FIFO would wait in open() for a writer.
+        let (file, len) = ppm_vk_scene::open_bounded(path, u64::MAX, "checkpoint")?;
+        let mut file = std::io::BufReader::new(file);
+        let mut prefix = vec![0u8; 16];
+        ensure!(len >= 16, "not a ppm-vk checkpoint ({len} bytes)");
+        file.read_exact(&mut prefix).context("reading the checkpoint")?;
+        let header_len = check_prefix(&prefix, len)?;
+        prefix.resize(16 + header_len, 0);
+        file.read_exact(&mut prefix[16..]).context("reading the checkpoint")?;
+        let header = parse_header(&prefix)?;
+        header.check_counters()?;
+        if let Some((scene, settings, build)) = render {
+            header.check(scene, settings, build)?;
+            header.check_sections(scene)?;
+        }
+        // The length the header gives, before the rest is read: what is read is what it says.
+        let total = expected_len(&header, header_len)?;
+        ensure!(
+            total == len,
+            "{len} bytes, the header lists {total} (truncated or damaged)"
+        );
+        let mut bytes = prefix;
+        bytes.reserve_exact((len as usize).saturating_sub(bytes.len()));
+        file.take(len - bytes.len() as u64)
+            .read_to_end(&mut bytes)
+            .context("reading the checkpoint")?;
+        Checkpoint::parse(&bytes)
     }
 
     fn parse(bytes: &[u8]) -> Result<Checkpoint> {
-        ensure!(bytes.len() >= 16 && &bytes[..8] == MAGIC, "not a ppm-vk checkpoint");
-        let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"));
-        let format = word(8);
+        let len = check_prefix(bytes, bytes.len() as u64)?;
+        let header = parse_header(&bytes[..(16 + len).min(bytes.len())])?;
+        let total = expected_len(&header, len)?;
         ensure!(
-            format == FORMAT,
-            "format version {format}, this build reads version {FORMAT}"
+            total == bytes.len() as u64,
+            "{} bytes, the header lists {total} (truncated?)",
+            bytes.len()
         );
-        let len = word(12);
+        let (body, trailer) = bytes.split_at(bytes.len() - TRAILER);
         ensure!(
-            len <= MAX_HEADER && 16 + len as usize <= bytes.len(),
-            "truncated header ({len} bytes)"
+            sha2::Sha256::digest(body)[..] == trailer[..],
+            "the file does not match its checksum (damaged or edited)"
         );
-        let header: Header = serde_json::from_slice(&bytes[16..16 + len as usize]).context("parsing the header")?;
-        let mut rest = &bytes[16 + len as usize..];
-        ensure!(
-            header.sections.len() == 5,
-            "{} sections, expected 5",
-            header.sections.len()
-        );
-        let total = header.sections.iter().try_fold(0u64, |sum, &n| sum.checked_add(n));
-        ensure!(
-            total == Some(rest.len() as u64),
-            "{} bytes of buffers, the header lists {:?} (truncated?)",
-            rest.len(),
-            header.sections
-        );
+        header.check_counters()?;
+        let mut rest = &body[16 + len..];
         let mut take = |n: u64| {
             let (a, b) = rest.split_at(n as usize);
             rest = b;
@@ -149,17 +184,112 @@ impl Checkpoint {
             busy,
             cut: cut[0],
         };
-        ensure!(
-            sha256(&c.payload()) == c.header.payload_sha256,
-            "the buffers do not match their checksum (damaged file)"
-        );
         Ok(c)
     }
 
     /// Fails, saying what differs, unless this checkpoint is of `scene` rendered with `settings` by the
     /// build `build`.
     pub fn check(&self, scene: &Scene, settings: &Settings, build: &str) -> Result<()> {
-        let h = &self.header;
+        self.header.check(scene, settings, build)
+    }
+}
+
+/// The header's length, after checking the magic bytes and the format version in the first 16 bytes of
+/// a file of `len` bytes.
+fn check_prefix(bytes: &[u8], len: u64) -> Result<usize> {
+    ensure!(bytes.len() >= 16 && &bytes[..8] == MAGIC, "not a ppm-vk checkpoint");
+    let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"));
+    let format = word(8);
+    ensure!(
+        format == FORMAT,
+        "format version {format}, this build reads version {FORMAT}"
+    );
+    let header = word(12);
+    ensure!(
+        header <= MAX_HEADER && 16 + header as u64 + TRAILER as u64 <= len,
+        "truncated header ({header} bytes)"
+    );
+    Ok(header as usize)
+}
+
+/// The header in `bytes` (the file's first 16 + its length); its counters are not checked yet.
+fn parse_header(bytes: &[u8]) -> Result<Header> {
+    let header: Header = serde_json::from_slice(&bytes[16..]).context("parsing the header")?;
+    ensure!(
+        header.sections.len() == 5,
+        "{} sections, expected 5",
+        header.sections.len()
+    );
+    Ok(header)
+}
+
+/// The file's length as `header` (of `header_len` bytes) gives it.
+fn expected_len(header: &Header, header_len: usize) -> Result<u64> {
+    let sizes = header.sections.iter().try_fold(0u64, |sum, &n| sum.checked_add(n));
+    sizes
+        .and_then(|n| n.checked_add((16 + header_len + TRAILER) as u64))
+        .ok_or_else(|| anyhow::anyhow!("buffer sizes {:?} overflow", header.sections))
+}
+
+impl Header {
+    /// The counters within what a render of its settings can reach: passes at most [`MAX_PASSES`],
+    /// photons emitted the passes times the photons per pass, a batch within a pass, a usable grid cell.
+    fn check_counters(&self) -> Result<()> {
+        self.settings.validate().context("its settings")?;
+        let per_pass = self.settings.photons_per_pass as u64;
+        ensure!(
+            self.passes <= MAX_PASSES,
+            "passes {} is more than a render may have ({MAX_PASSES})",
+            self.passes
+        );
+        ensure!(
+            self.passes.checked_mul(per_pass) == Some(self.emitted),
+            "emitted {} photons in {} passes of {per_pass}: the counters disagree",
+            self.emitted,
+            self.passes
+        );
+        ensure!(
+            (1..=per_pass).contains(&(self.batch as u64)),
+            "batch {} is outside 1..={per_pass} (the photons per pass)",
+            self.batch
+        );
+        ensure!(
+            self.grid_cell.is_finite() && self.grid_cell > 0.0,
+            "grid cell {} is not a positive size",
+            self.grid_cell
+        );
+        Ok(())
+    }
+
+    /// The buffers' sizes are those a render of `scene` with these settings has.
+    fn check_sections(&self, scene: &Scene) -> Result<()> {
+        let pixels = scene.camera.width as u64 * scene.camera.height as u64;
+        let slots = pixels * self.settings.slots() as u64;
+        let ppm_hits = match self.settings.mode {
+            crate::settings::Mode::Ppm => slots,
+            crate::settings::Mode::Sppm => 0,
+        };
+        let size = |n: u64, one: usize| n * one as u64;
+        let want = [
+            size(slots, std::mem::size_of::<HitStats>()),
+            size(ppm_hits, std::mem::size_of::<HitPoint>()),
+            size(pixels, std::mem::size_of::<[f64; 4]>()),
+            size(pixels, std::mem::size_of::<u32>()),
+            size(1, std::mem::size_of::<PathCounters>()),
+        ];
+        ensure!(
+            self.sections == want,
+            "its buffers are {:?} bytes, a render of {}x{} pixels has {want:?}",
+            self.sections,
+            scene.camera.width,
+            scene.camera.height
+        );
+        Ok(())
+    }
+
+    /// Fails, saying what differs, unless this header is of `scene` rendered with `settings` by `build`.
+    fn check(&self, scene: &Scene, settings: &Settings, build: &str) -> Result<()> {
+        let h = self;
         if h.build != build {
             bail!(
                 "it was written by build {}, this is build {build}: resume it with that build",
@@ -219,14 +349,6 @@ fn section<T: bytemuck::Pod>(bytes: &[u8], what: &str) -> Result<Vec<T>> {
     Ok(bytemuck::pod_collect_to_vec(bytes))
 }
 
-fn sha256(parts: &[&[u8]]) -> String {
-    let mut h = sha2::Sha256::new();
-    for p in parts {
-        h.update(p);
-    }
-    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -239,12 +361,11 @@ mod tests {
                 scene_sha256: "00".into(),
                 settings: Settings::default(),
                 passes: 3,
-                emitted: 300,
+                emitted: 3_000_000,
                 batch: 100,
                 grid_cell: 0.25,
                 probe: None,
                 sections: vec![],
-                payload_sha256: String::new(),
             },
             stats: vec![
                 HitStats {
@@ -287,14 +408,53 @@ mod tests {
         let err = |b: &[u8]| format!("{:#}", Checkpoint::parse(b).unwrap_err());
         assert!(err(&good[..good.len() - 1]).contains("truncated"));
         assert!(err(b"PNG\x89 not at all").contains("not a ppm-vk checkpoint"));
-        let mut v2 = good.clone();
-        v2[8] = 2;
-        assert!(err(&v2).contains("format version 2"), "{}", err(&v2));
+        let mut v1 = good.clone();
+        v1[8] = 1;
+        assert!(err(&v1).contains("format version 1"), "{}", err(&v1));
         let mut flipped = good.clone();
         *flipped.last_mut().unwrap() ^= 1;
         assert!(err(&flipped).contains("checksum"));
         let mut huge = good.clone();
         huge[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
         assert!(err(&huge).contains("truncated header"));
+        // The header is under the checksum: passes edited from 3 to 4 is a damaged file.
+        let at = good.windows(9).position(|w| w == b"passes\":3").unwrap();
+        let mut edited = good.clone();
+        edited[at + 8] = b'4';
+        assert!(err(&edited).contains("checksum"), "{}", err(&edited));
+    }
+
+    /// Counters a render of the header's settings cannot reach are refused even under a good checksum.
+    #[test]
+    fn counters_are_checked_against_the_settings() {
+        let err = |edit: fn(&mut Header), name: &str| {
+            let mut c = sample();
+            edit(&mut c.header);
+            format!("{:#}", Checkpoint::parse(&bytes(&c, name)).unwrap_err())
+        };
+        let e = err(|h| h.passes = u64::MAX, "passes.ckpt");
+        assert!(e.contains("passes 18446744073709551615 is more than"), "{e}");
+        let e = err(|h| h.emitted += 1, "emitted.ckpt");
+        assert!(e.contains("the counters disagree"), "{e}");
+        let e = err(|h| h.batch = 0, "batch.ckpt");
+        assert!(e.contains("batch 0 is outside"), "{e}");
+        let e = err(|h| h.grid_cell = -1.0, "cell.ckpt");
+        assert!(e.contains("grid cell -1 is not a positive size"), "{e}");
+    }
+
+    /// `load` refuses a FIFO (without blocking on it) and a device file, and a file whose length is not
+    /// the header's, before reading the buffers.
+    #[test]
+    fn only_a_regular_file_of_the_stated_length_is_read() {
+        let e = format!("{:#}", Checkpoint::load(Path::new("/dev/zero")).unwrap_err());
+        assert!(e.contains("not a regular file"), "{e}");
+        let dir = std::env::temp_dir().join(format!("ppm-vk-ckpt-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("long.ckpt");
+        let mut good = bytes(&sample(), "long.ckpt");
+        good.extend_from_slice(&[0; 100]);
+        std::fs::write(&path, &good).unwrap();
+        let e = format!("{:#}", Checkpoint::load(&path).unwrap_err());
+        assert!(e.contains("the header lists"), "{e}");
     }
 }

@@ -174,16 +174,14 @@ impl RgbImage {
     /// A file that cannot be opened or decoded is [`crate::Error::Io`].
     pub fn load_exr(path: impl AsRef<Path>) -> crate::Result<Self> {
         let path = path.as_ref();
-        match ImageReader::open(path) {
-            Err(e) => Err(crate::Error::io(path, e)),
-            Ok(_) => Self::load_exr_inner(path).map_err(|e| crate::Error::decode(path, format!("{e:#}"))),
-        }
+        // A regular file only, opened without blocking (a FIFO as --reference would wait for ever).
+        let (file, _) = crate::scene::open_bounded(path, crate::scene::MAX_IMAGE_BYTES, "EXR image")?;
+        Self::load_exr_inner(file).map_err(|e| crate::Error::decode(path, format!("{e:#}")))
     }
 
-    fn load_exr_inner(path: &Path) -> Result<Self> {
-        let mut reader = ImageReader::open(path)?;
+    fn load_exr_inner(file: std::fs::File) -> Result<Self> {
         // Decode as EXR whatever the file is called, so a misnamed file fails with a decoder error.
-        reader.set_format(ImageFormat::OpenExr);
+        let reader = ImageReader::with_format(std::io::BufReader::new(file), ImageFormat::OpenExr);
         let rgb = match reader.decode()? {
             DynamicImage::ImageRgb32F(buf) => buf,
             // Direct conversions keep the colour values untouched (no premultiplication).

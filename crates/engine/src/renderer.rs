@@ -159,6 +159,12 @@ enum GridUse {
 /// Largest batch log (batches per pass).
 const MAX_BATCHES: u32 = 1024;
 
+/// Most photons one batch traces: 2^20. Each batch is its own submission and a pass checks its
+/// [`CancelToken`] between them, so a signal ends even a pass of `MAX_PHOTONS_PER_PASS` photons within
+/// one batch (a 2^24-photon pass in one submission took 50 s on lavapipe). Passes of the default 10^6
+/// photons are one batch, as before.
+const MAX_BATCH_PHOTONS: u32 = 1 << 20;
+
 impl Renderer {
     /// Uploads the scene, allocates per-hit-point state and runs the ray pass (and the probe pass).
     pub fn new(ctx: &Context, scene: &Scene, settings: Settings) -> Result<Renderer> {
@@ -183,7 +189,6 @@ impl Renderer {
             grid_cell: self.gpu.params.cell_size,
             probe: self.probe_report.clone(),
             sections: vec![],
-            payload_sha256: String::new(),
         };
         let (slots, pixels) = (self.gpu.slots(), self.gpu.pixels());
         let hit_points = match self.settings.mode {
@@ -346,6 +351,27 @@ impl Renderer {
             ),
             ("the suspended photons", suspended_bytes),
         ];
+        // The textures are one buffer: when it cannot be bound, the images are the cause, not the
+        // resolution (an 8192 x 8192 image is 1 GiB of texels; lavapipe binds 128 MiB).
+        let texture_bytes = gpu.textures.len() as u64 * 16;
+        if texture_bytes > max_range {
+            let largest = scene.textures.iter().max_by_key(|t| t.pixel_count());
+            let lower = match largest {
+                Some(t) => format!(
+                    "the texture images' size (the largest, \"{}\", has {} pixels; this device binds {} in all)",
+                    t.name,
+                    t.pixel_count(),
+                    max_range / 16
+                ),
+                None => "the texture images' size".into(),
+            };
+            return Err(Error::limit(
+                "the textures (16 bytes a pixel, in one buffer)",
+                Some(texture_bytes),
+                max_range,
+                lower,
+            ));
+        }
         fits_device(&per_pixel, &others, max_range, ctx.info().memory_bytes, &advice)?;
         // The kernels read the textures as texels: each buffer within the device's texel buffer.
         let max_texels = ctx.limits().max_texel_buffer_elements as u64;
@@ -435,7 +461,7 @@ impl Renderer {
                 grid: Grid::new(ctx, gpu.max_buckets(), capacity)?,
                 r2_max: storage("largest radius", 8)?,
                 profiler: Profiler::new(ctx, 8 + 7 * MAX_BATCHES)?,
-                batch: settings.photons_per_pass,
+                batch: settings.photons_per_pass.min(MAX_BATCH_PHOTONS),
                 passes: 0,
                 emitted: 0,
                 ray_ms: 0.0,
@@ -474,7 +500,8 @@ impl Renderer {
         self.ctx
             .upload(&self.cut, bytemuck::bytes_of(&PathCounters::default()))
             .device(what)?;
-        (self.passes, self.emitted, self.batch, self.probe_report) = (0, 0, self.settings.photons_per_pass, None);
+        (self.passes, self.emitted, self.batch, self.probe_report) =
+            (0, 0, self.settings.photons_per_pass.min(MAX_BATCH_PHOTONS), None);
         self.grid.set_cells(self.gpu.params.grid_mask + 1).device(what)?;
         self.ctx
             .run(|cmd| {
@@ -771,35 +798,23 @@ impl Renderer {
             self.profiler.reset();
             let batch = self.batch;
             let split = self.settings.split_submissions && use_ == GridUse::Gather;
-            match split {
-                false => self
-                    .ctx
-                    .run(|cmd| {
-                        for b in 0..batches {
-                            let start = b * batch;
-                            let count = batch.min(total - start);
-                            self.record_batch(cmd, first + start as u64, count, b, use_, ALL_STAGES)?;
-                        }
-                        Ok(())
-                    })
-                    .device("a photon pass")?,
-                true => {
-                    for b in 0..batches {
-                        let start = b * batch;
-                        let count = batch.min(total - start);
-                        for stage in ALL_STAGES {
-                            // The caller sees the cancel and drops what the batches summed.
-                            if self.cancel.is_cancelled() {
-                                return Ok((Vec::new(), 0, b));
-                            }
-                            self.ctx
-                                .run(|cmd| {
-                                    let stage = std::slice::from_ref(stage);
-                                    self.record_batch(cmd, first + start as u64, count, b, use_, stage)
-                                })
-                                .device("a photon pass")?;
-                        }
+            // One submission a batch (a stage, split), the cancel checked between them; the probe pass
+            // is never cancelled halfway (its radii would be half probed).
+            let stages: Vec<&[BatchStage]> = match split {
+                false => vec![ALL_STAGES],
+                true => ALL_STAGES.iter().map(std::slice::from_ref).collect(),
+            };
+            for b in 0..batches {
+                let start = b * batch;
+                let count = batch.min(total - start);
+                for stage in &stages {
+                    // The caller sees the cancel and drops what the batches summed.
+                    if use_ == GridUse::Gather && self.cancel.is_cancelled() {
+                        return Ok((Vec::new(), 0, b));
                     }
+                    self.ctx
+                        .run(|cmd| self.record_batch(cmd, first + start as u64, count, b, use_, stage))
+                        .device("a photon pass")?;
                 }
             }
             let log: Vec<u32> = self

@@ -15,6 +15,9 @@ use crate::stats::{PassStats, ProbeReport};
 
 pub const SCHEMA: &str = "ppm-vk-report/1";
 
+/// Most bytes of a run report [`RunReport::load_json`] reads: 1 GiB.
+pub const MAX_REPORT_BYTES: u64 = 1 << 30;
+
 /// What was rendered, where, how.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RunHeader {
@@ -134,8 +137,11 @@ impl RunReport {
         std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
     }
 
+    /// Reads a JSON report of at most [`MAX_REPORT_BYTES`].
     pub fn load_json(path: &Path) -> Result<RunReport> {
-        let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        // Bounded, and a regular file only: a run report of 10^6 passes is a few hundred MB.
+        let bytes = crate::scene::read_bounded_bytes(path, MAX_REPORT_BYTES, "run report")?;
+        let text = String::from_utf8(bytes).with_context(|| format!("reading {}", path.display()))?;
         let report: RunReport = serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
         if report.header.schema != SCHEMA {
             bail!(

@@ -3,6 +3,11 @@
 use crate::error::{Error, Result};
 use ppm_vk_kernels::lookup::SCAN_BLOCK;
 
+/// Most photons one pass (or the probe pass) may emit: 2^24, 16 batches of `MAX_BATCH_PHOTONS` (a cancel
+/// ends a pass between batches; 2^31 photons in one pass were days that Ctrl-C could not stop, and the
+/// probe pass is never cut short). More photons: more passes.
+pub const MAX_PHOTONS_PER_PASS: u32 = 1 << 24;
+
 /// Most emission samples per pixel and eye pass (`Settings::emission_samples`).
 pub const MAX_EMISSION_SAMPLES: u32 = 64;
 
@@ -182,8 +187,19 @@ impl Settings {
 
     /// Checks every setting's range; the error is [`Error::Settings`] naming the field.
     pub fn validate(&self) -> Result<()> {
-        if self.photons_per_pass == 0 {
-            return Err(invalid("photons_per_pass", "must be at least 1".into()));
+        let per_pass = |field: &'static str, n: u32| match (1..=MAX_PHOTONS_PER_PASS).contains(&n) {
+            true => Ok(()),
+            false => Err(invalid(
+                field,
+                format!(
+                    "must be in 1..={MAX_PHOTONS_PER_PASS}, got {n} (more photons: more passes, which a \
+                     signal can end between them)"
+                ),
+            )),
+        };
+        per_pass("photons_per_pass", self.photons_per_pass)?;
+        if let Some(n) = self.probe_photons {
+            per_pass("probe_photons", n)?;
         }
         let most = ppm_vk_kernels::specialize::MAX_INLINE_TRIANGLES;
         if self.max_inline_triangles as usize > most {
@@ -217,9 +233,6 @@ impl Settings {
                 "probe_beta",
                 format!("must be a fraction of r in (0, 1), got {}", self.probe_beta),
             ));
-        }
-        if self.probe_photons == Some(0) {
-            return Err(invalid("probe_photons", "must be at least 1".into()));
         }
         if !(1..=8).contains(&self.hit_slots) {
             return Err(invalid(

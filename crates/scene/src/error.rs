@@ -166,5 +166,19 @@ fn chain(e: &(dyn std::error::Error + 'static)) -> String {
 
 /// A vector as messages show it: `[x, y, z]`.
 pub(crate) fn fmt_vec(v: [f32; 3]) -> String {
-    format!("[{}, {}, {}]", v[0], v[1], v[2])
+    // Very large and very small numbers in exponent form: 1e30 written out is 31 digits.
+    let f = |x: f32| match x.abs() {
+        a if a != 0.0 && !(1e-6..1e9).contains(&a) => format!("{x:e}"),
+        _ => format!("{x}"),
+    };
+    format!("[{}, {}, {}]", f(v[0]), f(v[1]), f(v[2]))
+}
+
+/// `text` cut to at most `max` characters, `...` marking a cut: quoted values stay short in messages
+/// whatever a file holds.
+pub(crate) fn truncated(text: &str, max: usize) -> String {
+    match text.char_indices().nth(max) {
+        Some((at, _)) => format!("{}...", &text[..at]),
+        None => text.to_string(),
+    }
 }

@@ -25,13 +25,16 @@ mod toml;
 pub use ppm_vk_materials::conductor as conductors;
 pub use ppm_vk_materials::{plastic, Microfacet};
 
-pub use mitsuba::{parse_define, DISK_SEGMENTS, MAX_INCLUDE_DEPTH, MAX_NESTING};
+pub use mitsuba::{
+    parse_define, DISK_SEGMENTS, MAX_INCLUDED_BYTES, MAX_INCLUDED_FILES, MAX_INCLUDE_DEPTH, MAX_NESTING,
+    MAX_SUBSTITUTED_BYTES,
+};
 
 pub use crate::error::{Error, Result};
 pub use emitter::{Emitter, EnvMap, Environment};
 #[cfg(test)]
 use files::TempDir;
-pub use files::{MAX_MESH_BYTES, MAX_SCENE_BYTES};
+pub use files::{open_bounded, read_bounded_bytes, MAX_IMAGE_BYTES, MAX_MESH_BYTES, MAX_SCENE_BYTES};
 pub use model::*;
 
 pub use obj::ObjImport;

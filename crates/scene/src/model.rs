@@ -29,6 +29,10 @@ pub const MAX_TRIANGLES: usize = 1 << 24;
 /// below this (`PathLimits`).
 pub const MAX_SHAPES: usize = 1 << 16;
 
+/// Farthest a sphere may reach from the origin (its centre's largest coordinate plus its radius): 2^60.
+/// Its intersection squares distances in 32-bit floats, which overflow at 2^128.
+pub const MAX_SPHERE_REACH: f32 = (1u64 << 60) as f32;
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     pub eye: Vec3,
@@ -702,6 +706,20 @@ impl Scene {
                     format!("must be positive and finite, got {}", s.radius),
                 ));
             }
+            // The intersection squares distances from the centre in f32: beyond 2^60 they overflow
+            // (2^128) and every ray misses or hits NaN, a silently black image.
+            let reach = s.center.abs().max_element() + s.radius;
+            if reach > MAX_SPHERE_REACH {
+                return Err(invalid(
+                    format!("{p}.radius"),
+                    format!(
+                        "a sphere of radius {:e} at {} reaches {reach:e} from the origin, beyond {MAX_SPHERE_REACH:e} \
+                         (2^60), where its intersection's squares overflow 32-bit floats",
+                        s.radius,
+                        fmt_vec(s.center.to_array())
+                    ),
+                ));
+            }
             material(&format!("{p}.material"), s.material)?;
         }
         for (i, q) in self.quads.iter().enumerate() {
@@ -920,6 +938,18 @@ fn check_material(m: &Material, coats: &mut plastic::Coats) -> Result<(), Invali
         return Err(invalid(
             ep,
             format!("every component must be >= 0, got {}", fmt_vec(m.emission.to_array())),
+        ));
+    }
+    // A subnormal emission's power (emission x area x pi) rounds to 0: a light that sends no photon.
+    if m.emission.to_array().iter().any(|&e| e > 0.0 && e < f32::MIN_POSITIVE) {
+        return Err(invalid(
+            ep,
+            format!(
+                "{} has a component above 0 but below {:e}, the smallest normal 32-bit float: its power \
+                 would round to 0 (use 0 for no light)",
+                fmt_vec(m.emission.to_array()),
+                f32::MIN_POSITIVE
+            ),
         ));
     }
     match m.surface {

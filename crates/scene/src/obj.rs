@@ -17,7 +17,7 @@ use glam::{DAffine3, DVec3, Vec2, Vec3};
 use super::texture::{self, Filter, Texture, Wrap};
 use super::{generated, Material, Mesh, Scene, Surface, Triangle};
 use crate::error::fmt_vec;
-use crate::files::{read_bounded, MAX_MESH_BYTES};
+use crate::files::{read_bounded, MAX_MESH_BYTES, MAX_SCENE_BYTES};
 
 /// How [`Scene::import_obj`] places and dresses an OBJ.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -586,8 +586,8 @@ fn check_ref(token: &str, so_far: [usize; 3], total: [usize; 3]) -> Result<(), S
 /// outer error: ours, with a line; the inner one: tobj's).
 fn read_mtl(path: &Path, mtllib_at: &str) -> Result<tobj::MTLLoadResult> {
     let shown = path.display();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| anyhow!("{shown}: cannot read MTL file (mtllib at {mtllib_at}): {e}"))?;
+    // Bounded and regular only: `mtllib /dev/zero` would be read until memory ran out.
+    let text = read_bounded(path, MAX_SCENE_BYTES, &format!("MTL file (mtllib at {mtllib_at})"))?;
     for (i, line) in text.lines().enumerate() {
         let fail = |msg: String| anyhow!("{shown}:{}: {msg}", i + 1);
         let t = line.trim();

@@ -8,6 +8,40 @@ use glam::{DVec3, Vec2};
 
 use super::obj::RawMesh;
 use super::MAX_TRIANGLES;
+use crate::files::{read_bounded_bytes, MAX_MESH_BYTES};
+
+/// ply-rs's error as a sentence: `file:line: malformed PLY: what` for the header and ASCII data (the
+/// line it names is the file's), `file: malformed PLY: binary data: what` for binary data, where a line
+/// means nothing. Only its first line is kept, and the text of the line it quotes: the rest is a debug
+/// dump of the inner parser's state.
+fn parse_error(shown: &str, bytes: &[u8], e: &std::io::Error) -> String {
+    let text = e.to_string();
+    let mut lines = text.lines();
+    let first = lines.next().unwrap_or("").trim();
+    let (line, what) = match first.strip_prefix("Line ").and_then(|r| r.split_once(": ")) {
+        Some((n, what)) => (n.parse::<usize>().ok(), what),
+        None => (None, first),
+    };
+    let what = what.trim_end_matches('.');
+    let header_end = bytes
+        .windows(10)
+        .position(|w| w == b"end_header")
+        .unwrap_or(bytes.len());
+    let binary = bytes[..header_end].windows(13).any(|w| w == b"format binary");
+    let in_header = line.is_some_and(|n| bytes[..header_end].iter().filter(|&&c| c == b'\n').count() >= n);
+    // The quoted line, short: it is the reader's own text, but may be a whole binary blob.
+    let quoted = lines
+        .find_map(|l| l.trim().strip_prefix("String: "))
+        .map(|q| q.trim_matches('\'').trim())
+        .filter(|q| !q.is_empty() && q.chars().all(|c| !c.is_control()))
+        .map(|q| format!(" (the line reads {:?})", crate::error::truncated(q, 60)));
+    let quoted = quoted.unwrap_or_default();
+    match line {
+        Some(n) if !binary || in_header => format!("{shown}:{n}: malformed PLY: {what}{quoted}"),
+        _ if binary => format!("{shown}: malformed PLY: in its binary data: {what}"),
+        _ => format!("{shown}: malformed PLY: {what}{quoted}"),
+    }
+}
 
 /// A PLY mesh (ASCII or binary): vertex x, y, z (and nx, ny, nz when all three are there), faces
 /// as `vertex_indices` (or `vertex_index`) lists, polygons split into fans from their first corner.
@@ -15,10 +49,12 @@ pub(super) fn read(path: &Path, material: u32) -> Result<RawMesh> {
     use ply_rs_bw::parser::Parser;
     use ply_rs_bw::ply::{DefaultElement, Property};
     let shown = path.display().to_string();
-    let file = std::fs::File::open(path).map_err(|e| anyhow!("{shown}: cannot read PLY file: {e}"))?;
+    // A regular file within the mesh bound only: /dev/zero would be read until memory ran out, a FIFO
+    // would block forever.
+    let bytes = read_bounded_bytes(path, MAX_MESH_BYTES, "PLY file")?;
     let ply = Parser::<DefaultElement>::new()
-        .read_ply(&mut std::io::BufReader::new(file))
-        .map_err(|e| anyhow!("{shown}: malformed PLY: {e}"))?;
+        .read_ply(&mut std::io::Cursor::new(&bytes))
+        .map_err(|e| anyhow!("{}", parse_error(&shown, &bytes, &e)))?;
     let scalar = |p: &Property| -> Option<f64> {
         Some(match *p {
             Property::Float(v) => f64::from(v),

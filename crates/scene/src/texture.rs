@@ -92,21 +92,124 @@ pub fn srgb_to_linear(x: f32) -> f32 {
     }
 }
 
+/// Most bytes the decoder may allocate for one image: its pixels as four 32-bit floats (the widest
+/// format read, EXR) and as much again for the decoder's own buffers. The default of the image crate
+/// (512 MiB) refused EXRs inside [`MAX_TEXTURE_PIXELS`].
+const MAX_DECODE_BYTES: u64 = MAX_TEXTURE_PIXELS * 16 * 2;
+
+/// The image crate's error as a sentence, without its debug dumps (a PNG's bad chunk came out as
+/// `ChunkType { type: IDA«, .. }`).
+fn image_error(e: &image::ImageError) -> String {
+    use image::ImageError as E;
+    // The codec's own words where they are one plain line; else only what kind of error it is.
+    let plain = |s: String| {
+        let s = s.lines().next().unwrap_or("").trim().trim_end_matches('.').to_string();
+        let clean = !s.is_empty() && !s.contains(['{', '}']) && s.chars().all(|c| c.is_ascii() && !c.is_control());
+        clean.then(|| format!(" ({})", crate::error::truncated(&s, 100)))
+    };
+    match e {
+        E::Decoding(d) => format!(
+            "not a readable PNG, JPEG or EXR image: its data is damaged or cut short{}",
+            plain(d.to_string()).unwrap_or_default()
+        ),
+        E::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            "not a readable PNG, JPEG or EXR image: the file ends early (truncated)".into()
+        }
+        E::IoError(io) => format!("cannot read the image: {io}"),
+        E::Limits(_) => format!(
+            "decoding it would take more than {} MiB, the most one image may (MAX_TEXTURE_PIXELS of four \
+             32-bit floats, twice)",
+            MAX_DECODE_BYTES >> 20
+        ),
+        E::Unsupported(u) => format!(
+            "not a readable PNG, JPEG or EXR image: an unsupported format or feature{}",
+            plain(u.to_string()).unwrap_or_default()
+        ),
+        E::Parameter(p) => format!("not a readable image{}", plain(p.to_string()).unwrap_or_default()),
+        E::Encoding(_) => "not a readable image".into(),
+    }
+}
+
+/// Whether a JPEG's data ends with its end-of-image marker after its last scan: a file cut inside a
+/// scan decodes without a word (the decoder is lenient and fills the rest grey), so it is checked here,
+/// as a truncated PNG is refused by its decoder. In a scan a 0xFF byte is always followed by 0x00 or a
+/// restart marker, so an FF D9 after the last start-of-scan (FF DA) is the real end.
+fn jpeg_is_complete(bytes: &[u8]) -> bool {
+    let last_scan = bytes.windows(2).rposition(|w| w == [0xFF, 0xDA]);
+    last_scan.is_some_and(|at| bytes[at..].windows(2).any(|w| w == [0xFF, 0xD9]))
+}
+
 /// Reads an image file (PNG, JPEG, EXR) as linear RGB, its top row first: 8- and 16-bit images are taken
 /// as sRGB-encoded and decoded unless `raw` (Mitsuba's rule; alpha is dropped), floating-point ones
-/// (EXR) as linear already. The error says what is wrong with the file, without its name (the caller's
-/// message names it with the scene line).
+/// (EXR) as linear already. Only a regular file of at most [`MAX_IMAGE_BYTES`](crate::MAX_IMAGE_BYTES)
+/// is opened. The error says what is wrong with the file, without its name (the caller's message
+/// names it with the scene line).
 pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), String> {
-    let open = || {
-        image::ImageReader::open(path)
-            .map_err(|e| format!("cannot open the image: {e}"))?
-            .with_guessed_format()
-            .map_err(|e| format!("cannot read the image: {e}"))
+    use std::io::{BufReader, Cursor, Read as _, Seek as _};
+    let (file, _) =
+        crate::files::open_bounded(path, crate::files::MAX_IMAGE_BYTES, "the image").map_err(|e| match e {
+            crate::Error::Io { error, .. } => error.to_string(),
+            e => e.to_string(),
+        })?;
+    let mut reader = BufReader::new(file);
+    let format = image::ImageReader::new(&mut reader)
+        .with_guessed_format()
+        .map_err(|e| format!("cannot read the image: {e}"))?
+        .format();
+    reader.rewind().map_err(|e| format!("cannot read the image: {e}"))?;
+    // A JPEG is read whole to check its end (JPEGs are small: the bound is the file's).
+    let mut jpeg = Vec::new();
+    if format == Some(image::ImageFormat::Jpeg) {
+        reader
+            .read_to_end(&mut jpeg)
+            .map_err(|e| format!("cannot read the image: {e}"))?;
+        if !jpeg_is_complete(&jpeg) {
+            return Err(
+                "not a readable JPEG image: its data ends before the end-of-image marker (the file is \
+                        cut short)"
+                    .into(),
+            );
+        }
+    }
+    let image = match format {
+        None => return Err("not a readable PNG, JPEG or EXR image: its first bytes are none of theirs".into()),
+        Some(image::ImageFormat::Jpeg) => decode(Cursor::new(&jpeg[..]), image::ImageFormat::Jpeg)?,
+        Some(f) => decode(reader, f)?,
     };
-    // The size first, from the header: an absurd one is refused before anything is decoded.
-    let (width, height) = open()?
-        .into_dimensions()
-        .map_err(|e| format!("not a readable PNG, JPEG or EXR image: {e}"))?;
+    let (width, height) = (image.width(), image.height());
+    let linear = raw || matches!(image.color(), image::ColorType::Rgb32F | image::ColorType::Rgba32F);
+    // One float copy of the pixels at a time: an image at MAX_TEXTURE_PIXELS is 768 MiB of them.
+    let rgb = image.into_rgb32f().into_raw();
+    let pixels = rgb
+        .chunks_exact(3)
+        .map(|p| {
+            let v = Vec3::new(p[0], p[1], p[2]);
+            if linear {
+                v
+            } else {
+                Vec3::new(srgb_to_linear(v.x), srgb_to_linear(v.y), srgb_to_linear(v.z))
+            }
+        })
+        .collect();
+    Ok((width, height, pixels))
+}
+
+/// Decodes the image `source` holds in `format`, its size first, from the header: an absurd one is
+/// refused before anything is decoded.
+fn decode<R: std::io::BufRead + std::io::Seek>(
+    mut source: R,
+    format: image::ImageFormat,
+) -> Result<image::DynamicImage, String> {
+    let reader = |source: R| {
+        let mut r = image::ImageReader::with_format(source, format);
+        let mut limits = image::Limits::default();
+        limits.max_alloc = Some(MAX_DECODE_BYTES);
+        r.limits(limits);
+        r
+    };
+    let mut header = image::ImageReader::with_format(&mut source, format);
+    header.no_limits();
+    let (width, height) = header.into_dimensions().map_err(|e| image_error(&e))?;
     if width == 0 || height == 0 || width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
         return Err(format!(
             "image of {width} x {height} pixels: each side must be in 1..={MAX_TEXTURE_SIDE}"
@@ -117,23 +220,8 @@ pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), Strin
             "image of {width} x {height} pixels: at most {MAX_TEXTURE_PIXELS} pixels (8192 x 8192)"
         ));
     }
-    let image = open()?
-        .decode()
-        .map_err(|e| format!("not a readable PNG, JPEG or EXR image: {e}"))?;
-    let linear = raw || matches!(image.color(), image::ColorType::Rgb32F | image::ColorType::Rgba32F);
-    let rgb = image.to_rgb32f();
-    let pixels = rgb
-        .pixels()
-        .map(|p| {
-            let v = Vec3::from_array(p.0);
-            if linear {
-                v
-            } else {
-                Vec3::new(srgb_to_linear(v.x), srgb_to_linear(v.y), srgb_to_linear(v.z))
-            }
-        })
-        .collect();
-    Ok((width, height, pixels))
+    source.rewind().map_err(|e| format!("cannot read the image: {e}"))?;
+    reader(source).decode().map_err(|e| image_error(&e))
 }
 
 /// Mitsuba's `to_uv` from the 4x4 affine transform its XML gives: Mitsuba applies it to the point

@@ -2465,7 +2465,7 @@ material = "light"
             (
                 r#"diffuse = { texture = "missing.png" }"#,
                 "materials.white.diffuse.texture",
-                "missing.png: cannot open the image",
+                "missing.png: cannot read the image",
             ),
             (
                 r#"diffuse = { texture = "corrupt.png" }"#,

@@ -110,7 +110,10 @@ pub fn lights(scene: &Scene, triangles: &[Triangle], textures: &mut Vec<[u32; 4]
         .map(|e| e.light.power.iter().map(|&p| p as f64).sum::<f64>())
         .sum();
     if entries.is_empty() || sum.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-        return Err(Error::scene(&scene.name, 0, 0, "", "no light emits power"));
+        let what = "no light emits power: every light's power (an emitter's emission x area x pi, a point's or \
+                    spot's intensity over its solid angle, the sun's or the sky's flux through the scene) rounds \
+                    to 0 in 32-bit floats (raise the emission or the lights' size)";
+        return Err(Error::scene(&scene.name, 0, 0, "", what));
     }
     let mut run = 0f64;
     for e in &mut entries {

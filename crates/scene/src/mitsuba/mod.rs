@@ -48,7 +48,7 @@ use super::plastic::Coats;
 use super::{Camera, Scene};
 
 pub use self::shape::DISK_SEGMENTS;
-pub use self::xml::{MAX_INCLUDE_DEPTH, MAX_NESTING};
+pub use self::xml::{MAX_INCLUDED_BYTES, MAX_INCLUDED_FILES, MAX_INCLUDE_DEPTH, MAX_NESTING, MAX_SUBSTITUTED_BYTES};
 
 /// `name=value` of a `-D` override; the name is what `$name` refers to.
 pub fn parse_define(s: &str) -> Result<(String, String), String> {

@@ -148,7 +148,7 @@ pub(super) fn number(e: &Elem, s: &str) -> Result<f64> {
     let v: f64 = s
         .trim()
         .parse()
-        .map_err(|_| e.err(format!("\"{s}\" is not a number")))?;
+        .map_err(|_| e.err(format!("\"{}\" is not a number", crate::error::truncated(s, 60))))?;
     if v.is_finite() {
         Ok(v)
     } else {

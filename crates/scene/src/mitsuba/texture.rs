@@ -265,7 +265,7 @@ mod tests {
         let tex = r#"<texture type="bitmap" name="reflectance"><string name="filename" value="t.png"/></texture>"#;
         // (body, the element named, its line, what is said)
         let cases: Vec<(String, &str, usize, &str)> = vec![
-            (bitmap("missing.png"), r#"<texture type="bitmap" name="reflectance">"#, 13, "missing.png: cannot open the image"),
+            (bitmap("missing.png"), r#"<texture type="bitmap" name="reflectance">"#, 13, "missing.png: cannot read the image"),
             (bitmap("corrupt.png"), r#"<texture type="bitmap" name="reflectance">"#, 13, "corrupt.png: not a readable PNG"),
             (bitmap("huge.png"), r#"<texture type="bitmap" name="reflectance">"#, 13, "huge.png: image of 100000 x 1 pixels"),
             (bitmap("vast.png"), r#"<texture type="bitmap" name="reflectance">"#, 13, "vast.png: image of 16384 x 16384 pixels: at most"),

@@ -9,11 +9,29 @@ use std::rc::Rc;
 
 use anyhow::{anyhow, bail, Result};
 
-use crate::error::Error;
+use crate::error::{truncated, Error};
 use crate::files::{read_bounded, MAX_SCENE_BYTES};
 
 /// Deepest `<include>` nesting, Mitsuba's own limit (`ParserConfig::max_include_depth`).
 pub const MAX_INCLUDE_DEPTH: usize = 15;
+
+/// Most files one scene may read, itself and its includes counted each time they are included: with the
+/// depth alone, ten includes a file eight files deep were 10^8 files.
+pub const MAX_INCLUDED_FILES: usize = 1000;
+
+/// Most bytes of scene text one scene may read, its includes' counted each time they are included.
+pub const MAX_INCLUDED_BYTES: u64 = 4 * MAX_SCENE_BYTES;
+
+/// Most bytes `$name` substitution may produce in all a scene's attribute values: ten `<default>`s each
+/// repeating the one before ten times made 10^10 bytes of a 1.6 KB file.
+pub const MAX_SUBSTITUTED_BYTES: u64 = MAX_SCENE_BYTES;
+
+/// Longest quotation of a value in a message.
+const QUOTED: usize = 60;
+
+/// Longest message about an element, in characters: whatever a substituted value holds, an error stays
+/// a line (at six levels of repeated `<default>`s one was 10 MB).
+const MAX_MESSAGE: usize = 400;
 
 /// Elements nested deeper than this are refused (real scenes nest about five deep: scene, shape,
 /// bsdf, bsdf, rgb).
@@ -83,13 +101,16 @@ pub(super) fn read(path: &Path, shown: &str, defines: &[(String, String)]) -> Re
             })
             .collect(),
         open: Vec::new(),
+        files: 0,
+        bytes: 0,
+        substituted: 0,
     };
     let (root, children) = reader.read(path, shown, None)?;
     if let Some(p) = reader.params.iter().find(|p| !p.used) {
         bail!(
             "{shown}: -D {}={}: the scene never uses ${0} (Mitsuba refuses unused parameters too)",
             &p.key[1..],
-            p.value
+            truncated(&p.value, QUOTED)
         );
     }
     Ok((root, children))
@@ -132,7 +153,7 @@ impl Elem {
         let mut s = format!("<{}", self.tag);
         for key in ["type", "id", "name"] {
             if let Some(v) = self.attr(key) {
-                s += &format!(" {key}=\"{v}\"");
+                s += &format!(" {key}=\"{}\"", truncated(v, QUOTED));
             }
         }
         s + ">"
@@ -147,12 +168,17 @@ impl Elem {
             *line as usize,
             *col as usize,
             self.what(),
-            msg.to_string(),
+            truncated(&msg.to_string(), MAX_MESSAGE),
         ))
     }
 
     pub(super) fn warning(&self, msg: impl fmt::Display) -> String {
-        format!("{}: {}: {msg}", self.loc, self.what())
+        format!(
+            "{}: {}: {}",
+            self.loc,
+            self.what(),
+            truncated(&msg.to_string(), MAX_MESSAGE)
+        )
     }
 
     pub(super) fn required(&self, name: &str) -> Result<&str> {
@@ -173,6 +199,11 @@ struct Reader {
     params: Vec<Param>,
     /// Canonical paths of the files being read, outermost first (to catch include cycles).
     open: Vec<PathBuf>,
+    /// Files read so far, and their bytes (within [`MAX_INCLUDED_FILES`], [`MAX_INCLUDED_BYTES`]).
+    files: usize,
+    bytes: u64,
+    /// Bytes substitution has produced so far (within [`MAX_SUBSTITUTED_BYTES`]).
+    substituted: u64,
 }
 
 impl Reader {
@@ -187,6 +218,15 @@ impl Reader {
             Some(include) => include.err(e),
             None => anyhow::Error::from(e),
         })?;
+        self.files += 1;
+        self.bytes += text.len() as u64;
+        if self.files > MAX_INCLUDED_FILES || self.bytes > MAX_INCLUDED_BYTES {
+            return Err(at(format!(
+                "the scene and its includes are more than {MAX_INCLUDED_FILES} files or {} MiB read in all \
+                 (each include counted every time it is included)",
+                MAX_INCLUDED_BYTES >> 20
+            )));
+        }
         let canonical = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
         if let Some(i) = self.open.iter().position(|p| *p == canonical) {
             let chain: Vec<String> = self.open[i..]
@@ -291,9 +331,13 @@ impl Reader {
             },
         };
         for a in node.attributes() {
-            let value = self
-                .substitute(a.value())
-                .map_err(|m| e.err(format!("attribute {}=\"{}\": {m}", a.name(), a.value())))?;
+            let value = self.substitute(a.value()).map_err(|m| {
+                e.err(format!(
+                    "attribute {}=\"{}\": {m}",
+                    a.name(),
+                    truncated(a.value(), QUOTED)
+                ))
+            })?;
             e.attrs.push((a.name().to_string(), value));
         }
         if deep {
@@ -327,6 +371,16 @@ impl Reader {
                 if k > 0 && s.as_bytes()[k - 1] == b'\\' {
                     pos = k + p.key.len();
                 } else {
+                    // Counted before it is made: a value repeating another grows tenfold a level.
+                    self.substituted += p.value.len() as u64;
+                    if self.substituted > MAX_SUBSTITUTED_BYTES {
+                        return Err(format!(
+                            "substituting {} makes more than {} MiB of attribute values in all (a <default> \
+                             that repeats another many times over?)",
+                            p.key,
+                            MAX_SUBSTITUTED_BYTES >> 20
+                        ));
+                    }
                     s.replace_range(k..k + p.key.len(), &p.value);
                     p.used = true;
                     pos = k + p.value.len();
@@ -342,6 +396,15 @@ impl Reader {
                 .chars()
                 .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
                 .collect();
+            // A defined one left over came from a value (`-D res=$res`): values are not substituted again.
+            if let Some(p) = self.params.iter().find(|p| p.key[1..] == name) {
+                return Err(format!(
+                    "${name} is left after substitution: it stands for \"{}\", which holds a $ parameter \
+                     itself, and a parameter's value is used as written, not substituted again (give \
+                     {name} a value without $, or write a literal $ as \\$)",
+                    truncated(&p.value, QUOTED)
+                ));
+            }
             return Err(format!(
                 "undefined parameter ${name} (give it a <default name=\"{name}\" value=\"...\"/> \
                  or -D {name}=...)"
