@@ -2840,7 +2840,7 @@ material = "light"
                 "[[light]]\ntype = \"envmap\"\nfilename = \"none.exr\"",
                 40,
                 "light[0].filename",
-                "none.exr: cannot open the image",
+                "none.exr: cannot read the image",
             ),
             (
                 "[[light]]\ntype = \"envmap\"\nfilename = \"one.png\"",

@@ -411,7 +411,7 @@ mod tests {
                 "<emitter type=\"envmap\">\n<string name=\"filename\" value=\"maps/none.exr\"/></emitter>",
                 12,
                 r#"<emitter type="envmap">"#,
-                "maps/none.exr: cannot open the image",
+                "maps/none.exr: cannot read the image",
             ),
             (
                 "<emitter type=\"envmap\">\n<string name=\"filename\" value=\"maps/one.png\"/></emitter>",
