@@ -355,12 +355,18 @@ impl Renderer {
         // resolution (an 8192 x 8192 image is 1 GiB of texels; lavapipe binds 128 MiB).
         let texture_bytes = gpu.textures.len() as u64 * 16;
         if texture_bytes > max_range {
-            let largest = scene.textures.iter().max_by_key(|t| t.pixel_count());
+            // An environment map's pixels (and its sampling tables, as many again) share the buffer
+            // (lower/lights.rs).
+            let maps = scene.emitters.iter().filter_map(|e| match e {
+                crate::scene::Emitter::Environment(env) => env.map.as_ref(),
+                _ => None,
+            });
+            let largest = (scene.textures.iter().map(|t| (t.name.as_str(), t.pixel_count())))
+                .chain(maps.map(|m| (m.name.as_str(), u64::from(m.width) * u64::from(m.height))))
+                .max_by_key(|&(_, pixels)| pixels);
             let lower = match largest {
-                Some(t) => format!(
-                    "the texture images' size (the largest, \"{}\", has {} pixels; this device binds {} in all)",
-                    t.name,
-                    t.pixel_count(),
+                Some((name, pixels)) => format!(
+                    "the texture images' size (the largest, \"{name}\", has {pixels} pixels; this device binds {} in all)",
                     max_range / 16
                 ),
                 None => "the texture images' size".into(),
