@@ -123,6 +123,18 @@ uint cdf_search(uint first, uint n, float u, out float t, out float p) {
     return lo;
 }
 
+// The probability cdf_search gives entry i of the inclusive cdf from `first`: its share of [0, 1).
+float cdf_share(uint first, uint i) {
+    return table_float(first + i) - (i > 0u ? table_float(first + i - 1u) : 0.0);
+}
+
+// The solid-angle density of a direction drawn uniformly in the (u, v) of a cell of the map's w x h pixels
+// chosen with probability p_cell: a density of cells = w (h - 1) over the unit square, and du dv =
+// dw / (2 pi^2 sin theta).
+float cell_density(uvec2 size, float p_cell, float sin_theta) {
+    return sin_theta > 0.0 ? p_cell * float(size.x * (size.y - 1u)) / (2.0 * PI * PI * sin_theta) : 0.0;
+}
+
 // Local direction of map coordinates (u, v): Mitsuba's (local y up, u = 0 towards -z).
 vec3 envmap_direction(float u, float v) {
     float phi = 2.0 * PI * u;
@@ -176,12 +188,7 @@ float environment_pdf(Emitter e, vec3 d) {
     env_cell(size.x, size.y, l, band, col, f);
     uint rows = e.table + 1u + size.x * size.y;
     uint cols = rows + size.y - 1u + band * size.x;
-    float p_band = table_float(rows + band) - (band > 0u ? table_float(rows + band - 1u) : 0.0);
-    float p_col = table_float(cols + col) - (col > 0u ? table_float(cols + col - 1u) : 0.0);
-    float sin_theta = sqrt(max(0.0, 1.0 - l.y * l.y));
-    // Uniform in the cell's (u, v): a density of cells = w (h - 1) over the unit square, and du dv =
-    // dw / (2 pi^2 sin theta).
-    return sin_theta > 0.0 ? p_band * p_col * float(size.x * (size.y - 1u)) / (2.0 * PI * PI * sin_theta) : 0.0;
+    return cell_density(size, cdf_share(rows, band) * cdf_share(cols, col), sqrt(max(0.0, 1.0 - l.y * l.y)));
 }
 
 // A world direction towards the environment for uniform (a, b), its solid-angle density, and the radiance
@@ -200,11 +207,14 @@ vec3 env_sample(Emitter e, float a, float b, out float pdf, out vec3 radiance) {
     float u = (float(col) + tx + 0.5) / float(size.x);
     float v = (float(band) + ty) / float(size.y - 1u);
     vec3 l = envmap_direction(u - floor(u), v);
-    float sin_theta = sin(PI * v);
-    pdf = sin_theta > 0.0 ? p_band * p_col * float(size.x * (size.y - 1u)) / (2.0 * PI * PI * sin_theta) : 0.0;
+    pdf = cell_density(size, p_band * p_col, sin(PI * v));
     radiance = env_bilinear(e, size.x, band, col, vec2(tx, ty));
     return l.x * e.edge_u + l.y * e.normal + l.z * e.edge_v;
 }
+
+// How far a shadow ray from o towards an infinite light (the sun, the environment) goes: past the scene's
+// bounding sphere.
+float infinite_reach(Emitter e, vec3 o) { return 2.0 * (e.radius + length(o - e.origin)); }
 
 // --- Shadow rays: light other than a quad's or triangle's reaching the ray origin o (offset from its
 // surface), for uniform (a, b): the unit direction w towards it, how far the shadow ray goes, and li, the
@@ -247,8 +257,7 @@ bool light_sample(Emitter e, vec3 o, float a, float b, out vec3 w, out float dis
         if (e.kind == LIGHT_SPOT) li *= spot_falloff(e, -dot(w, e.normal));
         return d2 > 0.0;
     }
-    // Infinite lights: the shadow ray runs past the scene's bounding sphere.
-    dist = 2.0 * (e.radius + length(o - e.origin));
+    dist = infinite_reach(e, o);
     if (HAS_DELTA_LIGHTS && e.kind == LIGHT_DIRECTIONAL) {
         w = -e.normal;
         li = e.value;

@@ -108,6 +108,18 @@ vec3 camera_ray(uint px, uint py, vec2 jitter) {
     return normalize(params.forward + sx * params.right + sy * params.up);
 }
 
+// Whether the shadow ray o + t w, t < d, is blocked. One that runs out of traversal steps answers yes: it is
+// counted here, as an eye path is, and the caller must then check bvh_spent and bvh_cut and drop the sample
+// (geometry.glsl: occluded).
+bool shadowed(vec3 o, vec3 w, float d) {
+    bool was_cut = bvh_cut;
+    bool was_spent = bvh_spent;
+    if (!occluded(o, w, d)) return false;
+    if (bvh_cut && !was_cut) atomicAdd(cut.traversal_cut, 1u);
+    if (bvh_spent && !was_spent) atomicAdd(cut.eye_paths, 1u);
+    return true;
+}
+
 // Term (d) at diffuse point p (nf the side its eye path arrives on, albedo its reflectance), one sample:
 // a light chosen in proportion to its power, a point y uniform on it, the shadow ray towards y. Its
 // estimate f_r Le G / pdf is (albedo / pi) Le (cos_p cos_y / d^2) (area / prob), and the light's flux
@@ -119,8 +131,7 @@ vec3 camera_ray(uint px, uint py, vec2 jitter) {
 // the light's direction (rough_conductor.glsl); albedo then holds its specular_reflectance.
 // nf is the shading normal, ng the true surface's on its side: a light on different sides of them adds
 // nothing (shading.glsl).
-// A shadow ray that runs out of traversal steps answers "occluded": it is counted here, as an eye path is,
-// and the caller must then check bvh_spent and bvh_cut and drop the sample (geometry.glsl: occluded).
+// A shadow ray that runs out of traversal steps is counted (shadowed) and the caller drops the sample.
 vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, uint rough, vec3 wo,
                   inout Rng rng) {
     Emitter e = choose_emitter(rng_float(rng));
@@ -155,13 +166,7 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint co
         s = cos_p * cos_y / (PI * d2);
     }
     if (HAS_SHADING_NORMALS && !shading_valid(w, ng, nf)) return vec3(0.0);
-    bool was_cut = bvh_cut;
-    bool was_spent = bvh_spent;
-    if (occluded(o, w, d)) {
-        if (bvh_cut && !was_cut) atomicAdd(cut.traversal_cut, 1u);
-        if (bvh_spent && !was_spent) atomicAdd(cut.eye_paths, 1u);
-        return vec3(0.0);
-    }
+    if (shadowed(o, w, d)) return vec3(0.0);
     vec3 fr = albedo / PI;
     if (HAS_ROUGH_CONDUCTORS && rough != 0u) {
         vec3 f;
@@ -190,13 +195,7 @@ vec3 environment_by_bsdf(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, 
     if (!(cos_p > 0.0)) return vec3(0.0);
     if (HAS_SHADING_NORMALS && !shading_valid(w, ng, nf)) return vec3(0.0);
     vec3 o = offset_ray(p, nf);
-    bool was_cut = bvh_cut;
-    bool was_spent = bvh_spent;
-    if (occluded(o, w, 2.0 * (e.radius + length(o - e.origin)))) {
-        if (bvh_cut && !was_cut) atomicAdd(cut.traversal_cut, 1u);
-        if (bvh_spent && !was_spent) atomicAdd(cut.eye_paths, 1u);
-        return vec3(0.0);
-    }
+    if (shadowed(o, w, infinite_reach(e, o))) return vec3(0.0);
     float pb = cos_p / PI;
     float pl = environment_pdf(e, w) * e.cdf;
     // f_r L cos_p / pb = albedo L.

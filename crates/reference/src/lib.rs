@@ -143,7 +143,7 @@ fn environment_by_bsdf(
         return Vec3::ZERO;
     }
     let o = offset_ray(g, p, nf);
-    if intersect_scene(g, o, w, 0.0, 2.0 * (e.radius + (o - e.origin).length())).is_some() {
+    if intersect_scene(g, o, w, 0.0, lights::infinite_reach(&e, o)).is_some() {
         return Vec3::ZERO;
     }
     let pb = cos_p / PI;

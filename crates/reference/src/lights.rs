@@ -155,6 +155,25 @@ fn cdf_search(g: &GpuScene, first: u32, n: u32, u: f32) -> (u32, f32, f32) {
     (lo, ((u - before) / p).clamp(0.0, 0.99999994), p)
 }
 
+/// lights.glsl's `cdf_share`.
+fn cdf_share(g: &GpuScene, first: u32, i: u32) -> f32 {
+    table_float(g, first + i) - if i > 0 { table_float(g, first + i - 1) } else { 0.0 }
+}
+
+/// lights.glsl's `cell_density`.
+fn cell_density((w, h): (u32, u32), p_cell: f32, sin_theta: f32) -> f32 {
+    if sin_theta > 0.0 {
+        p_cell * (w * (h - 1)) as f32 / (2.0 * PI * PI * sin_theta)
+    } else {
+        0.0
+    }
+}
+
+/// lights.glsl's `infinite_reach`: how far a shadow ray from o towards the sun or the sky goes.
+pub fn infinite_reach(e: &Emitter, o: Vec3) -> f32 {
+    2.0 * (e.radius + (o - e.origin).length())
+}
+
 fn env_size(g: &GpuScene, e: &Emitter) -> (u32, u32) {
     let t = g.textures[e.table as usize];
     (t[0], t[1])
@@ -207,14 +226,8 @@ pub fn environment_pdf(g: &GpuScene, e: &Emitter, d: Vec3) -> f32 {
     let (band, col, _) = env_cell(w, h, l);
     let rows = e.table + 1 + w * h;
     let cols = rows + h - 1 + band * w;
-    let p_band = table_float(g, rows + band) - if band > 0 { table_float(g, rows + band - 1) } else { 0.0 };
-    let p_col = table_float(g, cols + col) - if col > 0 { table_float(g, cols + col - 1) } else { 0.0 };
-    let sin_theta = (1.0 - l.y * l.y).max(0.0).sqrt();
-    if sin_theta > 0.0 {
-        p_band * p_col * (w * (h - 1)) as f32 / (2.0 * PI * PI * sin_theta)
-    } else {
-        0.0
-    }
+    let p_cell = cdf_share(g, rows, band) * cdf_share(g, cols, col);
+    cell_density((w, h), p_cell, (1.0 - l.y * l.y).max(0.0).sqrt())
 }
 
 /// lights.glsl's `env_sample`: (world direction, solid-angle density, radiance).
@@ -229,12 +242,7 @@ pub fn env_sample(g: &GpuScene, e: &Emitter, a: f32, b: f32) -> (Vec3, f32, Vec3
     let u = (col as f32 + tx + 0.5) / w as f32;
     let v = (band as f32 + ty) / (h - 1) as f32;
     let l = ppm_vk_engine::scene::emitter::envmap_direction(u - u.floor(), v);
-    let sin_theta = (PI * v).sin();
-    let pdf = if sin_theta > 0.0 {
-        p_band * p_col * (w * (h - 1)) as f32 / (2.0 * PI * PI * sin_theta)
-    } else {
-        0.0
-    };
+    let pdf = cell_density((w, h), p_band * p_col, (PI * v).sin());
     let radiance = env_bilinear(g, e, w, band, col, [tx, ty]);
     (l.x * e.edge_u + l.y * e.normal + l.z * e.edge_v, pdf, radiance)
 }
@@ -292,7 +300,7 @@ pub fn light_sample(g: &GpuScene, e: &Emitter, o: Vec3, a: f32, b: f32) -> Optio
         }
         LIGHT_DIRECTIONAL => Some(LightSample {
             w: -e.normal,
-            dist: 2.0 * (e.radius + (o - e.origin).length()),
+            dist: infinite_reach(e, o),
             li: e.value,
             pdf: 0.0,
         }),
@@ -304,7 +312,7 @@ pub fn light_sample(g: &GpuScene, e: &Emitter, o: Vec3, a: f32, b: f32) -> Optio
             let pdf = p * e.cdf;
             Some(LightSample {
                 w,
-                dist: 2.0 * (e.radius + (o - e.origin).length()),
+                dist: infinite_reach(e, o),
                 li: radiance / pdf,
                 pdf,
             })
