@@ -16,6 +16,7 @@ use ppm_vk_engine::{
 };
 
 mod bench;
+mod check;
 mod compare;
 mod plot;
 mod view;
@@ -41,6 +42,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Render variants for equal wall time each and score them against a reference.
     Compare(compare::CompareArgs),
+    /// Read scene files as `render` would and say what each holds and approximated (no device needed).
+    Check(check::CheckArgs),
 }
 
 #[derive(Args, Clone)]
@@ -461,6 +464,7 @@ fn main() {
         Command::Devices => devices(),
         Command::Bench(args) => bench::run(args),
         Command::Compare(args) => compare::run(args),
+        Command::Check(args) => check::run(args),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

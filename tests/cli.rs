@@ -1101,3 +1101,28 @@ fn a_texture_too_large_for_the_device_is_named() {
         );
     }
 }
+
+/// `check` reads scenes without a device: a line saying what each holds, its warnings under it, and
+/// for a file it cannot read the reader's located error and a failing exit.
+#[test]
+fn check_reads_scenes_and_names_what_it_cannot() {
+    let dir = scratch("check");
+    let bad = dir.join("bad.xml");
+    std::fs::write(
+        &bad,
+        "<scene version=\"3.0.0\">\n  <shape type=\"teapot\"/>\n</scene>\n",
+    )
+    .unwrap();
+    let run = bin().args(["check", CORNELL]).output().unwrap();
+    let out = String::from_utf8_lossy(&run.stdout).to_string();
+    assert!(run.status.success(), "{out}");
+    assert!(out.starts_with("ok: ") && out.contains("3 spheres, 7 quads"), "{out}");
+
+    let run = bin().args(["check", CORNELL, bad.to_str().unwrap()]).output().unwrap();
+    let out = String::from_utf8_lossy(&run.stdout).to_string();
+    let err = String::from_utf8_lossy(&run.stderr).to_string();
+    assert!(!run.status.success());
+    assert!(out.contains("bad.xml:2:3: <shape type=\"teapot\">"), "{out}");
+    assert!(err.contains("1 of 2 scene file(s) could not be read"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
