@@ -879,7 +879,7 @@ fn gather_on_glossy_hit_points_matches_brute_force() {
 /// Cells half the radius wide in the smallest hash table: a lookup spans about 5x5 cells (the general
 /// window, not 2x2x2), and many windows hold two cells that share a bucket. Each photon must still be
 /// counted once, from its own cell (the keys of grid.glsl; without them M differs on 416 of 1256). A
-/// smaller batch keeps the crowded buckets inside lavapipe's loop budget (lookup_cut_short_is_an_error).
+/// smaller batch keeps the crowded buckets inside lavapipe's loop budget (a_lookup_past_the_loop_budget_is_split_across_batches).
 #[test]
 fn gather_with_wide_windows_and_shared_buckets_matches_brute_force() {
     for sppm in [false, true] {
@@ -915,10 +915,12 @@ fn gather_through_the_most_partitions_matches_brute_force() {
 }
 
 /// A quarter-radius cell in the smallest table with 100k photons puts tens of thousands of photons in
-/// one SIMD group's lookups, past lavapipe's 65535 loop iterations: the renderer must refuse, not return a darker image.
-/// (On a device without such a limit the lookup completes and matches the brute force.)
+/// one SIMD group's lookups, past lavapipe's 65535 loop iterations. The renderer must not return a darker
+/// image, nor refuse: it splits the pass into smaller batches until every lookup fits, and the result is,
+/// bit for bit, the same photons gathered chunk by chunk at that batch size. (On a device without such a
+/// limit the pass runs in one batch.)
 #[test]
-fn lookup_cut_short_is_an_error() {
+fn a_lookup_past_the_loop_budget_is_split_across_batches() {
     let ctx = ctx();
     let scene = cornell(RES, RES);
     let r0 = ppm_vk_engine::lower::default_radius(&scene); // eq. 8, the starting radius
@@ -926,18 +928,62 @@ fn lookup_cut_short_is_an_error() {
         grid_buckets: Some(ppm_vk_kernels::lookup::SCAN_BLOCK),
         grid_cell: Some(0.25 * r0),
         photons_per_pass: 100_000,
+        emission_samples: 0,
         ..settings()
     };
-    let result = Renderer::new(&ctx, &scene, grid).and_then(|mut r| r.pass());
-    if ctx.info().name.contains("llvmpipe") {
-        let err = format!(
-            "{:#}",
-            result.expect_err("lavapipe cut the lookups short, and the pass did not say so")
+    let mut a = Renderer::new(&ctx, &scene, grid.clone()).unwrap();
+    let stats = a.pass().unwrap();
+    let batch = a.batch_size();
+    println!("{} batches of {batch} photons", stats.batches);
+    if ctx.info().loop_budget.is_some() {
+        assert!(
+            batch < 100_000 && stats.batches >= 2,
+            "the pass was not split ({} batches)",
+            stats.batches
         );
-        assert!(err.contains("cut short"), "unexpected error: {err}");
-    } else {
-        result.unwrap();
     }
+    let mut b = Renderer::new(&ctx, &scene, grid).unwrap();
+    for first in (0..100_000u32).step_by(batch as usize) {
+        b.trace_and_gather(first as u64, batch.min(100_000 - first)).unwrap();
+    }
+    b.update_only().unwrap();
+    let (sa, sb) = (a.read_stats().unwrap(), b.read_stats().unwrap());
+    assert_eq!(
+        sa.iter().zip(&sb).filter(|(x, y)| x != y).count(),
+        0,
+        "split pass vs chunk by chunk"
+    );
+    assert_clean(&ctx);
+}
+
+/// What cannot be split is still an error: with a loop budget that even one photon's lookups exceed
+/// (the limit set to 0 through the test hook, so every subgroup's lookup counts as cut), the pass halves its
+/// batches down to one photon and then refuses, naming the limit.
+#[test]
+fn a_lookup_past_the_loop_budget_with_one_photon_is_an_error() {
+    let ctx = ctx();
+    let scene = cornell(16, 16);
+    let settings = Settings {
+        photons_per_pass: 8,
+        emission_samples: 0,
+        ..settings()
+    };
+    let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
+    r.set_lookup_limit(0).unwrap();
+    let err = format!(
+        "{:#}",
+        r.pass()
+            .expect_err("a lookup cut with one photon per batch was not refused")
+    );
+    assert!(
+        err.contains("cut short") && err.contains("one photon per batch"),
+        "unexpected error: {err}"
+    );
+    assert_eq!(
+        r.batch_size(),
+        1,
+        "the batches were not halved down to one photon first"
+    );
     assert_clean(&ctx);
 }
 

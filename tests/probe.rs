@@ -204,7 +204,7 @@ fn paper_probe_depends_on_the_scene_units() {
     // is ~1 + r / 2, so it follows the units. At 32 pixels wide eq. 8 gives r = 0.17 in metres (growth
     // ~1.08) and 167 in millimetres (growth ~80). Documented, not fixed: that is what --probe paper means.
     // Only the probe runs: with radii 80 times the start every lookup reads the whole photon map, past
-    // lavapipe's loop budget (the renderer refuses such a pass; lookup_cut_short_is_an_error).
+    // lavapipe's loop budget (the renderer would split such a pass into smaller batches; a_lookup_past_the_loop_budget_is_split_across_batches).
     let (_, g1) = render_scaled(1.0, ProbeMode::Paper, 0);
     let (_, g1000) = render_scaled(1e3, ProbeMode::Paper, 0);
     println!("paper probe: mean radius growth {g1:.4} in metres, {g1000:.3} in millimetres");

@@ -785,8 +785,9 @@ impl Renderer {
     }
 
     /// Traces `total` photons from global index `first` and feeds each batch's grid to `use_`, in as few
-    /// batches as fit the record buffer. On overflow, clears the accumulators and goes again in smaller
-    /// batches: the same photons, since streams are by global index. Returns the GPU stages, the records
+    /// batches as fit the record buffer and keep every lookup within the device's loop budget. On overflow
+    /// or a cut lookup, clears the accumulators and goes again in smaller batches: the same photons, since
+    /// streams are by global index. Returns the GPU stages, the records
     /// and the batch count.
     fn run_batches(&mut self, first: u64, total: u32, use_: GridUse) -> Result<(Vec<ScopeTiming>, u64, u32)> {
         let capacity = self.gpu.params.photon_capacity as u64;
@@ -827,8 +828,9 @@ impl Renderer {
                 .ctx
                 .download_prefix(&self.batch_log, batches as usize)
                 .device("a photon pass")?;
-            self.check_lookups()?;
-            if log.iter().all(|&n| n as u64 <= capacity) {
+            let overflow = log.iter().any(|&n| n as u64 > capacity);
+            let cut = self.lookups_cut()?;
+            if !overflow && !cut {
                 return Ok((
                     self.profiler.read().device("a photon pass")?,
                     log.iter().map(|&n| n as u64).sum(),
@@ -836,13 +838,28 @@ impl Renderer {
                 ));
             }
             if self.batch == 1 {
-                return Err(Error::limit(
-                    "the records one photon left",
-                    None,
-                    capacity,
-                    "the photon depth (max_photon_depth)",
-                ));
+                return Err(match overflow {
+                    true => Error::limit(
+                        "the records one photon left",
+                        None,
+                        capacity,
+                        "the photon depth (max_photon_depth)",
+                    ),
+                    // One photon's batch still cut: the cells a lookup spans are too many, which only a
+                    // fixed `grid_cell` far below the radii can do (the renderer's own cells follow them).
+                    false => Error::limit(
+                        "a photon lookup was cut short at the device's limit on loop iterations per SIMD group \
+                         even with one photon per batch (the grid cells one subgroup reads are too many)",
+                        None,
+                        self.ctx.info().loop_budget.unwrap_or(0) as u64,
+                        "the radius or raise the grid cell size",
+                    ),
+                });
             }
+            // Records past the buffer, or a lookup that may have stopped at lavapipe's loop budget: go
+            // again in halves. Half the photons per batch put half as many in the cells a subgroup reads,
+            // so the gather and the probe are split across dispatches rather than refused; the same
+            // photons, and fixed-point sums, so the same image bit for bit.
             self.batch = self.batch.div_ceil(2);
             self.ctx
                 .run(|cmd| {
@@ -853,25 +870,24 @@ impl Renderer {
         }
     }
 
-    /// Fails if a gather or probe lookup may have stopped early: lavapipe ends every loop of a SIMD group
-    /// after 65535 iterations in all, and a cut lookup would silently lose photons.
-    fn check_lookups(&self) -> Result<()> {
+    /// Whether a gather or probe lookup of the batches just run may have stopped early (lavapipe ends every
+    /// loop of a SIMD group after 65535 iterations in all, and a cut lookup would silently lose photons);
+    /// clears the flag for the next try.
+    fn lookups_cut(&self) -> Result<bool> {
         let status: Vec<u32> = self
             .ctx
             .download_prefix(&self.grid.status, 1)
             .device("reading the lookup status")?;
-        if status[0] != 0 {
-            let what = "a photon lookup may have been cut short at the device's limit on loop iterations per SIMD \
-                        group (too many photons in the grid cells one subgroup reads)";
-            let lower = format!("the photons per pass (now {})", self.settings.photons_per_pass);
-            return Err(Error::limit(
-                what,
-                None,
-                self.ctx.info().loop_budget.unwrap_or(0) as u64,
-                lower,
-            ));
+        if status[0] == 0 {
+            return Ok(false);
         }
-        Ok(())
+        self.ctx
+            .run(|cmd| {
+                self.grid.status.cmd_fill(cmd, 0);
+                Ok(())
+            })
+            .device("clearing the lookup status")?;
+        Ok(true)
     }
 
     /// Pass 2, once: photon probing sets each hit point's starting radius (eq. 7-9).
@@ -1275,6 +1291,13 @@ impl Renderer {
         &self.gpu
     }
 
+    /// Sets the loop steps a subgroup's lookups may take before they count as cut short
+    /// (`RenderParams::lookup_limit`), as on a device with that loop budget; 0: every lookup counts as cut.
+    pub fn set_lookup_limit(&mut self, steps: u32) -> anyhow::Result<()> {
+        self.gpu.params.lookup_limit = steps;
+        self.ctx.upload(&self.params, bytemuck::bytes_of(&self.gpu.params))
+    }
+
     /// Photons per batch the passes currently use.
     pub fn batch_size(&self) -> u32 {
         self.batch
@@ -1351,7 +1374,9 @@ impl Renderer {
         self.ctx
             .run(|cmd| self.record_batch(cmd, first, count, 0, use_, ALL_STAGES))?;
         let n: Vec<u32> = self.ctx.download_prefix(&self.counter, 1)?;
-        self.check_lookups()?;
+        if self.lookups_cut()? {
+            anyhow::bail!("a test batch of {count} photons had a lookup cut short at the device's loop budget");
+        }
         self.path_counters()?;
         if n[0] > self.gpu.params.photon_capacity {
             anyhow::bail!(
