@@ -24,12 +24,15 @@
 //! calls into them. Mesh files are read by `obj.rs` (OBJ) and `ply.rs` (PLY).
 
 mod bsdf;
+mod cie;
 mod emitter;
 mod integrator;
 mod properties;
 mod sensor;
 mod shape;
+mod spectrum;
 mod texture;
+mod upgrade;
 mod xml;
 
 use std::collections::HashMap;
@@ -43,11 +46,12 @@ use glam::Vec3;
 use self::bsdf::Bsdf;
 use self::properties::Props;
 use self::texture::Tex;
-use self::xml::Elem;
+use self::xml::{Elem, Resolver};
 use super::plastic::Coats;
 use super::{Camera, Scene};
 
 pub use self::shape::DISK_SEGMENTS;
+pub use self::spectrum::MAX_SPECTRUM_BYTES;
 pub use self::xml::{MAX_INCLUDED_BYTES, MAX_INCLUDED_FILES, MAX_INCLUDE_DEPTH, MAX_NESTING, MAX_SUBSTITUTED_BYTES};
 
 /// `name=value` of a `-D` override; the name is what `$name` refers to.
@@ -65,9 +69,9 @@ pub fn parse_define(s: &str) -> Result<(String, String), String> {
 /// `-D name=value`: one the scene never uses is an error).
 pub(super) fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene> {
     let shown = path.display().to_string();
-    let (root, children) = xml::read(path, &shown, defines)?;
+    let (root, children, resolver) = xml::read(path, &shown, defines)?;
     let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or(&shown).to_string();
-    let mut b = Builder::new(name, root);
+    let mut b = Builder::new(name, root, resolver);
     for e in &children {
         b.top_level(e)?;
     }
@@ -85,13 +89,15 @@ struct Builder {
     origins: HashMap<String, Elem>,
     sensor: Option<Elem>,
     shapes: usize,
+    /// The search path at the end of the scene file: the files plugins name are found by it.
+    resolver: Resolver,
     /// The plastics' coats, each made once for the whole file: the bsdfs' bounds and the final check
     /// read them.
     coats: Coats,
 }
 
 impl Builder {
-    fn new(name: String, root: Elem) -> Builder {
+    fn new(name: String, root: Elem, resolver: Resolver) -> Builder {
         Builder {
             scene: Scene {
                 name,
@@ -118,6 +124,7 @@ impl Builder {
             origins: HashMap::new(),
             sensor: None,
             shapes: 0,
+            resolver,
             coats: Coats::default(),
         }
     }
@@ -176,13 +183,19 @@ impl Builder {
         }
     }
 
-    /// The `filename` of a mesh shape, relative to the scene file's directory.
+    /// The `filename` of a plugin (a mesh, an image), found as Mitsuba finds it when it makes the plugin:
+    /// by the scene's search path (its folder, after the `<path>` folders). Not found there, the folder of
+    /// the file that names it is tried too (where ppm-vk looked before it read `<path>`; Mitsuba would
+    /// not find it).
     fn file(&self, e: &Elem, props: &Props) -> Result<PathBuf> {
         let name = props
             .string("filename")?
             .ok_or_else(|| e.err("needs <string name=\"filename\" .../>"))?;
-        let dir = Path::new(&*e.loc.file).parent().unwrap_or(Path::new(""));
-        Ok(dir.join(name))
+        let own = Path::new(&*e.loc.file).parent().unwrap_or(Path::new("")).join(name);
+        if !self.resolver.finds(name) && own.exists() {
+            return Ok(own);
+        }
+        Ok(self.resolver.resolve(name))
     }
 
     fn finish(mut self) -> Result<Scene> {
