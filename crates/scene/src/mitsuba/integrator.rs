@@ -10,7 +10,23 @@ impl Builder {
     /// Integrators only choose how Mitsuba estimates the image; ppm-vk computes the same image
     /// (all paths) with its own. What would make Mitsuba's image differ is warned about.
     pub(super) fn integrator(&mut self, e: &Elem) -> Result<()> {
-        const FULL: &[&str] = &["path", "volpath", "volpathmis", "ptracer", "prb", "prbvolpath"];
+        // Mitsuba 3's, then Mitsuba 0.6's (bidirectional, Metropolis, photon mapping): all paths, each.
+        const FULL: &[&str] = &[
+            "path",
+            "volpath",
+            "volpathmis",
+            "ptracer",
+            "prb",
+            "prbvolpath",
+            "volpath_simple",
+            "bdpt",
+            "pssmlt",
+            "mlt",
+            "erpt",
+            "ppm",
+            "sppm",
+            "photonmapper",
+        ];
         if !FULL.contains(&e.kind()) {
             self.warn(
                 e,

@@ -241,16 +241,7 @@ pub(super) fn srgb(s: &str) -> Result<[f64; 3], String> {
             _ => return Err(format!("\"{s}\": expected 3 numbers or #rrggbb")),
         }
     };
-    Ok(encoded.map(srgb_to_linear))
-}
-
-/// The sRGB transfer function inverted (IEC 61966-2-1).
-fn srgb_to_linear(c: f64) -> f64 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
+    Ok(encoded.map(|c| f64::from(crate::texture::srgb_to_linear(c as f32))))
 }
 
 #[cfg(test)]

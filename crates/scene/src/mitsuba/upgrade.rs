@@ -178,3 +178,196 @@ fn mixture_as_blend(e: &mut Elem) -> Result<bool> {
     }
     Ok(true)
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::super::tests::{load_in, write_texture};
+    use super::super::{load, spectrum, xml};
+    use super::*;
+    use crate::{Scene, Surface, TempDir};
+
+    /// The names 0.6 scenes use, upgraded to Mitsuba 3's.
+    #[test]
+    fn camel_case_names_become_mitsuba_3s() {
+        for (old, new) in [
+            ("intIOR", "int_ior"),
+            ("extIOR", "ext_ior"),
+            ("alphaU", "alpha_u"),
+            ("toWorld", "to_world"),
+            ("fovAxis", "fov_axis"),
+            ("sampleCount", "sample_count"),
+            ("maxDepth", "max_depth"),
+            ("shapeIndex", "shape_index"),
+            ("faceNormals", "face_normals"),
+            ("specularReflectance", "specular_reflectance"),
+            ("cropOffsetX", "crop_offset_x"),
+            ("flipTexCoords", "flip_tex_coords"),
+            ("radiance", "radiance"),
+            ("already_snake", "already_snake"),
+            ("UPPER", "UPPER"),
+        ] {
+            assert_eq!(snake_case(old), new);
+        }
+    }
+
+    /// The test scene rewritten as a Mitsuba 0.5 file (scenes/legacy/cornell-spheres.xml) is the same
+    /// scene as the Mitsuba 3 file; only the ldrfilm's tone mapping is warned about.
+    #[test]
+    fn a_0_5_scene_is_the_same_scene_as_its_3_0_original() {
+        let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+        let new = load(
+            std::path::Path::new(&format!("{root}/../shared/reference/cornell-spheres.xml")),
+            &[],
+        )
+        .unwrap();
+        let mut old = load(
+            std::path::Path::new(&format!("{root}/scenes/legacy/cornell-spheres.xml")),
+            &[],
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        assert_eq!(old.warnings.len(), 1, "{:?}", old.warnings);
+        assert!(
+            old.warnings[0].contains("<film type=\"ldrfilm\">: a Mitsuba 0.6 film: ppm-vk writes the linear image")
+                && old.warnings[0].contains("(ignored: tonemap_method, gamma, exposure, banner, high_quality_edges)"),
+            "{}",
+            old.warnings[0]
+        );
+        assert!(new.warnings.is_empty());
+        old.warnings.clear();
+        assert_eq!(old, new);
+    }
+
+    fn legacy(dir: &TempDir, body: &str) -> anyhow::Result<Scene> {
+        let head = r#"<scene version="0.6.0"><sensor type="perspective"><float name="fov" value="40"/>
+            <transform name="toWorld"><lookAt origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+            <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film></sensor>
+            <shape type="rectangle"><transform name="toWorld"><rotate x="1" angle="90"/><translate y="3"/></transform>
+            <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>"#;
+        let path = dir.write("old.xml", &format!("{head}\n{body}\n</scene>\n"));
+        load(&path, &[])
+    }
+
+    #[test]
+    fn each_file_is_upgraded_by_its_own_version() {
+        let dir = TempDir::new("mitsuba-legacy");
+        // A 3.0 file included by a 0.6 one keeps its names (toWorld is no Mitsuba 3 name); a 0.6 file
+        // included by a 3.0 one is upgraded.
+        dir.write(
+            "new.xml",
+            r#"<scene version="3.0.0"><shape type="sphere"><transform name="toWorld"/></shape></scene>"#,
+        );
+        let e = format!("{:#}", legacy(&dir, r#"<include filename="new.xml"/>"#).unwrap_err());
+        assert!(
+            e.contains("new.xml:1:") && e.contains("<transform name=\"toWorld\">: parameter not read"),
+            "{e}"
+        );
+        dir.write(
+            "old-part.xml",
+            r#"<scene version="0.6.0"><bsdf type="dielectric" id="_glass"><float name="intIOR" value="1.33"/></bsdf></scene>"#,
+        );
+        let s = load_in(
+            &dir,
+            r#"<include filename="old-part.xml"/><shape type="sphere"><ref id="ID_glass__UPGR"/></shape>"#,
+            &[],
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        assert_eq!(s.materials.last().unwrap().name, "ID_glass__UPGR");
+        // int_ior over Mitsuba's default ext_ior (air, 1.000277): intIOR was read.
+        let glass = s.materials.last().unwrap().surface;
+        assert!(
+            matches!(glass, Surface::Glass { ior, .. } if (ior - 1.33 / 1.000_277).abs() < 1e-6),
+            "{glass:?}"
+        );
+    }
+
+    #[test]
+    fn texture_offsets_and_scales_become_to_uv() {
+        let dir = TempDir::new("mitsuba-legacy-uv");
+        write_texture(&dir, "t.png");
+        let old = legacy(
+            &dir,
+            r#"<shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="diffuseReflectance">
+               <string name="filename" value="t.png"/><float name="uscale" value="2"/><float name="voffset" value="0.25"/>
+               </texture></bsdf></shape>"#,
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        let path = dir.write(
+            "new.xml",
+            &std::fs::read_to_string(dir.0.join("old.xml"))
+                .unwrap()
+                .replace("0.6.0", "3.0.0")
+                .replace("toWorld", "to_world")
+                .replace("lookAt", "lookat")
+                .replace("diffuseReflectance", "reflectance")
+                .replace(
+                    r#"<float name="uscale" value="2"/><float name="voffset" value="0.25"/>"#,
+                    r#"<transform name="to_uv"><translate y="0.25"/><scale x="2"/></transform>"#,
+                ),
+        );
+        let mut new = load(&path, &[]).unwrap();
+        // The same warning (the rectangle is one-sided in Mitsuba), each naming its own file.
+        assert_eq!(old.warnings.len(), 1);
+        assert_eq!(old.warnings[0].replace("old.xml", "new.xml"), new.warnings[0]);
+        new.name = old.name.clone();
+        new.warnings = old.warnings.clone();
+        assert_eq!(old, new);
+        assert_eq!(old.textures[0].to_uv, [2.0, 0.0, 0.0, 0.0, 1.0, 0.25]);
+    }
+
+    #[test]
+    fn plugins_mitsuba_3_dropped_are_refused_by_name_and_exact_mixtures_are_blends() {
+        let dir = TempDir::new("mitsuba-legacy-dropped");
+        let e = format!(
+            "{:#}",
+            legacy(&dir, r#"<shape type="sphere"><bsdf type="phong"/></shape>"#).unwrap_err()
+        );
+        assert!(
+            e.contains("old.xml:6:")
+                && e.contains("<bsdf type=\"phong\">: a Mitsuba 0.6 plugin (the modified Phong model)"),
+            "{e}"
+        );
+        let e = format!("{:#}", legacy(&dir, r#"<emitter type="sunsky"/>"#).unwrap_err());
+        assert!(e.contains("Mitsuba 3's sunsky is another model"), "{e}");
+        // Weights summing to 1: a blendbsdf of the second's weight; otherwise refused.
+        let mixture = |weights: &str| {
+            format!(
+                r#"<scene version="0.6.0"><bsdf type="mixturebsdf" id="m"><string name="weights" value="{weights}"/>
+                   <bsdf type="diffuse"/><bsdf type="conductor"/></bsdf></scene>"#
+            )
+        };
+        let path = dir.write("m.xml", &mixture("0.3, 0.7"));
+        let (_, top, _) = xml::read(&path, "m.xml", &[]).unwrap();
+        assert_eq!(top[0].kind(), "blendbsdf");
+        let w = &top[0].children[0];
+        assert_eq!(
+            (w.tag.as_str(), w.attr("name"), w.attr("value")),
+            ("float", Some("weight"), Some("0.7"))
+        );
+        let path = dir.write("m.xml", &mixture("0.3, 0.6"));
+        let e = format!("{:#}", xml::read(&path, "m.xml", &[]).unwrap_err());
+        assert!(e.contains("a weighted sum of bsdfs"), "{e}");
+    }
+
+    #[test]
+    fn srgb_and_blackbody_of_0_6() {
+        let dir = TempDir::new("mitsuba-legacy-colours");
+        let s = legacy(
+            &dir,
+            r##"<shape type="sphere"><bsdf type="diffuse"><srgb name="reflectance" value="#808080"/></bsdf></shape>
+                <shape type="sphere"><point name="center" x="3"/><emitter type="area"><blackbody name="radiance" temperature="5000K" scale="1e-4"/></emitter></shape>"##,
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        // sRGB 128/255 is linear 0.2158605.
+        assert!(matches!(s.materials[1].surface, Surface::Diffuse { albedo } if (albedo.x - 0.215_860_5).abs() < 1e-6));
+        let want = spectrum::blackbody(5000.0).map(|c| (c * 1e-4) as f32);
+        assert_eq!(s.materials[2].emission, Vec3::from_array(want));
+        let e = format!(
+            "{:#}",
+            legacy(&dir, r#"<shape type="sphere"><bsdf type="diffuse"><blackbody name="reflectance" temperature="5000"/></bsdf></shape>"#)
+                .unwrap_err()
+        );
+        assert!(e.contains("a black body is an emission spectrum"), "{e}");
+    }
+}

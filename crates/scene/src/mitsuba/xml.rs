@@ -516,6 +516,89 @@ mod tests {
     use super::super::tests::load_in;
     use crate::{Scene, Surface, TempDir};
 
+    fn albedo(s: &Scene, quad: usize) -> f32 {
+        match s.materials[s.quads[quad].material as usize].surface {
+            Surface::Diffuse { albedo } => albedo.x,
+            _ => panic!("a diffuse quad"),
+        }
+    }
+
+    /// `<path>` folders are searched first, latest first; a spectrum file resolves by the search path in
+    /// force where it is read, a plugin's file (a mesh) by the one at the end of the scene file, as in
+    /// Mitsuba 3; an include by the including file's folder first, then the search path in force.
+    #[test]
+    fn path_folders_and_includes_resolve_as_mitsubas_file_resolver() {
+        let dir = TempDir::new("mitsuba-path");
+        for (sub, value) in [("", 0.4), ("a/", 0.2), ("b/", 0.6)] {
+            std::fs::create_dir_all(dir.0.join(sub)).unwrap();
+            dir.write(&format!("{sub}t.spd"), &format!("360 {value}\n830 {value}\n"));
+        }
+        std::fs::create_dir_all(dir.0.join("meshes")).unwrap();
+        dir.write(
+            "meshes/sq.obj",
+            "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nf 1 2 3\nf 1 3 4\n",
+        );
+        let cube = |file: &str| {
+            format!(
+                r#"<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" filename="{file}"/></bsdf></shape>"#
+            )
+        };
+        let body = format!(
+            r#"<shape type="obj"><string name="filename" value="sq.obj"/></shape>{}<path value="a"/>{}<path value="b"/>{}
+               <path value="meshes"/>"#,
+            cube("t.spd"),
+            cube("t.spd"),
+            cube("t.spd")
+        );
+        let s = load_in(&dir, &body, &[]).unwrap_or_else(|e| panic!("{e:#}"));
+        // The head's lamp is quad 0, then three cubes of six quads; a flat spectrum under D65 is its
+        // value in grey to within the CIE tables' resolution.
+        for (cube, want) in [(0, 0.4), (1, 0.2), (2, 0.6)] {
+            let got = albedo(&s, 1 + 6 * cube);
+            assert!((got - want).abs() < 0.01 * want, "cube {cube}: {got} vs {want}");
+        }
+        assert_eq!(s.meshes.len(), 1, "sq.obj found by the <path> after it");
+        let e = format!(
+            "{:#}",
+            load_in(
+                &dir,
+                r#"<shape type="obj"><string name="filename" value="sq.obj"/></shape>"#,
+                &[]
+            )
+            .unwrap_err()
+        );
+        assert!(e.contains("sq.obj") && e.contains("cannot read"), "{e}");
+        let e = format!("{:#}", load_in(&dir, r#"<path value="nowhere"/>"#, &[]).unwrap_err());
+        assert!(
+            e.contains("scene.xml:12:1: <path>: folder") && e.contains("nowhere\" not found"),
+            "{e}"
+        );
+        let e = format!(
+            "{:#}",
+            load_in(&dir, r#"<shape type="cube"><path value="a"/></shape>"#, &[]).unwrap_err()
+        );
+        assert!(e.contains("<path> belongs directly in the <scene>"), "{e}");
+
+        // mitsuba-data's participating_media: include/a.xml includes "include/b.xml", found from the
+        // outer scene's folder (include/include/b.xml does not exist).
+        std::fs::create_dir_all(dir.0.join("include")).unwrap();
+        dir.write(
+            "include/a.xml",
+            r#"<scene version="3.0.0"><include filename="include/b.xml"/></scene>"#,
+        );
+        dir.write(
+            "include/b.xml",
+            r#"<scene version="3.0.0"><bsdf type="diffuse" id="grey"/></scene>"#,
+        );
+        let s = load_in(
+            &dir,
+            r#"<include filename="include/a.xml"/><shape type="cube"><ref id="grey"/></shape>"#,
+            &[],
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        assert_eq!(albedo(&s, 1), 0.5);
+    }
+
     #[test]
     fn defaults_overrides_refs_and_includes() {
         let dir = TempDir::new("mitsuba-inc");
