@@ -69,9 +69,15 @@ pub fn parse_define(s: &str) -> Result<(String, String), String> {
 /// `-D name=value`: one the scene never uses is an error).
 pub(super) fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene> {
     let shown = path.display().to_string();
-    let (root, children, resolver) = xml::read(path, &shown, defines)?;
+    let xml::Read {
+        root,
+        children,
+        resolver,
+        warnings,
+    } = xml::read(path, &shown, defines)?;
     let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or(&shown).to_string();
     let mut b = Builder::new(name, root, resolver);
+    b.scene.warnings = warnings;
     b.ids(&children)?;
     for e in &children {
         b.top_level(e)?;

@@ -281,7 +281,7 @@ mod tests {
                 "case.xml",
                 &format!(r#"<scene version="3.0.0"><{owner} type="{kind}">{property}</{owner}></scene>"#),
             );
-            let (_, top, _) = xml::read(&path, "case.xml", &[]).unwrap();
+            let top = xml::read(&path, "case.xml", &[]).unwrap().children;
             let (props, _) = Props::of(&top[0]);
             let name = top[0].children[0].attr("name").unwrap();
             let got = props.color(name).map(|c| c.expect("the property is there"));

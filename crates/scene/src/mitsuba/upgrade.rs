@@ -13,20 +13,19 @@ use super::xml::Elem;
 /// letter that follows a lower-case one, that letter and the upper-case run after it lowered
 /// (`intIOR` -> `int_ior`, `toWorld` -> `to_world`, `cropOffsetX` -> `crop_offset_x`).
 pub(super) fn snake_case(name: &str) -> String {
-    let b = name.as_bytes();
+    let c: Vec<char> = name.chars().collect();
     let mut out = String::with_capacity(name.len() + 4);
     let mut i = 0;
-    while i < b.len() {
-        let c = b[i];
-        if i > 0 && b[i - 1].is_ascii_lowercase() && c.is_ascii_uppercase() {
+    while i < c.len() {
+        if i > 0 && c[i - 1].is_ascii_lowercase() && c[i].is_ascii_uppercase() {
             out.push('_');
-            out.push(c.to_ascii_lowercase() as char);
-            while i + 1 < b.len() && b[i + 1].is_ascii_uppercase() {
+            out.push(c[i].to_ascii_lowercase());
+            while i + 1 < c.len() && c[i + 1].is_ascii_uppercase() {
                 i += 1;
-                out.push(b[i].to_ascii_lowercase() as char);
+                out.push(c[i].to_ascii_lowercase());
             }
         } else {
-            out.push(c as char);
+            out.push(c[i]);
         }
         i += 1;
     }
@@ -87,8 +86,9 @@ const DROPPED: &[(&str, &str, &str)] = &[
 ];
 
 /// Rewrites that look at the element's children (read, substituted and upgraded already), and the
-/// refusal of plugins Mitsuba 3 dropped.
-pub(super) fn children(e: &mut Elem) -> Result<()> {
+/// refusal of plugins Mitsuba 3 dropped; approximations go to `warnings`.
+pub(super) fn children(e: &mut Elem, warnings: &mut Vec<String>) -> Result<()> {
+    images(e, warnings);
     if let Some((_, _, what)) = DROPPED.iter().find(|(t, k, _)| *t == e.tag && *k == e.kind()) {
         if !(e.kind() == "mixturebsdf" && mixture_as_blend(e)?) {
             return Err(e.err(format!(
@@ -140,6 +140,49 @@ pub(super) fn children(e: &mut Elem) -> Result<()> {
         e.children.push(t);
     }
     Ok(())
+}
+
+/// Mitsuba 0.6's image parameters Mitsuba 3 dropped, on a bitmap or an envmap: `gamma` -1 (the default:
+/// sRGB for 8-bit images, linear for HDR ones, as Mitsuba 3 reads them) dropped, `gamma` 1 (linear) as
+/// `raw` (a bitmap's; other values are left to be refused); `cache` (its MIP map cache file) dropped; EWA
+/// and trilinear filtering read as bilinear with a warning, `max_anisotropy` (EWA's) with it.
+fn images(e: &mut Elem, warnings: &mut Vec<String>) {
+    let bitmap = e.tag == "texture" && e.kind() == "bitmap";
+    if !bitmap && !(e.tag == "emitter" && e.kind() == "envmap") {
+        return;
+    }
+    let value = |c: &Elem| c.attr("value").and_then(|v| v.trim().parse::<f64>().ok());
+    let mut filtered = None;
+    let mut kept = Vec::new();
+    for mut c in std::mem::take(&mut e.children) {
+        match c.attr("name") {
+            Some("gamma") if value(&c) == Some(-1.0) => {}
+            Some("gamma") if bitmap && value(&c) == Some(1.0) => {
+                c.tag = "boolean".into();
+                c.attrs = vec![("name".into(), "raw".into()), ("value".into(), "true".into())];
+                kept.push(c);
+            }
+            Some("cache") => {}
+            Some("max_anisotropy") if bitmap => {}
+            Some("filter_type") if bitmap && matches!(c.attr("value"), Some("ewa" | "trilinear")) => {
+                filtered = c.attr("value").map(str::to_string);
+                set(&mut c, "value", "bilinear");
+                kept.push(c);
+            }
+            _ => kept.push(c),
+        }
+    }
+    e.children = kept;
+    // 0.6's default filter is EWA: a bitmap without one is filtered so too.
+    let filter = filtered.or_else(|| {
+        (bitmap && !e.children.iter().any(|c| c.attr("name") == Some("filter_type"))).then(|| "ewa".to_string())
+    });
+    if let Some(f) = filter {
+        warnings.push(e.warning(format!(
+            "Mitsuba 0.6's {f} filtering read as bilinear: ppm-vk looks the image up bilinearly, without \
+             averaging it over the pixel's footprint (the same where the texture is not minified)"
+        )));
+    }
 }
 
 fn set(e: &mut Elem, key: &str, value: &str) {
@@ -207,13 +250,16 @@ mod tests {
             ("radiance", "radiance"),
             ("already_snake", "already_snake"),
             ("UPPER", "UPPER"),
+            ("éA", "éA"),
+            ("aéB", "aéB"),
         ] {
             assert_eq!(snake_case(old), new);
         }
     }
 
     /// The test scene rewritten as a Mitsuba 0.5 file (scenes/legacy/cornell-spheres.xml) is the same
-    /// scene as the Mitsuba 3 file; only the ldrfilm's tone mapping is warned about.
+    /// scene as the Mitsuba 3 file; only the integrator's strictNormals and the ldrfilm's tone mapping are
+    /// warned about.
     #[test]
     fn a_0_5_scene_is_the_same_scene_as_its_3_0_original() {
         let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
@@ -227,12 +273,17 @@ mod tests {
             &[],
         )
         .unwrap_or_else(|e| panic!("{e:#}"));
-        assert_eq!(old.warnings.len(), 1, "{:?}", old.warnings);
+        assert_eq!(old.warnings.len(), 2, "{:?}", old.warnings);
         assert!(
-            old.warnings[0].contains("<film type=\"ldrfilm\">: a Mitsuba 0.6 film: ppm-vk writes the linear image")
-                && old.warnings[0].contains("(ignored: tonemap_method, gamma, exposure, banner, high_quality_edges)"),
+            old.warnings[0].contains("<integrator type=\"path\">: not read: strict_normals"),
             "{}",
             old.warnings[0]
+        );
+        assert!(
+            old.warnings[1].contains("<film type=\"ldrfilm\">: a Mitsuba 0.6 film: ppm-vk writes the linear image")
+                && old.warnings[1].contains("(ignored: tonemap_method, gamma, exposure, banner, high_quality_edges)"),
+            "{}",
+            old.warnings[1]
         );
         assert!(new.warnings.is_empty());
         old.warnings.clear();
@@ -290,6 +341,8 @@ mod tests {
             &dir,
             r#"<shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="diffuseReflectance">
                <string name="filename" value="t.png"/><float name="uscale" value="2"/><float name="voffset" value="0.25"/>
+               <string name="filterType" value="trilinear"/><float name="maxAnisotropy" value="20"/>
+               <float name="gamma" value="-1"/><boolean name="cache" value="false"/>
                </texture></bsdf></shape>"#,
         )
         .unwrap_or_else(|e| panic!("{e:#}"));
@@ -304,12 +357,26 @@ mod tests {
                 .replace(
                     r#"<float name="uscale" value="2"/><float name="voffset" value="0.25"/>"#,
                     r#"<transform name="to_uv"><translate y="0.25"/><scale x="2"/></transform>"#,
+                )
+                .replace(
+                    r#"<string name="filterType" value="trilinear"/><float name="maxAnisotropy" value="20"/>"#,
+                    "",
+                )
+                .replace(
+                    r#"<float name="gamma" value="-1"/><boolean name="cache" value="false"/>"#,
+                    "",
                 ),
         );
         let mut new = load(&path, &[]).unwrap();
-        // The same warning (the rectangle is one-sided in Mitsuba), each naming its own file.
-        assert_eq!(old.warnings.len(), 1);
-        assert_eq!(old.warnings[0].replace("old.xml", "new.xml"), new.warnings[0]);
+        // The filter is warned about; then the same warning (the rectangle is one-sided in Mitsuba), each
+        // naming its own file.
+        assert_eq!(old.warnings.len(), 2, "{:?}", old.warnings);
+        assert!(
+            old.warnings[0].contains("<texture type=\"bitmap\" name=\"diffuse_reflectance\">: Mitsuba 0.6's trilinear filtering read as bilinear"),
+            "{}",
+            old.warnings[0]
+        );
+        assert_eq!(old.warnings[1].replace("old.xml", "new.xml"), new.warnings[0]);
         new.name = old.name.clone();
         new.warnings = old.warnings.clone();
         assert_eq!(old, new);
@@ -338,7 +405,7 @@ mod tests {
             )
         };
         let path = dir.write("m.xml", &mixture("0.3, 0.7"));
-        let (_, top, _) = xml::read(&path, "m.xml", &[]).unwrap();
+        let top = xml::read(&path, "m.xml", &[]).unwrap().children;
         assert_eq!(top[0].kind(), "blendbsdf");
         let w = &top[0].children[0];
         assert_eq!(
@@ -346,7 +413,7 @@ mod tests {
             ("float", Some("weight"), Some("0.7"))
         );
         let path = dir.write("m.xml", &mixture("0.3, 0.6"));
-        let e = format!("{:#}", xml::read(&path, "m.xml", &[]).unwrap_err());
+        let e = format!("{:#}", xml::read(&path, "m.xml", &[]).err().expect("refused"));
         assert!(e.contains("a weighted sum of bsdfs"), "{e}");
     }
 

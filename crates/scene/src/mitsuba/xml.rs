@@ -92,8 +92,9 @@ fn too_deep(text: &str, max: usize) -> Option<usize> {
 /// The root element of the scene at `path` (`shown` in messages) and its top-level elements, includes
 /// spliced in; `defines` override its `<default>`s, and one the scene never uses is an error.
 /// Also returns the search path in force at the end of the scene file, which resolves the files the
-/// scene's plugins name (meshes, images), as Mitsuba resolves them when it instantiates the plugins.
-pub(super) fn read(path: &Path, shown: &str, defines: &[(String, String)]) -> Result<(Elem, Vec<Elem>, Resolver)> {
+/// scene's plugins name (meshes, images), as Mitsuba resolves them when it instantiates the plugins, and
+/// the warnings of the upgrade of older files.
+pub(super) fn read(path: &Path, shown: &str, defines: &[(String, String)]) -> Result<Read> {
     let mut reader = Reader {
         params: defines
             .iter()
@@ -110,6 +111,7 @@ pub(super) fn read(path: &Path, shown: &str, defines: &[(String, String)]) -> Re
         // Mitsuba's `load_file` puts the scene's folder first (its working directory, which follows, is
         // not searched here: what a scene reads does not depend on where ppm-vk runs).
         resolver: Resolver(Rc::new(vec![parent(path)])),
+        warnings: Vec::new(),
     };
     let (root, children) = reader.read(path, shown, None)?;
     if let Some(p) = reader.params.iter().find(|p| !p.used) {
@@ -119,7 +121,20 @@ pub(super) fn read(path: &Path, shown: &str, defines: &[(String, String)]) -> Re
             truncated(&p.value, QUOTED)
         );
     }
-    Ok((root, children, reader.resolver))
+    Ok(Read {
+        root,
+        children,
+        resolver: reader.resolver,
+        warnings: reader.warnings,
+    })
+}
+
+/// A scene file read: its root element and top-level elements, includes spliced in.
+pub(super) struct Read {
+    pub(super) root: Elem,
+    pub(super) children: Vec<Elem>,
+    pub(super) resolver: Resolver,
+    pub(super) warnings: Vec<String>,
 }
 
 /// `path`'s folder (`.` for a bare file name).
@@ -256,6 +271,8 @@ struct Reader {
     /// The search path in force (`<path>` prepends to it; an `<include>` reads with its file's folder
     /// prepended, and restores it after).
     resolver: Resolver,
+    /// What the upgrade of older files approximates.
+    warnings: Vec<String>,
 }
 
 impl Reader {
@@ -437,7 +454,7 @@ impl Reader {
             }
             e.children = children;
             if src.legacy {
-                upgrade::children(&mut e)?;
+                upgrade::children(&mut e, &mut self.warnings)?;
             }
         }
         Ok(e)
