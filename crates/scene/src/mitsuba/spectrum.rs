@@ -116,7 +116,12 @@ pub(super) fn uniform(value: f64, usage: Use) -> [f64; 3] {
 /// curve over [360, 830] nm integrated against the CIE curves, not weighted by D65, not bounded.
 pub(super) fn blackbody(kelvin: f64) -> [f64; 3] {
     const STEPS: usize = 1000;
-    let (c, h, k) = (2.997_924_58e8_f32, 6.626_070_04e-34_f32, 1.380_648_52e-23_f32);
+    // Mitsuba's constants (the speed of light, Planck's, Boltzmann's), rounded to 32 bits as its
+    // ScalarFloat(...) rounds them.
+    const C: f64 = 2.997_924_58e8;
+    const H: f64 = 6.626_070_04e-34;
+    const K: f64 = 1.380_648_52e-23;
+    let (c, h, k) = (C as f32, H as f32, K as f32);
     let c0 = f64::from(2.0 * h * c * c);
     let c1 = f64::from(h * c / k);
     let wavelengths: Vec<f64> = (0..STEPS)

@@ -148,7 +148,8 @@ pub(super) fn children(e: &mut Elem, warnings: &mut Vec<String>) -> Result<()> {
 /// and trilinear filtering read as bilinear with a warning, `max_anisotropy` (EWA's) with it.
 fn images(e: &mut Elem, warnings: &mut Vec<String>) {
     let bitmap = e.tag == "texture" && e.kind() == "bitmap";
-    if !bitmap && !(e.tag == "emitter" && e.kind() == "envmap") {
+    let envmap = e.tag == "emitter" && e.kind() == "envmap";
+    if !(bitmap || envmap) {
         return;
     }
     let value = |c: &Elem| c.attr("value").and_then(|v| v.trim().parse::<f64>().ok());
