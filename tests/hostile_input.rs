@@ -10,7 +10,7 @@ use std::cell::Cell;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use ppm_vk_engine::scene::{MAX_RESOLUTION, MAX_SCENE_BYTES, MAX_SHAPES};
+use ppm_vk_engine::scene::{MAX_RESOLUTION, MAX_SCENE_BYTES, MAX_SHAPES, MAX_SPECTRUM_BYTES};
 use ppm_vk_engine::Scene;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
@@ -83,9 +83,24 @@ fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
             vec![
                 "../shared/reference/cornell-spheres.xml",
                 "scenes/references/cornell-coated.xml",
+                "scenes/legacy/cornell-spheres.xml",
             ],
         ),
+        ("spd", load_spd, vec!["scenes/references/spectra-test.spd"]),
     ]
+}
+
+/// A spectrum file (Mitsuba's .spd text) as a light's radiance and a floor's reflectance.
+fn load_spd(text: &[u8]) -> anyhow::Result<Scene> {
+    let dir = scratch("spd");
+    std::fs::write(dir.join("s.spd"), String::from_utf8_lossy(text).as_bytes())?;
+    let path = xml_scene(
+        &dir,
+        "s.xml",
+        r#"<shape type="rectangle"><bsdf type="diffuse"><spectrum name="reflectance" filename="s.spd"/></bsdf></shape>
+           <shape type="sphere"><emitter type="area"><spectrum name="radiance" filename="s.spd"/></emitter></shape>"#,
+    );
+    Ok(Scene::load(&path)?)
 }
 
 /// A Mitsuba scene, read from a file (includes and meshes resolve against its directory).
@@ -691,4 +706,77 @@ fn an_exr_at_the_documented_pixel_limit_loads() {
     let scene = loaded.unwrap();
     assert_eq!(scene.textures[0].pixel_count(), w as u64 * h as u64);
     std::fs::remove_file(&path).ok();
+}
+
+/// Spectra Mitsuba refuses (one entry, wavelengths that do not increase, NaN) and a spectrum file beyond
+/// its bound are errors naming the file, the line and the element; a file at the bound is read.
+#[test]
+fn malformed_spectra_are_refused_in_sentences() {
+    let dir = scratch("spectra");
+    let body = |value: &str| {
+        format!(
+            r#"<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" value="{value}"/></bsdf></shape>"#
+        )
+    };
+    for (value, says) in [
+        ("500:0.5", "at least two wavelength:value entries"),
+        (
+            "600:0.5, 500:0.2",
+            "wavelengths must increase strictly: 500 nm follows 600 nm",
+        ),
+        (
+            "500:0.5, 500:0.2",
+            "wavelengths must increase strictly: 500 nm follows 500 nm",
+        ),
+        ("400:0.5, 500:nan", "NaN is not a finite number"),
+        ("400:0.5, 500:1e999", "inf is not a finite number"),
+        ("400:0.5 500", "\"500\" is not a wavelength:value pair"),
+    ] {
+        let e = load_fails(xml_scene(&dir, "s.xml", &body(value)));
+        assert!(
+            e.contains("s.xml:4:") && e.contains("<spectrum name=\"reflectance\">") && e.contains(says),
+            "{value}: {e}"
+        );
+    }
+    let file = |text: &str| {
+        std::fs::write(dir.join("f.spd"), text).unwrap();
+        xml_scene(
+            &dir,
+            "f.xml",
+            r#"<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" filename="f.spd"/></bsdf></shape>"#,
+        )
+    };
+    let e = load_fails(file("# measured\n400 0.5\n450 0.6 0.7\n"));
+    assert!(
+        e.contains("f.xml:4:") && e.contains("f.spd:3: expected a wavelength and a value, got 3 numbers"),
+        "{e}"
+    );
+    let e = load_fails(file("400 0.5\n380 0.6\n"));
+    assert!(e.contains("f.spd: wavelengths must increase strictly"), "{e}");
+    let e = load_fails(file("400 0.5\n500 nan\n"));
+    assert!(e.contains("f.spd:2: \"nan\" is not a finite number"), "{e}");
+    // At the bound: read; one byte more (a sparse file) is refused before it is read.
+    let line = "500 0.5\n";
+    let mut text = format!(
+        "400 0.5\n{}",
+        "#".repeat(MAX_SPECTRUM_BYTES as usize - 8 - line.len() - 1)
+    );
+    text += "\n";
+    text += line;
+    assert_eq!(text.len() as u64, MAX_SPECTRUM_BYTES);
+    assert!(Scene::load(file(&text)).is_ok());
+    std::fs::File::create(dir.join("f.spd"))
+        .unwrap()
+        .set_len(MAX_SPECTRUM_BYTES + 1)
+        .unwrap();
+    let path = xml_scene(
+        &dir,
+        "f.xml",
+        r#"<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" filename="f.spd"/></bsdf></shape>"#,
+    );
+    let e = load_fails(path);
+    assert!(
+        e.contains("f.xml:4:") && e.contains("f.spd") && e.contains("more than a spectrum file may have"),
+        "{e}"
+    );
 }

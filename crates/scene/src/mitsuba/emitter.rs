@@ -271,7 +271,9 @@ mod tests {
                 intensity: Vec3::new(1.0, 2.0, 3.0)
             }
         );
-        // to_world's translation is the position; a spectrum of one value is grey.
+        // to_world's translation is the position; a light's spectrum of one value is, as in Mitsuba 3's RGB
+        // variants, that value times xyz_to_srgb(1, 1, 1) (a flat spectrum is not D65's white), not grey: Mitsuba
+        // 3 gives (6.023969650268555, 4.741455078125, 4.544580459594727) (scenes/references/spectra.json).
         assert_eq!(
             light(
                 r#"<emitter type="point"><transform name="to_world"><rotate y="1" angle="30"/><translate x="-1" z="2"/></transform>
@@ -279,7 +281,7 @@ mod tests {
             ),
             Emitter::Point {
                 position: Vec3::new(-1.0, 0.0, 2.0),
-                intensity: Vec3::splat(5.0)
+                intensity: Vec3::new(6.023_969_7, 4.741_455, 4.544_580_5)
             }
         );
         // Mitsuba's lookat: origin the position, +z towards the target.

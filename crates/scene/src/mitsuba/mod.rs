@@ -24,12 +24,15 @@
 //! calls into them. Mesh files are read by `obj.rs` (OBJ) and `ply.rs` (PLY).
 
 mod bsdf;
+mod cie;
 mod emitter;
 mod integrator;
 mod properties;
 mod sensor;
 mod shape;
+mod spectrum;
 mod texture;
+mod upgrade;
 mod xml;
 
 use std::collections::HashMap;
@@ -43,11 +46,12 @@ use glam::Vec3;
 use self::bsdf::Bsdf;
 use self::properties::Props;
 use self::texture::Tex;
-use self::xml::Elem;
+use self::xml::{Elem, Resolver};
 use super::plastic::Coats;
 use super::{Camera, Scene};
 
 pub use self::shape::DISK_SEGMENTS;
+pub use self::spectrum::MAX_SPECTRUM_BYTES;
 pub use self::xml::{MAX_INCLUDED_BYTES, MAX_INCLUDED_FILES, MAX_INCLUDE_DEPTH, MAX_NESTING, MAX_SUBSTITUTED_BYTES};
 
 /// `name=value` of a `-D` override; the name is what `$name` refers to.
@@ -65,9 +69,16 @@ pub fn parse_define(s: &str) -> Result<(String, String), String> {
 /// `-D name=value`: one the scene never uses is an error).
 pub(super) fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene> {
     let shown = path.display().to_string();
-    let (root, children) = xml::read(path, &shown, defines)?;
+    let xml::Read {
+        root,
+        children,
+        resolver,
+        warnings,
+    } = xml::read(path, &shown, defines)?;
     let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or(&shown).to_string();
-    let mut b = Builder::new(name, root);
+    let mut b = Builder::new(name, root, resolver);
+    b.scene.warnings = warnings;
+    b.ids(&children)?;
     for e in &children {
         b.top_level(e)?;
     }
@@ -81,17 +92,24 @@ struct Builder {
     bsdfs: HashMap<String, Bsdf>,
     /// Top-level textures by id (`<ref id=".." name="reflectance"/>` in a bsdf reads them).
     textures: HashMap<String, Rc<Tex>>,
+    /// Top-level area emitters by id, with whether a shape has referenced them: a `<ref>` in a shape
+    /// naming one is that shape's emitter (mitsuba-data's cbox-rgb.xml).
+    emitters: HashMap<String, (Elem, bool)>,
+    /// Ids of top-level samplers: a sensor may refer to one (it only decides Mitsuba's noise).
+    samplers: Vec<String>,
     /// Field path prefix (`quad[3]`, `materials.white`, `camera`) -> the element it came from.
     origins: HashMap<String, Elem>,
     sensor: Option<Elem>,
     shapes: usize,
+    /// The search path at the end of the scene file: the files plugins name are found by it.
+    resolver: Resolver,
     /// The plastics' coats, each made once for the whole file: the bsdfs' bounds and the final check
     /// read them.
     coats: Coats,
 }
 
 impl Builder {
-    fn new(name: String, root: Elem) -> Builder {
+    fn new(name: String, root: Elem, resolver: Resolver) -> Builder {
         Builder {
             scene: Scene {
                 name,
@@ -115,9 +133,12 @@ impl Builder {
             root,
             bsdfs: HashMap::new(),
             textures: HashMap::new(),
+            emitters: HashMap::new(),
+            samplers: Vec::new(),
             origins: HashMap::new(),
             sensor: None,
             shapes: 0,
+            resolver,
             coats: Coats::default(),
         }
     }
@@ -143,7 +164,7 @@ impl Builder {
             "bsdf" => {
                 let b = self.bsdf(e)?;
                 match &b.id {
-                    Some(id) if self.bsdfs.contains_key(id) || self.textures.contains_key(id) => {
+                    Some(id) if self.taken(id) => {
                         return Err(e.err(format!(
                             "the id \"{id}\" is already taken (ids are unique, as in Mitsuba)"
                         )));
@@ -155,14 +176,20 @@ impl Builder {
                 }
                 Ok(())
             }
-            "shape" => self.shape(e),
+            "shape" => {
+                let e = self.emitter_refs(e);
+                self.shape(&e)
+            }
+            // Read before the walk (`ids`).
+            "emitter" if e.kind() == "area" && e.attr("id").is_some() => Ok(()),
             "emitter" => self.emitter(e),
+            "sampler" if e.attr("id").is_some() => Ok(()),
             "texture" => {
                 let Some(id) = e.attr("id") else {
                     self.warn(e, "a top-level texture without an id cannot be used: ignored");
                     return Ok(());
                 };
-                if self.bsdfs.contains_key(id) || self.textures.contains_key(id) {
+                if self.taken(id) {
                     return Err(e.err(format!(
                         "the id \"{id}\" is already taken (ids are unique, as in Mitsuba)"
                     )));
@@ -176,16 +203,75 @@ impl Builder {
         }
     }
 
-    /// The `filename` of a mesh shape, relative to the scene file's directory.
+    /// The top-level objects a `<ref>` may name before they are defined (Mitsuba resolves references after
+    /// reading the whole file): area emitters (Mitsuba makes an object once and lets any `<ref>` to its id
+    /// use it: an area emitter at the top level is the emitter of each shape that refers to it) and
+    /// samplers.
+    fn ids(&mut self, top: &[Elem]) -> Result<()> {
+        for e in top {
+            match (e.tag.as_str(), e.attr("id")) {
+                ("emitter", Some(id)) if e.kind() == "area" => {
+                    if self.emitters.contains_key(id) {
+                        return Err(e.err(format!(
+                            "the id \"{id}\" is already taken (ids are unique, as in Mitsuba)"
+                        )));
+                    }
+                    self.emitters.insert(id.to_string(), (e.clone(), false));
+                }
+                ("sampler", Some(id)) => self.samplers.push(id.to_string()),
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether a top-level object already has the id `id`.
+    fn taken(&self, id: &str) -> bool {
+        self.bsdfs.contains_key(id) || self.textures.contains_key(id) || self.emitters.contains_key(id)
+    }
+
+    /// `e` (a shape) with each `<ref>` that names a top-level area emitter replaced by that emitter, so that
+    /// a ref resolves by the kind of object its id names (the others stay: bsdfs).
+    fn emitter_refs(&mut self, e: &Elem) -> Elem {
+        let mut e = e.clone();
+        for c in &mut e.children {
+            if c.tag != "ref" {
+                continue;
+            }
+            if let Some((emitter, used)) = c.attr("id").and_then(|id| self.emitters.get_mut(id)) {
+                *used = true;
+                *c = emitter.clone();
+            }
+        }
+        e
+    }
+
+    /// The `filename` of a plugin (a mesh, an image), found as Mitsuba finds it when it makes the plugin:
+    /// by the scene's search path (its folder, after the `<path>` folders). Not found there, the folder of
+    /// the file that names it is tried too (where ppm-vk looked before it read `<path>`; Mitsuba would
+    /// not find it).
     fn file(&self, e: &Elem, props: &Props) -> Result<PathBuf> {
         let name = props
             .string("filename")?
             .ok_or_else(|| e.err("needs <string name=\"filename\" .../>"))?;
-        let dir = Path::new(&*e.loc.file).parent().unwrap_or(Path::new(""));
-        Ok(dir.join(name))
+        let own = Path::new(&*e.loc.file).parent().unwrap_or(Path::new("")).join(name);
+        if !self.resolver.finds(name) && own.exists() {
+            return Ok(own);
+        }
+        Ok(self.resolver.resolve(name))
     }
 
     fn finish(mut self) -> Result<Scene> {
+        let mut unused: Vec<Elem> = self
+            .emitters
+            .values()
+            .filter(|(_, used)| !used)
+            .map(|(e, _)| e.clone())
+            .collect();
+        unused.sort_by_key(|e| e.loc.to_string());
+        for e in unused {
+            self.warn(&e, "an area emitter no shape refers to: it lights nothing (ignored)");
+        }
         self.camera()?;
         let root = self.root.clone();
         self.scene.check_with(&mut self.coats).map_err(|inv| {
@@ -379,6 +465,51 @@ mod tests {
         );
         let e = error(&hidden);
         assert!(e.contains(&format!("nested deeper than {MAX_NESTING} levels")), "{e}");
+    }
+
+    /// A `<ref>` in a shape resolves by the kind of object its id names: a top-level area emitter
+    /// (defined before or after, as Mitsuba resolves references after reading the file) is the shape's
+    /// emitter, next to its bsdf (mitsuba-data's cbox-rgb.xml); a sensor may refer to a top-level sampler.
+    #[test]
+    fn refs_to_top_level_emitters_and_samplers() {
+        let body = r#"<shape type="rectangle" id="a"><ref id="white"/><ref id="glow"/></shape>
+            <bsdf type="diffuse" id="white"/>
+            <emitter type="area" id="glow"><rgb name="radiance" value="2, 3, 4"/></emitter>
+            <shape type="rectangle" id="b"><ref id="glow"/></shape>
+            <emitter type="area" id="unused"/>
+            <sampler type="independent" id="s"/>"#;
+        // The bsdf is defined after the first shape: Mitsuba takes it too, ppm-vk needs it before.
+        let e = error(body);
+        assert!(e.contains("no bsdf with id \"white\" defined before it"), "{e}");
+        let body = body.replacen(r#"<ref id="white"/>"#, "", 1);
+        let s = load_body(&body).unwrap_or_else(|e| panic!("{e:#}"));
+        let emission = |i: usize| s.materials[s.quads[i].material as usize].emission;
+        assert_eq!(
+            (emission(1), emission(2)),
+            (Vec3::new(2.0, 3.0, 4.0), Vec3::new(2.0, 3.0, 4.0))
+        );
+        assert!(
+            s.warnings
+                .iter()
+                .any(|w| w.contains("<emitter type=\"area\" id=\"unused\">: an area emitter no shape refers to")),
+            "{:?}",
+            s.warnings
+        );
+        let e = error(r#"<emitter type="area" id="x"/><emitter type="area" id="x"/>"#);
+        assert!(
+            e.contains("scene.xml:12:") && e.contains("the id \"x\" is already taken"),
+            "{e}"
+        );
+        let e = error(r#"<bsdf type="diffuse" id="x"/><emitter type="area" id="x"/>"#);
+        assert!(e.contains("the id \"x\" is already taken"), "{e}");
+        let dir = TempDir::new("mitsuba-sampler-ref");
+        let path = dir.write(
+            "s.xml",
+            r#"<scene version="2.1.0"><sampler type="independent" id="s"><integer name="sample_count" value="4"/></sampler>
+               <sensor type="perspective"><ref id="s"/><film type="hdrfilm"><rfilter type="box"/></film></sensor>
+               <shape type="rectangle"><emitter type="area"/></shape></scene>"#,
+        );
+        load(&path, &[]).unwrap_or_else(|e| panic!("{e:#}"));
     }
 
     #[test]

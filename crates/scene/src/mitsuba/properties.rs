@@ -7,6 +7,7 @@ use std::cell::Cell;
 use anyhow::Result;
 use glam::{DAffine3, DMat3, DMat4, DVec3, DVec4, Vec3};
 
+use super::spectrum::{self, Use};
 use super::xml::Elem;
 
 /// The properties (`<float name=..>`, `<transform name=..>`, ...) of one plugin element. Each one
@@ -25,6 +26,9 @@ const PROPERTY_TAGS: &[&str] = &[
     "vector",
     "rgb",
     "spectrum",
+    // Mitsuba 0.6's sRGB-encoded colour and black body.
+    "srgb",
+    "blackbody",
     "transform",
     "texture",
 ];
@@ -107,8 +111,18 @@ impl<'a> Props<'a> {
             .transpose()
     }
 
+    /// A colour parameter, a spectrum made RGB as Mitsuba 3 makes it for this parameter: emission on an
+    /// emitter (its `get_emissive_texture`), unbounded for a conductor's eta and k and a roughness (its
+    /// `get_unbounded_texture`), a reflectance otherwise.
     pub(super) fn color(&self, name: &str) -> Result<Option<Vec3>> {
-        self.get(name).map(color).transpose()
+        let usage = if self.owner.tag == "emitter" {
+            Use::Emission
+        } else if matches!(name, "eta" | "k" | "alpha" | "alpha_u" | "alpha_v") {
+            Use::Unbounded
+        } else {
+            Use::Reflectance
+        };
+        self.get(name).map(|e| color_as(e, usage)).transpose()
     }
 
     pub(super) fn transform(&self, name: &str) -> Result<DAffine3> {
@@ -177,8 +191,15 @@ fn vector(e: &Elem, default: f64) -> Result<DVec3> {
     Ok(DVec3::new(c("x")?, c("y")?, c("z")?))
 }
 
-/// A constant colour: `<rgb>`, `<float>` (grey) or a `<spectrum>` of one value (grey).
+/// A constant reflectance: `<rgb>`, `<float>` (grey), `<spectrum>`, Mitsuba 0.6's `<srgb>`.
 pub(super) fn color(e: &Elem) -> Result<Vec3> {
+    color_as(e, Use::Reflectance)
+}
+
+/// A constant colour used as `usage` says: `<rgb>`, `<float>` (grey), `<spectrum>` (uniform, a
+/// `wavelength:value` list, a file, a black body), Mitsuba 0.6's `<srgb>` and `<blackbody>`.
+pub(super) fn color_as(e: &Elem, usage: Use) -> Result<Vec3> {
+    let rgb = |c: [f64; 3]| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
     match e.tag.as_str() {
         "rgb" => {
             let v = e.required("value")?;
@@ -189,21 +210,59 @@ pub(super) fn color(e: &Elem) -> Result<Vec3> {
             }
         }
         "float" => Ok(Vec3::splat(number(e, e.required("value")?)? as f32)),
-        "spectrum" => {
-            let v = e
-                .attr("value")
-                .ok_or_else(|| e.err("only a constant spectrum (value=\"x\") is read, not a file"))?;
-            if v.contains(':') {
-                return Err(e.err(
-                    "a sampled spectrum (wavelength:value pairs) is not supported: ppm-vk renders \
-                     RGB (give an rgb)",
-                ));
+        "spectrum" if e.attr("type").is_some() => match e.kind() {
+            "blackbody" => {
+                let (props, objects) = Props::of(e);
+                if let Some(o) = objects.first() {
+                    return Err(o.err(format!("not expected inside {}", e.what())));
+                }
+                let kelvin = props
+                    .float("temperature")?
+                    .ok_or_else(|| e.err("needs <float name=\"temperature\" .../> (in kelvin)"))?;
+                // The spectral range Mitsuba integrates over is the CIE curves' own.
+                props.ignore(&["wavelength_min", "wavelength_max"]);
+                props.finish()?;
+                blackbody(e, kelvin, 1.0, usage).map(rgb)
             }
-            Ok(Vec3::splat(number(e, v)? as f32))
+            _ => Err(e.err(
+                "unsupported spectrum type (read: blackbody; give a value, wavelength:value pairs or a \
+                 filename for others)",
+            )),
+        },
+        "spectrum" => {
+            let (wavelengths, values) = match (e.attr("value"), e.attr("filename")) {
+                (Some(_), Some(_)) | (None, None) => {
+                    return Err(e.err("give either value or filename (as Mitsuba requires)"))
+                }
+                (Some(v), None) if !v.contains(':') => return Ok(rgb(spectrum::uniform(number(e, v)?, usage))),
+                (Some(v), None) => spectrum::parse_list(v).map_err(|m| e.err(m))?,
+                (None, Some(f)) => spectrum::read_spd(&e.loc.resolver.resolve(f)).map_err(|m| e.err(m))?,
+            };
+            Ok(rgb(spectrum::to_rgb(&wavelengths, &values, usage)))
+        }
+        "srgb" => Ok(rgb(spectrum::srgb(e.required("value")?).map_err(|m| e.err(m))?)),
+        "blackbody" => {
+            // Mitsuba 0.6: `<blackbody name=".." temperature="5000K" scale="1"/>`.
+            let t = e.required("temperature")?;
+            let kelvin = number(e, t.trim().trim_end_matches(['K', 'k']))?;
+            let scale = e.attr("scale").map_or(Ok(1.0), |s| number(e, s))?;
+            blackbody(e, kelvin, scale, usage).map(rgb)
         }
         "texture" | "ref" => Err(e.err(texture_refused(e.attr("name").unwrap_or_default()))),
         _ => Err(e.err("expected a colour: <rgb>, <float> or <spectrum>")),
     }
+}
+
+/// A black body's RGB (see [`spectrum::blackbody`]), on emitters only (Mitsuba: "only makes sense for
+/// specifying emission").
+fn blackbody(e: &Elem, kelvin: f64, scale: f64, usage: Use) -> Result<[f64; 3]> {
+    if usage != Use::Emission {
+        return Err(e.err("a black body is an emission spectrum: give it to an emitter"));
+    }
+    if !(kelvin > 0.0 && kelvin <= 1e6) {
+        return Err(e.err(format!("temperature {kelvin} K: expected one in (0, 10^6] kelvin")));
+    }
+    Ok(spectrum::blackbody(kelvin).map(|c| c * scale))
 }
 
 /// Why a texture on parameter `name` is refused.

@@ -27,13 +27,16 @@ impl Builder {
         let mut film_seen = false;
         for o in objects {
             match (o.tag.as_str(), o.kind()) {
-                ("film", "hdrfilm") => {
+                // Mitsuba 0.6's ldrfilm (tone-mapped 8-bit output) and tiledhdrfilm: the same image before
+                // its encoding, which is warned about (ppm-vk writes linear HDR).
+                ("film", "hdrfilm" | "ldrfilm" | "tiledhdrfilm") => {
                     film_seen = true;
                     size = self.film(o)?;
                 }
                 ("film", _) => return Err(o.err("only hdrfilm is supported")),
                 // The sampler decides only the noise of Mitsuba's estimate; ppm-vk's --seed is its own.
                 ("sampler", _) => {}
+                ("ref", _) if o.attr("id").is_some_and(|id| self.samplers.iter().any(|s| s == id)) => {}
                 _ => return Err(o.err(format!("not expected inside {}", e.what()))),
             }
         }
@@ -54,7 +57,15 @@ impl Builder {
                     .err("an off-centre principal point is not supported"));
             }
         }
-        props.ignore(&["near_clip", "shutter_open", "shutter_close"]);
+        // shutter_open_time is Mitsuba 0.6's name: motion blur is not read either way.
+        // focus_distance: every projective camera of Mitsuba 3 reads it; a pinhole's image does not use it.
+        props.ignore(&[
+            "near_clip",
+            "shutter_open",
+            "shutter_close",
+            "shutter_open_time",
+            "focus_distance",
+        ]);
         let far = props.float("far_clip")?;
         props.finish()?;
         let l = m.matrix3;
@@ -118,6 +129,35 @@ impl Builder {
             if let Some(p) = fp.get(name) {
                 return Err(p.err("a crop window is not supported"));
             }
+        }
+        // Mitsuba 0.6's film parameters that Mitsuba 3 dropped: its ldrfilm's tone mapping, the log and
+        // the banner. Ignored with a warning: ppm-vk's image is the linear one before them.
+        let dropped: Vec<&str> = [
+            "tonemap_method",
+            "gamma",
+            "exposure",
+            "key",
+            "burn",
+            "attach_log",
+            "banner",
+            "high_quality_edges",
+        ]
+        .into_iter()
+        .filter(|n| fp.get(n).is_some() && (o.kind() != "hdrfilm" || !matches!(*n, "banner" | "high_quality_edges")))
+        .collect();
+        if o.kind() != "hdrfilm" || !dropped.is_empty() {
+            self.warn(
+                o,
+                format!(
+                    "a Mitsuba 0.6 film{}: ppm-vk writes the linear image, without tone mapping{}",
+                    if o.kind() == "hdrfilm" { " parameter" } else { "" },
+                    if dropped.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" (ignored: {})", dropped.join(", "))
+                    }
+                ),
+            );
         }
         // Output encoding only: the image is the same.
         fp.ignore(&[

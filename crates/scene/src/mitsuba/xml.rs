@@ -1,7 +1,7 @@
 //! Stage 1: XML files to one owned tree of [`Elem`]s in document order, as Mitsuba's parser does it:
 //! `$name` parameters substituted in every attribute (`-D` overrides first, then `<default>`s),
-//! `<include>`s spliced in place (relative to the including file, cycles and nesting deeper than
-//! Mitsuba's limit refused).
+//! `<include>`s spliced in place (cycles and nesting deeper than Mitsuba's limit refused), file names
+//! resolved by Mitsuba's search path (`<path>`), and files older than version 2 upgraded (`upgrade.rs`).
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -9,6 +9,7 @@ use std::rc::Rc;
 
 use anyhow::{anyhow, bail, Result};
 
+use super::upgrade;
 use crate::error::{truncated, Error};
 use crate::files::{read_bounded, MAX_SCENE_BYTES};
 
@@ -90,7 +91,10 @@ fn too_deep(text: &str, max: usize) -> Option<usize> {
 
 /// The root element of the scene at `path` (`shown` in messages) and its top-level elements, includes
 /// spliced in; `defines` override its `<default>`s, and one the scene never uses is an error.
-pub(super) fn read(path: &Path, shown: &str, defines: &[(String, String)]) -> Result<(Elem, Vec<Elem>)> {
+/// Also returns the search path in force at the end of the scene file, which resolves the files the
+/// scene's plugins name (meshes, images), as Mitsuba resolves them when it instantiates the plugins, and
+/// the warnings of the upgrade of older files.
+pub(super) fn read(path: &Path, shown: &str, defines: &[(String, String)]) -> Result<Read> {
     let mut reader = Reader {
         params: defines
             .iter()
@@ -104,6 +108,10 @@ pub(super) fn read(path: &Path, shown: &str, defines: &[(String, String)]) -> Re
         files: 0,
         bytes: 0,
         substituted: 0,
+        // Mitsuba's `load_file` puts the scene's folder first (its working directory, which follows, is
+        // not searched here: what a scene reads does not depend on where ppm-vk runs).
+        resolver: Resolver(Rc::new(vec![parent(path)])),
+        warnings: Vec::new(),
     };
     let (root, children) = reader.read(path, shown, None)?;
     if let Some(p) = reader.params.iter().find(|p| !p.used) {
@@ -113,7 +121,60 @@ pub(super) fn read(path: &Path, shown: &str, defines: &[(String, String)]) -> Re
             truncated(&p.value, QUOTED)
         );
     }
-    Ok((root, children))
+    Ok(Read {
+        root,
+        children,
+        resolver: reader.resolver,
+        warnings: reader.warnings,
+    })
+}
+
+/// A scene file read: its root element and top-level elements, includes spliced in.
+pub(super) struct Read {
+    pub(super) root: Elem,
+    pub(super) children: Vec<Elem>,
+    pub(super) resolver: Resolver,
+    pub(super) warnings: Vec<String>,
+}
+
+/// `path`'s folder (`.` for a bare file name).
+fn parent(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Mitsuba's `FileResolver`: folders searched in order for a relative file name (src/core/fresolver.cpp).
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct Resolver(Rc<Vec<PathBuf>>);
+
+impl Resolver {
+    /// The first folder in which `name` exists, joined to it; an absolute name, or one found nowhere, as
+    /// it is (Mitsuba's `resolve`), here joined to the first folder so that a message names a real place.
+    pub(super) fn resolve(&self, name: &str) -> PathBuf {
+        let p = Path::new(name);
+        if p.is_absolute() {
+            return p.to_path_buf();
+        }
+        self.0
+            .iter()
+            .map(|d| d.join(p))
+            .find(|c| c.exists())
+            .unwrap_or_else(|| self.0[0].join(p))
+    }
+
+    /// Whether `name` is found by the search path.
+    pub(super) fn finds(&self, name: &str) -> bool {
+        Path::new(name).is_absolute() || self.0.iter().any(|d| d.join(name).exists())
+    }
+
+    /// This search path with `dir` first.
+    fn prepend(&self, dir: PathBuf) -> Resolver {
+        let mut dirs = vec![dir];
+        dirs.extend(self.0.iter().cloned());
+        Resolver(Rc::new(dirs))
+    }
 }
 
 /// Where an element starts.
@@ -122,6 +183,9 @@ pub(super) struct Loc {
     pub(super) file: Rc<str>,
     line: u32,
     col: u32,
+    /// The search path in force where the element was read (a spectrum file resolves by it, as Mitsuba's
+    /// parser resolves one while it reads).
+    pub(super) resolver: Resolver,
 }
 
 impl fmt::Display for Loc {
@@ -134,7 +198,7 @@ impl fmt::Display for Loc {
 #[derive(Clone, Debug)]
 pub(super) struct Elem {
     pub(super) tag: String,
-    attrs: Vec<(String, String)>,
+    pub(super) attrs: Vec<(String, String)>,
     pub(super) children: Vec<Elem>,
     pub(super) loc: Loc,
 }
@@ -162,7 +226,7 @@ impl Elem {
     /// A located [`Error::Scene`] (inside anyhow; `Scene::load_with` takes it out): the element is its
     /// field.
     pub(super) fn err(&self, msg: impl fmt::Display) -> anyhow::Error {
-        let Loc { file, line, col } = &self.loc;
+        let Loc { file, line, col, .. } = &self.loc;
         anyhow::Error::from(Error::scene(
             file.to_string(),
             *line as usize,
@@ -204,6 +268,11 @@ struct Reader {
     bytes: u64,
     /// Bytes substitution has produced so far (within [`MAX_SUBSTITUTED_BYTES`]).
     substituted: u64,
+    /// The search path in force (`<path>` prepends to it; an `<include>` reads with its file's folder
+    /// prepended, and restores it after).
+    resolver: Resolver,
+    /// What the upgrade of older files approximates.
+    warnings: Vec<String>,
 }
 
 impl Reader {
@@ -255,39 +324,45 @@ impl Reader {
         })?;
         self.open.push(canonical);
         let file: Rc<str> = shown.into();
-        let src = Src {
+        let mut src = Src {
             doc: &doc,
             file,
-            dir: path.parent().unwrap_or(Path::new("")),
+            dir: parent(path),
+            legacy: false,
         };
         let root = doc.root_element();
         let mut top = Vec::new();
         // The root is read like any element (its attributes substituted), without its children.
         let root_elem = self.element(&src, root, false)?;
-        if root.tag_name().name() == "scene" {
-            if let Some(v) = root_elem.attr("version") {
-                let major = v.split('.').next().and_then(|m| m.parse::<u32>().ok());
-                if major.is_none_or(|m| m < 2) {
+        // Each file is upgraded by its own version, as Mitsuba 3's parser does (`transform_upgrade`).
+        if let Some(v) = root_elem.attr("version") {
+            let major = v.split('.').next().and_then(|m| m.trim().parse::<u32>().ok());
+            match major {
+                Some(0..=1) => src.legacy = true,
+                Some(2..=3) => {}
+                _ => {
                     return Err(root_elem.err(format!(
-                        "version {v}: only scenes of version 2 and 3 are read (older ones name \
-                         their parameters differently)"
-                    )));
+                        "version \"{}\": expected a Mitsuba version such as 0.6.0, 2.1.0 or 3.0.0",
+                        truncated(v, QUOTED)
+                    )))
                 }
             }
+        }
+        if root.tag_name().name() == "scene" {
             for child in root.children().filter(|n| n.is_element()) {
-                self.convert(&src, child, &mut top)?;
+                self.convert(&src, child, &mut top, true)?;
             }
         } else {
             // An included file may hold one object instead of a scene.
-            self.convert(&src, root, &mut top)?;
+            self.convert(&src, root, &mut top, false)?;
         }
         self.open.pop();
         Ok((root_elem, top))
     }
 
     /// Appends what `node` stands for to `out`: itself, an included file's elements, or nothing (a
-    /// `<default>`).
-    fn convert(&mut self, src: &Src, node: roxmltree::Node, out: &mut Vec<Elem>) -> Result<()> {
+    /// `<default>`, a `<path>`); `top` when `node` is a child of the file's root.
+    fn convert(&mut self, src: &Src, node: roxmltree::Node, out: &mut Vec<Elem>, top: bool) -> Result<()> {
         let e = self.element(src, node, true)?;
         match e.tag.as_str() {
             "default" => {
@@ -306,11 +381,34 @@ impl Reader {
                 }
             }
             "include" => {
+                // As Mitsuba's parser: the including file's folder first, for this include only.
                 let file = e.required("filename")?;
-                let path = src.dir.join(file);
+                let outer = self.resolver.clone();
+                self.resolver = outer.prepend(src.dir.clone());
+                let path = self.resolver.resolve(file);
                 let shown = path.display().to_string();
-                let (_, children) = self.read(&path, &shown, Some(&e))?;
-                out.extend(children);
+                let read = self.read(&path, &shown, Some(&e));
+                self.resolver = outer;
+                out.extend(read?.1);
+            }
+            "path" => {
+                // Mitsuba's `<path value="dir"/>`: a folder searched first from here on, relative to this
+                // file's folder, else found by the search path; a child of the root only.
+                if !top {
+                    return Err(e.err("<path> belongs directly in the <scene> (as Mitsuba requires)"));
+                }
+                let value = e.required("value")?;
+                let mut dir = PathBuf::from(value);
+                if !dir.is_absolute() {
+                    dir = src.dir.join(value);
+                    if !dir.exists() {
+                        dir = self.resolver.resolve(value);
+                    }
+                }
+                if !dir.is_dir() {
+                    return Err(e.err(format!("folder \"{}\" not found", dir.display())));
+                }
+                self.resolver = self.resolver.prepend(dir);
             }
             _ => out.push(e),
         }
@@ -328,6 +426,7 @@ impl Reader {
                 file: src.file.clone(),
                 line: pos.row,
                 col: pos.col,
+                resolver: self.resolver.clone(),
             },
         };
         for a in node.attributes() {
@@ -340,6 +439,9 @@ impl Reader {
             })?;
             e.attrs.push((a.name().to_string(), value));
         }
+        if src.legacy {
+            upgrade::rename(&mut e);
+        }
         if deep {
             // Bounded, as the reader and the scene's drop recurse per level (a fuzzed file nested
             // thousands deep overflowed the stack).
@@ -348,9 +450,12 @@ impl Reader {
             }
             let mut children = Vec::new();
             for child in node.children().filter(|n| n.is_element()) {
-                self.convert(src, child, &mut children)?;
+                self.convert(src, child, &mut children, false)?;
             }
             e.children = children;
+            if src.legacy {
+                upgrade::children(&mut e, &mut self.warnings)?;
+            }
         }
         Ok(e)
     }
@@ -418,13 +523,98 @@ impl Reader {
 struct Src<'a, 'input> {
     doc: &'a roxmltree::Document<'input>,
     file: Rc<str>,
-    dir: &'a Path,
+    dir: PathBuf,
+    /// Written for Mitsuba before version 2: upgraded as it is read.
+    legacy: bool,
 }
 
 #[cfg(test)]
 mod tests {
     use super::super::tests::load_in;
     use crate::{Scene, Surface, TempDir};
+
+    fn albedo(s: &Scene, quad: usize) -> f32 {
+        match s.materials[s.quads[quad].material as usize].surface {
+            Surface::Diffuse { albedo } => albedo.x,
+            _ => panic!("a diffuse quad"),
+        }
+    }
+
+    /// `<path>` folders are searched first, latest first; a spectrum file resolves by the search path in
+    /// force where it is read, a plugin's file (a mesh) by the one at the end of the scene file, as in
+    /// Mitsuba 3; an include by the including file's folder first, then the search path in force.
+    #[test]
+    fn path_folders_and_includes_resolve_as_mitsubas_file_resolver() {
+        let dir = TempDir::new("mitsuba-path");
+        for (sub, value) in [("", 0.4), ("a/", 0.2), ("b/", 0.6)] {
+            std::fs::create_dir_all(dir.0.join(sub)).unwrap();
+            dir.write(&format!("{sub}t.spd"), &format!("360 {value}\n830 {value}\n"));
+        }
+        std::fs::create_dir_all(dir.0.join("meshes")).unwrap();
+        dir.write(
+            "meshes/sq.obj",
+            "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nf 1 2 3\nf 1 3 4\n",
+        );
+        let cube = |file: &str| {
+            format!(
+                r#"<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" filename="{file}"/></bsdf></shape>"#
+            )
+        };
+        let body = format!(
+            r#"<shape type="obj"><string name="filename" value="sq.obj"/></shape>{}<path value="a"/>{}<path value="b"/>{}
+               <path value="meshes"/>"#,
+            cube("t.spd"),
+            cube("t.spd"),
+            cube("t.spd")
+        );
+        let s = load_in(&dir, &body, &[]).unwrap_or_else(|e| panic!("{e:#}"));
+        // The head's lamp is quad 0, then three cubes of six quads; a flat spectrum under D65 is its
+        // value in grey to within the CIE tables' resolution.
+        for (cube, want) in [(0, 0.4), (1, 0.2), (2, 0.6)] {
+            let got = albedo(&s, 1 + 6 * cube);
+            assert!((got - want).abs() < 0.01 * want, "cube {cube}: {got} vs {want}");
+        }
+        assert_eq!(s.meshes.len(), 1, "sq.obj found by the <path> after it");
+        let e = format!(
+            "{:#}",
+            load_in(
+                &dir,
+                r#"<shape type="obj"><string name="filename" value="sq.obj"/></shape>"#,
+                &[]
+            )
+            .unwrap_err()
+        );
+        assert!(e.contains("sq.obj") && e.contains("cannot read"), "{e}");
+        let e = format!("{:#}", load_in(&dir, r#"<path value="nowhere"/>"#, &[]).unwrap_err());
+        assert!(
+            e.contains("scene.xml:12:1: <path>: folder") && e.contains("nowhere\" not found"),
+            "{e}"
+        );
+        let e = format!(
+            "{:#}",
+            load_in(&dir, r#"<shape type="cube"><path value="a"/></shape>"#, &[]).unwrap_err()
+        );
+        assert!(e.contains("<path> belongs directly in the <scene>"), "{e}");
+
+        // mitsuba-data's participating_media: include/a.xml includes "include/b.xml", found from the
+        // outer scene's folder (include/include/b.xml does not exist).
+        std::fs::create_dir_all(dir.0.join("include")).unwrap();
+        dir.write(
+            "include/a.xml",
+            r#"<scene version="3.0.0"><include filename="include/b.xml"/></scene>"#,
+        );
+        dir.write(
+            "include/b.xml",
+            r#"<scene version="3.0.0"><bsdf type="diffuse" id="grey"/></scene>"#,
+        );
+        let s = load_in(
+            &dir,
+            r#"<include filename="include/a.xml"/><shape type="cube"><ref id="grey"/></shape>"#,
+            &[],
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        assert_eq!(albedo(&s, 1), 0.5);
+    }
 
     #[test]
     fn defaults_overrides_refs_and_includes() {
