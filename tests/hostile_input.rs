@@ -870,3 +870,59 @@ fn damaged_serialized_meshes_are_refused_in_sentences() {
     });
     assert_eq!(s.unwrap().meshes[0].indices.len(), 1);
 }
+
+/// Instancing is bounded as the shapes it copies are: a scene reaches MAX_SHAPES spheres and quads, or
+/// MAX_TRIANGLES triangles, through instances and loads; one instance more is refused naming it, before
+/// its copy is made.
+#[test]
+fn instancing_holds_the_scene_limits_at_their_bounds() {
+    use ppm_vk_engine::scene::MAX_TRIANGLES;
+    let dir = scratch("instancing");
+    // Quads: the lamp and 257 instances of a group of 255 rectangles (MAX_SHAPES = 1 + 257 * 255), then
+    // one more instance. (Few elements: the XML reader locates each element from the file's start.)
+    assert_eq!(MAX_SHAPES, 1 + 257 * 255);
+    let rectangles = format!(
+        r#"<shape type="shapegroup" id="g">{}</shape>"#,
+        r#"<shape type="rectangle"/>"#.repeat(255)
+    );
+    let instances = |n: usize| r#"<shape type="instance"><ref id="g"/></shape>"#.repeat(n);
+    let s = Scene::load(xml_scene(&dir, "quads.xml", &format!("{rectangles}{}", instances(257)))).unwrap();
+    assert_eq!(s.quads.len(), MAX_SHAPES);
+    let e = load_fails(xml_scene(
+        &dir,
+        "quads1.xml",
+        &format!("{rectangles}{}", instances(258)),
+    ));
+    assert!(
+        e.contains("quads1.xml:4:")
+            && e.contains("<shape type=\"instance\">")
+            && e.contains(&format!("{} spheres and quads, more than MAX_SHAPES", MAX_SHAPES + 255)),
+        "{e}"
+    );
+    // Triangles: a serialized mesh of MAX_TRIANGLES / 4 (equal) triangles, instanced four times, then five.
+    let quarter = MAX_TRIANGLES as u64 / 4;
+    let mut body = triangle_body(3, quarter);
+    body.truncate(body.len() - 12);
+    for _ in 0..quarter {
+        for i in [0u32, 1, 2] {
+            body.extend(i.to_le_bytes());
+        }
+    }
+    std::fs::write(dir.join("many.serialized"), serialized_file(&[serialized_shape(&body)])).unwrap();
+    let group = r#"<shape type="shapegroup" id="g"><shape type="serialized"><string name="filename" value="many.serialized"/>
+                   <bsdf type="twosided"><bsdf type="diffuse"/></bsdf></shape></shape>"#;
+    let s = Scene::load(xml_scene(&dir, "tris.xml", &format!("{group}{}", instances(4)))).unwrap();
+    assert_eq!(s.meshes.iter().map(|m| m.indices.len()).sum::<usize>(), MAX_TRIANGLES);
+    drop(s);
+    let e = Scene::load(xml_scene(&dir, "tris1.xml", &format!("{group}{}", instances(5))))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("<shape type=\"instance\">")
+            && e.contains(&format!(
+                "{} triangles, more than MAX_TRIANGLES",
+                MAX_TRIANGLES + MAX_TRIANGLES / 4
+            )),
+        "{e}"
+    );
+}

@@ -17,7 +17,8 @@
 //!   refused;
 //! - `integrator.rs`: `<integrator>`; `sensor.rs`: `<sensor>` with its `<film>` and `<sampler>`;
 //! - `bsdf.rs`: `<bsdf>`, one function per plugin; `texture.rs`: `<texture>` (bitmap, checkerboard);
-//! - `shape.rs`: `<shape>`, one function per shape type; `emitter.rs`: `<emitter>`.
+//! - `shape.rs`: `<shape>`, one function per shape type; `instance.rs`: `shapegroup` and `instance`
+//!   (flattened at load); `emitter.rs`: `<emitter>`.
 //!
 //! Uses run one way: the children use this file's [`Builder`], `xml.rs`'s [`Elem`] and `properties.rs`;
 //! `shape.rs` uses `bsdf.rs`, `emitter.rs` and `texture.rs`, and `bsdf.rs` uses `texture.rs`; this file
@@ -25,6 +26,7 @@
 
 mod bsdf;
 mod emitter;
+mod instance;
 mod integrator;
 mod properties;
 mod sensor;
@@ -81,6 +83,8 @@ struct Builder {
     bsdfs: HashMap<String, Bsdf>,
     /// Top-level textures by id (`<ref id=".." name="reflectance"/>` in a bsdf reads them).
     textures: HashMap<String, Rc<Tex>>,
+    /// Top-level shapegroups by id (instances copy them).
+    groups: HashMap<String, instance::Group>,
     /// Field path prefix (`quad[3]`, `materials.white`, `camera`) -> the element it came from.
     origins: HashMap<String, Elem>,
     sensor: Option<Elem>,
@@ -115,6 +119,7 @@ impl Builder {
             root,
             bsdfs: HashMap::new(),
             textures: HashMap::new(),
+            groups: HashMap::new(),
             origins: HashMap::new(),
             sensor: None,
             shapes: 0,
@@ -143,7 +148,11 @@ impl Builder {
             "bsdf" => {
                 let b = self.bsdf(e)?;
                 match &b.id {
-                    Some(id) if self.bsdfs.contains_key(id) || self.textures.contains_key(id) => {
+                    Some(id)
+                        if self.bsdfs.contains_key(id)
+                            || self.textures.contains_key(id)
+                            || self.groups.contains_key(id) =>
+                    {
                         return Err(e.err(format!(
                             "the id \"{id}\" is already taken (ids are unique, as in Mitsuba)"
                         )));
@@ -155,6 +164,7 @@ impl Builder {
                 }
                 Ok(())
             }
+            "shape" if e.kind() == "shapegroup" => self.shapegroup(e),
             "shape" => self.shape(e),
             "emitter" => self.emitter(e),
             "texture" => {
@@ -162,7 +172,7 @@ impl Builder {
                     self.warn(e, "a top-level texture without an id cannot be used: ignored");
                     return Ok(());
                 };
-                if self.bsdfs.contains_key(id) || self.textures.contains_key(id) {
+                if self.bsdfs.contains_key(id) || self.textures.contains_key(id) || self.groups.contains_key(id) {
                     return Err(e.err(format!(
                         "the id \"{id}\" is already taken (ids are unique, as in Mitsuba)"
                     )));

@@ -52,6 +52,9 @@ impl Builder {
     /// A `<shape>`: its bsdf and emitter, its material, then its type's reader; every property must have
     /// been read by then.
     pub(super) fn shape(&mut self, e: &Elem) -> Result<()> {
+        if e.kind() == "instance" {
+            return self.instance(e);
+        }
         let index = self.shapes;
         self.shapes += 1;
         let (props, objects) = Props::of(e);
