@@ -78,6 +78,14 @@ fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
             ],
         ),
         (
+            "serialized",
+            load_serialized,
+            vec![
+                "scenes/references/serialized/shapes-v4.serialized",
+                "scenes/references/serialized/shapes-v3.serialized",
+            ],
+        ),
+        (
             "xml",
             load_xml,
             vec![
@@ -108,6 +116,15 @@ fn load_xml(text: &[u8]) -> anyhow::Result<Scene> {
     let path = scratch("xml").join("s.xml");
     std::fs::write(&path, String::from_utf8_lossy(text).as_bytes())?;
     Ok(Scene::load(&path)?)
+}
+
+/// A serialized mesh, its second shape (so that the end-of-file dictionary is read), in a minimal scene.
+fn load_serialized(bytes: &[u8]) -> anyhow::Result<Scene> {
+    let dir = scratch("serialized");
+    std::fs::write(dir.join("m.serialized"), bytes)?;
+    let body = r#"<shape type="serialized"><string name="filename" value="m.serialized"/>
+                  <integer name="shape_index" value="1"/></shape>"#;
+    Ok(Scene::load(xml_scene(&dir, "s.xml", body))?)
 }
 
 fn load_toml(text: &[u8]) -> anyhow::Result<Scene> {
@@ -777,6 +794,223 @@ fn malformed_spectra_are_refused_in_sentences() {
     let e = load_fails(path);
     assert!(
         e.contains("f.xml:4:") && e.contains("f.spd") && e.contains("more than a spectrum file may have"),
+        "{e}"
+    );
+}
+
+/// One shape of a version 4 serialized file: its header, then `body` (the flags onwards) compressed.
+fn serialized_shape(body: &[u8]) -> Vec<u8> {
+    use std::io::Write as _;
+    let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::fast());
+    z.write_all(body).unwrap();
+    let mut out = vec![0x1C, 0x04, 4, 0];
+    out.extend(z.finish().unwrap());
+    out
+}
+
+/// The uncompressed body of a version 4 shape: float positions only, `vertices` and `faces` as the header
+/// says, then the arrays of a triangle (three vertices, one face).
+fn triangle_body(vertices: u64, faces: u64) -> Vec<u8> {
+    let mut b = 0x1000u32.to_le_bytes().to_vec();
+    b.extend(b"tri\0");
+    b.extend(vertices.to_le_bytes());
+    b.extend(faces.to_le_bytes());
+    for x in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        b.extend(x.to_le_bytes());
+    }
+    for i in [0u32, 1, 2] {
+        b.extend(i.to_le_bytes());
+    }
+    b
+}
+
+/// `shapes` concatenated, with the end-of-file dictionary of their offsets.
+fn serialized_file(shapes: &[Vec<u8>]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut offsets = Vec::new();
+    for s in shapes {
+        offsets.push(out.len() as u64);
+        out.extend(s);
+    }
+    for o in offsets {
+        out.extend(o.to_le_bytes());
+    }
+    out.extend((shapes.len() as u32).to_le_bytes());
+    out
+}
+
+/// Damaged serialized meshes are each an error naming the file and what is wrong, within the time and
+/// allocation bounds: a lying vertex count, counts past the bounds, a bad zlib stream, a file cut short,
+/// a shape_index past the dictionary's end, a dictionary offset past the file's end, an endless name. A
+/// zlib bomb behind an honest header is never inflated past what its counts need.
+#[test]
+fn damaged_serialized_meshes_are_refused_in_sentences() {
+    use ppm_vk_engine::scene::{MAX_SERIALIZED_NAME, MAX_SERIALIZED_VERTICES, MAX_TRIANGLES};
+    let dir = scratch("serialized-damaged");
+    let scene = |name: &str, bytes: &[u8], index: u32| {
+        std::fs::write(dir.join(name), bytes).unwrap();
+        let body = format!(
+            r#"<shape type="serialized"><string name="filename" value="{name}"/>
+               <integer name="shape_index" value="{index}"/></shape>"#
+        );
+        xml_scene(&dir, &format!("{name}.xml"), &body)
+    };
+    let good = serialized_file(&[
+        serialized_shape(&triangle_body(3, 1)),
+        serialized_shape(&triangle_body(3, 1)),
+    ]);
+    let s = Scene::load(scene("good.serialized", &good, 1)).unwrap();
+    assert_eq!(s.meshes[0].indices.len(), 1);
+
+    let many = serialized_file(&[serialized_shape(&triangle_body(1 << 30, 1))]);
+    // A count within the bounds that the data does not bear out.
+    let lying = serialized_file(&[serialized_shape(&triangle_body(1 << 24, 1))]);
+    let mut bad_zlib = good.clone();
+    bad_zlib[4..12].copy_from_slice(b"garbage!");
+    let mut far = good.clone();
+    let n = far.len();
+    far[n - 12..n - 4].copy_from_slice(&(1u64 << 40).to_le_bytes());
+    let mut endless = 0x1000u32.to_le_bytes().to_vec();
+    endless.extend(vec![b'a'; MAX_SERIALIZED_NAME + 1]);
+    let mut at_bound = 0x1000u32.to_le_bytes().to_vec();
+    at_bound.extend(vec![b'a'; MAX_SERIALIZED_NAME]);
+    at_bound.extend(&triangle_body(3, 1)[7..]);
+    let name_ok = Scene::load(scene(
+        "name.serialized",
+        &serialized_file(&[serialized_shape(&at_bound)]),
+        0,
+    ));
+    assert!(
+        name_ok.is_ok(),
+        "a name of MAX_SERIALIZED_NAME bytes: {:?}",
+        name_ok.err()
+    );
+    let cases: Vec<(&str, Vec<u8>, u32, &str)> = vec![
+        (
+            "many.serialized",
+            many,
+            0,
+            "vertices, more than MAX_SERIALIZED_VERTICES",
+        ),
+        (
+            "lying.serialized",
+            lying,
+            0,
+            "the compressed stream ends after 48 bytes of data where its 16777216 vertices and 1 triangles need",
+        ),
+        (
+            "triangles.serialized",
+            serialized_file(&[serialized_shape(&triangle_body(3, MAX_TRIANGLES as u64 + 1))]),
+            0,
+            "triangles, more than MAX_TRIANGLES",
+        ),
+        (
+            "zlib.serialized",
+            bad_zlib,
+            0,
+            "bad zlib stream while reading the flags",
+        ),
+        ("short.serialized", good[..24].to_vec(), 0, "the file is cut short"),
+        (
+            "index.serialized",
+            good.clone(),
+            2,
+            "shape_index 2 is past the end: the file's dictionary lists 2 shapes",
+        ),
+        (
+            "far.serialized",
+            far,
+            1,
+            "shape 1 is at offset 1099511627776 in the dictionary, past the end of the file",
+        ),
+        (
+            "name-long.serialized",
+            serialized_file(&[serialized_shape(&endless)]),
+            0,
+            "runs past 4096 bytes (MAX_SERIALIZED_NAME)",
+        ),
+        (
+            "version.serialized",
+            [&[0x1C, 0x04, 5, 0][..], &good[4..]].concat(),
+            0,
+            "version 5: versions 3 and 4 are read",
+        ),
+    ];
+    assert!(MAX_SERIALIZED_VERTICES < 1 << 30);
+    for (name, bytes, index, says) in cases {
+        let e = load_fails(scene(name, &bytes, index));
+        assert!(
+            e.contains(&format!("{name}.xml:")) && e.contains("<shape type=\"serialized\">"),
+            "{e}"
+        );
+        assert!(e.contains(name) && e.contains(says), "{name}: {e}");
+    }
+
+    // A bomb: an honest triangle, then 256 MiB more of zeros in the same stream (about a MiB
+    // compressed). Only the triangle's 48 bytes are inflated.
+    let mut body = triangle_body(3, 1);
+    body.resize(body.len() + (256 << 20), 0);
+    let bomb = serialized_file(&[serialized_shape(&body)]);
+    assert!(bomb.len() < 2 << 20, "{} bytes", bomb.len());
+    let path = scene("bomb.serialized", &bomb, 0);
+    let s = bounded("a zlib bomb", Duration::from_secs(5), move || {
+        Scene::load(&path).map_err(|e| e.to_string())
+    });
+    assert_eq!(s.unwrap().meshes[0].indices.len(), 1);
+}
+
+/// Instancing is bounded as the shapes it copies are: a scene reaches MAX_SHAPES spheres and quads, or
+/// MAX_TRIANGLES triangles, through instances and loads; one instance more is refused naming it, before
+/// its copy is made.
+#[test]
+fn instancing_holds_the_scene_limits_at_their_bounds() {
+    use ppm_vk_engine::scene::MAX_TRIANGLES;
+    let dir = scratch("instancing");
+    // Quads: the lamp and 257 instances of a group of 255 rectangles (MAX_SHAPES = 1 + 257 * 255), then
+    // one more instance. (Few elements: the XML reader locates each element from the file's start.)
+    assert_eq!(MAX_SHAPES, 1 + 257 * 255);
+    let rectangles = format!(
+        r#"<shape type="shapegroup" id="g">{}</shape>"#,
+        r#"<shape type="rectangle"/>"#.repeat(255)
+    );
+    let instances = |n: usize| r#"<shape type="instance"><ref id="g"/></shape>"#.repeat(n);
+    let s = Scene::load(xml_scene(&dir, "quads.xml", &format!("{rectangles}{}", instances(257)))).unwrap();
+    assert_eq!(s.quads.len(), MAX_SHAPES);
+    let e = load_fails(xml_scene(
+        &dir,
+        "quads1.xml",
+        &format!("{rectangles}{}", instances(258)),
+    ));
+    assert!(
+        e.contains("quads1.xml:4:")
+            && e.contains("<shape type=\"instance\">")
+            && e.contains(&format!("{} spheres and quads, more than MAX_SHAPES", MAX_SHAPES + 255)),
+        "{e}"
+    );
+    // Triangles: a serialized mesh of MAX_TRIANGLES / 4 (equal) triangles, instanced four times, then five.
+    let quarter = MAX_TRIANGLES as u64 / 4;
+    let mut body = triangle_body(3, quarter);
+    body.truncate(body.len() - 12);
+    for _ in 0..quarter {
+        for i in [0u32, 1, 2] {
+            body.extend(i.to_le_bytes());
+        }
+    }
+    std::fs::write(dir.join("many.serialized"), serialized_file(&[serialized_shape(&body)])).unwrap();
+    let group = r#"<shape type="shapegroup" id="g"><shape type="serialized"><string name="filename" value="many.serialized"/>
+                   <bsdf type="twosided"><bsdf type="diffuse"/></bsdf></shape></shape>"#;
+    let s = Scene::load(xml_scene(&dir, "tris.xml", &format!("{group}{}", instances(4)))).unwrap();
+    assert_eq!(s.meshes.iter().map(|m| m.indices.len()).sum::<usize>(), MAX_TRIANGLES);
+    drop(s);
+    let e = Scene::load(xml_scene(&dir, "tris1.xml", &format!("{group}{}", instances(5))))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("<shape type=\"instance\">")
+            && e.contains(&format!(
+                "{} triangles, more than MAX_TRIANGLES",
+                MAX_TRIANGLES + MAX_TRIANGLES / 4
+            )),
         "{e}"
     );
 }

@@ -2,7 +2,7 @@
 //! See `docs/scene-format.md` for the user-facing spec.
 //!
 //! Formats are loaders that all build this one [`Scene`] (model.rs): `toml` reads the scene file,
-//! `mitsuba/` Mitsuba 3 XML, `obj` imports OBJ/MTL meshes through tobj, `ply` PLY meshes, `texture`
+//! `mitsuba/` Mitsuba 3 XML, `obj` imports OBJ/MTL meshes through tobj, `ply` PLY meshes, `serialized` Mitsuba's serialized meshes, `texture`
 //! bitmaps and procedural textures ([`generated`] lists the demo meshes that crates/scene-gen writes); load.rs
 //! chooses the reader for a file. Every value check lives once, in [`Scene::validate`], so a scene built in
 //! code, read from TOML or imported is checked the same way; the TOML loader maps a failed check's field
@@ -18,6 +18,7 @@ mod mitsuba;
 mod model;
 mod obj;
 mod ply;
+mod serialized;
 pub mod texture;
 mod toml;
 
@@ -38,3 +39,4 @@ pub use files::{open_bounded, read_bounded_bytes, MAX_IMAGE_BYTES, MAX_MESH_BYTE
 pub use model::*;
 
 pub use obj::ObjImport;
+pub use serialized::{MAX_SERIALIZED_NAME, MAX_SERIALIZED_VERTICES};

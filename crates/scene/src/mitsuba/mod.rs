@@ -17,7 +17,8 @@
 //!   refused;
 //! - `integrator.rs`: `<integrator>`; `sensor.rs`: `<sensor>` with its `<film>` and `<sampler>`;
 //! - `bsdf.rs`: `<bsdf>`, one function per plugin; `texture.rs`: `<texture>` (bitmap, checkerboard);
-//! - `shape.rs`: `<shape>`, one function per shape type; `emitter.rs`: `<emitter>`.
+//! - `shape.rs`: `<shape>`, one function per shape type; `instance.rs`: `shapegroup` and `instance`
+//!   (flattened at load); `emitter.rs`: `<emitter>`.
 //!
 //! Uses run one way: the children use this file's [`Builder`], `xml.rs`'s [`Elem`] and `properties.rs`;
 //! `shape.rs` uses `bsdf.rs`, `emitter.rs` and `texture.rs`, and `bsdf.rs` uses `texture.rs`; this file
@@ -26,6 +27,7 @@
 mod bsdf;
 mod cie;
 mod emitter;
+mod instance;
 mod integrator;
 mod properties;
 mod sensor;
@@ -97,6 +99,8 @@ struct Builder {
     emitters: HashMap<String, (Elem, bool)>,
     /// Ids of top-level samplers: a sensor may refer to one (it only decides Mitsuba's noise).
     samplers: Vec<String>,
+    /// Top-level shapegroups by id (instances copy them).
+    groups: HashMap<String, instance::Group>,
     /// Field path prefix (`quad[3]`, `materials.white`, `camera`) -> the element it came from.
     origins: HashMap<String, Elem>,
     sensor: Option<Elem>,
@@ -135,6 +139,7 @@ impl Builder {
             textures: HashMap::new(),
             emitters: HashMap::new(),
             samplers: Vec::new(),
+            groups: HashMap::new(),
             origins: HashMap::new(),
             sensor: None,
             shapes: 0,
@@ -176,6 +181,7 @@ impl Builder {
                 }
                 Ok(())
             }
+            "shape" if e.kind() == "shapegroup" => self.shapegroup(e),
             "shape" => {
                 let e = self.emitter_refs(e);
                 self.shape(&e)
@@ -227,7 +233,10 @@ impl Builder {
 
     /// Whether a top-level object already has the id `id`.
     fn taken(&self, id: &str) -> bool {
-        self.bsdfs.contains_key(id) || self.textures.contains_key(id) || self.emitters.contains_key(id)
+        self.bsdfs.contains_key(id)
+            || self.textures.contains_key(id)
+            || self.emitters.contains_key(id)
+            || self.groups.contains_key(id)
     }
 
     /// `e` (a shape) with each `<ref>` that names a top-level area emitter replaced by that emitter, so that

@@ -16,7 +16,7 @@ use super::xml::Elem;
 use super::Builder;
 use crate::obj::{self, RawMesh};
 use crate::texture::{self, Texture};
-use crate::{ply, Mesh, ObjImport, Quad, Sphere, Surface, MAX_TRIANGLES};
+use crate::{ply, serialized, Mesh, ObjImport, Quad, Sphere, Surface, MAX_TRIANGLES};
 
 /// Triangles in the fan a `disk` becomes. The polygon's radius is enlarged so that its area is the
 /// disk's exactly (an emitting disk keeps its power); its outline then lies between 2.6e-5 of the
@@ -52,6 +52,9 @@ impl Builder {
     /// A `<shape>`: its bsdf and emitter, its material, then its type's reader; every property must have
     /// been read by then.
     pub(super) fn shape(&mut self, e: &Elem) -> Result<()> {
+        if e.kind() == "instance" {
+            return self.instance(e);
+        }
         let index = self.shapes;
         self.shapes += 1;
         let (props, objects) = Props::of(e);
@@ -173,7 +176,8 @@ impl Builder {
             "sphere" => self.sphere(&common)?,
             "obj" => self.obj(&common)?,
             "ply" => self.ply(&common)?,
-            _ => return Err(e.err("unsupported shape (read: rectangle, cube, disk, sphere, obj, ply)")),
+            "serialized" => self.serialized(&common)?,
+            _ => return Err(e.err("unsupported shape (read: rectangle, cube, disk, sphere, obj, ply, serialized)")),
         };
         props.finish()?;
         self.warn_one_sided(e, &bsdf, bsdf_at, closed);
@@ -442,6 +446,52 @@ impl Builder {
             return Err(e.err(format!(
                 "{}: no texture coordinates (float or double vertex properties u and v, texture_u and \
                  texture_v, or s and t), which the texture of {} needs",
+                path.display(),
+                bsdf_at.what()
+            )));
+        }
+        let i = self.mesh(e, raw, &to_world, flip)?;
+        let m = &mut self.scene.meshes[i];
+        if !face_normals && m.normals.is_none() {
+            m.compute_vertex_normals();
+        }
+        Ok(closed(m))
+    }
+
+    /// Mitsuba's `serialized`: shape `shape_index` of a .serialized file (read by `scene/serialized.rs`),
+    /// with the file's normals unless `face_normals`, else Mitsuba's computed ones.
+    fn serialized(&mut self, c: &Common) -> Result<Closed> {
+        let Common {
+            e,
+            props,
+            to_world,
+            flip,
+            material,
+            bsdf_at,
+            textured,
+            ..
+        } = *c;
+        let path = self.file(e, props)?;
+        let face_normals = props.boolean("face_normals")?;
+        let index = match props.get("shape_index") {
+            None => 0,
+            Some(p) => {
+                let v = p.required("value")?;
+                if p.tag != "integer" {
+                    return Err(p.err("expected an <integer> here"));
+                }
+                v.trim()
+                    .parse::<u32>()
+                    .map_err(|_| p.err(format!("expected a non-negative integer, got \"{v}\"")))?
+            }
+        };
+        let mut raw = serialized::read(&path, index, material).map_err(|err| e.err(format!("{err:#}")))?;
+        if face_normals {
+            raw.normals = None;
+        }
+        if textured && raw.uvs.is_none() {
+            return Err(e.err(format!(
+                "{}: shape {index} has no texture coordinates, which the texture of {} needs",
                 path.display(),
                 bsdf_at.what()
             )));
