@@ -101,6 +101,11 @@ struct Builder {
     samplers: Vec<String>,
     /// Top-level shapegroups by id (instances copy them).
     groups: HashMap<String, instance::Group>,
+    /// Top-level bsdfs by id, for a shape that refers to one defined after it (Mitsuba resolves references
+    /// after reading the file): such a bsdf is read when the shape needs it, and skipped where it stands
+    /// (`early` holds where it stands).
+    later_bsdfs: HashMap<String, Elem>,
+    early: Vec<String>,
     /// Field path prefix (`quad[3]`, `materials.white`, `camera`) -> the element it came from.
     origins: HashMap<String, Elem>,
     sensor: Option<Elem>,
@@ -140,6 +145,8 @@ impl Builder {
             emitters: HashMap::new(),
             samplers: Vec::new(),
             groups: HashMap::new(),
+            later_bsdfs: HashMap::new(),
+            early: Vec::new(),
             origins: HashMap::new(),
             sensor: None,
             shapes: 0,
@@ -166,6 +173,7 @@ impl Builder {
                 }
                 Ok(())
             }
+            "bsdf" if self.early.contains(&e.loc.to_string()) => Ok(()),
             "bsdf" => {
                 let b = self.bsdf(e)?;
                 match &b.id {
@@ -184,6 +192,7 @@ impl Builder {
             "shape" if e.kind() == "shapegroup" => self.shapegroup(e),
             "shape" => {
                 let e = self.emitter_refs(e);
+                self.bsdfs_ahead(&e)?;
                 self.shape(&e)
             }
             // Read before the walk (`ids`).
@@ -225,7 +234,26 @@ impl Builder {
                     self.emitters.insert(id.to_string(), (e.clone(), false));
                 }
                 ("sampler", Some(id)) => self.samplers.push(id.to_string()),
+                ("bsdf", Some(id)) => {
+                    // The first of a duplicate id: the walk refuses the second where it stands.
+                    self.later_bsdfs.entry(id.to_string()).or_insert_with(|| e.clone());
+                }
                 _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads now the top-level bsdfs that `shape`'s `<ref>`s name and that are defined after it.
+    fn bsdfs_ahead(&mut self, shape: &Elem) -> Result<()> {
+        for c in shape.children.iter().filter(|c| c.tag == "ref") {
+            let Some(id) = c.attr("id") else { continue };
+            if self.bsdfs.contains_key(id) {
+                continue;
+            }
+            if let Some(b) = self.later_bsdfs.remove(id) {
+                self.top_level(&b)?;
+                self.early.push(b.loc.to_string());
             }
         }
         Ok(())
@@ -308,7 +336,7 @@ mod tests {
 
     use super::*;
     use crate::texture;
-    use crate::TempDir;
+    use crate::{Surface, TempDir};
 
     /// A camera and a light, so that a scene with one more shape validates.
     const HEAD: &str = r#"<scene version="3.0.0">
@@ -478,20 +506,26 @@ mod tests {
 
     /// A `<ref>` in a shape resolves by the kind of object its id names: a top-level area emitter
     /// (defined before or after, as Mitsuba resolves references after reading the file) is the shape's
-    /// emitter, next to its bsdf (mitsuba-data's cbox-rgb.xml); a sensor may refer to a top-level sampler.
+    /// emitter, next to its bsdf (mitsuba-data's cbox-rgb.xml), a bsdf (likewise before or after) its
+    /// bsdf; a sensor may refer to a top-level sampler.
     #[test]
     fn refs_to_top_level_emitters_and_samplers() {
         let body = r#"<shape type="rectangle" id="a"><ref id="white"/><ref id="glow"/></shape>
-            <bsdf type="diffuse" id="white"/>
+            <bsdf type="diffuse" id="white"><rgb name="reflectance" value="0.25"/></bsdf>
             <emitter type="area" id="glow"><rgb name="radiance" value="2, 3, 4"/></emitter>
             <shape type="rectangle" id="b"><ref id="glow"/></shape>
             <emitter type="area" id="unused"/>
-            <sampler type="independent" id="s"/>"#;
-        // The bsdf is defined after the first shape: Mitsuba takes it too, ppm-vk needs it before.
-        let e = error(body);
-        assert!(e.contains("no bsdf with id \"white\" defined before it"), "{e}");
-        let body = body.replacen(r#"<ref id="white"/>"#, "", 1);
-        let s = load_body(&body).unwrap_or_else(|e| panic!("{e:#}"));
+            <sampler type="independent" id="s"/>
+            <shape type="rectangle" id="c"><ref id="white"/></shape>"#;
+        // The bsdf is defined after the first shape, which refers to it: read when that shape needs it
+        // (Mitsuba resolves references after reading the file), once.
+        let s = load_body(body).unwrap_or_else(|e| panic!("{e:#}"));
+        let surface = |i: usize| s.materials[s.quads[i].material as usize].surface;
+        let white = Surface::Diffuse {
+            albedo: Vec3::splat(0.25),
+        };
+        assert_eq!((surface(1), surface(3)), (white, white));
+        assert_eq!(s.materials[s.quads[3].material as usize].name, "white");
         let emission = |i: usize| s.materials[s.quads[i].material as usize].emission;
         assert_eq!(
             (emission(1), emission(2)),

@@ -35,6 +35,11 @@ impl Builder {
                 }
                 ("film", _) => return Err(o.err("only hdrfilm is supported")),
                 // The sampler decides only the noise of Mitsuba's estimate; ppm-vk's --seed is its own.
+                // Mitsuba 0.6's quasi-random samplers, which Mitsuba 3 dropped: said, as Mitsuba 3 would refuse them.
+                ("sampler", kind @ ("halton" | "hammersley" | "sobol")) => self.warn(
+                    o,
+                    format!("Mitsuba 3 has no {kind} sampler (Mitsuba 0.6's): ignored, as every sampler"),
+                ),
                 ("sampler", _) => {}
                 ("ref", _) if o.attr("id").is_some_and(|id| self.samplers.iter().any(|s| s == id)) => {}
                 _ => return Err(o.err(format!("not expected inside {}", e.what()))),
@@ -321,5 +326,31 @@ mod tests {
             .unwrap_err()
         );
         assert!(e.contains("scale"), "{e}");
+    }
+
+    #[test]
+    fn samplers_are_ignored_and_0_6_ones_said() {
+        let dir = TempDir::new("mitsuba-sampler");
+        for (kind, warned) in [
+            ("independent", false),
+            ("ldsampler", false),
+            ("halton", true),
+            ("sobol", true),
+        ] {
+            let path = dir.write(
+                "s.xml",
+                &format!(
+                    r#"<scene version="3.0.0"><sensor type="perspective"><sampler type="{kind}"><integer name="sample_count" value="4"/></sampler>
+                       <film type="hdrfilm"><rfilter type="box"/></film></sensor>
+                       <shape type="sphere"><emitter type="area"/></shape></scene>"#
+                ),
+            );
+            let s = load(&path, &[]).unwrap();
+            let said = s
+                .warnings
+                .iter()
+                .any(|w| w.contains(&format!("Mitsuba 3 has no {kind} sampler")));
+            assert_eq!(said, warned, "{kind}: {:?}", s.warnings);
+        }
     }
 }
