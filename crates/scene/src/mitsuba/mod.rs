@@ -49,7 +49,7 @@ use self::xml::Elem;
 use super::plastic::Coats;
 use super::{Camera, Scene};
 
-pub use self::shape::DISK_SEGMENTS;
+pub use self::shape::{CYLINDER_SEGMENTS, DISK_SEGMENTS};
 pub use self::xml::{MAX_INCLUDED_BYTES, MAX_INCLUDED_FILES, MAX_INCLUDE_DEPTH, MAX_NESTING, MAX_SUBSTITUTED_BYTES};
 
 /// `name=value` of a `-D` override; the name is what `$name` refers to.
@@ -275,8 +275,8 @@ mod tests {
                 "the id \"a\" is already taken",
             ),
             (
-                r#"<shape type="cylinder"/>"#,
-                r#"<shape type="cylinder">"#,
+                r#"<shape type="bsplinecurve"/>"#,
+                r#"<shape type="bsplinecurve">"#,
                 12,
                 "unsupported shape",
             ),
