@@ -158,7 +158,11 @@ pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), Strin
         .with_guessed_format()
         .map_err(|e| format!("cannot read the image: {e}"))?
         .format()
-        .or_else(|| image::ImageFormat::from_path(path).ok().filter(|f| *f == image::ImageFormat::Tga));
+        .or_else(|| {
+            image::ImageFormat::from_path(path)
+                .ok()
+                .filter(|f| *f == image::ImageFormat::Tga)
+        });
     reader.rewind().map_err(|e| format!("cannot read the image: {e}"))?;
     // A JPEG is read whole to check its end (JPEGs are small: the bound is the file's).
     let mut jpeg = Vec::new();
@@ -496,7 +500,10 @@ mod tests {
         assert_eq!((w, h), (2, 2));
         for (p, want) in px.iter().zip(floats.chunks_exact(3)) {
             let want = Vec3::from_slice(want);
-            assert!((*p - want).abs().max_element() <= want.max_element() / 128.0, "{p} vs {want}");
+            assert!(
+                (*p - want).abs().max_element() <= want.max_element() / 128.0,
+                "{p} vs {want}"
+            );
         }
     }
 }
