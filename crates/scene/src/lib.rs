@@ -27,8 +27,8 @@ pub use ppm_vk_materials::conductor as conductors;
 pub use ppm_vk_materials::{plastic, Microfacet};
 
 pub use mitsuba::{
-    parse_define, DISK_SEGMENTS, MAX_INCLUDED_BYTES, MAX_INCLUDED_FILES, MAX_INCLUDE_DEPTH, MAX_NESTING,
-    MAX_SPECTRUM_BYTES, MAX_SUBSTITUTED_BYTES,
+    parse_define, CYLINDER_SEGMENTS, DISK_SEGMENTS, MAX_INCLUDED_BYTES, MAX_INCLUDED_FILES, MAX_INCLUDE_DEPTH,
+    MAX_NESTING, MAX_SPECTRUM_BYTES, MAX_SUBSTITUTED_BYTES,
 };
 
 pub use crate::error::{Error, Result};

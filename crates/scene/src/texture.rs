@@ -139,9 +139,10 @@ fn jpeg_is_complete(bytes: &[u8]) -> bool {
     last_scan.is_some_and(|at| bytes[at..].windows(2).any(|w| w == [0xFF, 0xD9]))
 }
 
-/// Reads an image file (PNG, JPEG, EXR) as linear RGB, its top row first: 8- and 16-bit images are taken
-/// as sRGB-encoded and decoded unless `raw` (Mitsuba's rule; alpha is dropped), floating-point ones
-/// (EXR) as linear already. Only a regular file of at most [`MAX_IMAGE_BYTES`](crate::MAX_IMAGE_BYTES)
+/// Reads an image file (PNG, JPEG, EXR, Radiance HDR, TGA, BMP, PPM/PGM: those of Mitsuba's Bitmap formats
+/// that the image crate decodes) as linear RGB, its top row first: 8- and 16-bit images are taken as
+/// sRGB-encoded and decoded unless `raw` (Mitsuba's rule; alpha is dropped), floating-point ones (EXR,
+/// HDR) as linear already. Only a regular file of at most [`MAX_IMAGE_BYTES`](crate::MAX_IMAGE_BYTES)
 /// is opened. The error says what is wrong with the file, without its name (the caller's message
 /// names it with the scene line).
 pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), String> {
@@ -152,10 +153,16 @@ pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), Strin
             e => e.to_string(),
         })?;
     let mut reader = BufReader::new(file);
+    // By its first bytes; a TGA has no signature, so by its extension then.
     let format = image::ImageReader::new(&mut reader)
         .with_guessed_format()
         .map_err(|e| format!("cannot read the image: {e}"))?
-        .format();
+        .format()
+        .or_else(|| {
+            image::ImageFormat::from_path(path)
+                .ok()
+                .filter(|f| *f == image::ImageFormat::Tga)
+        });
     reader.rewind().map_err(|e| format!("cannot read the image: {e}"))?;
     // A JPEG is read whole to check its end (JPEGs are small: the bound is the file's).
     let mut jpeg = Vec::new();
@@ -467,5 +474,36 @@ mod tests {
         assert!((px[1].x - srgb_to_linear(188.0 / 255.0)).abs() < 1e-6);
         let (_, _, raw) = read_image(&path, true).unwrap();
         assert!((raw[1].x - 188.0 / 255.0).abs() < 1e-6);
+    }
+
+    /// The same 8-bit pixels as TGA, BMP and PPM read as the PNG does (sRGB-decoded, or raw), and a
+    /// Radiance HDR as the linear floats written (within RGBE's precision: 8 bits of mantissa).
+    #[test]
+    fn tga_bmp_ppm_read_as_png_and_hdr_as_linear() {
+        let dir = crate::TempDir::new("texture-formats");
+        let rgb = [255u8, 0, 0, 188, 188, 188, 10, 120, 250, 0, 0, 0];
+        write_png(&dir.0.join("a.png"), 2, 2, &rgb);
+        let image = image::RgbImage::from_raw(2, 2, rgb.to_vec()).unwrap();
+        for raw in [false, true] {
+            let png = read_image(&dir.0.join("a.png"), raw).unwrap();
+            for name in ["a.tga", "a.bmp", "a.ppm"] {
+                image.save(dir.0.join(name)).unwrap();
+                assert_eq!(read_image(&dir.0.join(name), raw).unwrap(), png, "{name} raw {raw}");
+            }
+        }
+        let floats = [2.5f32, 0.0, 0.125, 0.3, 0.3, 0.3, 7.0, 1.0, 0.01, 0.0, 0.0, 0.0];
+        image::Rgb32FImage::from_raw(2, 2, floats.to_vec())
+            .unwrap()
+            .save(dir.0.join("a.hdr"))
+            .unwrap();
+        let (w, h, px) = read_image(&dir.0.join("a.hdr"), false).unwrap();
+        assert_eq!((w, h), (2, 2));
+        for (p, want) in px.iter().zip(floats.chunks_exact(3)) {
+            let want = Vec3::from_slice(want);
+            assert!(
+                (*p - want).abs().max_element() <= want.max_element() / 128.0,
+                "{p} vs {want}"
+            );
+        }
     }
 }

@@ -52,7 +52,7 @@ use self::xml::{Elem, Resolver};
 use super::plastic::Coats;
 use super::{Camera, Scene};
 
-pub use self::shape::DISK_SEGMENTS;
+pub use self::shape::{CYLINDER_SEGMENTS, DISK_SEGMENTS};
 pub use self::spectrum::MAX_SPECTRUM_BYTES;
 pub use self::xml::{MAX_INCLUDED_BYTES, MAX_INCLUDED_FILES, MAX_INCLUDE_DEPTH, MAX_NESTING, MAX_SUBSTITUTED_BYTES};
 
@@ -388,8 +388,8 @@ mod tests {
                 "the id \"a\" is already taken",
             ),
             (
-                r#"<shape type="cylinder"/>"#,
-                r#"<shape type="cylinder">"#,
+                r#"<shape type="bsplinecurve"/>"#,
+                r#"<shape type="bsplinecurve">"#,
                 12,
                 "unsupported shape",
             ),

@@ -23,6 +23,11 @@ use crate::{ply, serialized, Mesh, ObjImport, Quad, Sphere, Surface, MAX_TRIANGL
 /// radius inside the circle (edge midpoints) and 5.1e-5 outside (corners).
 pub const DISK_SEGMENTS: u32 = 256;
 
+/// Sides of the prism a `cylinder` becomes. Its circumradius is enlarged so that its lateral area is
+/// the cylinder's exactly (pi / n / sin(pi / n) times the radius); its outline then lies between 5.0e-5
+/// of the radius inside the circle (the middles of its faces) and 2.5e-5 outside (its edges).
+pub const CYLINDER_SEGMENTS: u32 = 256;
+
 /// Shapes whose back side can be seen (a one-sided BSDF on them renders differently here).
 #[derive(Clone, Copy, PartialEq)]
 enum Closed {
@@ -125,13 +130,6 @@ impl Builder {
                 e.kind()
             )));
         }
-        if textured && matches!(e.kind(), "cube" | "disk") {
-            return Err(bsdf_at.err(format!(
-                "texture coordinates of a {} are not supported yet (textures are read on rectangles, spheres, \
-                 and OBJ and PLY meshes with texture coordinates)",
-                e.kind()
-            )));
-        }
         // A rectangle's quad has Mitsuba's uv as its coordinates along edge_u and edge_v. A mirroring
         // to_world or flip_normals turns its front side around by swapping the edges, which would swap
         // u and v: a textured one instead runs its first edge backwards from the corner (1, -1), so that
@@ -171,13 +169,18 @@ impl Builder {
         };
         let closed = match e.kind() {
             "rectangle" => self.rectangle(&common, backwards),
-            "cube" => self.cube(&common),
+            "cube" => self.cube(&common)?,
             "disk" => self.disk(&common)?,
+            "cylinder" => self.cylinder(&common)?,
             "sphere" => self.sphere(&common)?,
             "obj" => self.obj(&common)?,
             "ply" => self.ply(&common)?,
             "serialized" => self.serialized(&common)?,
-            _ => return Err(e.err("unsupported shape (read: rectangle, cube, disk, sphere, obj, ply, serialized)")),
+            _ => {
+                return Err(
+                    e.err("unsupported shape (read: rectangle, cube, disk, cylinder, sphere, obj, ply, serialized)")
+                )
+            }
         };
         props.finish()?;
         self.warn_one_sided(e, &bsdf, bsdf_at, closed);
@@ -258,15 +261,45 @@ impl Builder {
         }
     }
 
-    /// Mitsuba's `cube`: [-1, 1]^3, its six faces facing out.
-    fn cube(&mut self, c: &Common) -> Closed {
+    /// Mitsuba's `cube`: [-1, 1]^3, its six faces facing out: six quads, or with a texture the mesh of
+    /// twelve triangles Mitsuba makes of it (src/shapes/cube.cpp), with its texture coordinates.
+    fn cube(&mut self, c: &Common) -> Result<Closed> {
         let Common {
             e,
             to_world,
             flip,
             material,
+            textured,
             ..
         } = *c;
+        if textured {
+            // Each face's corners, counter-clockwise seen from outside, at uv (0, 1), (1, 1), (1, 0), (0, 0)
+            // (Mitsuba's table, face by face: -y, +y, +x, +z, -x, -z).
+            let faces: [[[f64; 3]; 4]; 6] = [
+                [[1., -1., -1.], [1., -1., 1.], [-1., -1., 1.], [-1., -1., -1.]],
+                [[1., 1., -1.], [-1., 1., -1.], [-1., 1., 1.], [1., 1., 1.]],
+                [[1., -1., -1.], [1., 1., -1.], [1., 1., 1.], [1., -1., 1.]],
+                [[1., -1., 1.], [1., 1., 1.], [-1., 1., 1.], [-1., -1., 1.]],
+                [[-1., -1., 1.], [-1., 1., 1.], [-1., 1., -1.], [-1., -1., -1.]],
+                [[1., 1., -1.], [1., -1., -1.], [-1., -1., -1.], [-1., 1., -1.]],
+            ];
+            let corner_uv = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+            let positions = faces.iter().flatten().map(|&p| DVec3::from(p)).collect();
+            let uvs = (0..6).flat_map(|_| corner_uv.map(glam::Vec2::from)).collect();
+            let triangles = (0..6u32)
+                .flat_map(|f| [[0, 1, 2], [3, 0, 2]].map(|t| (t.map(|k| 4 * f + k), material)))
+                .collect();
+            let raw = RawMesh {
+                name: format!("{} cube", e.loc),
+                positions,
+                normals: None,
+                partial_normals: false,
+                uvs: Some(uvs),
+                triangles,
+            };
+            self.mesh(e, raw, &to_world, flip)?;
+            return Ok(Closed::Yes);
+        }
         // Each face of [-1, 1]^3 with its normal outward: edges u x v along +axis, swapped
         // for the face on the negative side.
         for axis in 0..3 {
@@ -288,7 +321,7 @@ impl Builder {
                 );
             }
         }
-        Closed::Yes
+        Ok(Closed::Yes)
     }
 
     /// Mitsuba's `disk`: the unit disk at z = 0, facing +z, as a fan of [`DISK_SEGMENTS`] triangles.
@@ -304,21 +337,115 @@ impl Builder {
         let step = std::f64::consts::TAU / f64::from(n);
         // The regular n-gon of area pi: radius sqrt(2 pi / (n sin(2 pi / n))).
         let r = (std::f64::consts::TAU / (f64::from(n) * step.sin())).sqrt();
-        let mut positions = vec![DVec3::ZERO];
-        positions.extend((0..n).map(|i| {
-            let a = step * f64::from(i);
-            DVec3::new(r * a.cos(), r * a.sin(), 0.0)
-        }));
-        let triangles = (0..n).map(|i| ([0, 1 + i, 1 + (i + 1) % n], material)).collect();
+        // Mitsuba's uv (src/shapes/disk.cpp): (r, phi / 2 pi). The rim's n + 1 vertices (the last at v = 1,
+        // the seam), then a centre per triangle, at the v of the triangle's middle: one shared centre
+        // would bend every triangle's v towards its own.
+        let mut positions: Vec<DVec3> = (0..=n)
+            .map(|i| {
+                let a = step * f64::from(i % n);
+                DVec3::new(r * a.cos(), r * a.sin(), 0.0)
+            })
+            .collect();
+        let mut uvs: Vec<glam::Vec2> = (0..=n).map(|i| glam::Vec2::new(1.0, i as f32 / n as f32)).collect();
+        positions.extend((0..n).map(|_| DVec3::ZERO));
+        uvs.extend((0..n).map(|i| glam::Vec2::new(0.0, (i as f32 + 0.5) / n as f32)));
+        let triangles = (0..n).map(|i| ([n + 1 + i, i, i + 1], material)).collect();
         let raw = RawMesh {
             name: format!("{} disk", e.loc),
             positions,
             normals: None,
             partial_normals: false,
-            uvs: None,
+            uvs: Some(uvs),
             triangles,
         };
         self.mesh(e, raw, &to_world, flip)?;
+        Ok(Closed::No)
+    }
+
+    /// Mitsuba's `cylinder` (src/shapes/cylinder.cpp): an open tube of radius 1 from z = 0 to 1, placed by
+    /// `to_world * translate(p0) * to_frame(p1 - p0) * scale(radius, radius, |p1 - p0|)`, as a prism of
+    /// [`CYLINDER_SEGMENTS`] sides whose lateral area is exact, shaded smooth by the true cylinder's normals,
+    /// with Mitsuba's uv: u = phi / 2 pi about the axis (from the frame's s axis), v = z.
+    fn cylinder(&mut self, c: &Common) -> Result<Closed> {
+        let Common {
+            e,
+            props,
+            to_world,
+            flip,
+            material,
+            ..
+        } = *c;
+        let p0 = props.point("p0")?.unwrap_or(DVec3::ZERO);
+        let p1 = props.point("p1")?.unwrap_or(DVec3::Z);
+        let radius = props.float("radius")?.unwrap_or(1.0);
+        let d = p1 - p0;
+        let length = d.length();
+        if !(length > 0.0 && length.is_finite()) {
+            return Err(e.err("p0 and p1 coincide: the cylinder has no length"));
+        }
+        if !(radius > 0.0 && radius.is_finite()) {
+            return Err(e.err(format!("radius {radius}: must be positive")));
+        }
+        let n = d / length;
+        // Mitsuba's Frame3f(n): coordinate_system (Duff et al. 2017), as include/mitsuba/core/vector.h.
+        let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        let s = DVec3::new(sign * n.x * n.x * a + 1.0, sign * b, -sign * n.x);
+        let t = DVec3::new(b, sign + n.y * n.y * a, -n.y);
+        let m = to_world
+            * DAffine3::from_translation(p0)
+            * DAffine3::from_mat3(DMat3::from_cols(s, t, n))
+            * DAffine3::from_scale(DVec3::new(radius, radius, length));
+        // Mitsuba intersects a circular cylinder whatever to_world says (it only warns): refused here.
+        let (x, y, z) = (m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis);
+        let r2 = x.length_squared();
+        let round = (y.length_squared() - r2).abs() <= 1e-6 * r2
+            && [x.dot(y), x.dot(z), y.dot(z)]
+                .iter()
+                .all(|p| p.abs() <= 1e-6 * r2.max(z.length_squared()));
+        if !round {
+            return Err(e.err(
+                "to_world shears the cylinder or scales it unevenly across its axis (an elliptic \
+                 cylinder): not supported (Mitsuba only warns, and intersects a round one)",
+            ));
+        }
+        if m.matrix3.determinant() < 0.0 {
+            return Err(e.err("a mirroring to_world on a cylinder is not supported"));
+        }
+        let segments = CYLINDER_SEGMENTS;
+        let step = std::f64::consts::TAU / f64::from(segments);
+        let half = step / 2.0;
+        let enlarged = half / half.sin();
+        // Two rings of segments + 1 vertices (the last at u = 1, where the texture's seam is).
+        let mut positions = Vec::new();
+        let mut normals = Vec::new();
+        let mut uvs = Vec::new();
+        for z in [0.0, 1.0] {
+            for i in 0..=segments {
+                let phi = step * f64::from(i % segments);
+                let (sin, cos) = phi.sin_cos();
+                positions.push(DVec3::new(enlarged * cos, enlarged * sin, z));
+                normals.push(DVec3::new(cos, sin, 0.0));
+                uvs.push(glam::Vec2::new(i as f32 / segments as f32, z as f32));
+            }
+        }
+        let ring = segments + 1;
+        let mut triangles = Vec::new();
+        for i in 0..segments {
+            // Counter-clockwise seen from outside: along phi, then up.
+            triangles.push(([i, i + 1, ring + i + 1], material));
+            triangles.push(([i, ring + i + 1, ring + i], material));
+        }
+        let raw = RawMesh {
+            name: format!("{} cylinder", e.loc),
+            positions,
+            normals: Some(normals),
+            partial_normals: false,
+            uvs: Some(uvs),
+            triangles,
+        };
+        self.mesh(e, raw, &m, flip)?;
         Ok(Closed::No)
     }
 
@@ -740,6 +867,76 @@ mod tests {
         assert!(flipped.meshes[0]
             .triangles()
             .all(|t| t.normal().distance(Vec3::NEG_Z) < 1e-5));
+    }
+
+    /// A cylinder from p0 to p1 (then turned, scaled and moved by to_world): its lateral area is the
+    /// cylinder's, 2 pi r L, to 1e-6; every vertex lies 2.5e-5 of the radius outside the true cylinder
+    /// ((pi / n)^2 / 6) between its end circles, and its normal is the cylinder's there (radial, unit).
+    #[test]
+    fn cylinder_is_an_area_exact_prism_with_the_cylinders_normals() {
+        let s = load_body(
+            r#"<shape type="cylinder"><point name="p0" value="1, -0.5, 0.25"/><point name="p1" value="-0.5, 2, 1"/>
+               <float name="radius" value="0.3"/><transform name="to_world"><scale value="2"/>
+               <rotate x="0.6" y="0.8" angle="70"/><translate x="1" y="2" z="3"/></transform>
+               <bsdf type="twosided"><bsdf type="diffuse"/></bsdf><emitter type="area"/></shape>"#,
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        let m = &s.meshes[0];
+        assert_eq!(m.indices.len(), 2 * CYLINDER_SEGMENTS as usize);
+        let place = DAffine3::from_scale(DVec3::splat(2.0));
+        let place = DAffine3::from_axis_angle(DVec3::new(0.6, 0.8, 0.0), 70f64.to_radians()) * place;
+        let place = DAffine3::from_translation(DVec3::new(1.0, 2.0, 3.0)) * place;
+        let (p0, p1) = (
+            place.transform_point3(DVec3::new(1.0, -0.5, 0.25)),
+            place.transform_point3(DVec3::new(-0.5, 2.0, 1.0)),
+        );
+        let (r, length, axis) = (0.6, p0.distance(p1), (p1 - p0).normalize());
+        let area: f64 = m.triangles().map(|t| f64::from(t.area())).sum();
+        let exact = std::f64::consts::TAU * r * length;
+        assert!((area / exact - 1.0).abs() < 1e-6, "area {area} vs {exact}");
+        let outside = (std::f64::consts::PI / f64::from(CYLINDER_SEGMENTS)).powi(2) / 6.0;
+        let normals = m.normals.as_ref().expect("smooth");
+        for (p, n) in m.positions.iter().zip(normals) {
+            let d = p.as_dvec3() - p0;
+            let along = d.dot(axis);
+            let radial = d - along * axis;
+            assert!(
+                along.abs() < 1e-5 || (along - length).abs() < 1e-5,
+                "{p}: {along} along the axis"
+            );
+            assert!(
+                (radial.length() / r - 1.0 - outside).abs() < 1e-5,
+                "{p}: {} from the axis",
+                radial.length()
+            );
+            assert!(n.as_dvec3().distance(radial.normalize()) < 1e-5, "{p}: normal {n}");
+        }
+        // Every triangle faces out (its winding), and the emitter lights outwards.
+        for t in m.triangles() {
+            let c = (t.p[0] + t.p[1] + t.p[2]).as_dvec3() / 3.0 - p0;
+            assert!(t.normal().as_dvec3().dot(c - c.dot(axis) * axis) > 0.0);
+        }
+        assert_eq!(s.emitting_triangles().len(), 2 * CYLINDER_SEGMENTS as usize);
+        let flipped = load_body(
+            r#"<shape type="cylinder"><boolean name="flip_normals" value="true"/><bsdf type="diffuse"/></shape>"#,
+        )
+        .unwrap();
+        let m = &flipped.meshes[0];
+        for (t, idx) in m.triangles().zip(&m.indices) {
+            let c = (t.p[0] + t.p[1] + t.p[2]) / 3.0;
+            assert!(t.normal().dot(c.with_z(0.0)) < 0.0, "flipped: faces in");
+            let n = m.normals.as_ref().unwrap()[idx[0] as usize];
+            assert!(n.dot(c.with_z(0.0)) < 0.0, "flipped: its normals in");
+        }
+        for (body, says) in [
+            (r#"<point name="p1" value="0, 0, 0"/>"#, "no length"),
+            (r#"<float name="radius" value="0"/>"#, "must be positive"),
+            (r#"<transform name="to_world"><scale x="2"/></transform>"#, "elliptic"),
+            (r#"<transform name="to_world"><scale z="-1"/></transform>"#, "mirroring"),
+        ] {
+            let e = error(&format!(r#"<shape type="cylinder">{body}</shape>"#));
+            assert!(e.contains("<shape type=\"cylinder\">") && e.contains(says), "{e}");
+        }
     }
 
     #[test]

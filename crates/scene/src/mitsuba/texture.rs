@@ -319,18 +319,6 @@ mod tests {
                 "a texture on radiance is not supported",
             ),
             (
-                format!(r#"<shape type="cube"><bsdf type="diffuse">{tex}</bsdf></shape>"#),
-                r#"<bsdf type="diffuse">"#,
-                12,
-                "texture coordinates of a cube are not supported yet",
-            ),
-            (
-                format!(r#"<shape type="disk"><bsdf type="diffuse">{tex}</bsdf></shape>"#),
-                r#"<bsdf type="diffuse">"#,
-                12,
-                "texture coordinates of a disk are not supported yet",
-            ),
-            (
                 format!(r#"<shape type="sphere"><transform name="to_world"><rotate x="1" angle="30"/></transform><bsdf type="diffuse">{tex}</bsdf></shape>"#),
                 r#"<shape type="sphere">"#,
                 12,
