@@ -26,6 +26,7 @@
 mod bsdf;
 mod emitter;
 mod integrator;
+mod modifiers;
 mod properties;
 mod sensor;
 mod shape;
