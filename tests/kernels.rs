@@ -714,6 +714,12 @@ fn photon_records_match_reference_with_normal_maps() {
     photon_records_match_reference_on(cornell_mapped(false), true, 1e-3);
 }
 
+/// The same with the kernels as built (the map code always in).
+#[test]
+fn photon_records_match_reference_with_normal_maps_unspecialized() {
+    photon_records_match_reference_on(cornell_mapped(false), false, 1e-3);
+}
+
 /// Rough plastics: records carry flux times the coat's table, bounces choose a lobe through a sampled facet.
 #[test]
 fn photon_records_match_reference_with_rough_plastics() {

@@ -50,8 +50,11 @@ impl Builder {
                 .err("a checkerboard as a height map: Mitsuba gives it no gradient (use a bitmap)"));
         }
         let scale = props.float("scale")?.unwrap_or(1.0);
-        if !scale.is_finite() {
-            return Err(props.get("scale").unwrap().err(format!("must be finite, got {scale}")));
+        if !(scale as f32).is_finite() {
+            return Err(props
+                .get("scale")
+                .unwrap()
+                .err(format!("must be a finite 32-bit float, got {scale}")));
         }
         self.wrap(e, props, nested, texture, Some(scale as f32))
     }
