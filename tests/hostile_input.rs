@@ -92,6 +92,7 @@ fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
                 "../shared/reference/cornell-spheres.xml",
                 "scenes/references/cornell-coated.xml",
                 "scenes/legacy/cornell-spheres.xml",
+                "scenes/bump-plane.xml",
             ],
         ),
         ("spd", load_spd, vec!["scenes/references/spectra-test.spd"]),
@@ -487,6 +488,42 @@ fn load_fails(path: PathBuf) -> String {
     let e = out.expect_err(&what);
     assert!(!e.contains("panicked"), "{e}");
     e
+}
+
+/// Bump maps with a scale that is not a finite f32 (NaN, infinite, or finite in f64 and infinite in f32) and
+/// a normal map without its texture or with two bsdfs: an error naming the element or field, never a panic.
+#[test]
+fn hostile_bump_and_normal_maps_are_refused() {
+    let dir = scratch("modifiers");
+    let bump = |scale: &str| {
+        format!(
+            "<shape type=\"rectangle\"><bsdf type=\"bumpmap\"><float name=\"scale\" value=\"{scale}\"/>\
+             <texture type=\"bitmap\"><string name=\"filename\" value=\"{}\"/></texture>\
+             <bsdf type=\"diffuse\"/></bsdf></shape>",
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("scenes/textures/bump-height.exr")
+                .display()
+        )
+    };
+    let cases = [
+        (bump("nan"), "scale"),
+        (bump("inf"), "scale"),
+        (bump("1e39"), "scale"),
+        (
+            "<shape type=\"rectangle\"><bsdf type=\"normalmap\"><bsdf type=\"diffuse\"/></bsdf></shape>".to_string(),
+            "needs the texture \"normalmap\"",
+        ),
+        (
+            "<shape type=\"rectangle\"><bsdf type=\"normalmap\"><texture type=\"checkerboard\" name=\"normalmap\"/>\
+             <bsdf type=\"diffuse\"/><bsdf type=\"diffuse\"/></bsdf></shape>"
+                .to_string(),
+            "a second bsdf",
+        ),
+    ];
+    for (i, (body, says)) in cases.iter().enumerate() {
+        let e = load_fails(xml_scene(&dir, &format!("m{i}.xml"), body));
+        assert!(e.contains(says), "{body}: {e}");
+    }
 }
 
 /// Every file a scene names is opened only if it is a regular file, without blocking, and read within a

@@ -271,6 +271,73 @@ fn emission_passes_match_reference(r: &mut Renderer, direct_rel: f64) {
     );
 }
 
+/// scenes/references/cornell-smooth.xml at RES x RES with bump and normal maps (normal_map.glsl): a bumpy
+/// height field (an 8 x 8 bitmap, bilinear, tilting up to about 20 degrees) on every other material and a
+/// normal map (4 x 4, tilting up to about 22 degrees) on the rest, the meshes given texture coordinates
+/// from their positions: the perturbed normals of quads, spheres and triangles, and the shadowing term on
+/// eye paths and photons. `all`: every material; else not the glass mesh's nor the spheres' (see
+/// photon_records_match_reference_with_normal_maps).
+fn cornell_mapped(all: bool) -> ppm_vk_engine::Scene {
+    use ppm_vk_engine::scene::texture::{Filter, Pattern, Texture, Wrap, IDENTITY_UV};
+    use ppm_vk_engine::scene::NormalMap;
+    let mut scene = cornell_smooth();
+    let bitmap = |name: &str, n: u32, f: &dyn Fn(u32) -> Vec3| Texture {
+        name: name.into(),
+        pattern: Pattern::Bitmap {
+            width: n,
+            height: n,
+            pixels: (0..n * n).map(f).collect(),
+        },
+        filter: Filter::Bilinear,
+        wrap: Wrap::Repeat,
+        to_uv: IDENTITY_UV,
+    };
+    // Heights from a fixed scramble of the pixel index; normals (x, y) in [-0.4, 0.4], z 1.
+    let heights = bitmap("heights", 8, &|i| Vec3::splat(((i * 37 + 11) % 17) as f32 / 16.0));
+    let normals = bitmap("normals", 4, &|i| {
+        let (x, y) = (((i * 7 + 3) % 9) as f32 / 8.0, ((i * 5 + 1) % 9) as f32 / 8.0);
+        Vec3::new(0.3 + 0.4 * x, 0.3 + 0.4 * y, 1.0)
+    });
+    scene.textures.extend([heights, normals]);
+    let (h, n) = (scene.textures.len() as u32 - 2, scene.textures.len() as u32 - 1);
+    let on_spheres: Vec<u32> = scene.spheres.iter().map(|s| s.material).collect();
+    for (i, m) in scene.materials.iter_mut().enumerate() {
+        if !all && (matches!(m.surface, Surface::Glass { .. }) || on_spheres.contains(&(i as u32))) {
+            continue;
+        }
+        m.normal_map = Some(match i % 2 {
+            0 => NormalMap::Bump {
+                texture: h,
+                scale: 0.05,
+            },
+            _ => NormalMap::Normal { texture: n },
+        });
+    }
+    for mesh in &mut scene.meshes {
+        mesh.uvs = Some(
+            mesh.positions
+                .iter()
+                .map(|p| glam::Vec2::new(p.x + 0.3 * p.z, p.y))
+                .collect(),
+        );
+    }
+    scene.validate().unwrap();
+    scene
+}
+
+/// Bump and normal maps: the perturbed shading normals of the hit points and their shadowing term on the
+/// direct light.
+#[test]
+fn ray_pass_matches_reference_with_normal_maps() {
+    ray_pass_matches_reference_on(cornell_mapped(true), true, DirectLight::Sample);
+}
+
+/// The same with the kernels as built (the map code always in).
+#[test]
+fn ray_pass_matches_reference_with_normal_maps_unspecialized() {
+    ray_pass_matches_reference_on(cornell_mapped(true), false, DirectLight::Sample);
+}
+
 /// With the scene compiled into the tracing kernels (the default), direct light sampled (the default).
 #[test]
 fn ray_pass_matches_reference() {
@@ -634,6 +701,23 @@ fn photon_records_match_reference_with_anisotropic_surfaces() {
 #[test]
 fn photon_records_match_reference_with_smooth_shading() {
     photon_records_match_reference_on(cornell_smooth(), true, 1e-3);
+}
+
+/// Bump and normal maps: records carry Veach's correction about the perturbed normal and the shadowing
+/// term of the direction they arrived from. Not on the spheres nor the glass: a sphere's texture
+/// coordinates come from atan and acos, which lavapipe approximates to about 1e-5, and the mirror sphere's
+/// mapped normal then turns a reflected photon by about 5e-5, past the match's direction tolerance
+/// (measured with maps everywhere: 97.0% of the records matched one to one, 10.7% of the snapped buckets
+/// differing, 0.2% of the records and 0.08% of the flux displaced).
+#[test]
+fn photon_records_match_reference_with_normal_maps() {
+    photon_records_match_reference_on(cornell_mapped(false), true, 1e-3);
+}
+
+/// The same with the kernels as built (the map code always in).
+#[test]
+fn photon_records_match_reference_with_normal_maps_unspecialized() {
+    photon_records_match_reference_on(cornell_mapped(false), false, 1e-3);
 }
 
 /// Rough plastics: records carry flux times the coat's table, bounces choose a lobe through a sampled facet.
@@ -1468,6 +1552,7 @@ fn cornell_textured() -> ppm_vk_engine::Scene {
             surface,
             emission: Vec3::ZERO,
             texture: Some(texture),
+            normal_map: None,
         });
         (scene.materials.len() - 1) as u32
     };

@@ -29,18 +29,24 @@ layout(binding = 7) uniform usamplerBuffer triangle_texels;
 
 // A kernel compiled for one scene knows whether any material has a texture (without one, the texture
 // index is not even read), whether any mesh is smooth-shaded (shading.glsl) and whether any rough
-// surface is anisotropic (geometry.glsl's surface_tangent), and which kinds of light it has beyond quads
+// surface is anisotropic (geometry.glsl's surface_tangent), whether any has a bump or normal map
+// (normal_map.glsl), and which kinds of light it has beyond quads
 // and triangles (lights.glsl): glowing spheres, delta lights (point, spot, directional), an environment.
 #ifdef SCENE_CONSTANTS
 #include "scene_constants.glsl"
 #define HAS_TEXTURES SCENE_TEXTURES
-#define HAS_SHADING_NORMALS SCENE_SHADING_NORMALS
+#define HAS_VERTEX_NORMALS SCENE_SHADING_NORMALS
+#define HAS_NORMAL_MAPS SCENE_NORMAL_MAPS
+// A bump or normal map's normal goes through smooth shading's path (shading.glsl).
+#define HAS_SHADING_NORMALS (SCENE_SHADING_NORMALS || SCENE_NORMAL_MAPS)
 #define HAS_ANISOTROPY SCENE_ANISOTROPIC
 #define HAS_SPHERE_LIGHTS SCENE_SPHERE_LIGHTS
 #define HAS_DELTA_LIGHTS SCENE_DELTA_LIGHTS
 #define HAS_ENVIRONMENT SCENE_ENVIRONMENT
 #else
 #define HAS_TEXTURES true
+#define HAS_VERTEX_NORMALS true
+#define HAS_NORMAL_MAPS true
 #define HAS_SHADING_NORMALS true
 #define HAS_ANISOTROPY true
 #define HAS_SPHERE_LIGHTS true

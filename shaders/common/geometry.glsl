@@ -46,6 +46,14 @@ void glass_branch(vec3 pos, vec3 nf, bool front, float ior, float u, inout vec3 
     }
 }
 
+// Mitsuba's dp/du and dp/dv of a sphere of radius r at unit normal n (src/shapes/sphere.cpp: u the
+// longitude about z over 2 pi, v the colatitude over pi; at a pole dp/dv's direction is x).
+void sphere_derivatives(vec3 n, float r, out vec3 dpdu, out vec3 dpdv) {
+    float rd = sqrt(n.x * n.x + n.y * n.y);
+    dpdu = (2.0 * PI * r) * vec3(-n.y, n.x, 0.0);
+    dpdv = rd > 0.0 ? (PI * r) * vec3(n.z * n.x / rd, n.z * n.y / rd, -rd) : (PI * r) * vec3(1.0, 0.0, 0.0);
+}
+
 struct Hit {
     float t;
     vec3 pos;
@@ -56,7 +64,9 @@ struct Hit {
     vec2 local;      // a quad's planar coordinates (its texture coordinates), a triangle's barycentric
                      // weights of v1 and v2 (texture.glsl's surface_uv reads them)
     vec3 dpdu;       // a quad's edge_u, a triangle's v1 - v0, where a scene has anisotropic surfaces
-                     // (surface_tangent)
+                     // (surface_tangent) or normal maps; a sphere's dp/du where it has normal maps
+    vec3 dpdv;       // where a scene has normal maps (normal_map.glsl): a quad's edge_v, a triangle's
+                     // v2 - v0, a sphere's dp/dv
 };
 
 const uint HIT_QUAD = 0u;     // hit.normal set in the loop
@@ -75,6 +85,7 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit h
     hit.local = vec2(0.0);
     hit.prim = 0u;
     hit.dpdu = vec3(0.0);
+    hit.dpdv = vec3(0.0);
     vec3 center = vec3(0.0);
     float inv_radius = 0.0;
     Triangle tri = Triangle(vec3(0.0), 0u, vec3(0.0), 0u, vec3(0.0), 0u);
@@ -112,7 +123,8 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit h
         hit.t = t; found = true; kind = HIT_QUAD;
         hit.normal = q.normal; hit.material = q.material;
         hit.local = vec2(a, b);
-        if (HAS_ANISOTROPY) hit.dpdu = q.edge_u;
+        if (HAS_ANISOTROPY || HAS_NORMAL_MAPS) hit.dpdu = q.edge_u;
+        if (HAS_NORMAL_MAPS) hit.dpdv = q.edge_v;
     }
     // A small mesh's triangles, written out (specialize.rs): each tested, with the BVH's watertight test.
     if (NUM_INLINE_TRIANGLES > 0u) {
@@ -150,7 +162,9 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit h
         hit.pos = o + hit.t * d;
         if (kind == HIT_SPHERE) hit.normal = (hit.pos - center) * inv_radius;
         if (kind == HIT_TRIANGLE) hit.normal = bvh_normal(tri);
-        if (HAS_ANISOTROPY && kind == HIT_TRIANGLE) hit.dpdu = tri.v1 - tri.v0;
+        if ((HAS_ANISOTROPY || HAS_NORMAL_MAPS) && kind == HIT_TRIANGLE) hit.dpdu = tri.v1 - tri.v0;
+        if (HAS_NORMAL_MAPS && kind == HIT_TRIANGLE) hit.dpdv = tri.v2 - tri.v0;
+        if (HAS_NORMAL_MAPS && kind == HIT_SPHERE) sphere_derivatives(hit.normal, 1.0 / inv_radius, hit.dpdu, hit.dpdv);
     }
     return found;
 }

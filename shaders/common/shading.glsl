@@ -18,12 +18,14 @@
 // chance of about 6e-11 per vertex at a 30 degree tilt between ns and ng; docs/design.md).
 #ifndef SHADING_GLSL
 #define SHADING_GLSL
+#include "materials/normal_map.glsl"
 
 // The shading normal of hit h on the side of ng (h.normal turned towards the ray): interpolated from the
-// triangle's vertex normals where it has them (triangle_texels' third texel), else ng. A sum of vertex
-// normals that cancels keeps ng.
+// triangle's vertex normals where it has them (triangle_texels' third texel), else ng (a sum of vertex
+// normals that cancels keeps ng); then perturbed by its material's bump or normal map, where it has one.
 vec3 shading_normal(Hit h, vec3 ng) {
-    if (HAS_SHADING_NORMALS && h.kind == HIT_TRIANGLE) {
+    vec3 ns = ng;
+    if (HAS_VERTEX_NORMALS && h.kind == HIT_TRIANGLE) {
         uvec4 t = texelFetch(triangle_texels, int(TRIANGLE_TEXELS * h.prim + 2u));
         if (t.w != 0u) {
             vec3 n = (1.0 - h.local.x - h.local.y) * normalize(oct_decode_unnormalized(t.x))
@@ -32,11 +34,13 @@ vec3 shading_normal(Hit h, vec3 ng) {
             float l = dot(n, n);
             if (l > 0.0) {
                 n *= inversesqrt(l);
-                return dot(n, ng) < 0.0 ? -n : n;
+                ns = dot(n, ng) < 0.0 ? -n : n;
             }
         }
     }
-    return ng;
+    // A bump or normal map perturbs it further (normal_map.glsl).
+    if (HAS_NORMAL_MAPS) ns = mapped_normal(h, ng, ns);
+    return ns;
 }
 
 // Whether direction w (either way along it) lies on the same side of ng and ns.

@@ -30,7 +30,8 @@ struct Material {
                      // weight its diffuse lobe gives (plastic.glsl), y its coat's internal diffuse
                      // reflectance (fdr_int when smooth) and z 1 if nonlinear
                      // (what turns a texture's diffuse_reflectance into its diffuse factor)
-    uint pad1;
+    uint normal_map; // 0: none; else 1 + the texel of its bump or normal map's record in texture_texels
+                     // (normal_map.glsl)
     float alpha_u;   // rough surfaces: the microfacet roughness along the tangent (microfacet.glsl)
     float alpha_v;   // and along the bitangent
     uint distribution; // MICROFACET_*

@@ -237,6 +237,8 @@ void main() {
             nf = shading_normal(h, ng);
             if (!shading_valid(d, ng, nf)) { alive = false; continue; }
             flux = capped(flux * shading_in(-d, ng, nf));
+            // A bump or normal map's term, for the direction the photon arrived from (normal_map.glsl).
+            if (HAS_NORMAL_MAPS) flux *= bump_shadowing(-d);
             vng = ng;
             vns = nf;
             leave = true;

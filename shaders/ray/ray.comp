@@ -176,6 +176,7 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint co
     vec3 l = fr * lflux * s;
     if (HAS_PLASTICS && coat_ior > 0.0) l *= coat_transmittance(coat_table, cos_p, coat_ior);
     if (HAS_ENVIRONMENT) l *= weight;
+    if (HAS_NORMAL_MAPS) l *= bump_shadowing(w); // a bump or normal map's term (normal_map.glsl)
     return l;
 }
 
@@ -201,6 +202,7 @@ vec3 environment_by_bsdf(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, 
     // f_r L cos_p / pb = albedo L.
     vec3 l = albedo * environment_radiance(e, w) * (pb * pb / (pb * pb + pl * pl));
     if (HAS_PLASTICS && coat_ior > 0.0) l *= coat_transmittance(coat_table, cos_p, coat_ior);
+    if (HAS_NORMAL_MAPS) l *= bump_shadowing(w);
     return l;
 }
 
@@ -229,9 +231,12 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
     vec3 thr = vec3(1.0);
     vec3 sum = vec3(0.0); // term (d) at the plastics passed on the way
     vec3 vng = d, vns = d; // the last vertex's normals, which d must lie on the same side of (shading.glsl)
+    bump_alpha2 = 0.0;
     for (uint depth = 0u;; depth++) {
         bvh_sync();
         if (HAS_SHADING_NORMALS && !shading_valid(d, vng, vns)) break;
+        // The last vertex's bump or normal map term for the direction the path leaves it along.
+        if (HAS_NORMAL_MAPS) { thr *= bump_shadowing(d); bump_alpha2 = 0.0; }
         if (depth >= params.max_eye_depth) { atomicAdd(cut.eye_paths, 1u); break; }
         Hit h;
         if (!intersect_scene(o, d, 0.0, 1e30, h)) {
@@ -343,9 +348,12 @@ void main() {
             // The last vertex's normals, which r.d must lie on the same side of (shading.glsl); a branch
             // is stacked only where it does.
             vec3 vng = r.d, vns = r.d;
+            bump_alpha2 = 0.0; // a stacked branch took its vertex's term when stacked
             for (;;) {
                 bvh_sync();
                 if (HAS_SHADING_NORMALS && !shading_valid(r.d, vng, vns)) break;
+                // The last vertex's bump or normal map term for the direction the path leaves it along.
+                if (HAS_NORMAL_MAPS) { r.thr *= bump_shadowing(r.d); bump_alpha2 = 0.0; }
                 if (r.depth >= params.max_eye_depth) { atomicAdd(cut.eye_paths, 1u); break; }
                 Hit h;
                 if (!intersect_scene(r.o, r.d, 0.0, 1e30, h)) {
@@ -433,7 +441,7 @@ void main() {
                     if (rr < 1.0 && slot + sp + 1u < params.hit_slots) {
                         vec3 refl = reflect(r.d, nf);
                         if (!HAS_SHADING_NORMALS || shading_valid(refl, ng, nf))
-                            stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * (rr * m.color), r.depth);
+                            stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * (rr * m.color) * bump_shadowing(refl), r.depth);
                         r.thr *= (1.0 - rr) * material_term_a(h.material);
                         r.o = offset_ray(h.pos, -nf);
                     } else {
@@ -459,7 +467,7 @@ void main() {
                     r.o = offset_ray(h.pos, nf);
                 } else if (slot + sp + 1u < params.hit_slots) {
                     if (!HAS_SHADING_NORMALS || shading_valid(refl, ng, nf))
-                        stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * f, r.depth);
+                        stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * f * bump_shadowing(refl), r.depth);
                     r.thr *= 1.0 - f;
                     r.d = refr;
                     r.o = offset_ray(h.pos, -nf);

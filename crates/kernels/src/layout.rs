@@ -34,7 +34,9 @@ pub struct Material {
     /// See `lobe_a`; a plastic's `lobe_b[1]` and `lobe_b[2]` hold its fdr_int and 1 if nonlinear, which
     /// turn a texture's diffuse_reflectance into its diffuse factor.
     pub lobe_b: [f32; 3],
-    pub pad1: u32,
+    /// 0: no bump or normal map; else 1 + the texel of its record in the texture buffer (normal_map.glsl:
+    /// kind, its texture's header, a bump map's scale).
+    pub normal_map: u32,
     /// A rough surface's microfacet roughness along the tangent and the bitangent, and its
     /// `MICROFACET_*` distribution; zero for other surfaces.
     pub alpha_u: f32,
@@ -52,7 +54,7 @@ gpu_struct!(Material {
     lobe_a,
     texture,
     lobe_b,
-    pad1,
+    normal_map,
     alpha_u,
     alpha_v,
     distribution,
@@ -67,6 +69,8 @@ pub use crate::reflected::constants::TRIANGLE_TEXELS;
 pub use crate::reflected::constants::{
     FILTER_BILINEAR, FILTER_NEAREST, TEXTURE_BITMAP, TEXTURE_CHECKERBOARD, WRAP_CLAMP, WRAP_MIRROR, WRAP_REPEAT,
 };
+/// A bump or normal map's kind in its record (normal_map.glsl).
+pub use crate::reflected::constants::{NORMAL_MAP_BUMP, NORMAL_MAP_NORMAL};
 /// The most a photon may carry at a smooth-shaded surface, in fixed-point units of the gather's sums
 /// (2^46, `RenderParams::flux_fixed` per unit of flux: 2^16 times the most any light gives a photon).
 /// Veach's correction for shading normals can raise a photon's flux without bound (shading.glsl); the

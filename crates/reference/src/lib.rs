@@ -15,6 +15,7 @@ pub mod lights;
 /// Generated meshes for the BVH's tests and benchmarks.
 pub mod meshes;
 pub mod microfacet;
+pub mod normal_map;
 pub mod plastic;
 /// The kernels' random numbers (rng.glsl), a leaf of the materials crate, whose samplers' tests use them too.
 pub use ppm_vk_materials::rng;
@@ -35,6 +36,7 @@ use ppm_vk_kernels::ray::RayPush;
 use ppm_vk_materials::math::{cosine_direction, fresnel_dielectric, oct_decode, oct_encode, reflect, v3, PI};
 
 use lights::{choose_emitter, emitter_point, first_emitter, is_area, light_sample, LightSample};
+use normal_map::Bump;
 use ppm_vk_engine::lower::GpuScene;
 use ppm_vk_engine::settings::ProbeMode;
 use rng::Rng;
@@ -61,6 +63,7 @@ fn direct_light(
     albedo: Vec3,
     coat: Option<&Material>,
     rough: Option<(&Material, Vec3)>,
+    bump: &Bump,
     rng: &mut Rng,
 ) -> Vec3 {
     let e = choose_emitter(g, rng.float());
@@ -117,11 +120,12 @@ fn direct_light(
         Some(m) => l * plastic::coat_transmittance(g, m.table, cos_p, m.ior),
         None => l,
     };
-    l * weight
+    l * weight * bump.shadowing(w)
 }
 
 /// ray.comp's `environment_by_bsdf`: the environment's light at diffuse point p by a cosine-weighted
 /// direction, weighted against direct_light's environment samples (power heuristic).
+#[allow(clippy::too_many_arguments)]
 fn environment_by_bsdf(
     g: &GpuScene,
     p: Vec3,
@@ -129,6 +133,7 @@ fn environment_by_bsdf(
     ng: Vec3,
     albedo: Vec3,
     coat: Option<&Material>,
+    bump: &Bump,
     rng: &mut Rng,
 ) -> Vec3 {
     let e = first_emitter(g);
@@ -149,14 +154,16 @@ fn environment_by_bsdf(
     let pb = cos_p / PI;
     let pl = lights::environment_pdf(g, &e, w) * e.cdf;
     let l = albedo * lights::environment_radiance(g, &e, w) * (pb * pb / (pb * pb + pl * pl));
-    match coat {
+    let l = match coat {
         Some(m) => l * plastic::coat_transmittance(g, m.table, cos_p, m.ior),
         None => l,
-    }
+    };
+    l * bump.shadowing(w)
 }
 
 /// ray.comp's `direct_diffuse`: direct_light at a diffuse point or plastic base, and with an environment
 /// its other strategy.
+#[allow(clippy::too_many_arguments)]
 fn direct_diffuse(
     g: &GpuScene,
     p: Vec3,
@@ -164,11 +171,12 @@ fn direct_diffuse(
     ng: Vec3,
     albedo: Vec3,
     coat: Option<&Material>,
+    bump: &Bump,
     rng: &mut Rng,
 ) -> Vec3 {
-    let l = direct_light(g, p, nf, ng, albedo, coat, None, rng);
+    let l = direct_light(g, p, nf, ng, albedo, coat, None, bump, rng);
     if g.has_environment {
-        l + environment_by_bsdf(g, p, nf, ng, albedo, coat, rng)
+        l + environment_by_bsdf(g, p, nf, ng, albedo, coat, bump, rng)
     } else {
         l
     }
@@ -231,6 +239,8 @@ struct EyeVertex {
     front: bool,
     ng: Vec3,
     nf: Vec3,
+    /// Its bump or normal map's shadowing term (normal_map.rs).
+    bump: Bump,
 }
 
 /// The start of every eye vertex on both of ray.comp's eye paths (which write it out twice: as one GLSL
@@ -249,12 +259,17 @@ fn eye_vertex(
     depth: u32,
     vng: &mut Vec3,
     vns: &mut Vec3,
+    thr: &mut Vec3,
+    bump: &mut Bump,
     cut: &mut u32,
     escaped: &mut bool,
 ) -> Option<EyeVertex> {
     if !shading::valid(d, *vng, *vns) {
         return None;
     }
+    // The last vertex's bump or normal map term for the direction the path leaves it along.
+    *thr *= bump.shadowing(d);
+    *bump = Bump::default();
     if depth >= g.params.max_eye_depth {
         *cut += 1;
         return None;
@@ -266,12 +281,20 @@ fn eye_vertex(
     let m = texture::apply(g, &g.materials[h.material as usize], h.uv);
     let front = d.dot(h.normal) < 0.0;
     let ng = if front { h.normal } else { -h.normal };
-    let nf = shading::normal(&h, ng);
+    let (nf, here) = normal_map::perturb(g, &h, ng, shading::normal(&h, ng));
     if !shading::valid(d, ng, nf) {
         return None;
     }
     (*vng, *vns) = (ng, nf);
-    Some(EyeVertex { h, m, front, ng, nf })
+    *bump = here;
+    Some(EyeVertex {
+        h,
+        m,
+        front,
+        ng,
+        nf,
+        bump: here,
+    })
 }
 
 /// One emission eye sample of ray.comp's `emission_sample`: the emission met along the specular chain
@@ -296,9 +319,17 @@ fn emission_sample(
     let mut sum = Vec3::ZERO;
     // The last vertex's normals, which d must lie on the same side of (shading.glsl).
     let (mut vng, mut vns) = (d, d);
+    let mut last = Bump::default();
     for depth in 0.. {
         let mut out = false;
-        let Some(EyeVertex { h, m, front, ng, nf }) = eye_vertex(g, o, d, depth, &mut vng, &mut vns, cut, &mut out)
+        let Some(EyeVertex {
+            h,
+            m,
+            front,
+            ng,
+            nf,
+            bump,
+        }) = eye_vertex(g, o, d, depth, &mut vng, &mut vns, &mut thr, &mut last, cut, &mut out)
         else {
             if out {
                 let e = thr * escaped(g, d);
@@ -312,7 +343,7 @@ fn emission_sample(
             let mut e = if front { thr * v3(m.emission) } else { Vec3::ZERO };
             *seen |= e.max_element() > 0.0;
             if g.params.direct_light != 0 {
-                let l = direct_diffuse(g, h.pos, nf, ng, v3(m.color), None, rng);
+                let l = direct_diffuse(g, h.pos, nf, ng, v3(m.color), None, &bump, rng);
                 *lit |= l.max_element() > 0.0;
                 e += thr * l;
             }
@@ -322,7 +353,7 @@ fn emission_sample(
             // A glossy hit point's vertex: its term (d), and the path ends.
             let mut e = Vec3::ZERO;
             if g.params.direct_light != 0 {
-                let l = direct_light(g, h.pos, nf, ng, v3(m.color), None, Some((m, -d)), rng);
+                let l = direct_light(g, h.pos, nf, ng, v3(m.color), None, Some((m, -d)), &bump, rng);
                 *lit |= l.max_element() > 0.0;
                 e = thr * l;
             }
@@ -338,7 +369,7 @@ fn emission_sample(
             // Both lobes: the base's term (d) here, the path on along the coat.
             let (coat_d, spec, diff) = plastic::plastic_lobes(g, m, nf, rng, d);
             if g.params.direct_light != 0 {
-                let l = direct_diffuse(g, h.pos, nf, ng, diff, Some(m), rng);
+                let l = direct_diffuse(g, h.pos, nf, ng, diff, Some(m), &bump, rng);
                 *lit |= l.max_element() > 0.0;
                 sum += thr * l;
             }
@@ -458,9 +489,27 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                 // The last vertex's normals (shading.glsl); a branch is stacked only where d suits them.
                 let (mut vng, mut vns) = (d, d);
                 let mut out_of_scene = false;
-                while let Some(EyeVertex { h, m, front, ng, nf }) =
-                    eye_vertex(g, o, d, depth, &mut vng, &mut vns, &mut out.cut, &mut out_of_scene)
-                {
+                // A stacked branch took its vertex's term when stacked.
+                let mut last = Bump::default();
+                while let Some(EyeVertex {
+                    h,
+                    m,
+                    front,
+                    ng,
+                    nf,
+                    bump,
+                }) = eye_vertex(
+                    g,
+                    o,
+                    d,
+                    depth,
+                    &mut vng,
+                    &mut vns,
+                    &mut thr,
+                    &mut last,
+                    &mut out.cut,
+                    &mut out_of_scene,
+                ) {
                     let m = &m;
                     let diffuse = m.surface == SURFACE_DIFFUSE;
                     if diffuse || m.surface == SURFACE_PLASTIC {
@@ -492,7 +541,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         if on_base {
                             if p.direct_light != 0 && hit_is_sample {
                                 let coat = (!diffuse).then_some(m);
-                                hit_emitted += thr * direct_diffuse(g, h.pos, nf, ng, diff, coat, &mut rng);
+                                hit_emitted += thr * direct_diffuse(g, h.pos, nf, ng, diff, coat, &bump, &mut rng);
                             }
                             if diff.max_element() > 0.0 && slot < slots {
                                 out.hits[base + slot] = HitPoint {
@@ -523,7 +572,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         }
                         if p.direct_light != 0 && hit_is_sample {
                             hit_emitted +=
-                                thr * direct_light(g, h.pos, nf, ng, v3(m.color), None, Some((m, wo)), &mut rng);
+                                thr * direct_light(g, h.pos, nf, ng, v3(m.color), None, Some((m, wo)), &bump, &mut rng);
                         }
                         if slot < slots {
                             out.hits[base + slot] = HitPoint {
@@ -552,7 +601,8 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         if rr < 1.0 && slot + stack.len() + 1 < slots {
                             let refl = reflect(d, nf);
                             if shading::valid(refl, ng, nf) {
-                                stack.push((offset_ray(g, h.pos, nf), refl, thr * (rr * v3(m.color)), depth));
+                                let w = thr * (rr * v3(m.color)) * bump.shadowing(refl);
+                                stack.push((offset_ray(g, h.pos, nf), refl, w, depth));
                             }
                             thr *= (1.0 - rr) * v3(m.lobe_a);
                             o = offset_ray(g, h.pos, -nf);
@@ -579,7 +629,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         o = offset_ray(g, h.pos, nf);
                     } else if slot + stack.len() + 1 < slots {
                         if shading::valid(refl, ng, nf) {
-                            stack.push((offset_ray(g, h.pos, nf), refl, thr * f, depth));
+                            stack.push((offset_ray(g, h.pos, nf), refl, thr * f * bump.shadowing(refl), depth));
                         }
                         thr *= 1.0 - f;
                         d = refr;
@@ -678,13 +728,15 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
         let m = &texture::apply(g, &g.materials[h.material as usize], h.uv);
         let front = d.dot(h.normal) < 0.0;
         let ng = if front { h.normal } else { -h.normal };
-        let nf = shading::normal(&h, ng);
+        let (nf, bump) = normal_map::perturb(g, &h, ng, shading::normal(&h, ng));
         // Veach's correction (shading.glsl): shading_in here, shading_out on leaving but after a diffuse
         // bounce (drawn about ng); exactly 1 on a flat surface.
         if !shading::valid(d, ng, nf) {
             return true;
         }
         flux = cap(flux * shading::factor_in(-d, ng, nf));
+        // A bump or normal map's term, for the direction the photon arrived from (normal_map.rs).
+        flux *= bump.shadowing(-d);
         let mut leave = true;
         if (p.direct_light == 0 || depth > 1) && glossy_hit(g, m) {
             // photon.comp: a record on a glossy hit point's surface; its lobe sampled below.

@@ -9,7 +9,7 @@ use ppm_vk_materials::math::v3;
 
 use ppm_vk_engine::lower::GpuScene;
 
-fn texel_rgb(t: [u32; 4]) -> Vec3 {
+pub(crate) fn texel_rgb(t: [u32; 4]) -> Vec3 {
     Vec3::new(f32::from_bits(t[0]), f32::from_bits(t[1]), f32::from_bits(t[2]))
 }
 
@@ -27,7 +27,7 @@ fn wrap_pixel(i: i32, n: i32, wrap: u32) -> i32 {
     }
 }
 
-fn pixel(texels: &[[u32; 4]], first: u32, size: IVec2, p: IVec2, wrap: u32) -> Vec3 {
+pub(crate) fn pixel(texels: &[[u32; 4]], first: u32, size: IVec2, p: IVec2, wrap: u32) -> Vec3 {
     let x = wrap_pixel(p.x, size.x, wrap);
     let y = wrap_pixel(p.y, size.y, wrap);
     texel_rgb(texels[(first as i32 + y * size.x + x) as usize])

@@ -21,6 +21,9 @@ pub struct Hit {
     pub smooth: Option<Vec3>,
     /// Mitsuba's dp/du, not unit (geometry.glsl's `surface_tangent`).
     pub dpdu: Vec3,
+    /// Mitsuba's dp/du and dp/dv, not unit, as a bump or normal map reads them (normal_map.glsl's
+    /// `surface_derivatives`).
+    pub dp: [Vec3; 2],
 }
 
 pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
@@ -106,6 +109,7 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
                 uv: Vec2::new(phi * (0.5 / PI), normal.z.clamp(-1.0, 1.0).acos() * (1.0 / PI)),
                 smooth: None,
                 dpdu: Vec3::new(-normal.y, normal.x, 0.0),
+                dp: super::normal_map::sphere_derivatives(normal, 1.0 / (1.0 / s.radius)),
             }
         }
         1 => Hit {
@@ -115,6 +119,7 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
             uv: local,
             smooth: None,
             dpdu: v3(g.quads[i].edge_u),
+            dp: [v3(g.quads[i].edge_u), v3(g.quads[i].edge_v)],
         },
         _ => {
             let t = &g.bvh_triangles[i];
@@ -142,6 +147,19 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
                 Some(t) if t[1][3] != 0 => oct_decode(t[1][2]),
                 _ => v3(t.v1) - v3(t.v0),
             };
+            let (e1, e2) = (v3(t.v1) - v3(t.v0), v3(t.v2) - v3(t.v0));
+            let dp = match texels {
+                Some(t) => super::normal_map::triangle_derivatives(
+                    e1,
+                    e2,
+                    [
+                        Vec2::new(f(t[0][0]), f(t[0][1])),
+                        Vec2::new(f(t[0][2]), f(t[0][3])),
+                        Vec2::new(f(t[1][0]), f(t[1][1])),
+                    ],
+                ),
+                None => [e1, e2],
+            };
             Hit {
                 pos,
                 normal,
@@ -149,6 +167,7 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
                 uv,
                 smooth,
                 dpdu,
+                dp,
             }
         }
     })

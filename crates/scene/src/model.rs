@@ -160,6 +160,29 @@ pub struct Material {
     /// Index into `Scene::textures`: the texture the diffuse reflectance (a diffuse surface's albedo, a
     /// plastic's base) is read from at each point, instead of the surface's constant.
     pub texture: Option<u32>,
+    /// Mitsuba's `bumpmap` or `normalmap` around the surface: the normal its BSDF works about, perturbed
+    /// at each point by a texture (shaders/materials/normal_map.glsl).
+    pub normal_map: Option<NormalMap>,
+}
+
+/// A texture that perturbs a material's shading normal, as Mitsuba 3's src/bsdfs/bumpmap.cpp and
+/// normalmap.cpp do, with their shadowing term (Estevez et al. 2019) on the perturbed BSDF.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum NormalMap {
+    /// `bumpmap`: a height field, the luminance of texture `texture` (index into `Scene::textures`) times
+    /// `scale`, whose gradient in (u, v) moves the surface along its normal.
+    Bump { texture: u32, scale: f32 },
+    /// `normalmap`: texture `texture`'s RGB as 2 x - 1, a normal in the shading frame (dp/du, its cross,
+    /// the normal).
+    Normal { texture: u32 },
+}
+
+impl NormalMap {
+    pub fn texture(&self) -> u32 {
+        match *self {
+            NormalMap::Bump { texture, .. } | NormalMap::Normal { texture } => texture,
+        }
+    }
 }
 
 impl Material {
@@ -519,6 +542,12 @@ impl Scene {
             .collect();
         // Writing into a hash cannot fail.
         let _ = write!(Feed(&mut h), "{:?}", (&surfaces, &self.spheres, &self.quads));
+        // Only materials with a normal map hash it, so that every other scene keeps its hash.
+        for (i, m) in self.materials.iter().enumerate() {
+            if let Some(n) = m.normal_map {
+                let _ = write!(Feed(&mut h), "normal_map{i}{n:?}");
+            }
+        }
         for t in &self.textures {
             let _ = write!(Feed(&mut h), "{:?}", (t.filter, t.wrap, t.to_uv));
             match &t.pattern {
@@ -640,6 +669,25 @@ impl Scene {
             }
         }
         for m in &self.materials {
+            let Some(n) = m.normal_map else { continue };
+            let p = format!("materials.{}.normal_map", m.name);
+            if n.texture() as usize >= self.textures.len() {
+                return Err(invalid(
+                    p,
+                    format!(
+                        "texture index {} out of range ({} textures)",
+                        n.texture(),
+                        self.textures.len()
+                    ),
+                ));
+            }
+            if let NormalMap::Bump { scale, .. } = n {
+                if !scale.is_finite() {
+                    return Err(invalid(p, format!("the bump map's scale must be finite, got {scale}")));
+                }
+            }
+        }
+        for m in &self.materials {
             let Some(t) = m.texture else { continue };
             let p = format!("materials.{}.texture", m.name);
             let Some(texture) = self.textures.get(t as usize) else {
@@ -731,6 +779,16 @@ impl Scene {
             check_mesh(m, &p, self.materials.len())?;
             if m.uvs.is_none() {
                 let textured = m.materials.iter().map(|&k| &self.materials[k as usize]);
+                if let Some(t) = textured.clone().find(|t| t.normal_map.is_some()) {
+                    return Err(invalid(
+                        p,
+                        format!(
+                            "{}: material \"{}\" has a bump or normal map, which needs texture coordinates (one \
+                             per vertex), and the mesh has none",
+                            m.name, t.name
+                        ),
+                    ));
+                }
                 if let Some(t) = textured.clone().find(|t| t.texture.is_some()) {
                     return Err(invalid(
                         p,
@@ -1139,12 +1197,14 @@ mod tests {
                     },
                     emission: Vec3::ZERO,
                     texture: None,
+                    normal_map: None,
                 },
                 Material {
                     name: "lamp".into(),
                     surface: Surface::Diffuse { albedo: Vec3::ZERO },
                     emission: Vec3::splat(5.0),
                     texture: None,
+                    normal_map: None,
                 },
             ],
             spheres: vec![],

@@ -855,6 +855,7 @@ fn convert(m: &tobj::Material, name: String, mtl: &str) -> Result<(Material, Vec
             surface,
             emission,
             texture: None,
+            normal_map: None,
         },
         notes,
     ))
@@ -885,6 +886,7 @@ mod tests {
                 },
                 emission: Vec3::ZERO,
                 texture: None,
+                normal_map: None,
             }],
             spheres: vec![],
             quads: vec![],

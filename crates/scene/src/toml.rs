@@ -907,6 +907,7 @@ fn material(
         surface,
         emission: r.emission.as_ref().map_or(Vec3::ZERO, vec3),
         texture,
+        normal_map: None,
     })
 }
 

@@ -5,7 +5,7 @@ use glam::Vec3;
 use ppm_vk_kernels::layout::{self, Material};
 use ppm_vk_materials::plastic;
 
-use crate::scene::{Microfacet, Scene, Surface};
+use crate::scene::{Microfacet, NormalMap, Scene, Surface};
 
 /// The records of `scene`'s materials, in order. `texture_at` is the texel of each texture's header;
 /// rough plastics' coat tables are appended to `textures`, one per material (each distinct coat made once).
@@ -29,6 +29,7 @@ fn material(
     let base = Material {
         emission: m.emission.to_array(),
         texture: m.texture.map_or(0, |t| texture_at[t as usize] + 1),
+        normal_map: m.normal_map.map_or(0, |n| push_normal_map(textures, n, texture_at)),
         ..Default::default()
     };
     match m.surface {
@@ -129,6 +130,17 @@ fn with_microfacet(base: Material, rough: Option<Microfacet>) -> Material {
         }),
         ..base
     }
+}
+
+/// Appends a bump or normal map's record to the texture buffer (normal_map.glsl: its kind, its texture's
+/// header, a bump map's scale); returns 1 + its texel (`Material::normal_map`).
+fn push_normal_map(textures: &mut Vec<[u32; 4]>, n: NormalMap, texture_at: &[u32]) -> u32 {
+    let (kind, scale) = match n {
+        NormalMap::Bump { scale, .. } => (layout::NORMAL_MAP_BUMP, scale),
+        NormalMap::Normal { .. } => (layout::NORMAL_MAP_NORMAL, 0.0),
+    };
+    textures.push([kind, texture_at[n.texture() as usize], scale.to_bits(), 0]);
+    textures.len() as u32
 }
 
 /// Appends a coat's transmittance table to the texture buffer, four values a texel (plastic.glsl's

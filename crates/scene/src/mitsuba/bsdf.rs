@@ -8,6 +8,7 @@ use std::rc::Rc;
 use anyhow::Result;
 use glam::Vec3;
 
+use super::modifiers::Perturbation;
 use super::properties::{color, number, Props};
 use super::texture::{same_texture, Tex};
 use super::xml::Elem;
@@ -25,6 +26,8 @@ pub(super) struct Bsdf {
     /// The texture its diffuse reflectance is read from (the surface's constant is then the texture's
     /// largest value in each channel).
     pub(super) texture: Option<Rc<Tex>>,
+    /// A `bumpmap` or `normalmap` around it.
+    pub(super) normal_map: Option<Perturbation>,
 }
 
 /// Indices of the refraction of Mitsuba's named materials (`int_ior="bk7"`), from its documentation.
@@ -61,10 +64,12 @@ impl Builder {
         let (props, objects) = Props::of(e);
         let id = e.attr("id").map(str::to_string);
         let nested: Vec<&Elem> = objects.iter().copied().filter(|c| c.tag == "bsdf").collect();
-        if let Some(o) = objects.iter().find(|c| c.tag != "bsdf") {
+        // A bump or normal map also holds textures (and refs to them or to its bsdf): modifiers.rs.
+        let modifier = matches!(e.kind(), "bumpmap" | "normalmap");
+        if let Some(o) = objects.iter().find(|c| c.tag != "bsdf" && !modifier) {
             return Err(o.err(format!("not expected inside {}", e.what())));
         }
-        if e.kind() != "twosided" {
+        if e.kind() != "twosided" && !modifier {
             if let Some(n) = nested.first() {
                 return Err(n.err(format!("a bsdf nested in {} is not supported", e.what())));
             }
@@ -79,10 +84,12 @@ impl Builder {
             "thindielectric" => thin_dielectric(e, &props)?,
             "plastic" => self.plastic(e, &props, false)?,
             "roughplastic" => self.plastic(e, &props, true)?,
+            "bumpmap" => self.bumpmap(e, &props, &objects)?,
+            "normalmap" => self.normalmap(e, &props, &objects)?,
             _ => {
                 return Err(e.err(
                     "unsupported bsdf (read: diffuse, twosided, conductor, roughconductor, \
-                     dielectric, roughdielectric, thindielectric, plastic, roughplastic)",
+                     dielectric, roughdielectric, thindielectric, plastic, roughplastic, bumpmap, normalmap)",
                 ))
             }
         };
@@ -98,6 +105,7 @@ impl Builder {
             two_sided: false,
             id: None,
             texture,
+            normal_map: None,
         })
     }
 
@@ -107,7 +115,14 @@ impl Builder {
             [one] => self.bsdf(one)?,
             [a, b] => {
                 let (x, y) = (self.bsdf(a)?, self.bsdf(b)?);
-                if x.surface != y.surface || !same_texture(&x.texture, &y.texture) {
+                let same_map = match (&x.normal_map, &y.normal_map) {
+                    (None, None) => true,
+                    (Some(a), Some(b)) => {
+                        a.bump_scale == b.bump_scale && same_texture(&Some(a.texture.clone()), &Some(b.texture.clone()))
+                    }
+                    _ => false,
+                };
+                if x.surface != y.surface || !same_texture(&x.texture, &y.texture) || !same_map {
                     return Err(b.err(
                         "a different bsdf on the back side is not supported (ppm-vk \
                          surfaces are the same on both sides)",
@@ -182,6 +197,7 @@ impl Builder {
             two_sided: false,
             id: None,
             texture,
+            normal_map: None,
         })
     }
 
@@ -227,11 +243,19 @@ impl Builder {
             .texture
             .as_ref()
             .map(|t| texture::intern(&mut self.scene.textures, std::borrow::Cow::Borrowed(&t.texture)));
+        let normal_map = bsdf.normal_map.as_ref().map(|p| {
+            let texture = texture::intern(&mut self.scene.textures, std::borrow::Cow::Borrowed(&p.texture.texture));
+            match p.bump_scale {
+                Some(scale) => crate::NormalMap::Bump { texture, scale },
+                None => crate::NormalMap::Normal { texture },
+            }
+        });
         let wanted = Material {
             name: name.to_string(),
             surface: bsdf.surface,
             emission,
             texture,
+            normal_map,
         };
         let mut candidate = name.to_string();
         for n in 2.. {
@@ -254,6 +278,10 @@ impl Builder {
             self.origins
                 .insert(format!("materials.{candidate}.texture"), t.at.clone());
         }
+        if let Some(p) = &bsdf.normal_map {
+            self.origins
+                .insert(format!("materials.{candidate}.normal_map"), p.texture.at.clone());
+        }
         self.scene.materials.push(Material {
             name: candidate,
             ..wanted
@@ -269,6 +297,7 @@ fn one_sided(surface: Surface) -> Bsdf {
         two_sided: false,
         id: None,
         texture: None,
+        normal_map: None,
     }
 }
 
@@ -324,6 +353,7 @@ fn dielectric(e: &Elem, props: &Props) -> Result<Bsdf> {
         two_sided: true,
         id: None,
         texture: None,
+        normal_map: None,
     })
 }
 
@@ -338,6 +368,7 @@ fn rough_dielectric(e: &Elem, props: &Props) -> Result<Bsdf> {
         two_sided: true,
         id: None,
         texture: None,
+        normal_map: None,
     })
 }
 
@@ -378,6 +409,7 @@ fn thin_dielectric(e: &Elem, props: &Props) -> Result<Bsdf> {
         two_sided: true,
         id: None,
         texture: None,
+        normal_map: None,
     })
 }
 

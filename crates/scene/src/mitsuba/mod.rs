@@ -29,6 +29,7 @@ mod cie;
 mod emitter;
 mod instance;
 mod integrator;
+mod modifiers;
 mod properties;
 mod sensor;
 mod shape;

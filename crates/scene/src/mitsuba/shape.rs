@@ -97,6 +97,7 @@ impl Builder {
                 two_sided: false,
                 id: None,
                 texture: None,
+                normal_map: None,
             },
             e,
         ));
@@ -119,7 +120,8 @@ impl Builder {
         };
         let to_world = props.transform("to_world")?;
         let flip = props.boolean("flip_normals")?;
-        let textured = bsdf.texture.is_some();
+        // A bump or normal map reads texture coordinates too (modifiers.rs).
+        let textured = bsdf.texture.is_some() || bsdf.normal_map.is_some();
         // An anisotropic lobe lies along Mitsuba's dp/du: a rectangle's x axis (edge_u below), a sphere's
         // longitude, a mesh's texture coordinates (or the frame of its face normal without them).
         let anisotropic = bsdf.surface.rough().is_some_and(|r| r.is_anisotropic());
@@ -137,6 +139,12 @@ impl Builder {
         // An anisotropic one does the same, so that edge_u stays along (minus) Mitsuba's x axis.
         let turned = (to_world.matrix3.determinant() < 0.0) != flip;
         let backwards = e.kind() == "rectangle" && turned && (textured || anisotropic);
+        if backwards && bsdf.normal_map.is_some() {
+            return Err(bsdf_at.err(
+                "a bump or normal map on a rectangle turned by flip_normals or a mirroring to_world is not \
+                 supported yet",
+            ));
+        }
         let material = match (&bsdf.texture, backwards) {
             (Some(t), true) => {
                 let mirrored = Texture {

@@ -1,0 +1,181 @@
+//! Bump and normal maps, as `shaders/materials/normal_map.glsl` (Mitsuba 3's src/bsdfs/bumpmap.cpp and
+//! normalmap.cpp): the perturbed shading normal at a hit and the shadowing term it gives the BSDF.
+
+use glam::{IVec2, Vec2, Vec3};
+use ppm_vk_kernels::layout::{FILTER_NEAREST, NORMAL_MAP_BUMP, TEXTURE_BITMAP};
+
+use super::texture::{pixel, texel_rgb, value};
+use super::trace::Hit;
+use ppm_vk_engine::lower::GpuScene;
+
+/// The shadowing term of a hit's map (Estevez et al. 2019): alpha^2 about the unperturbed normal `n0`;
+/// alpha^2 = 0 where there is no map (or it left the normal as it was).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Bump {
+    pub alpha2: f32,
+    pub n0: Vec3,
+}
+
+/// Mitsuba's Frame3f::tan_theta_2 of `w` about `n`.
+fn tan_theta_2(w: Vec3, n: Vec3) -> f32 {
+    let c = w.dot(n);
+    (1.0 - c * c).max(0.0) / (c * c)
+}
+
+impl Bump {
+    /// normal_map.glsl's `bump_shadowing`: the term for light-side direction `w`.
+    pub fn shadowing(&self, w: Vec3) -> f32 {
+        if self.alpha2 == 0.0 {
+            return 1.0;
+        }
+        2.0 / (1.0 + (1.0 + self.alpha2 * tan_theta_2(w, self.n0)).sqrt())
+    }
+}
+
+/// normal_map.glsl's `texture_gradient` (Mitsuba's bitmap eval_1_grad).
+pub fn texture_gradient(texels: &[[u32; 4]], at: u32, uv: Vec2) -> Vec2 {
+    let head = texels[at as usize];
+    if head[0] & 15 != TEXTURE_BITMAP || (head[0] >> 4) & 15 == FILTER_NEAREST {
+        return Vec2::ZERO;
+    }
+    let r0 = texel_rgb(texels[at as usize + 1]);
+    let r1 = texel_rgb(texels[at as usize + 2]);
+    let st = Vec2::new(r0.x * uv.x + r0.y * uv.y + r0.z, r1.x * uv.x + r1.y * uv.y + r1.z);
+    let wrap = (head[0] >> 8) & 15;
+    let size = IVec2::new(head[1] as i32, head[2] as i32);
+    let p = st * size.as_vec2() - Vec2::splat(0.5);
+    let i = p.floor().as_ivec2();
+    let w1 = p - i.as_vec2();
+    let w0 = Vec2::ONE - w1;
+    let y = Vec3::new(0.212671, 0.715160, 0.072169);
+    let f = |dx: i32, dy: i32| y.dot(pixel(texels, head[3], size, i + IVec2::new(dx, dy), wrap));
+    let (f00, f10, f01, f11) = (f(0, 0), f(1, 0), f(0, 1), f(1, 1));
+    let df = Vec2::new(
+        w0.y * (f10 - f00) + w1.y * (f11 - f01),
+        w0.x * (f01 - f00) + w1.x * (f11 - f10),
+    );
+    size.as_vec2() * Vec2::new(r0.x * df.x + r1.x * df.y, r0.y * df.x + r1.y * df.y)
+}
+
+/// normal_map.glsl's `mapped_normal`: the shading normal at `h` with its material's map applied, on the
+/// side of `ng` (`ns`: the unperturbed one, on that side), and its shadowing term.
+pub fn perturb(g: &GpuScene, h: &Hit, ng: Vec3, ns: Vec3) -> (Vec3, Bump) {
+    let record = g.materials[h.material as usize].normal_map;
+    if record == 0 {
+        return (ns, Bump::default());
+    }
+    let r = g.textures[record as usize - 1];
+    let front = h.normal;
+    let n0 = if ns.dot(front) < 0.0 { -ns } else { ns };
+    let [dpdu, dpdv] = h.dp;
+    let n = if r[0] == NORMAL_MAP_BUMP {
+        let grad = f32::from_bits(r[2]) * texture_gradient(&g.textures, r[1], h.uv);
+        if grad == Vec2::ZERO {
+            return (ns, Bump::default());
+        }
+        let du = dpdu + n0 * (grad.x - n0.dot(dpdu));
+        let dv = dpdv + n0 * (grad.y - n0.dot(dpdv));
+        let n = du.cross(dv).normalize();
+        if front.dot(n) < 0.0 {
+            -n
+        } else {
+            n
+        }
+    } else {
+        let c = 2.0 * value(&g.textures, r[1], h.uv) - Vec3::ONE;
+        if c.x == 0.0 && c.y == 0.0 && c.z > 0.0 {
+            return (ns, Bump::default());
+        }
+        let s = (dpdu - n0 * n0.dot(dpdu)).normalize();
+        let t = n0.cross(s);
+        (c.x * s + c.y * t + c.z * n0).normalize()
+    };
+    let bump = Bump {
+        alpha2: (0.125 * tan_theta_2(n, n0)).min(1.0),
+        n0,
+    };
+    (if n.dot(ng) < 0.0 { -n } else { n }, bump)
+}
+
+/// geometry.glsl's `sphere_derivatives`: Mitsuba's dp/du and dp/dv of a sphere of radius `r` at unit
+/// normal `n`.
+pub fn sphere_derivatives(n: Vec3, r: f32) -> [Vec3; 2] {
+    let pi = ppm_vk_materials::math::PI;
+    let rd = (n.x * n.x + n.y * n.y).sqrt();
+    let dpdu = (2.0 * pi * r) * Vec3::new(-n.y, n.x, 0.0);
+    let dpdv = if rd > 0.0 {
+        (pi * r) * Vec3::new(n.z * n.x / rd, n.z * n.y / rd, -rd)
+    } else {
+        (pi * r) * Vec3::X
+    };
+    [dpdu, dpdv]
+}
+
+/// normal_map.glsl's `surface_derivatives` for a triangle of edges `e1`, `e2` and texture coordinates
+/// `uv`: Mitsuba's dp/du and dp/dv, the edges where the coordinates are degenerate.
+pub fn triangle_derivatives(e1: Vec3, e2: Vec3, uv: [Vec2; 3]) -> [Vec3; 2] {
+    let duv0 = uv[1] - uv[0];
+    let duv1 = uv[2] - uv[0];
+    let det = duv0.x * duv1.y - duv0.y * duv1.x;
+    if det == 0.0 {
+        return [e1, e2];
+    }
+    let inv = 1.0 / det;
+    [(duv1.y * e1 - duv0.y * e2) * inv, (duv0.x * e2 - duv1.x * e1) * inv]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A bump map's height h = s u on a unit square (dp/du = x, dp/dv = y, n = z) tilts the normal to
+    /// normalize(-s, 0, 1): the closed form of cross(x + s z, y).
+    #[test]
+    fn a_linear_height_field_tilts_the_normal_by_its_slope() {
+        let s = 0.75f32;
+        let (du, dv, n0) = (Vec3::X, Vec3::Y, Vec3::Z);
+        let du2 = du + n0 * (s - n0.dot(du));
+        let dv2 = dv + n0 * (0.0 - n0.dot(dv));
+        let n = du2.cross(dv2).normalize();
+        assert!((n - Vec3::new(-s, 0.0, 1.0).normalize()).length() < 1e-6, "{n}");
+    }
+
+    /// The shadowing term is 1 without tilt, and Mitsuba's closed form otherwise: tilt 45 degrees
+    /// (tan^2 = 1, alpha^2 = 1/8) and a direction at 60 degrees (tan^2 = 3): 2 / (1 + sqrt(1 + 3/8)).
+    #[test]
+    fn shadowing_term_is_estevez_closed_form() {
+        assert_eq!(Bump::default().shadowing(Vec3::new(0.3, 0.1, 0.9).normalize()), 1.0);
+        let b = Bump {
+            alpha2: 0.125,
+            n0: Vec3::Z,
+        };
+        let w = Vec3::new(60f32.to_radians().sin(), 0.0, 60f32.to_radians().cos());
+        let want = 2.0 / (1.0 + (1.0f32 + 3.0 / 8.0).sqrt());
+        assert!(
+            (b.shadowing(w) - want).abs() < 1e-6,
+            "{} against {want}",
+            b.shadowing(w)
+        );
+    }
+
+    /// A sphere's derivatives are Mitsuba's: at the equator on +x, dp/du = 2 pi r y and dp/dv = -pi r z.
+    #[test]
+    fn sphere_derivatives_at_the_equator() {
+        let [du, dv] = sphere_derivatives(Vec3::X, 2.0);
+        let pi = ppm_vk_materials::math::PI;
+        assert!((du - Vec3::new(0.0, 4.0 * pi, 0.0)).length() < 1e-5, "{du}");
+        assert!((dv - Vec3::new(0.0, 0.0, -2.0 * pi)).length() < 1e-5, "{dv}");
+    }
+
+    /// A triangle's uv derivatives: corners (0,0,0), (2,0,0), (0,3,0) with uv (0,0), (1,0), (0,1) give
+    /// dp/du = (2,0,0) and dp/dv = (0,3,0).
+    #[test]
+    fn triangle_derivatives_follow_the_texture_coordinates() {
+        let [du, dv] = triangle_derivatives(
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(0.0, 3.0, 0.0),
+            [Vec2::ZERO, Vec2::X, Vec2::Y],
+        );
+        assert_eq!((du, dv), (Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 3.0, 0.0)));
+    }
+}
