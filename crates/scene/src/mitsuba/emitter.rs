@@ -27,6 +27,8 @@ impl Builder {
                 fields.push((name, p));
             }
         };
+        // Every Mitsuba 3 emitter's relative chance of being chosen for a shadow ray: its noise only.
+        props.ignore(&["sampling_weight"]);
         let light = match e.kind() {
             "point" => {
                 field("intensity", "intensity");
@@ -195,6 +197,7 @@ pub(super) fn area(o: &Elem) -> Result<Vec3> {
         return Err(r.err(format!("not expected inside {}", o.what())));
     }
     let radiance = ep.color("radiance")?.unwrap_or(Vec3::ONE);
+    ep.ignore(&["sampling_weight"]); // Mitsuba's chance of choosing it for a shadow ray: noise only
     ep.finish()?;
     Ok(radiance)
 }
@@ -382,7 +385,7 @@ mod tests {
         texture::write_png(&dir.0.join("maps/sky.png"), 4, 2, &rgb);
         let env = envmap(
             &dir,
-            r#"png"/><float name="scale" value="2.5"/><boolean name="mis_compensation" value="true"/>
+            r#"png"/><float name="scale" value="2.5"/><boolean name="mis_compensation" value="true"/><float name="sampling_weight" value="0.5"/>
                <transform name="to_world"><rotate x="1" angle="-90"/><translate y="7"/></transform>"#,
         )
         .unwrap_or_else(|e| panic!("{e:#}"));
@@ -599,7 +602,7 @@ mod tests {
             let s = load_in(
                 &dir,
                 &format!(
-                    r#"<shape type="{shape}">{file}<bsdf type="diffuse"/><emitter type="area"><rgb name="radiance" value="2, 3, 4"/></emitter></shape>"#
+                    r#"<shape type="{shape}">{file}<bsdf type="diffuse"/><emitter type="area"><rgb name="radiance" value="2, 3, 4"/><float name="sampling_weight" value="3"/></emitter></shape>"#
                 ),
                 &[],
             )

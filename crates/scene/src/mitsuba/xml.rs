@@ -329,6 +329,7 @@ impl Reader {
             file,
             dir: parent(path),
             legacy: false,
+            cursor: std::cell::Cell::new(TextCursor::default()),
         };
         let root = doc.root_element();
         let mut top = Vec::new();
@@ -417,7 +418,7 @@ impl Reader {
 
     /// `node` with its attributes substituted and (with `deep`) its children converted.
     fn element(&mut self, src: &Src, node: roxmltree::Node, deep: bool) -> Result<Elem> {
-        let pos = src.doc.text_pos_at(node.range().start);
+        let pos = src.position(node.range().start);
         let mut e = Elem {
             tag: node.tag_name().name().to_string(),
             attrs: Vec::new(),
@@ -526,12 +527,79 @@ struct Src<'a, 'input> {
     dir: PathBuf,
     /// Written for Mitsuba before version 2: upgraded as it is read.
     legacy: bool,
+    /// The last position converted to a line and column.
+    cursor: std::cell::Cell<TextCursor>,
+}
+
+/// A byte offset in the file with its line and column (1-based, the column in characters, as roxmltree
+/// counts them).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct TextCursor {
+    pos: usize,
+    row: u32,
+    col: u32,
+}
+
+impl Default for TextCursor {
+    fn default() -> Self {
+        TextCursor { pos: 0, row: 1, col: 1 }
+    }
+}
+
+impl Src<'_, '_> {
+    /// The line and column of byte offset `pos`. Elements are read in document order, so each step goes
+    /// on from the last position: the whole file is scanned once (roxmltree's `text_pos_at` scans from the
+    /// start each time, which made a file of 65k elements take minutes).
+    fn position(&self, pos: usize) -> TextCursor {
+        let text = self.doc.input_text();
+        let mut c = self.cursor.get();
+        if pos < c.pos {
+            c = TextCursor::default();
+        }
+        for ch in text[c.pos..pos].chars() {
+            match ch {
+                '\n' => {
+                    c.row += 1;
+                    c.col = 1;
+                }
+                _ => c.col += 1,
+            }
+        }
+        c.pos = pos;
+        self.cursor.set(c);
+        c
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::super::tests::load_in;
     use crate::{Scene, Surface, TempDir};
+
+    /// Lines and columns as roxmltree's own `text_pos_at` gives them, for every element in document order
+    /// and out of it (the cursor restarts), across multi-byte characters and CRLF line ends.
+    #[test]
+    fn positions_are_roxmltree_s() {
+        let text = "<scene version=\"3.0.0\">\r\n  <!-- é, ü -->\n\t<bsdf type=\"diffuse\" id=\"ä\"><rgb name=\"reflectance\" value=\"1\"/></bsdf>\n\n   <shape type=\"sphere\"/>\r\n</scene>\n";
+        let doc = roxmltree::Document::parse(text).unwrap();
+        let src = super::Src {
+            doc: &doc,
+            file: "t.xml".into(),
+            dir: std::path::PathBuf::new(),
+            legacy: false,
+            cursor: std::cell::Cell::new(super::TextCursor::default()),
+        };
+        let starts: Vec<usize> = doc
+            .descendants()
+            .filter(|n| n.is_element())
+            .map(|n| n.range().start)
+            .collect();
+        assert_eq!(starts.len(), 4);
+        for &p in starts.iter().chain(starts.iter().rev()) {
+            let (ours, theirs) = (src.position(p), doc.text_pos_at(p));
+            assert_eq!((ours.row, ours.col), (theirs.row, theirs.col), "at byte {p}");
+        }
+    }
 
     fn albedo(s: &Scene, quad: usize) -> glam::Vec3 {
         match s.materials[s.quads[quad].material as usize].surface {
