@@ -97,36 +97,10 @@ pub fn perturb(g: &GpuScene, h: &Hit, ng: Vec3, ns: Vec3) -> (Vec3, Bump) {
     (if n.dot(ng) < 0.0 { -n } else { n }, bump)
 }
 
-/// geometry.glsl's `sphere_derivatives`: Mitsuba's dp/du and dp/dv of a sphere of radius `r` at unit
-/// normal `n`.
-pub fn sphere_derivatives(n: Vec3, r: f32) -> [Vec3; 2] {
-    let pi = ppm_vk_materials::math::PI;
-    let rd = (n.x * n.x + n.y * n.y).sqrt();
-    let dpdu = (2.0 * pi * r) * Vec3::new(-n.y, n.x, 0.0);
-    let dpdv = if rd > 0.0 {
-        (pi * r) * Vec3::new(n.z * n.x / rd, n.z * n.y / rd, -rd)
-    } else {
-        (pi * r) * Vec3::X
-    };
-    [dpdu, dpdv]
-}
-
-/// normal_map.glsl's `surface_derivatives` for a triangle of edges `e1`, `e2` and texture coordinates
-/// `uv`: Mitsuba's dp/du and dp/dv, the edges where the coordinates are degenerate.
-pub fn triangle_derivatives(e1: Vec3, e2: Vec3, uv: [Vec2; 3]) -> [Vec3; 2] {
-    let duv0 = uv[1] - uv[0];
-    let duv1 = uv[2] - uv[0];
-    let det = duv0.x * duv1.y - duv0.y * duv1.x;
-    if det == 0.0 {
-        return [e1, e2];
-    }
-    let inv = 1.0 / det;
-    [(duv1.y * e1 - duv0.y * e2) * inv, (duv0.x * e2 - duv1.x * e1) * inv]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::trace::{sphere_derivatives, triangle_derivatives};
 
     /// A bump map's height h = s u on a unit square (dp/du = x, dp/dv = y, n = z) tilts the normal to
     /// normalize(-s, 0, 1): the closed form of cross(x + s z, y).

@@ -109,7 +109,7 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
                 uv: Vec2::new(phi * (0.5 / PI), normal.z.clamp(-1.0, 1.0).acos() * (1.0 / PI)),
                 smooth: None,
                 dpdu: Vec3::new(-normal.y, normal.x, 0.0),
-                dp: super::normal_map::sphere_derivatives(normal, 1.0 / (1.0 / s.radius)),
+                dp: sphere_derivatives(normal, 1.0 / (1.0 / s.radius)),
             }
         }
         1 => Hit {
@@ -149,7 +149,7 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
             };
             let (e1, e2) = (v3(t.v1) - v3(t.v0), v3(t.v2) - v3(t.v0));
             let dp = match texels {
-                Some(t) => super::normal_map::triangle_derivatives(
+                Some(t) => triangle_derivatives(
                     e1,
                     e2,
                     [
@@ -209,6 +209,33 @@ pub fn grid_key(g: &GpuScene, p: Vec3) -> u32 {
 pub fn grid_bucket(g: &GpuScene, key: u32) -> u32 {
     let (x, y, z) = (key & 1023, (key >> 10) & 1023, key >> 20);
     (x.wrapping_mul(73856093) ^ y.wrapping_mul(19349663) ^ z.wrapping_mul(83492791)) & g.params.grid_mask
+}
+
+/// geometry.glsl's `sphere_derivatives` (what bump and normal maps perturb, normal_map.rs): Mitsuba's dp/du and dp/dv of a sphere of radius `r` at unit
+/// normal `n`.
+pub fn sphere_derivatives(n: Vec3, r: f32) -> [Vec3; 2] {
+    let pi = ppm_vk_materials::math::PI;
+    let rd = (n.x * n.x + n.y * n.y).sqrt();
+    let dpdu = (2.0 * pi * r) * Vec3::new(-n.y, n.x, 0.0);
+    let dpdv = if rd > 0.0 {
+        (pi * r) * Vec3::new(n.z * n.x / rd, n.z * n.y / rd, -rd)
+    } else {
+        (pi * r) * Vec3::X
+    };
+    [dpdu, dpdv]
+}
+
+/// normal_map.glsl's `surface_derivatives` for a triangle of edges `e1`, `e2` and texture coordinates
+/// `uv`: Mitsuba's dp/du and dp/dv, the edges where the coordinates are degenerate.
+pub fn triangle_derivatives(e1: Vec3, e2: Vec3, uv: [Vec2; 3]) -> [Vec3; 2] {
+    let duv0 = uv[1] - uv[0];
+    let duv1 = uv[2] - uv[0];
+    let det = duv0.x * duv1.y - duv0.y * duv1.x;
+    if det == 0.0 {
+        return [e1, e2];
+    }
+    let inv = 1.0 / det;
+    [(duv1.y * e1 - duv0.y * e2) * inv, (duv0.x * e2 - duv1.x * e1) * inv]
 }
 
 #[cfg(test)]

@@ -8,13 +8,20 @@ use std::rc::Rc;
 use anyhow::Result;
 use glam::Vec3;
 
-use super::modifiers::Perturbation;
+use super::elem::Elem;
 use super::properties::{color, number, Props};
 use super::texture::{same_texture, Tex};
-use super::xml::Elem;
 use super::Builder;
 use crate::texture::{self, Pattern};
 use crate::{conductors, Material, Microfacet, Surface};
+
+/// A bsdf's bump or normal map as read (modifiers.rs): the texture, and a bump map's scale (`None`: a
+/// normal map).
+#[derive(Clone, Debug)]
+pub(super) struct Perturbation {
+    pub(super) texture: Rc<Tex>,
+    pub(super) bump_scale: Option<f32>,
+}
 
 /// A BSDF as ppm-vk reads it.
 #[derive(Clone, Debug)]

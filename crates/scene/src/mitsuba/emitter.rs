@@ -5,8 +5,8 @@
 use anyhow::Result;
 use glam::{DAffine3, DMat3, DVec3, Mat3, Vec3};
 
+use super::elem::Elem;
 use super::properties::Props;
-use super::xml::Elem;
 use super::Builder;
 use crate::emitter::{Emitter, EnvMap, Environment};
 use crate::texture;

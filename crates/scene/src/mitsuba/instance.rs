@@ -6,17 +6,10 @@
 use anyhow::Result;
 use glam::{DAffine3, DMat3, DVec3};
 
+use super::elem::Elem;
 use super::properties::Props;
-use super::xml::Elem;
-use super::Builder;
+use super::{Builder, Group};
 use crate::{Mesh, Quad, Sphere, MAX_SHAPES, MAX_TRIANGLES};
-
-/// A shapegroup's shapes, placed in its own space (their `to_world` applied), not in the scene.
-pub(super) struct Group {
-    quads: Vec<Quad>,
-    spheres: Vec<Sphere>,
-    meshes: Vec<Mesh>,
-}
 
 impl Group {
     fn triangles(&self) -> usize {

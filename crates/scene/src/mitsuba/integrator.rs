@@ -2,8 +2,8 @@
 
 use anyhow::Result;
 
+use super::elem::Elem;
 use super::properties::Props;
-use super::xml::Elem;
 use super::Builder;
 
 /// Integrators that render all light paths: Mitsuba 3's, then Mitsuba 0.6's (bidirectional, Metropolis,

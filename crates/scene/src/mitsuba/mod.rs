@@ -26,6 +26,7 @@
 
 mod bsdf;
 mod cie;
+mod elem;
 mod emitter;
 mod instance;
 mod integrator;
@@ -47,9 +48,9 @@ use anyhow::Result;
 use glam::Vec3;
 
 use self::bsdf::Bsdf;
+use self::elem::{Elem, Resolver};
 use self::properties::Props;
 use self::texture::Tex;
-use self::xml::{Elem, Resolver};
 use super::plastic::Coats;
 use super::{Camera, Scene};
 
@@ -88,6 +89,14 @@ pub(super) fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene> {
     b.finish()
 }
 
+/// A shapegroup's shapes, placed in its own space (their `to_world` applied), not in the scene (instances
+/// copy them: instance.rs).
+struct Group {
+    quads: Vec<crate::Quad>,
+    spheres: Vec<crate::Sphere>,
+    meshes: Vec<crate::Mesh>,
+}
+
 /// What the scene's objects became, and where each came from (to locate a failed check).
 struct Builder {
     scene: Scene,
@@ -101,7 +110,7 @@ struct Builder {
     /// Ids of top-level samplers: a sensor may refer to one (it only decides Mitsuba's noise).
     samplers: Vec<String>,
     /// Top-level shapegroups by id (instances copy them).
-    groups: HashMap<String, instance::Group>,
+    groups: HashMap<String, Group>,
     /// Top-level bsdfs by id, for a shape that refers to one defined after it (Mitsuba resolves references
     /// after reading the file): such a bsdf is read when the shape needs it, and skipped where it stands
     /// (`early` holds where it stands).

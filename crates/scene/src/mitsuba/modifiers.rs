@@ -6,18 +6,11 @@ use std::rc::Rc;
 
 use anyhow::Result;
 
-use super::bsdf::Bsdf;
+use super::bsdf::{Bsdf, Perturbation};
+use super::elem::Elem;
 use super::properties::Props;
 use super::texture::Tex;
-use super::xml::Elem;
 use super::Builder;
-
-/// A bsdf's bump or normal map as read: the texture, and a bump map's scale (`None`: a normal map).
-#[derive(Clone, Debug)]
-pub(super) struct Perturbation {
-    pub(super) texture: Rc<Tex>,
-    pub(super) bump_scale: Option<f32>,
-}
 
 /// What a modifier nests: bsdfs (an element, or one a `ref` names) and textures.
 enum Nested<'a> {

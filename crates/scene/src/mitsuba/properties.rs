@@ -7,8 +7,8 @@ use std::cell::Cell;
 use anyhow::Result;
 use glam::{DAffine3, DMat3, DMat4, DVec3, DVec4, Vec3};
 
+use super::elem::Elem;
 use super::spectrum::{self, Use};
-use super::xml::Elem;
 
 /// The properties (`<float name=..>`, `<transform name=..>`, ...) of one plugin element. Each one
 /// read is marked; [`Props::finish`] refuses those never read, as Mitsuba refuses unused properties.

@@ -5,8 +5,8 @@
 use anyhow::Result;
 use glam::{DMat3, DVec3};
 
+use super::elem::Elem;
 use super::properties::{number, Props};
-use super::xml::Elem;
 use super::Builder;
 use crate::Camera;
 

@@ -9,10 +9,10 @@ use anyhow::Result;
 use glam::{DAffine3, DMat3, DVec3, Vec3};
 
 use super::bsdf::Bsdf;
+use super::elem::Elem;
 use super::emitter;
 use super::properties::Props;
 use super::texture::Tex;
-use super::xml::Elem;
 use super::Builder;
 use crate::obj::{self, RawMesh};
 use crate::texture::{self, Texture};

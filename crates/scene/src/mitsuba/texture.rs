@@ -5,8 +5,8 @@ use std::rc::Rc;
 use anyhow::Result;
 use glam::Vec3;
 
+use super::elem::Elem;
 use super::properties::Props;
-use super::xml::Elem;
 use super::Builder;
 use crate::texture::{self, Filter, Pattern, Texture, Wrap};
 

@@ -7,7 +7,7 @@
 
 use anyhow::Result;
 
-use super::xml::Elem;
+use super::elem::Elem;
 
 /// camelCase to snake_case as Mitsuba 3's `camel_to_underscore_case`: an underscore before an upper-case
 /// letter that follows a lower-case one, that letter and the upper-case run after it lowered

@@ -3,12 +3,12 @@
 //! `<include>`s spliced in place (cycles and nesting deeper than Mitsuba's limit refused), file names
 //! resolved by Mitsuba's search path (`<path>`), and files older than version 2 upgraded (`upgrade.rs`).
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 use anyhow::{anyhow, bail, Result};
 
+use super::elem::{Elem, Loc, Resolver, QUOTED};
 use super::upgrade;
 use crate::error::{truncated, Error};
 use crate::files::{read_bounded, MAX_SCENE_BYTES};
@@ -26,13 +26,6 @@ pub const MAX_INCLUDED_BYTES: u64 = 4 * MAX_SCENE_BYTES;
 /// Most bytes `$name` substitution may produce in all a scene's attribute values: ten `<default>`s each
 /// repeating the one before ten times made 10^10 bytes of a 1.6 KB file.
 pub const MAX_SUBSTITUTED_BYTES: u64 = MAX_SCENE_BYTES;
-
-/// Longest quotation of a value in a message.
-const QUOTED: usize = 60;
-
-/// Longest message about an element, in characters: whatever a substituted value holds, an error stays
-/// a line (at six levels of repeated `<default>`s one was 10 MB).
-const MAX_MESSAGE: usize = 400;
 
 /// Elements nested deeper than this are refused (real scenes nest about five deep: scene, shape,
 /// bsdf, bsdf, rgb).
@@ -110,7 +103,7 @@ pub(super) fn read(path: &Path, shown: &str, defines: &[(String, String)]) -> Re
         substituted: 0,
         // Mitsuba's `load_file` puts the scene's folder first (its working directory, which follows, is
         // not searched here: what a scene reads does not depend on where ppm-vk runs).
-        resolver: Resolver(Rc::new(vec![parent(path)])),
+        resolver: Resolver::of_folder(parent(path)),
         warnings: Vec::new(),
     };
     let (root, children) = reader.read(path, shown, None)?;
@@ -142,112 +135,6 @@ fn parent(path: &Path) -> PathBuf {
     match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
-    }
-}
-
-/// Mitsuba's `FileResolver`: folders searched in order for a relative file name (src/core/fresolver.cpp).
-#[derive(Clone, Debug, PartialEq)]
-pub(super) struct Resolver(Rc<Vec<PathBuf>>);
-
-impl Resolver {
-    /// The first folder in which `name` exists, joined to it; an absolute name, or one found nowhere, as
-    /// it is (Mitsuba's `resolve`), here joined to the first folder so that a message names a real place.
-    pub(super) fn resolve(&self, name: &str) -> PathBuf {
-        let p = Path::new(name);
-        if p.is_absolute() {
-            return p.to_path_buf();
-        }
-        self.0
-            .iter()
-            .map(|d| d.join(p))
-            .find(|c| c.exists())
-            .unwrap_or_else(|| self.0[0].join(p))
-    }
-
-    /// Whether `name` is found by the search path.
-    pub(super) fn finds(&self, name: &str) -> bool {
-        Path::new(name).is_absolute() || self.0.iter().any(|d| d.join(name).exists())
-    }
-
-    /// This search path with `dir` first.
-    fn prepend(&self, dir: PathBuf) -> Resolver {
-        let mut dirs = vec![dir];
-        dirs.extend(self.0.iter().cloned());
-        Resolver(Rc::new(dirs))
-    }
-}
-
-/// Where an element starts.
-#[derive(Clone, Debug)]
-pub(super) struct Loc {
-    pub(super) file: Rc<str>,
-    line: u32,
-    col: u32,
-    /// The search path in force where the element was read (a spectrum file resolves by it, as Mitsuba's
-    /// parser resolves one while it reads).
-    pub(super) resolver: Resolver,
-}
-
-impl fmt::Display for Loc {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}:{}:{}", self.file, self.line, self.col)
-    }
-}
-
-/// An XML element with its attributes substituted.
-#[derive(Clone, Debug)]
-pub(super) struct Elem {
-    pub(super) tag: String,
-    pub(super) attrs: Vec<(String, String)>,
-    pub(super) children: Vec<Elem>,
-    pub(super) loc: Loc,
-}
-
-impl Elem {
-    pub(super) fn attr(&self, name: &str) -> Option<&str> {
-        self.attrs.iter().find(|(k, _)| k == name).map(|(_, v)| v.as_str())
-    }
-
-    pub(super) fn kind(&self) -> &str {
-        self.attr("type").unwrap_or("")
-    }
-
-    /// The element as messages name it: `<shape type="rectangle" id="floor">`, `<float name="fov">`.
-    pub(super) fn what(&self) -> String {
-        let mut s = format!("<{}", self.tag);
-        for key in ["type", "id", "name"] {
-            if let Some(v) = self.attr(key) {
-                s += &format!(" {key}=\"{}\"", truncated(v, QUOTED));
-            }
-        }
-        s + ">"
-    }
-
-    /// A located [`Error::Scene`] (inside anyhow; `Scene::load_with` takes it out): the element is its
-    /// field.
-    pub(super) fn err(&self, msg: impl fmt::Display) -> anyhow::Error {
-        let Loc { file, line, col, .. } = &self.loc;
-        anyhow::Error::from(Error::scene(
-            file.to_string(),
-            *line as usize,
-            *col as usize,
-            self.what(),
-            truncated(&msg.to_string(), MAX_MESSAGE),
-        ))
-    }
-
-    pub(super) fn warning(&self, msg: impl fmt::Display) -> String {
-        format!(
-            "{}: {}: {}",
-            self.loc,
-            self.what(),
-            truncated(&msg.to_string(), MAX_MESSAGE)
-        )
-    }
-
-    pub(super) fn required(&self, name: &str) -> Result<&str> {
-        self.attr(name)
-            .ok_or_else(|| self.err(format!("needs the attribute {name}")))
     }
 }
 
