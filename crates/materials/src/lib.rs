@@ -8,6 +8,7 @@
 pub mod conductor;
 pub mod math;
 pub mod microfacet;
+pub mod normal_map;
 pub mod plastic;
 pub mod rng;
 pub mod rough_conductor;

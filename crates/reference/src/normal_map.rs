@@ -3,34 +3,12 @@
 
 use glam::{IVec2, Vec2, Vec3};
 use ppm_vk_kernels::layout::{FILTER_NEAREST, NORMAL_MAP_BUMP, TEXTURE_BITMAP};
+pub use ppm_vk_materials::normal_map::Bump;
+use ppm_vk_materials::normal_map::{bumped, mapped};
 
 use super::texture::{pixel, texel_rgb, value};
 use super::trace::Hit;
 use ppm_vk_engine::lower::GpuScene;
-
-/// The shadowing term of a hit's map (Estevez et al. 2019): alpha^2 about the unperturbed normal `n0`;
-/// alpha^2 = 0 where there is no map (or it left the normal as it was).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Bump {
-    pub alpha2: f32,
-    pub n0: Vec3,
-}
-
-/// Mitsuba's Frame3f::tan_theta_2 of `w` about `n`.
-fn tan_theta_2(w: Vec3, n: Vec3) -> f32 {
-    let c = w.dot(n);
-    (1.0 - c * c).max(0.0) / (c * c)
-}
-
-impl Bump {
-    /// normal_map.glsl's `bump_shadowing`: the term for light-side direction `w`.
-    pub fn shadowing(&self, w: Vec3) -> f32 {
-        if self.alpha2 == 0.0 {
-            return 1.0;
-        }
-        2.0 / (1.0 + (1.0 + self.alpha2 * tan_theta_2(w, self.n0)).sqrt())
-    }
-}
 
 /// normal_map.glsl's `texture_gradient` (Mitsuba's bitmap eval_1_grad).
 pub fn texture_gradient(texels: &[[u32; 4]], at: u32, uv: Vec2) -> Vec2 {
@@ -73,27 +51,15 @@ pub fn perturb(g: &GpuScene, h: &Hit, ng: Vec3, ns: Vec3) -> (Vec3, Bump) {
         if grad == Vec2::ZERO {
             return (ns, Bump::default());
         }
-        let du = dpdu + n0 * (grad.x - n0.dot(dpdu));
-        let dv = dpdv + n0 * (grad.y - n0.dot(dpdv));
-        let n = du.cross(dv).normalize();
-        if front.dot(n) < 0.0 {
-            -n
-        } else {
-            n
-        }
+        bumped(dpdu, dpdv, n0, grad, front)
     } else {
         let c = 2.0 * value(&g.textures, r[1], h.uv) - Vec3::ONE;
         if c.x == 0.0 && c.y == 0.0 && c.z > 0.0 {
             return (ns, Bump::default());
         }
-        let s = (dpdu - n0 * n0.dot(dpdu)).normalize();
-        let t = n0.cross(s);
-        (c.x * s + c.y * t + c.z * n0).normalize()
+        mapped(dpdu, n0, c)
     };
-    let bump = Bump {
-        alpha2: (0.125 * tan_theta_2(n, n0)).min(1.0),
-        n0,
-    };
+    let bump = Bump::of(n, n0);
     (if n.dot(ng) < 0.0 { -n } else { n }, bump)
 }
 
