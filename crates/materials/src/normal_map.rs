@@ -75,4 +75,22 @@ mod tests {
         assert!((n - Vec3::new(1.0, 0.0, 1.0).normalize()).length() < 1e-6, "{n}");
         assert_eq!(Bump::of(Vec3::Z, Vec3::Z).shadowing(Vec3::X), 1.0);
     }
+
+    /// The shadowing term is 1 without tilt, and Mitsuba's closed form otherwise: tilt 45 degrees
+    /// (tan^2 = 1, alpha^2 = 1/8) and a direction at 60 degrees (tan^2 = 3): 2 / (1 + sqrt(1 + 3/8)).
+    #[test]
+    fn shadowing_term_is_estevez_closed_form() {
+        assert_eq!(Bump::default().shadowing(Vec3::new(0.3, 0.1, 0.9).normalize()), 1.0);
+        let b = Bump {
+            alpha2: 0.125,
+            n0: Vec3::Z,
+        };
+        let w = Vec3::new(60f32.to_radians().sin(), 0.0, 60f32.to_radians().cos());
+        let want = 2.0 / (1.0 + (1.0f32 + 3.0 / 8.0).sqrt());
+        assert!(
+            (b.shadowing(w) - want).abs() < 1e-6,
+            "{} against {want}",
+            b.shadowing(w)
+        );
+    }
 }

@@ -68,36 +68,6 @@ mod tests {
     use super::*;
     use crate::trace::{sphere_derivatives, triangle_derivatives};
 
-    /// A bump map's height h = s u on a unit square (dp/du = x, dp/dv = y, n = z) tilts the normal to
-    /// normalize(-s, 0, 1): the closed form of cross(x + s z, y).
-    #[test]
-    fn a_linear_height_field_tilts_the_normal_by_its_slope() {
-        let s = 0.75f32;
-        let (du, dv, n0) = (Vec3::X, Vec3::Y, Vec3::Z);
-        let du2 = du + n0 * (s - n0.dot(du));
-        let dv2 = dv + n0 * (0.0 - n0.dot(dv));
-        let n = du2.cross(dv2).normalize();
-        assert!((n - Vec3::new(-s, 0.0, 1.0).normalize()).length() < 1e-6, "{n}");
-    }
-
-    /// The shadowing term is 1 without tilt, and Mitsuba's closed form otherwise: tilt 45 degrees
-    /// (tan^2 = 1, alpha^2 = 1/8) and a direction at 60 degrees (tan^2 = 3): 2 / (1 + sqrt(1 + 3/8)).
-    #[test]
-    fn shadowing_term_is_estevez_closed_form() {
-        assert_eq!(Bump::default().shadowing(Vec3::new(0.3, 0.1, 0.9).normalize()), 1.0);
-        let b = Bump {
-            alpha2: 0.125,
-            n0: Vec3::Z,
-        };
-        let w = Vec3::new(60f32.to_radians().sin(), 0.0, 60f32.to_radians().cos());
-        let want = 2.0 / (1.0 + (1.0f32 + 3.0 / 8.0).sqrt());
-        assert!(
-            (b.shadowing(w) - want).abs() < 1e-6,
-            "{} against {want}",
-            b.shadowing(w)
-        );
-    }
-
     /// A sphere's derivatives are Mitsuba's: at the equator on +x, dp/du = 2 pi r y and dp/dv = -pi r z.
     #[test]
     fn sphere_derivatives_at_the_equator() {

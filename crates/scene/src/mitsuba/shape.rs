@@ -573,24 +573,16 @@ impl Builder {
         } = *c;
         let path = self.file(e, props)?;
         let face_normals = props.boolean("face_normals")?;
-        let mut raw = ply::read(&path, material).map_err(|err| e.err(format!("{err:#}")))?;
-        if face_normals {
-            raw.normals = None;
-        }
-        if textured && raw.uvs.is_none() {
-            return Err(e.err(format!(
+        let raw = ply::read(&path, material).map_err(|err| e.err(format!("{err:#}")))?;
+        let uvs = || {
+            format!(
                 "{}: no texture coordinates (float or double vertex properties u and v, texture_u and \
                  texture_v, or s and t), which the texture of {} needs",
                 path.display(),
                 bsdf_at.what()
-            )));
-        }
-        let i = self.mesh(e, raw, &to_world, flip)?;
-        let m = &mut self.scene.meshes[i];
-        if !face_normals && m.normals.is_none() {
-            m.compute_vertex_normals();
-        }
-        Ok(closed(m))
+            )
+        };
+        self.mesh_file(e, raw, face_normals, &to_world, flip, textured, uvs)
     }
 
     /// Mitsuba's `serialized`: shape `shape_index` of a .serialized file (read by `scene/serialized.rs`),
@@ -620,18 +612,40 @@ impl Builder {
                     .map_err(|_| p.err(format!("expected a non-negative integer, got \"{v}\"")))?
             }
         };
-        let mut raw = serialized::read(&path, index, material).map_err(|err| e.err(format!("{err:#}")))?;
+        let raw = serialized::read(&path, index, material).map_err(|err| e.err(format!("{err:#}")))?;
+        let uvs = || {
+            format!(
+                "{}: shape {index} has no texture coordinates, which the texture of {} needs",
+                path.display(),
+                bsdf_at.what()
+            )
+        };
+        self.mesh_file(e, raw, face_normals, &to_world, flip, textured, uvs)
+    }
+
+    /// A mesh read from a file (PLY, serialized) placed in the scene as Mitsuba does: flat where
+    /// `face_normals` asks, else with the file's vertex normals or Mitsuba's own; refused with `no_uvs`'s
+    /// message where a texture needs coordinates the file lacks.
+    // The element, the mesh and how to shade it, its placement, and what a texture needs: a struct would
+    // only name them again.
+    #[allow(clippy::too_many_arguments)]
+    fn mesh_file(
+        &mut self,
+        e: &Elem,
+        mut raw: RawMesh,
+        face_normals: bool,
+        to_world: &DAffine3,
+        flip: bool,
+        textured: bool,
+        no_uvs: impl FnOnce() -> String,
+    ) -> Result<Closed> {
         if face_normals {
             raw.normals = None;
         }
         if textured && raw.uvs.is_none() {
-            return Err(e.err(format!(
-                "{}: shape {index} has no texture coordinates, which the texture of {} needs",
-                path.display(),
-                bsdf_at.what()
-            )));
+            return Err(e.err(no_uvs()));
         }
-        let i = self.mesh(e, raw, &to_world, flip)?;
+        let i = self.mesh(e, raw, to_world, flip)?;
         let m = &mut self.scene.meshes[i];
         if !face_normals && m.normals.is_none() {
             m.compute_vertex_normals();
