@@ -1553,6 +1553,10 @@ fn cornell_textured() -> ppm_vk_engine::Scene {
             emission: Vec3::ZERO,
             texture: Some(texture),
             normal_map: None,
+            opacity: None,
+            specular_texture: None,
+            alpha_texture: None,
+            emission_texture: None,
         });
         (scene.materials.len() - 1) as u32
     };

@@ -13,9 +13,11 @@ const uint SURFACE_THIN = 5u;     // Mitsuba's thindielectric: thin_dielectric.g
 const uint SURFACE_ROUGH_CONDUCTOR = 6u; // Mitsuba's roughconductor: rough_conductor.glsl
 const uint SURFACE_ROUGH_GLASS = 7u;     // Mitsuba's roughdielectric: rough_dielectric.glsl
 
-// Five 16-byte texels; material() reads the first two, material_terms() the next two (only conductors,
-// plastics and thin dielectrics need them, so every other surface costs two fetches), and
-// material_microfacet() the last (only rough surfaces).
+// MATERIAL_TEXELS 16-byte texels; material() reads the first two, material_terms() the next two (only
+// conductors, plastics and thin dielectrics need them, so every other surface costs two fetches),
+// material_microfacet() the fifth (only rough surfaces) and the sixth holds the textures on parameters
+// other than the diffuse reflectance (each 0: none; else 1 + the texel of the texture's header).
+const uint MATERIAL_TEXELS = 6u;
 struct Material {
     vec3 color;      // diffuse albedo, mirror reflectance, a (rough) conductor's or thin dielectric's
                      // specular_reflectance, or a plastic's diffuse factor (plastic.glsl)
@@ -37,6 +39,10 @@ struct Material {
     uint distribution; // MICROFACET_*
     uint table;      // a rough plastic: 1 + the texel of its coat's transmittance table in texture_texels
                      // (64 values over the cosine, four a texel: plastic.glsl); else 0
+    uint opacity;    // Mitsuba's mask: the texture of its opacity (a constant one is a 1 x 1 bitmap)
+    uint specular_texture; // specular_reflectance (conductors, plastics, thin dielectrics)
+    uint alpha_texture;    // a rough surface's alpha
+    uint emission_texture; // an area light's radiance
 };
 
 const uint TEXTURE_BITMAP = 0u;

@@ -38,13 +38,13 @@ void frame(vec3 nf, vec3 dpdu, out vec3 t, out vec3 b) {
 
 // Material i's distribution (the material's fifth texel; bindings.glsl's material_texels).
 Microfacet material_microfacet(uint i) {
-    uvec4 t = texelFetch(material_texels, int(5u * i + 4u));
+    uvec4 t = texelFetch(material_texels, int(MATERIAL_TEXELS * i + 4u));
     return Microfacet(t.z, uintBitsToFloat(t.x), uintBitsToFloat(t.y));
 }
 
 // Material i's table (Material.table: a rough plastic's coat).
 uint material_table(uint i) {
-    return texelFetch(material_texels, int(5u * i + 4u)).w;
+    return texelFetch(material_texels, int(MATERIAL_TEXELS * i + 4u)).w;
 }
 
 // The distribution of normals D(m).

@@ -82,7 +82,7 @@ void surface_derivatives(Hit h, out vec3 dpdu, out vec3 dpdv) {
 // then the unperturbed one, which its arithmetic would only reproduce up to rounding.
 vec3 mapped_normal(Hit h, vec3 ng, vec3 ns) {
     bump_alpha2 = 0.0;
-    uint record = texelFetch(material_texels, int(5u * h.material + 3u)).w;
+    uint record = texelFetch(material_texels, int(MATERIAL_TEXELS * h.material + 3u)).w;
     if (record == 0u) return ns;
     uvec4 r = texelFetch(texture_texels, int(record - 1u));
     // The unperturbed frame on the surface's front side (Mitsuba's frames do not turn towards the ray).

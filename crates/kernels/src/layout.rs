@@ -45,6 +45,14 @@ pub struct Material {
     /// A rough plastic's coat: 1 + the texel of its transmittance table in the texture buffer (64 values,
     /// four a texel); 0 for every other surface.
     pub table: u32,
+    /// Mitsuba's `mask`: 0 opaque; else 1 + the texel of its opacity texture's header.
+    pub opacity: u32,
+    /// 0: none; else 1 + the texel of the header of the texture on `specular_reflectance`.
+    pub specular_texture: u32,
+    /// 0: none; else 1 + the texel of the header of the texture on a rough surface's `alpha`.
+    pub alpha_texture: u32,
+    /// 0: none; else 1 + the texel of the header of the texture on an area light's `radiance`.
+    pub emission_texture: u32,
 }
 gpu_struct!(Material {
     color,
@@ -58,7 +66,11 @@ gpu_struct!(Material {
     alpha_u,
     alpha_v,
     distribution,
-    table
+    table,
+    opacity,
+    specular_texture,
+    alpha_texture,
+    emission_texture
 });
 
 /// Texels of a texture's header, before a bitmap's pixels.

@@ -163,6 +163,16 @@ pub struct Material {
     /// Mitsuba's `bumpmap` or `normalmap` around the surface: the normal its BSDF works about, perturbed
     /// at each point by a texture (shaders/materials/normal_map.glsl).
     pub normal_map: Option<NormalMap>,
+    /// Mitsuba's `mask`: index into `Scene::textures` of its opacity (1 opaque, 0 not there; a constant
+    /// opacity is a 1 x 1 texture). Rays pass the surface with probability 1 - opacity.
+    pub opacity: Option<u32>,
+    /// Index into `Scene::textures`: the texture `specular_reflectance` is read from (conductors,
+    /// plastics, thin dielectrics), instead of the surface's constant.
+    pub specular_texture: Option<u32>,
+    /// Index into `Scene::textures`: the texture a rough surface's `alpha` is read from.
+    pub alpha_texture: Option<u32>,
+    /// Index into `Scene::textures`: the texture an area light's `radiance` is read from.
+    pub emission_texture: Option<u32>,
 }
 
 /// A texture that perturbs a material's shading normal, as Mitsuba 3's src/bsdfs/bumpmap.cpp and
@@ -1198,6 +1208,10 @@ mod tests {
                     emission: Vec3::ZERO,
                     texture: None,
                     normal_map: None,
+                    opacity: None,
+                    specular_texture: None,
+                    alpha_texture: None,
+                    emission_texture: None,
                 },
                 Material {
                     name: "lamp".into(),
@@ -1205,6 +1219,10 @@ mod tests {
                     emission: Vec3::splat(5.0),
                     texture: None,
                     normal_map: None,
+                    opacity: None,
+                    specular_texture: None,
+                    alpha_texture: None,
+                    emission_texture: None,
                 },
             ],
             spheres: vec![],

@@ -908,6 +908,10 @@ fn material(
         emission: r.emission.as_ref().map_or(Vec3::ZERO, vec3),
         texture,
         normal_map: None,
+        opacity: None,
+        specular_texture: None,
+        alpha_texture: None,
+        emission_texture: None,
     })
 }
 

@@ -28,8 +28,12 @@ fn material(
 ) -> Material {
     let base = Material {
         emission: m.emission.to_array(),
-        texture: m.texture.map_or(0, |t| texture_at[t as usize] + 1),
+        texture: header(m.texture, texture_at),
         normal_map: m.normal_map.map_or(0, |n| push_normal_map(textures, n, texture_at)),
+        opacity: header(m.opacity, texture_at),
+        specular_texture: header(m.specular_texture, texture_at),
+        alpha_texture: header(m.alpha_texture, texture_at),
+        emission_texture: header(m.emission_texture, texture_at),
         ..Default::default()
     };
     match m.surface {
@@ -117,6 +121,12 @@ fn material(
             ..with_microfacet(base, Some(rough))
         },
     }
+}
+
+/// A material's reference to texture `t` (an index into `Scene::textures`): 0 for none, else 1 + the
+/// texel of its header.
+fn header(t: Option<u32>, texture_at: &[u32]) -> u32 {
+    t.map_or(0, |t| texture_at[t as usize] + 1)
 }
 
 /// `base` with a microfacet distribution's roughness and kind; a smooth surface (`None`) keeps zeros.

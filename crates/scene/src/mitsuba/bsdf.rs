@@ -263,6 +263,10 @@ impl Builder {
             emission,
             texture,
             normal_map,
+            opacity: None,
+            specular_texture: None,
+            alpha_texture: None,
+            emission_texture: None,
         };
         let mut candidate = name.to_string();
         for n in 2.. {
