@@ -1737,3 +1737,103 @@ fn photon_records_match_reference_with_every_kind_of_light() {
         photon_records_match_reference_within(every_light(), settings, 1e-4, 0.99);
     }
 }
+
+/// cornell_textured with blends (Mitsuba's blendbsdf, blend.glsl) on every kind of shape: the floor a
+/// blend (weight 0.3) of its checkerboard diffuse and rough gold, the back wall its bitmap diffuse blended
+/// with a mirror by a textured weight (the luminance of another bitmap), the plastic ball half glass, and the
+/// card a blend (0.6) of a textured-weight blend (card / mirror) and a red diffuse, two deep: the choice at
+/// each hit of eye paths and photons, drawn from the path's random numbers, and the chosen component's
+/// hit points, bounces and records.
+fn cornell_blended() -> ppm_vk_engine::Scene {
+    use ppm_vk_engine::scene::{Material, Microfacet};
+    let mut scene = cornell_textured();
+    let add = |scene: &mut ppm_vk_engine::Scene, name: &str, surface: Surface, texture: Option<u32>| {
+        scene.materials.push(Material {
+            name: name.into(),
+            surface,
+            emission: Vec3::ZERO,
+            texture,
+            normal_map: None,
+            opacity: None,
+            specular_texture: None,
+            alpha_texture: None,
+            emission_texture: None,
+        });
+        (scene.materials.len() - 1) as u32
+    };
+    let index = |scene: &ppm_vk_engine::Scene, name: &str| scene.materials.iter().position(|m| m.name == name).unwrap() as u32;
+    let (floor, back, ball, card) = (
+        index(&scene, "floor"),
+        index(&scene, "back"),
+        index(&scene, "ball"),
+        index(&scene, "card"),
+    );
+    let (eta, k) = ppm_vk_engine::scene::conductors::named("Au").unwrap();
+    let gold = add(
+        &mut scene,
+        "rough gold",
+        Surface::RoughConductor {
+            reflectance: Vec3::splat(0.9),
+            eta,
+            k,
+            rough: Microfacet::isotropic(true, 0.2),
+        },
+        None,
+    );
+    let mirror = add(&mut scene, "mirror", Surface::Mirror { reflectance: Vec3::splat(0.8) }, None);
+    let glass = add(&mut scene, "glass", Surface::Glass { ior: 1.5 }, None);
+    let red = add(
+        &mut scene,
+        "red",
+        Surface::Diffuse {
+            albedo: Vec3::new(0.7, 0.1, 0.1),
+        },
+        None,
+    );
+    let blend = |weight: f32, first: u32, second: u32| Surface::Blend { weight, first, second };
+    let floor_blend = add(&mut scene, "floor blend", blend(0.3, floor, gold), None);
+    let back_blend = add(&mut scene, "back blend", blend(0.5, back, mirror), Some(3));
+    let ball_blend = add(&mut scene, "ball blend", blend(0.5, ball, glass), None);
+    let inner = add(&mut scene, "card inner", blend(0.5, card, mirror), Some(1));
+    let card_blend = add(&mut scene, "card blend", blend(0.6, inner, red), None);
+    let swap = |m: &mut u32| {
+        *m = match *m {
+            m if m == floor => floor_blend,
+            m if m == back => back_blend,
+            m if m == ball => ball_blend,
+            m if m == card => card_blend,
+            m => m,
+        }
+    };
+    scene.quads.iter_mut().for_each(|q| swap(&mut q.material));
+    scene.spheres.iter_mut().for_each(|s| swap(&mut s.material));
+    scene
+        .meshes
+        .iter_mut()
+        .for_each(|m| m.materials.iter_mut().for_each(swap));
+    scene.validate().unwrap_or_else(|e| panic!("{e:#}"));
+    scene
+}
+
+#[test]
+fn ray_pass_matches_reference_with_blends() {
+    ray_pass_matches_reference_on(cornell_blended(), true, DirectLight::Sample);
+}
+
+/// The kernels as built: resolve_blend always compiled in.
+#[test]
+fn ray_pass_matches_reference_with_blends_unspecialized() {
+    ray_pass_matches_reference_on(cornell_blended(), false, DirectLight::Sample);
+}
+
+/// Flux as loose as the textures' and the conductor's (the rough gold's and the plastic's terms vary with
+/// the angle).
+#[test]
+fn photon_records_match_reference_with_blends() {
+    photon_records_match_reference_on(cornell_blended(), true, 1e-3);
+}
+
+#[test]
+fn photon_records_match_reference_with_blends_unspecialized() {
+    photon_records_match_reference_on(cornell_blended(), false, 1e-3);
+}

@@ -12,6 +12,7 @@ const uint SURFACE_PLASTIC = 4u;  // Mitsuba's plastic: plastic.glsl
 const uint SURFACE_THIN = 5u;     // Mitsuba's thindielectric: thin_dielectric.glsl
 const uint SURFACE_ROUGH_CONDUCTOR = 6u; // Mitsuba's roughconductor: rough_conductor.glsl
 const uint SURFACE_ROUGH_GLASS = 7u;     // Mitsuba's roughdielectric: rough_dielectric.glsl
+const uint SURFACE_BLEND = 8u;           // Mitsuba's blendbsdf: blend.glsl (resolved at each hit)
 
 // MATERIAL_TEXELS 16-byte texels; material() reads the first two, material_terms() the next two (only
 // conductors, plastics and thin dielectrics need them, so every other surface costs two fetches),
@@ -23,11 +24,14 @@ struct Material {
                      // specular_reflectance, or a plastic's diffuse factor (plastic.glsl)
     uint surface;    // SURFACE_*
     vec3 emission;   // radiance leaving the front side (quads only)
-    float ior;       // (rough) glass, plastic coat, thin dielectric: index inside over index outside
+    float ior;       // (rough) glass, plastic coat, thin dielectric: index inside over index outside; blend:
+                     // its constant weight
     vec3 lobe_a;     // (rough) conductor: real part eta of the complex index, per channel; plastic: the coat's
-                     // specular_reflectance; thin dielectric: specular_transmittance
+                     // specular_reflectance; thin dielectric: specular_transmittance; blend: the bits of x
+                     // and y are its two components' material indices (blend.glsl)
     uint texture;    // 0: none; else 1 + the texel of its texture's header (texture.glsl), whose value is
-                     // the diffuse albedo (diffuse) or diffuse_reflectance (plastic) at each point
+                     // the diffuse albedo (diffuse) or diffuse_reflectance (plastic) at each point, or whose
+                     // luminance is a blend's weight
     vec3 lobe_b;     // conductor: imaginary part k (extinction), per channel; plastic: x, the largest
                      // weight its diffuse lobe gives (plastic.glsl), y its coat's internal diffuse
                      // reflectance (fdr_int when smooth) and z 1 if nonlinear

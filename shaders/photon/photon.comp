@@ -40,6 +40,7 @@ layout(push_constant) uniform PhotonPush {
 #include "materials/thin_dielectric.glsl"
 #include "materials/rough_dielectric.glsl"
 #include "texture.glsl"
+#include "materials/blend.glsl"
 #include "shading.glsl"
 #include "grid.glsl"
 #include "invocation.glsl"
@@ -230,6 +231,7 @@ void main() {
         o = offset_ray(h.pos, nf);
         continue;
 #endif
+        resolve_blend(h, rng); // before anything reads the hit's material (blend.glsl)
         Material m = material(h.material);
         apply_texture(m, h);
         vec3 ng = nf;

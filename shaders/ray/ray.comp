@@ -93,6 +93,7 @@ layout(push_constant) uniform RayPush {
 #include "materials/thin_dielectric.glsl"
 #include "materials/rough_dielectric.glsl"
 #include "texture.glsl"
+#include "materials/blend.glsl"
 #include "shading.glsl"
 #include "invocation.glsl"
 #include "lights.glsl"
@@ -249,6 +250,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             }
             break;
         }
+        resolve_blend(h, rng); // before anything reads the hit's material (blend.glsl)
         Material m = material(h.material);
         apply_texture(m, h);
         bool front = dot(d, h.normal) < 0.0;
@@ -362,6 +364,7 @@ void main() {
                     if (HAS_ENVIRONMENT) hit_emitted += r.thr * escaped(r.d); // term (a) (dropped if cut)
                     break;
                 }
+                resolve_blend(h, rng); // before anything reads the hit's material (blend.glsl)
                 Material m = material(h.material);
                 apply_texture(m, h);
                 bool front = dot(r.d, h.normal) < 0.0;

@@ -8,8 +8,8 @@ use anyhow::{anyhow, Context as _, Result};
 
 use crate::layout::{
     Light, Quad, Sphere, Triangle, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_QUAD, LIGHT_SPHERE,
-    LIGHT_SPOT, LIGHT_TRIANGLE, SURFACE_CONDUCTOR, SURFACE_PLASTIC, SURFACE_ROUGH_CONDUCTOR, SURFACE_ROUGH_GLASS,
-    SURFACE_THIN,
+    LIGHT_SPOT, LIGHT_TRIANGLE, SURFACE_BLEND, SURFACE_CONDUCTOR, SURFACE_PLASTIC, SURFACE_ROUGH_CONDUCTOR,
+    SURFACE_ROUGH_GLASS, SURFACE_THIN,
 };
 use crate::reflected::{KernelInfo, SOURCES};
 
@@ -32,7 +32,7 @@ pub struct SceneConstants<'a> {
     pub inline_triangles: bool,
     pub lights: &'a [Light],
     /// The surfaces the scene's materials use, as bits `1 << SURFACE_*`: the kernels leave out the code of
-    /// conductors, plastics and thin dielectrics where there are none (lavapipe runs both sides of a
+    /// conductors, plastics, thin dielectrics and blends where there are none (lavapipe runs both sides of a
     /// branch, so code a scene never takes still costs).
     pub surfaces: u32,
     /// Whether any material has a texture: without one the kernels do not read the texture index.
@@ -96,6 +96,8 @@ pub fn scene_constants(c: &SceneConstants) -> String {
         has(SURFACE_ROUGH_CONDUCTOR),
         has(SURFACE_ROUGH_GLASS)
     );
+    // Without blends, blend.glsl's resolve_blend reads nothing.
+    s += &format!("const bool SCENE_BLENDS = {};\n", has(SURFACE_BLEND));
     s += &format!("const bool SCENE_TEXTURES = {};\n", c.textures);
     s += &format!("const bool SCENE_ROUGH_PLASTICS = {};\n", c.rough_plastics);
     s += &format!("const bool SCENE_SHADING_NORMALS = {};\n", c.shading_normals);

@@ -5,6 +5,7 @@
 //! kernels, and the CPU twin of the kernels (crates/reference) walks a scene with them, so nothing here knows a
 //! scene or the kernels' record layout.
 
+pub mod blend;
 pub mod conductor;
 pub mod math;
 pub mod microfacet;

@@ -9,6 +9,7 @@
 // The kernels test `!(x > y)` so that a NaN ends a path; the twin mirrors them as written.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod blend;
 pub mod bvh;
 pub mod conductor;
 pub mod lights;
@@ -263,6 +264,7 @@ fn eye_vertex(
     bump: &mut Bump,
     cut: &mut u32,
     escaped: &mut bool,
+    rng: &mut Rng,
 ) -> Option<EyeVertex> {
     if !shading::valid(d, *vng, *vns) {
         return None;
@@ -274,10 +276,11 @@ fn eye_vertex(
         *cut += 1;
         return None;
     }
-    let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
+    let Some(mut h) = intersect_scene(g, o, d, 0.0, 1e30) else {
         *escaped = true;
         return None;
     };
+    blend::resolve(g, &mut h, rng);
     let m = texture::apply(g, &g.materials[h.material as usize], h.uv);
     let front = d.dot(h.normal) < 0.0;
     let ng = if front { h.normal } else { -h.normal };
@@ -329,7 +332,7 @@ fn emission_sample(
             ng,
             nf,
             bump,
-        }) = eye_vertex(g, o, d, depth, &mut vng, &mut vns, &mut thr, &mut last, cut, &mut out)
+        }) = eye_vertex(g, o, d, depth, &mut vng, &mut vns, &mut thr, &mut last, cut, &mut out, rng)
         else {
             if out {
                 let e = thr * escaped(g, d);
@@ -509,6 +512,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                     &mut last,
                     &mut out.cut,
                     &mut out_of_scene,
+                    &mut rng,
                 ) {
                     let m = &m;
                     let diffuse = m.surface == SURFACE_DIFFUSE;
@@ -722,9 +726,10 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
     // photon.comp's `capped`, without its count.
     let cap = |f: Vec3| shading::capped(f, p.flux_fixed).0;
     for depth in 1..=p.max_photon_depth {
-        let Some(h) = intersect_scene(g, o, d, 0.0, 1e30) else {
+        let Some(mut h) = intersect_scene(g, o, d, 0.0, 1e30) else {
             return true;
         };
+        blend::resolve(g, &mut h, &mut rng);
         let m = &texture::apply(g, &g.materials[h.material as usize], h.uv);
         let front = d.dot(h.normal) < 0.0;
         let ng = if front { h.normal } else { -h.normal };

@@ -86,7 +86,15 @@ pub enum Surface {
         reflectance: Vec3,
         transmittance: Vec3,
     },
+    /// Mitsuba's `blendbsdf` (ppm_vk_materials::blend): (1 - w) times material `first`'s BSDF plus w times
+    /// material `second`'s (indices into `Scene::materials`, themselves blends at most
+    /// [`MAX_BLEND_DEPTH`] deep). w is `weight`, or, where the material has a `texture`, that texture's
+    /// luminance at each point (the weight's texture lives in `Material::texture`, which a blend reads
+    /// for nothing else). The kernels pick one of the two at each surface interaction (blend.glsl).
+    Blend { weight: f32, first: u32, second: u32 },
 }
+
+pub use ppm_vk_materials::blend::MAX_BLEND_DEPTH;
 
 impl Surface {
     /// Its microfacet distribution, where it is rough.
@@ -709,10 +717,13 @@ impl Scene {
             let constant = match m.surface {
                 Surface::Diffuse { albedo } => albedo,
                 Surface::Plastic { diffuse, .. } => diffuse,
+                // A blend's weight: the texture's luminance, in [0, 1] as its values are (checked above).
+                Surface::Blend { .. } => continue,
                 _ => {
                     return Err(invalid(
                         p,
-                        "a texture gives a diffuse reflectance: only diffuse and plastic surfaces read one",
+                        "a texture gives a diffuse reflectance (or a blend's weight): only diffuse, plastic and \
+                     blend surfaces read one",
                     ))
                 }
             };
@@ -733,6 +744,67 @@ impl Scene {
         Ok(())
     }
 
+    /// Material `i` and, where it is a blend, every material its components reach (`i` first). Only for
+    /// a scene whose blends [`Scene::check_blends`] accepted.
+    pub fn blend_components(&self, i: u32) -> Vec<u32> {
+        let mut out = vec![i];
+        let mut k = 0;
+        while k < out.len() {
+            if let Some(Surface::Blend { first, second, .. }) = self.materials.get(out[k] as usize).map(|m| m.surface) {
+                out.extend([first, second]);
+            }
+            k += 1;
+        }
+        out
+    }
+
+    /// Blends: their components in range, no blend reaching itself, none more than [`MAX_BLEND_DEPTH`]
+    /// deep, and none with a bump or normal map of its own (a reader gives it to the components: the
+    /// kernels apply the chosen component's).
+    fn check_blends(&self) -> Result<(), Invalid> {
+        // The blend depth of material `i`; `path`: the blends above it.
+        fn depth(s: &Scene, i: u32, path: &mut Vec<u32>) -> Result<u32, Invalid> {
+            let m = &s.materials[i as usize];
+            let Surface::Blend { first, second, .. } = m.surface else {
+                return Ok(0);
+            };
+            let p = format!("materials.{}.blend", m.name);
+            for c in [first, second] {
+                if c as usize >= s.materials.len() {
+                    return Err(invalid(
+                        p,
+                        format!("material index {c} out of range ({} materials)", s.materials.len()),
+                    ));
+                }
+            }
+            if path.contains(&i) {
+                return Err(invalid(p, "a blend that contains itself (its components lead back to it)"));
+            }
+            if path.len() as u32 >= MAX_BLEND_DEPTH {
+                return Err(invalid(
+                    p,
+                    format!("blends nested more than MAX_BLEND_DEPTH = {MAX_BLEND_DEPTH} deep"),
+                ));
+            }
+            path.push(i);
+            let d = depth(s, first, path)?.max(depth(s, second, path)?);
+            path.pop();
+            Ok(1 + d)
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            if let Surface::Blend { .. } = m.surface {
+                if m.normal_map.is_some() {
+                    return Err(invalid(
+                        format!("materials.{}.normal_map", m.name),
+                        "a bump or normal map on a blend: give it to each of its components",
+                    ));
+                }
+                depth(self, i as u32, &mut Vec::new())?;
+            }
+        }
+        Ok(())
+    }
+
     /// [`Scene::validate`] with the field path kept apart, for loaders that can locate it.
     pub(crate) fn check(&self) -> Result<(), Invalid> {
         self.check_with(&mut plastic::Coats::default())
@@ -747,6 +819,7 @@ impl Scene {
         for m in &self.materials {
             check_material(m, coats)?;
         }
+        self.check_blends()?;
         let material = |path: &str, i: u32| -> Result<&Material, Invalid> {
             self.materials.get(i as usize).ok_or_else(|| {
                 invalid(
@@ -788,7 +861,8 @@ impl Scene {
             let p = format!("mesh[{i}]");
             check_mesh(m, &p, self.materials.len())?;
             if m.uvs.is_none() {
-                let textured = m.materials.iter().map(|&k| &self.materials[k as usize]);
+                // A blend's components are read at its points too.
+                let textured = m.materials.iter().flat_map(|&k| self.blend_components(k)).map(|k| &self.materials[k as usize]);
                 if let Some(t) = textured.clone().find(|t| t.normal_map.is_some()) {
                     return Err(invalid(
                         p,
@@ -1084,6 +1158,15 @@ fn check_material(m: &Material, coats: &mut plastic::Coats) -> Result<(), Invali
             positive_ior(ior, &format!("{p}.thin.ior"))?;
             unit_vec(reflectance, &format!("{p}.thin.reflectance"))?;
             unit_vec(transmittance, &format!("{p}.thin.transmittance"))?;
+        }
+        Surface::Blend { weight, .. } => {
+            // Mitsuba clips the weight to [0, 1]; outside it is a mistake in the file, refused here.
+            if !(0.0..=1.0).contains(&weight) {
+                return Err(invalid(
+                    format!("{p}.blend.weight"),
+                    format!("must be in [0, 1], got {weight}"),
+                ));
+            }
         }
     }
     if m.is_light() && !matches!(m.surface, Surface::Diffuse { .. }) {

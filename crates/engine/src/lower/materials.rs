@@ -120,8 +120,18 @@ fn material(
             ior,
             ..with_microfacet(base, Some(rough))
         },
+        // blend.glsl: the weight, its texture (`base.texture`) and the components' indices as lobe_a's bits.
+        Surface::Blend { weight, first, second } => Material {
+            surface: layout::SURFACE_BLEND,
+            ior: weight,
+            lobe_a: [f32::from_bits(first), f32::from_bits(second), 0.0],
+            ..base
+        },
     }
 }
+
+// blend.glsl resolves as many levels as the scene lets blends nest.
+const _: () = assert!(layout::MAX_BLEND_DEPTH == ppm_vk_materials::blend::MAX_BLEND_DEPTH);
 
 /// A material's reference to texture `t` (an index into `Scene::textures`): 0 for none, else 1 + the
 /// texel of its header.

@@ -35,6 +35,9 @@ pub(super) struct Bsdf {
     pub(super) texture: Option<Rc<Tex>>,
     /// A `bumpmap` or `normalmap` around it.
     pub(super) normal_map: Option<Perturbation>,
+    /// A `blendbsdf`: its weight and components (blend.rs); `surface` is then a `Surface::Blend` whose
+    /// indices [`Builder::material`] sets, `texture` and `normal_map` are `None`.
+    pub(super) blend: Option<Rc<super::blend::Blend>>,
 }
 
 /// Indices of the refraction of Mitsuba's named materials (`int_ior="bk7"`), from its documentation.
@@ -72,7 +75,7 @@ impl Builder {
         let id = e.attr("id").map(str::to_string);
         let nested: Vec<&Elem> = objects.iter().copied().filter(|c| c.tag == "bsdf").collect();
         // A bump or normal map also holds textures (and refs to them or to its bsdf): modifiers.rs.
-        let modifier = matches!(e.kind(), "bumpmap" | "normalmap");
+        let modifier = matches!(e.kind(), "bumpmap" | "normalmap" | "blendbsdf");
         if let Some(o) = objects.iter().find(|c| c.tag != "bsdf" && !modifier) {
             return Err(o.err(format!("not expected inside {}", e.what())));
         }
@@ -93,10 +96,12 @@ impl Builder {
             "roughplastic" => self.plastic(e, &props, true)?,
             "bumpmap" => self.bumpmap(e, &props, &objects)?,
             "normalmap" => self.normalmap(e, &props, &objects)?,
+            "blendbsdf" => self.blendbsdf(e, &props, &objects)?,
             _ => {
                 return Err(e.err(
                     "unsupported bsdf (read: diffuse, twosided, conductor, roughconductor, \
-                     dielectric, roughdielectric, thindielectric, plastic, roughplastic, bumpmap, normalmap)",
+                     dielectric, roughdielectric, thindielectric, plastic, roughplastic, bumpmap, normalmap, \
+                     blendbsdf)",
                 ))
             }
         };
@@ -113,6 +118,7 @@ impl Builder {
             id: None,
             texture,
             normal_map: None,
+            blend: None,
         })
     }
 
@@ -122,6 +128,9 @@ impl Builder {
             [one] => self.bsdf(one)?,
             [a, b] => {
                 let (x, y) = (self.bsdf(a)?, self.bsdf(b)?);
+                if x.blend.is_some() || y.blend.is_some() {
+                    return Err(b.err("two bsdfs in a twosided, one a blendbsdf: not supported (give one)"));
+                }
                 let same_map = match (&x.normal_map, &y.normal_map) {
                     (None, None) => true,
                     (Some(a), Some(b)) => {
@@ -141,6 +150,14 @@ impl Builder {
         };
         if inner.two_sided || matches!(inner.surface, Surface::Glass { .. }) {
             return Err(e.err("wraps a two-sided bsdf (Mitsuba refuses this too)"));
+        }
+        // A blend's components: Mitsuba's twosided refuses a transmitting component (its flags are the
+        // union of theirs); a twosided one is already two-sided.
+        if inner.blend.is_some() && inner.leaves().iter().any(|l| l.two_sided) {
+            return Err(e.err(
+                "wraps a blendbsdf with a two-sided or transmitting component (a dielectric, or one already \
+                 in twosided): not supported (Mitsuba refuses a transmitting one)",
+            ));
         }
         Ok(Bsdf {
             two_sided: true,
@@ -205,6 +222,7 @@ impl Builder {
             id: None,
             texture,
             normal_map: None,
+            blend: None,
         })
     }
 
@@ -246,10 +264,24 @@ impl Builder {
     /// Index of the scene material for `bsdf` with `emission`, named `name` (made on first use; the
     /// same name for different contents gets a suffix).
     pub(super) fn material(&mut self, name: &str, bsdf: &Bsdf, emission: Vec3, e: &Elem) -> u32 {
-        let texture = bsdf
-            .texture
-            .as_ref()
-            .map(|t| texture::intern(&mut self.scene.textures, std::borrow::Cow::Borrowed(&t.texture)));
+        // A blend: its components' materials first (named by their ids, else after it), then the blend of
+        // them, whose texture is its weight's.
+        let (surface, weight_texture) = match &bsdf.blend {
+            Some(b) => {
+                let part = |p: &Bsdf, k: u32| p.id.clone().unwrap_or_else(|| format!("{name}.{k}"));
+                let first = self.material(&part(&b.first, 0), &b.first, Vec3::ZERO, e);
+                let second = self.material(&part(&b.second, 1), &b.second, Vec3::ZERO, e);
+                let surface = Surface::Blend {
+                    weight: b.weight,
+                    first,
+                    second,
+                };
+                (surface, b.texture.as_ref())
+            }
+            None => (bsdf.surface, bsdf.texture.as_ref()),
+        };
+        let texture =
+            weight_texture.map(|t| texture::intern(&mut self.scene.textures, std::borrow::Cow::Borrowed(&t.texture)));
         let normal_map = bsdf.normal_map.as_ref().map(|p| {
             let texture = texture::intern(&mut self.scene.textures, std::borrow::Cow::Borrowed(&p.texture.texture));
             match p.bump_scale {
@@ -259,7 +291,7 @@ impl Builder {
         });
         let wanted = Material {
             name: name.to_string(),
-            surface: bsdf.surface,
+            surface,
             emission,
             texture,
             normal_map,
@@ -285,7 +317,7 @@ impl Builder {
             }
         }
         self.origins.insert(format!("materials.{candidate}"), e.clone());
-        if let Some(t) = &bsdf.texture {
+        if let Some(t) = weight_texture {
             self.origins
                 .insert(format!("materials.{candidate}.texture"), t.at.clone());
         }
@@ -309,6 +341,7 @@ fn one_sided(surface: Surface) -> Bsdf {
         id: None,
         texture: None,
         normal_map: None,
+        blend: None,
     }
 }
 
@@ -365,6 +398,7 @@ fn dielectric(e: &Elem, props: &Props) -> Result<Bsdf> {
         id: None,
         texture: None,
         normal_map: None,
+        blend: None,
     })
 }
 
@@ -380,6 +414,7 @@ fn rough_dielectric(e: &Elem, props: &Props) -> Result<Bsdf> {
         id: None,
         texture: None,
         normal_map: None,
+        blend: None,
     })
 }
 
@@ -421,6 +456,7 @@ fn thin_dielectric(e: &Elem, props: &Props) -> Result<Bsdf> {
         id: None,
         texture: None,
         normal_map: None,
+        blend: None,
     })
 }
 

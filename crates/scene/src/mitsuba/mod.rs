@@ -24,6 +24,7 @@
 //! `shape.rs` uses `bsdf.rs`, `emitter.rs` and `texture.rs`, and `bsdf.rs` uses `texture.rs`; this file
 //! calls into them. Mesh files are read by `obj.rs` (OBJ) and `ply.rs` (PLY).
 
+mod blend;
 mod bsdf;
 mod cie;
 mod elem;

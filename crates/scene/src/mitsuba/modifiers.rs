@@ -115,7 +115,7 @@ impl Builder {
             (None, _) => return Err(e.err("needs one nested bsdf")),
             _ => return Err(e.err("holds a second bsdf: it wraps one (as in Mitsuba)")),
         };
-        if inner.normal_map.is_some() {
+        if inner.leaves().iter().any(|l| l.normal_map.is_some()) {
             return Err(e.err("a bump or normal map inside another is not supported (one perturbation per surface)"));
         }
         let given = |name: &str| props.get(name).is_some();
@@ -132,10 +132,10 @@ impl Builder {
                  faces away from the eye; such a path ends there, as at any shading normal (docs/mitsuba.md)",
             );
         }
-        Ok(Bsdf {
-            normal_map: Some(Perturbation { texture, bump_scale }),
-            ..inner
-        })
+        // Around a blend, each component gets it (blend.rs's `perturbed`).
+        Ok(inner
+            .perturbed(&Perturbation { texture, bump_scale })
+            .expect("no component has a map of its own (checked above)"))
     }
 
     /// A `<texture>` element, or a `<ref>` to a top-level one.

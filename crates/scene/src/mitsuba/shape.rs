@@ -98,6 +98,7 @@ impl Builder {
                 id: None,
                 texture: None,
                 normal_map: None,
+                blend: None,
             },
             e,
         ));
@@ -107,6 +108,7 @@ impl Builder {
             return Err(emitter_at.err(format!(
                 "an area emitter on a {} surface: ppm-vk lights are diffuse (or black) only",
                 match bsdf.surface {
+                    Surface::Blend { .. } => "blendbsdf",
                     Surface::Glass { .. } | Surface::RoughGlass { .. } => "dielectric",
                     Surface::Plastic { .. } => "plastic",
                     Surface::ThinDielectric { .. } => "thin dielectric",
@@ -121,10 +123,10 @@ impl Builder {
         let to_world = props.transform("to_world")?;
         let flip = props.boolean("flip_normals")?;
         // A bump or normal map reads texture coordinates too (modifiers.rs).
-        let textured = bsdf.texture.is_some() || bsdf.normal_map.is_some();
+        let textured = bsdf.textured();
         // An anisotropic lobe lies along Mitsuba's dp/du: a rectangle's x axis (edge_u below), a sphere's
         // longitude, a mesh's texture coordinates (or the frame of its face normal without them).
-        let anisotropic = bsdf.surface.rough().is_some_and(|r| r.is_anisotropic());
+        let anisotropic = (bsdf.leaves().iter()).any(|l| l.surface.rough().is_some_and(|r| r.is_anisotropic()));
         if anisotropic && matches!(e.kind(), "cube" | "disk") {
             return Err(bsdf_at.err(format!(
                 "anisotropic roughness on a {} is not supported yet (read on rectangles, spheres and OBJ and \
@@ -139,6 +141,12 @@ impl Builder {
         // An anisotropic one does the same, so that edge_u stays along (minus) Mitsuba's x axis.
         let turned = (to_world.matrix3.determinant() < 0.0) != flip;
         let backwards = e.kind() == "rectangle" && turned && (textured || anisotropic);
+        if backwards && bsdf.blend.is_some() {
+            return Err(bsdf_at.err(
+                "a blendbsdf with a texture or anisotropic roughness on a rectangle turned by flip_normals or a \
+                 mirroring to_world is not supported yet",
+            ));
+        }
         if backwards && bsdf.normal_map.is_some() {
             return Err(bsdf_at.err(
                 "a bump or normal map on a rectangle turned by flip_normals or a mirroring to_world is not \
@@ -196,7 +204,7 @@ impl Builder {
     }
 
     /// The bsdf a `<ref id="..">` names (a top-level one defined before it).
-    fn bsdf_ref(&self, o: &Elem) -> Result<Bsdf> {
+    pub(super) fn bsdf_ref(&self, o: &Elem) -> Result<Bsdf> {
         let id = o.required("id")?;
         self.bsdfs.get(id).cloned().ok_or_else(|| {
             let mut known: Vec<&str> = self.bsdfs.keys().map(String::as_str).collect();
@@ -221,6 +229,8 @@ impl Builder {
             | Surface::RoughConductor { .. }
             | Surface::Plastic { .. } => true,
             Surface::Glass { .. } | Surface::RoughGlass { .. } | Surface::ThinDielectric { .. } => false,
+            // Both components two-sided make it two-sided (blend.rs).
+            Surface::Blend { .. } => true,
         };
         if closed == Closed::No && one_sided && !bsdf.two_sided {
             self.warn(
