@@ -93,6 +93,7 @@ fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
                 "scenes/references/cornell-coated.xml",
                 "scenes/legacy/cornell-spheres.xml",
                 "scenes/bump-plane.xml",
+                "scenes/blend-plane.xml",
             ],
         ),
         ("spd", load_spd, vec!["scenes/references/spectra-test.spd"]),
@@ -1051,4 +1052,63 @@ fn instancing_holds_the_scene_limits_at_their_bounds() {
             )),
         "{e}"
     );
+}
+
+/// Blends (Mitsuba's blendbsdf) with one or three nested bsdfs, a weight outside [0, 1] (a value, a
+/// texture), and nested past `MAX_BLEND_DEPTH` (at the bound they load): an error naming the file, line and
+/// element, never a panic.
+#[test]
+fn hostile_blends_are_refused() {
+    use ppm_vk_engine::scene::MAX_BLEND_DEPTH;
+    let dir = scratch("blends");
+    let diffuse = "<bsdf type=\"diffuse\"/>";
+    let blend = |inside: &str| format!("<bsdf type=\"blendbsdf\">{inside}</bsdf>");
+    let shape = |bsdf: &str| format!("<shape type=\"rectangle\">{bsdf}</shape>");
+    // `depth` blends, each of the next one and a diffuse.
+    let nested = |depth: u32| (0..depth).fold(diffuse.to_string(), |inner, _| blend(&format!("{inner}{diffuse}")));
+    let cases = [
+        (shape(&blend(diffuse)), "<bsdf type=\"blendbsdf\">", "needs two nested bsdfs"),
+        (
+            shape(&blend(&[diffuse; 3].concat())),
+            "<bsdf type=\"diffuse\">",
+            "a third bsdf",
+        ),
+        (
+            shape(&blend(&format!("<float name=\"weight\" value=\"1.5\"/>{diffuse}{diffuse}"))),
+            "<float name=\"weight\">",
+            "must be in [0, 1], got 1.5",
+        ),
+        (
+            shape(&blend(&format!("<float name=\"weight\" value=\"nan\"/>{diffuse}{diffuse}"))),
+            "<float name=\"weight\">",
+            "nan is not finite",
+        ),
+        (
+            shape(&blend(&format!(
+                "<texture type=\"checkerboard\" name=\"weight\"><rgb name=\"color0\" value=\"2\"/></texture>\
+                 {diffuse}{diffuse}"
+            ))),
+            "<texture type=\"checkerboard\" name=\"weight\">",
+            "a blend weight texture's values must be in [0, 1]",
+        ),
+        (
+            shape(&nested(MAX_BLEND_DEPTH + 1)),
+            "<bsdf type=\"blendbsdf\">",
+            "more than MAX_BLEND_DEPTH = 4",
+        ),
+    ];
+    for (i, (body, element, says)) in cases.iter().enumerate() {
+        let e = load_fails(xml_scene(&dir, &format!("b{i}.xml"), body));
+        assert!(e.contains(&format!("b{i}.xml:4:")), "located: {e}");
+        assert!(e.contains(element) && e.contains(says), "{body}: {e}");
+    }
+    // At the bound: read, every level a material of its own.
+    let path = xml_scene(&dir, "bound.xml", &shape(&nested(MAX_BLEND_DEPTH)));
+    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e:#}"));
+    let blends = scene
+        .materials
+        .iter()
+        .filter(|m| matches!(m.surface, ppm_vk_engine::scene::Surface::Blend { .. }))
+        .count();
+    assert_eq!(blends as u32, MAX_BLEND_DEPTH);
 }

@@ -722,8 +722,8 @@ impl Scene {
                 _ => {
                     return Err(invalid(
                         p,
-                        "a texture gives a diffuse reflectance (or a blend's weight): only diffuse, plastic and \
-                     blend surfaces read one",
+                        "a texture gives a diffuse reflectance: only diffuse and plastic surfaces read one (and \
+                     blends, as their weight)",
                     ))
                 }
             };

@@ -165,3 +165,203 @@ impl Builder {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::tests::{error, load_body, load_in, write_texture};
+    use crate::{Material, NormalMap, Scene, Surface, TempDir, MAX_BLEND_DEPTH};
+    use glam::Vec3;
+
+    fn material<'a>(s: &'a Scene, i: u32) -> &'a Material {
+        &s.materials[i as usize]
+    }
+
+    /// A blend's components become materials of their own (named by id, else after the blend), in the
+    /// order written; a textured weight is the blend's texture; twosided around a blend of one-sided
+    /// bsdfs (Blender's export) and blends of twosided ones both read.
+    #[test]
+    fn blends_become_materials_of_their_components() {
+        let dir = TempDir::new("mitsuba-blend");
+        write_texture(&dir, "w.png");
+        let s = load_in(
+            &dir,
+            r#"<bsdf type="roughconductor" id="metal"/>
+               <shape type="rectangle"><bsdf type="twosided"><bsdf type="blendbsdf"><float name="weight" value="0.25"/>
+                 <bsdf type="diffuse"><rgb name="reflectance" value="0.3"/></bsdf><ref id="metal"/></bsdf></bsdf></shape>
+               <shape type="sphere"><bsdf type="blendbsdf" id="b">
+                 <texture type="bitmap" name="weight"><string name="filename" value="w.png"/></texture>
+                 <bsdf type="twosided"><bsdf type="diffuse"/></bsdf><bsdf type="twosided"><bsdf type="plastic"/></bsdf></bsdf></shape>"#,
+            &[],
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        let quad = material(&s, s.quads[1].material);
+        let Surface::Blend { weight, first, second } = quad.surface else {
+            panic!("{:?}", quad.surface)
+        };
+        assert_eq!(weight, 0.25);
+        assert_eq!(
+            material(&s, first).surface,
+            Surface::Diffuse {
+                albedo: Vec3::splat(0.3)
+            }
+        );
+        assert_eq!(material(&s, second).name, "metal");
+        assert!(matches!(material(&s, second).surface, Surface::RoughConductor { .. }));
+        let sphere = material(&s, s.spheres[0].material);
+        assert_eq!(sphere.name, "b");
+        let Surface::Blend { first, second, .. } = sphere.surface else {
+            panic!("{:?}", sphere.surface)
+        };
+        assert_eq!(sphere.texture, Some(0), "the weight's texture");
+        assert_eq!((material(&s, first).name.as_str(), material(&s, second).name.as_str()), ("b.0", "b.1"));
+        assert!(matches!(material(&s, second).surface, Surface::Plastic { .. }));
+        assert!(
+            !s.warnings.iter().any(|w| w.contains("one-sided")),
+            "two-sided both: {:?}",
+            s.warnings
+        );
+    }
+
+    /// A bump map around a blend goes to each component (the same map); one inside a blend stays its
+    /// component's; 0.6's two-weight mixturebsdf reads as the blend it is.
+    #[test]
+    fn maps_around_blends_go_to_their_components_and_mixtures_read() {
+        let dir = TempDir::new("mitsuba-blend-maps");
+        write_texture(&dir, "h.png");
+        let s = load_in(
+            &dir,
+            r#"<shape type="rectangle"><bsdf type="bumpmap"><texture type="bitmap"><string name="filename" value="h.png"/></texture>
+                 <bsdf type="blendbsdf"><bsdf type="diffuse"/><bsdf type="conductor"/></bsdf></bsdf></shape>
+               <shape type="sphere"><bsdf type="blendbsdf"><bsdf type="normalmap">
+                 <texture type="bitmap" name="normalmap"><string name="filename" value="h.png"/><boolean name="raw" value="true"/></texture>
+                 <bsdf type="diffuse"/></bsdf><bsdf type="diffuse"/></bsdf></shape>"#,
+            &[],
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        let quad = material(&s, s.quads[1].material);
+        let Surface::Blend { first, second, .. } = quad.surface else {
+            panic!("{:?}", quad.surface)
+        };
+        assert_eq!(quad.normal_map, None);
+        let bump = Some(NormalMap::Bump { texture: 0, scale: 1.0 });
+        assert_eq!((material(&s, first).normal_map, material(&s, second).normal_map), (bump, bump));
+        let sphere = material(&s, s.spheres[0].material);
+        let Surface::Blend { first, second, .. } = sphere.surface else {
+            panic!("{:?}", sphere.surface)
+        };
+        // The same image, read raw or not (pure 0 and 255), is one texture.
+        assert_eq!(material(&s, first).normal_map, Some(NormalMap::Normal { texture: 0 }));
+        assert_eq!(material(&s, second).normal_map, None);
+
+        let path = dir.write(
+            "old.xml",
+            r#"<scene version="0.6.0"><sensor type="perspective"><transform name="toWorld"><lookAt origin="0, 0, 4" target="0, 0, 0" up="0, 1, 0"/></transform></sensor>
+               <shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+               <shape type="sphere"><bsdf type="mixturebsdf"><string name="weights" value="0.3, 0.7"/>
+                 <bsdf type="diffuse"/><bsdf type="conductor"/></bsdf></shape></scene>"#,
+        );
+        let s = crate::mitsuba::load(&path, &[]).unwrap_or_else(|e| panic!("{e:#}"));
+        let m = material(&s, s.spheres[0].material);
+        let Surface::Blend { weight, first, second } = m.surface else {
+            panic!("{:?}", m.surface)
+        };
+        assert!((weight - 0.7).abs() < 1e-7, "{weight}");
+        assert!(matches!(material(&s, first).surface, Surface::Diffuse { .. }));
+        assert!(matches!(material(&s, second).surface, Surface::Mirror { .. }));
+    }
+
+    /// What is refused, by element.
+    #[test]
+    fn what_blends_cannot_be_is_refused_by_element() {
+        let cases: &[(&str, &str)] = &[
+            (
+                r#"<shape type="rectangle"><bsdf type="blendbsdf"><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>
+                   <emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>"#,
+                "an area emitter on a blendbsdf surface",
+            ),
+            (
+                r#"<shape type="rectangle"><bsdf type="twosided"><bsdf type="blendbsdf"><bsdf type="diffuse"/>
+                   <bsdf type="dielectric"/></bsdf></bsdf></shape>"#,
+                "wraps a blendbsdf with a two-sided or transmitting component",
+            ),
+            (
+                r#"<shape type="rectangle"><bsdf type="normalmap"><texture type="checkerboard" name="normalmap"/>
+                   <bsdf type="blendbsdf"><bsdf type="normalmap"><texture type="checkerboard" name="normalmap"/>
+                   <bsdf type="diffuse"/></bsdf><bsdf type="diffuse"/></bsdf></bsdf></shape>"#,
+                "a bump or normal map inside another",
+            ),
+            (
+                r#"<shape type="rectangle"><bsdf type="blendbsdf"><texture type="checkerboard" name="weight"/>
+                   <bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf><boolean name="flip_normals" value="true"/></shape>"#,
+                "a blendbsdf with a texture or anisotropic roughness on a rectangle turned",
+            ),
+            (
+                r#"<shape type="rectangle"><bsdf type="blendbsdf"><rgb name="color" value="1"/>
+                   <bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf></shape>"#,
+                "color",
+            ),
+        ];
+        for (body, want) in cases {
+            let e = error(body);
+            assert!(e.contains(want), "{body}: {e}");
+            assert!(e.contains("scene.xml:12:") || e.contains("scene.xml:13:"), "located: {e}");
+        }
+        // A checkerboard weight on a cube: a mesh with texture coordinates.
+        let cube = load_body(
+            r#"<shape type="cube"><bsdf type="blendbsdf"><texture type="checkerboard" name="weight"/>
+               <bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf></shape>"#,
+        )
+        .unwrap();
+        assert!(cube.meshes.iter().any(|m| m.uvs.is_some()), "the textured cube has uvs");
+    }
+
+    /// Scene::validate on blends built in code: indices in range, no cycle, at most MAX_BLEND_DEPTH deep
+    /// (at the bound accepted), no map of their own, a weight in [0, 1].
+    #[test]
+    fn validate_checks_blends() {
+        let base = load_body(r#"<shape type="sphere"><bsdf type="diffuse"/></shape>"#).unwrap();
+        let sphere = base.spheres[0].material;
+        // `n` blends, each of the next and the sphere's diffuse, the sphere on the first.
+        let chain = |n: u32| {
+            let mut s = base.clone();
+            let start = s.materials.len() as u32;
+            for k in 0..n {
+                let next = if k + 1 < n { start + k + 1 } else { sphere };
+                s.materials.push(Material {
+                    name: format!("blend{k}"),
+                    surface: Surface::Blend {
+                        weight: 0.5,
+                        first: next,
+                        second: sphere,
+                    },
+                    ..s.materials[sphere as usize].clone()
+                });
+            }
+            s.spheres[0].material = start;
+            s
+        };
+        chain(MAX_BLEND_DEPTH).validate().unwrap();
+        let e = format!("{:#}", chain(MAX_BLEND_DEPTH + 1).validate().unwrap_err());
+        assert!(e.contains("materials.blend4.blend") && e.contains("MAX_BLEND_DEPTH = 4"), "{e}");
+        let with = |f: &dyn Fn(&mut Scene)| {
+            let mut s = chain(2);
+            f(&mut s);
+            format!("{:#}", s.validate().unwrap_err())
+        };
+        let last = base.materials.len();
+        let e = with(&|s| s.materials[last + 1].surface = Surface::Blend { weight: 0.5, first: 99, second: 0 });
+        assert!(e.contains("materials.blend1.blend") && e.contains("index 99 out of range"), "{e}");
+        let e = with(&|s| s.materials[last + 1].surface = Surface::Blend {
+            weight: 0.5,
+            first: last as u32,
+            second: 0,
+        });
+        assert!(e.contains("contains itself"), "{e}");
+        let e = with(&|s| s.materials[last].surface = Surface::Blend { weight: -0.1, first: 0, second: 0 });
+        assert!(e.contains("materials.blend0.blend.weight") && e.contains("[0, 1]"), "{e}");
+        let e = with(&|s| s.materials[last].normal_map = Some(NormalMap::Normal { texture: 0 }));
+        assert!(e.contains("normal_map"), "{e}");
+        let e = with(&|s| s.materials[last].emission = Vec3::ONE);
+        assert!(e.contains("materials.blend0.emission"), "{e}");
+    }
+}
