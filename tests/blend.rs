@@ -41,7 +41,11 @@ fn blended(plain: &Scene, weight: f32) -> Scene {
             blend_of.push(i as u32);
             continue;
         }
-        let (first, second) = if weight == 0.0 { (i as u32, red) } else { (red, i as u32) };
+        let (first, second) = if weight == 0.0 {
+            (i as u32, red)
+        } else {
+            (red, i as u32)
+        };
         s.materials.push(Material {
             name: format!("blend of {}", m.name),
             surface: Surface::Blend { weight, first, second },
@@ -52,8 +56,12 @@ fn blended(plain: &Scene, weight: f32) -> Scene {
         });
         blend_of.push(s.materials.len() as u32 - 1);
     }
-    s.quads.iter_mut().for_each(|q| q.material = blend_of[q.material as usize]);
-    s.spheres.iter_mut().for_each(|q| q.material = blend_of[q.material as usize]);
+    s.quads
+        .iter_mut()
+        .for_each(|q| q.material = blend_of[q.material as usize]);
+    s.spheres
+        .iter_mut()
+        .for_each(|q| q.material = blend_of[q.material as usize]);
     s.meshes
         .iter_mut()
         .for_each(|m| m.materials.iter_mut().for_each(|k| *k = blend_of[*k as usize]));
@@ -78,7 +86,10 @@ fn a_blend_of_weight_0_or_1_is_its_component_bit_for_bit() {
     let plain = cornell(RES, RES);
     let a = render(&ctx, &plain, settings(), 2);
     let mean = a.mean();
-    assert!(mean.iter().all(|&m| m > 0.01), "a dark image proves nothing: mean {mean:?}");
+    assert!(
+        mean.iter().all(|&m| m > 0.01),
+        "a dark image proves nothing: mean {mean:?}"
+    );
     for weight in [0.0, 1.0] {
         let b = render(&ctx, &blended(&plain, weight), settings(), 2);
         assert!(same_pixels(&a, &b), "weight {weight}: the blend changed the image");
@@ -100,7 +111,10 @@ fn the_weight_is_mitsubas_eval_1_and_the_first_bsdf_is_the_first_written() {
             .unwrap();
     let scene = Scene::load(std::path::Path::new(&format!("{ROOT}/scenes/blend-plane.xml")))
         .unwrap_or_else(|e| panic!("{e:#}"));
-    let textured = scene.materials.iter().find(|m| matches!(m.surface, Surface::Blend { .. }) && m.texture.is_some());
+    let textured = scene
+        .materials
+        .iter()
+        .find(|m| matches!(m.surface, Surface::Blend { .. }) && m.texture.is_some());
     let t = textured.expect("a textured blend").texture.unwrap();
     let (texels, at) = ppm_vk_engine::lower::texture_texels(&scene.textures);
     let points = json["eval_1"].as_array().unwrap();
@@ -110,17 +124,26 @@ fn the_weight_is_mitsubas_eval_1_and_the_first_bsdf_is_the_first_written() {
         let want = p["eval_1"].as_f64().unwrap() as f32;
         let rgb = Vec3::from_array([0, 1, 2].map(|c| p["rgb"][c].as_f64().unwrap() as f32));
         // Mitsuba's eval_1 is the luminance of its eval...
-        assert!((luminance(rgb) - want).abs() < 1e-6, "{uv}: luminance {} vs eval_1 {want}", luminance(rgb));
+        assert!(
+            (luminance(rgb) - want).abs() < 1e-6,
+            "{uv}: luminance {} vs eval_1 {want}",
+            luminance(rgb)
+        );
         // ...and ppm-vk's weight the luminance of the same texture's value.
         let got = luminance(ppm_vk_reference::texture::value(&texels, at[t as usize], uv));
         assert!((got - want).abs() < 1e-5, "{uv}: ppm-vk {got}, Mitsuba {want}");
     }
     let red = [0.8, 0.1, 0.1];
     for key in ["order_dict", "order_xml"] {
-        let got: Vec<f64> = json[key].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        let got: Vec<f64> = json[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
         assert!(got.iter().zip(red).all(|(g, r)| (g - r).abs() < 1e-6), "{key}: {got:?}");
     }
-    let s = Scene::load(&write_blend_of_red_and_blue()).unwrap_or_else(|e| panic!("{e:#}"));
+    let s = Scene::load(write_blend_of_red_and_blue()).unwrap_or_else(|e| panic!("{e:#}"));
     let Surface::Blend { first, .. } = s.materials[s.spheres[0].material as usize].surface else {
         panic!("a blend")
     };
@@ -157,8 +180,10 @@ fn write_blend_of_red_and_blue() -> std::path::PathBuf {
 fn blends_match_mitsuba() {
     use ppm_vk_engine::metrics::Reference;
     use ppm_vk_engine::Mode;
-    let reference = Reference::load(std::path::Path::new(&format!("{ROOT}/scenes/references/blend-plane.exr")))
-        .unwrap_or_else(|e| panic!("{e:#}"));
+    let reference = Reference::load(std::path::Path::new(&format!(
+        "{ROOT}/scenes/references/blend-plane.exr"
+    )))
+    .unwrap_or_else(|e| panic!("{e:#}"));
     let scene = Scene::load_with(
         format!("{ROOT}/scenes/blend-plane.xml"),
         &[("res".to_string(), "64".to_string())],
@@ -196,13 +221,21 @@ fn blends_match_mitsuba() {
     for (what, got, want) in [
         ("image", image.mean(), want.mean()),
         ("diffuse / rough gold (left)", half(&image, false), half(want, false)),
-        ("textured-weight diffuse pair (right)", half(&image, true), half(want, true)),
+        (
+            "textured-weight diffuse pair (right)",
+            half(&image, true),
+            half(want, true),
+        ),
     ] {
         let ratio = [0, 1, 2].map(|c| got[c] / want[c]);
         println!("{what}: mean {got:.5?}, Mitsuba {want:.5?}, ratio {ratio:.4?}");
         for (c, r) in ratio.iter().enumerate() {
             worst = worst.max((r - 1.0).abs());
-            assert!((r - 1.0).abs() < 0.01, "{what}, channel {c}: {:+.2}% off Mitsuba's", 100.0 * (r - 1.0));
+            assert!(
+                (r - 1.0).abs() < 0.01,
+                "{what}, channel {c}: {:+.2}% off Mitsuba's",
+                100.0 * (r - 1.0)
+            );
         }
     }
     println!("largest difference {:.2}%", 100.0 * worst);

@@ -1067,19 +1067,27 @@ fn hostile_blends_are_refused() {
     // `depth` blends, each of the next one and a diffuse.
     let nested = |depth: u32| (0..depth).fold(diffuse.to_string(), |inner, _| blend(&format!("{inner}{diffuse}")));
     let cases = [
-        (shape(&blend(diffuse)), "<bsdf type=\"blendbsdf\">", "needs two nested bsdfs"),
+        (
+            shape(&blend(diffuse)),
+            "<bsdf type=\"blendbsdf\">",
+            "needs two nested bsdfs",
+        ),
         (
             shape(&blend(&[diffuse; 3].concat())),
             "<bsdf type=\"diffuse\">",
             "a third bsdf",
         ),
         (
-            shape(&blend(&format!("<float name=\"weight\" value=\"1.5\"/>{diffuse}{diffuse}"))),
+            shape(&blend(&format!(
+                "<float name=\"weight\" value=\"1.5\"/>{diffuse}{diffuse}"
+            ))),
             "<float name=\"weight\">",
             "must be in [0, 1], got 1.5",
         ),
         (
-            shape(&blend(&format!("<float name=\"weight\" value=\"nan\"/>{diffuse}{diffuse}"))),
+            shape(&blend(&format!(
+                "<float name=\"weight\" value=\"nan\"/>{diffuse}{diffuse}"
+            ))),
             "<float name=\"weight\">",
             "nan is not finite",
         ),

@@ -1761,7 +1761,8 @@ fn cornell_blended() -> ppm_vk_engine::Scene {
         });
         (scene.materials.len() - 1) as u32
     };
-    let index = |scene: &ppm_vk_engine::Scene, name: &str| scene.materials.iter().position(|m| m.name == name).unwrap() as u32;
+    let index =
+        |scene: &ppm_vk_engine::Scene, name: &str| scene.materials.iter().position(|m| m.name == name).unwrap() as u32;
     let (floor, back, ball, card) = (
         index(&scene, "floor"),
         index(&scene, "back"),
@@ -1780,7 +1781,14 @@ fn cornell_blended() -> ppm_vk_engine::Scene {
         },
         None,
     );
-    let mirror = add(&mut scene, "mirror", Surface::Mirror { reflectance: Vec3::splat(0.8) }, None);
+    let mirror = add(
+        &mut scene,
+        "mirror",
+        Surface::Mirror {
+            reflectance: Vec3::splat(0.8),
+        },
+        None,
+    );
     let glass = add(&mut scene, "glass", Surface::Glass { ior: 1.5 }, None);
     let red = add(
         &mut scene,

@@ -5,6 +5,9 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::gpu_struct;
 
+/// How many blends deep blend.glsl resolves a hit's material (ppm_vk_materials::blend::MAX_BLEND_DEPTH,
+/// checked equal where the engine lowers blends).
+pub use crate::reflected::constants::MAX_BLEND_DEPTH;
 /// `Material::distribution` of a rough surface (microfacet.glsl).
 pub use crate::reflected::constants::{MICROFACET_BECKMANN, MICROFACET_GGX};
 /// `Material::surface`: which BSDF (types.glsl).
@@ -12,9 +15,6 @@ pub use crate::reflected::constants::{
     SURFACE_BLEND, SURFACE_CONDUCTOR, SURFACE_DIFFUSE, SURFACE_GLASS, SURFACE_MIRROR, SURFACE_PLASTIC,
     SURFACE_ROUGH_CONDUCTOR, SURFACE_ROUGH_GLASS, SURFACE_THIN,
 };
-/// How many blends deep blend.glsl resolves a hit's material (ppm_vk_materials::blend::MAX_BLEND_DEPTH,
-/// checked equal where the engine lowers blends).
-pub use crate::reflected::constants::MAX_BLEND_DEPTH;
 /// `HitPoint::pixel` of an empty slot.
 pub const EMPTY_SLOT: u32 = u32::MAX;
 /// The probe pass's fixed-point scale for d^2 / r^2 (2^30).

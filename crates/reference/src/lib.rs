@@ -332,7 +332,9 @@ fn emission_sample(
             ng,
             nf,
             bump,
-        }) = eye_vertex(g, o, d, depth, &mut vng, &mut vns, &mut thr, &mut last, cut, &mut out, rng)
+        }) = eye_vertex(
+            g, o, d, depth, &mut vng, &mut vns, &mut thr, &mut last, cut, &mut out, rng,
+        )
         else {
             if out {
                 let e = thr * escaped(g, d);

@@ -778,7 +778,10 @@ impl Scene {
                 }
             }
             if path.contains(&i) {
-                return Err(invalid(p, "a blend that contains itself (its components lead back to it)"));
+                return Err(invalid(
+                    p,
+                    "a blend that contains itself (its components lead back to it)",
+                ));
             }
             if path.len() as u32 >= MAX_BLEND_DEPTH {
                 return Err(invalid(
@@ -862,7 +865,11 @@ impl Scene {
             check_mesh(m, &p, self.materials.len())?;
             if m.uvs.is_none() {
                 // A blend's components are read at its points too.
-                let textured = m.materials.iter().flat_map(|&k| self.blend_components(k)).map(|k| &self.materials[k as usize]);
+                let textured = m
+                    .materials
+                    .iter()
+                    .flat_map(|&k| self.blend_components(k))
+                    .map(|k| &self.materials[k as usize]);
                 if let Some(t) = textured.clone().find(|t| t.normal_map.is_some()) {
                     return Err(invalid(
                         p,

@@ -6,21 +6,11 @@ use std::rc::Rc;
 
 use anyhow::Result;
 
-use super::bsdf::{Bsdf, Perturbation};
+use super::bsdf::{Blend, Bsdf, Perturbation};
 use super::elem::Elem;
 use super::properties::Props;
-use super::texture::Tex;
 use super::Builder;
 use crate::{Surface, MAX_BLEND_DEPTH};
-
-/// A blend as read: its weight (a constant, or the luminance of `texture`) and its two components.
-#[derive(Debug)]
-pub(super) struct Blend {
-    pub(super) weight: f32,
-    pub(super) texture: Option<Rc<Tex>>,
-    pub(super) first: Bsdf,
-    pub(super) second: Bsdf,
-}
 
 impl Bsdf {
     /// The plain bsdfs it is made of: itself, or a blend's components' (in order).
@@ -98,10 +88,7 @@ impl Builder {
             Err(parts) => {
                 return Err(match parts.get(2) {
                     Some((_, third)) => third.err("a third bsdf: a blendbsdf blends two (as in Mitsuba)"),
-                    None => e.err(format!(
-                        "needs two nested bsdfs (as in Mitsuba), has {}",
-                        parts.len()
-                    )),
+                    None => e.err(format!("needs two nested bsdfs (as in Mitsuba), has {}", parts.len())),
                 })
             }
         };
@@ -130,9 +117,10 @@ impl Builder {
             _ => {
                 let w = props.float("weight")?.unwrap_or(0.5);
                 if !(0.0..=1.0).contains(&w) {
-                    return Err(props.get("weight").unwrap().err(format!(
-                        "must be in [0, 1], got {w} (Mitsuba would clip it)"
-                    )));
+                    return Err(props
+                        .get("weight")
+                        .unwrap()
+                        .err(format!("must be in [0, 1], got {w} (Mitsuba would clip it)")));
                 }
                 (w as f32, None)
             }
@@ -172,7 +160,7 @@ mod tests {
     use crate::{Material, NormalMap, Scene, Surface, TempDir, MAX_BLEND_DEPTH};
     use glam::Vec3;
 
-    fn material<'a>(s: &'a Scene, i: u32) -> &'a Material {
+    fn material(s: &Scene, i: u32) -> &Material {
         &s.materials[i as usize]
     }
 
@@ -213,7 +201,10 @@ mod tests {
             panic!("{:?}", sphere.surface)
         };
         assert_eq!(sphere.texture, Some(0), "the weight's texture");
-        assert_eq!((material(&s, first).name.as_str(), material(&s, second).name.as_str()), ("b.0", "b.1"));
+        assert_eq!(
+            (material(&s, first).name.as_str(), material(&s, second).name.as_str()),
+            ("b.0", "b.1")
+        );
         assert!(matches!(material(&s, second).surface, Surface::Plastic { .. }));
         assert!(
             !s.warnings.iter().any(|w| w.contains("one-sided")),
@@ -244,7 +235,10 @@ mod tests {
         };
         assert_eq!(quad.normal_map, None);
         let bump = Some(NormalMap::Bump { texture: 0, scale: 1.0 });
-        assert_eq!((material(&s, first).normal_map, material(&s, second).normal_map), (bump, bump));
+        assert_eq!(
+            (material(&s, first).normal_map, material(&s, second).normal_map),
+            (bump, bump)
+        );
         let sphere = material(&s, s.spheres[0].material);
         let Surface::Blend { first, second, .. } = sphere.surface else {
             panic!("{:?}", sphere.surface)
@@ -304,7 +298,10 @@ mod tests {
         for (body, want) in cases {
             let e = error(body);
             assert!(e.contains(want), "{body}: {e}");
-            assert!(e.contains("scene.xml:12:") || e.contains("scene.xml:13:"), "located: {e}");
+            assert!(
+                e.contains("scene.xml:12:") || e.contains("scene.xml:13:"),
+                "located: {e}"
+            );
         }
         // A checkerboard weight on a cube: a mesh with texture coordinates.
         let cube = load_body(
@@ -342,23 +339,46 @@ mod tests {
         };
         chain(MAX_BLEND_DEPTH).validate().unwrap();
         let e = format!("{:#}", chain(MAX_BLEND_DEPTH + 1).validate().unwrap_err());
-        assert!(e.contains("materials.blend4.blend") && e.contains("MAX_BLEND_DEPTH = 4"), "{e}");
+        assert!(
+            e.contains("materials.blend4.blend") && e.contains("MAX_BLEND_DEPTH = 4"),
+            "{e}"
+        );
         let with = |f: &dyn Fn(&mut Scene)| {
             let mut s = chain(2);
             f(&mut s);
             format!("{:#}", s.validate().unwrap_err())
         };
         let last = base.materials.len();
-        let e = with(&|s| s.materials[last + 1].surface = Surface::Blend { weight: 0.5, first: 99, second: 0 });
-        assert!(e.contains("materials.blend1.blend") && e.contains("index 99 out of range"), "{e}");
-        let e = with(&|s| s.materials[last + 1].surface = Surface::Blend {
-            weight: 0.5,
-            first: last as u32,
-            second: 0,
+        let e = with(&|s| {
+            s.materials[last + 1].surface = Surface::Blend {
+                weight: 0.5,
+                first: 99,
+                second: 0,
+            }
+        });
+        assert!(
+            e.contains("materials.blend1.blend") && e.contains("index 99 out of range"),
+            "{e}"
+        );
+        let e = with(&|s| {
+            s.materials[last + 1].surface = Surface::Blend {
+                weight: 0.5,
+                first: last as u32,
+                second: 0,
+            }
         });
         assert!(e.contains("contains itself"), "{e}");
-        let e = with(&|s| s.materials[last].surface = Surface::Blend { weight: -0.1, first: 0, second: 0 });
-        assert!(e.contains("materials.blend0.blend.weight") && e.contains("[0, 1]"), "{e}");
+        let e = with(&|s| {
+            s.materials[last].surface = Surface::Blend {
+                weight: -0.1,
+                first: 0,
+                second: 0,
+            }
+        });
+        assert!(
+            e.contains("materials.blend0.blend.weight") && e.contains("[0, 1]"),
+            "{e}"
+        );
         let e = with(&|s| s.materials[last].normal_map = Some(NormalMap::Normal { texture: 0 }));
         assert!(e.contains("normal_map"), "{e}");
         let e = with(&|s| s.materials[last].emission = Vec3::ONE);

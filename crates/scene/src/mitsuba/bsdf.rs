@@ -37,7 +37,16 @@ pub(super) struct Bsdf {
     pub(super) normal_map: Option<Perturbation>,
     /// A `blendbsdf`: its weight and components (blend.rs); `surface` is then a `Surface::Blend` whose
     /// indices [`Builder::material`] sets, `texture` and `normal_map` are `None`.
-    pub(super) blend: Option<Rc<super::blend::Blend>>,
+    pub(super) blend: Option<Rc<Blend>>,
+}
+
+/// A `blendbsdf` as read (blend.rs): its weight (a constant, or the luminance of `texture`) and its two components.
+#[derive(Debug)]
+pub(super) struct Blend {
+    pub(super) weight: f32,
+    pub(super) texture: Option<Rc<Tex>>,
+    pub(super) first: Bsdf,
+    pub(super) second: Bsdf,
 }
 
 /// Indices of the refraction of Mitsuba's named materials (`int_ior="bk7"`), from its documentation.
