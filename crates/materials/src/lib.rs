@@ -6,6 +6,7 @@
 //! scene or the kernels' record layout.
 
 pub mod conductor;
+pub mod mask;
 pub mod math;
 pub mod microfacet;
 pub mod normal_map;

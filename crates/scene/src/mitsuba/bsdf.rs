@@ -9,6 +9,7 @@ use anyhow::Result;
 use glam::Vec3;
 
 use super::elem::Elem;
+use super::mask::Opacity;
 use super::properties::{color, number, Props};
 use super::texture::{same_texture, Tex};
 use super::Builder;
@@ -35,6 +36,8 @@ pub(super) struct Bsdf {
     pub(super) texture: Option<Rc<Tex>>,
     /// A `bumpmap` or `normalmap` around it.
     pub(super) normal_map: Option<Perturbation>,
+    /// A `mask` around it (or a `null` bsdf): mask.rs.
+    pub(super) opacity: Option<Opacity>,
 }
 
 /// Indices of the refraction of Mitsuba's named materials (`int_ior="bk7"`), from its documentation.
@@ -72,7 +75,7 @@ impl Builder {
         let id = e.attr("id").map(str::to_string);
         let nested: Vec<&Elem> = objects.iter().copied().filter(|c| c.tag == "bsdf").collect();
         // A bump or normal map also holds textures (and refs to them or to its bsdf): modifiers.rs.
-        let modifier = matches!(e.kind(), "bumpmap" | "normalmap");
+        let modifier = matches!(e.kind(), "bumpmap" | "normalmap" | "mask");
         if let Some(o) = objects.iter().find(|c| c.tag != "bsdf" && !modifier) {
             return Err(o.err(format!("not expected inside {}", e.what())));
         }
@@ -93,10 +96,12 @@ impl Builder {
             "roughplastic" => self.plastic(e, &props, true)?,
             "bumpmap" => self.bumpmap(e, &props, &objects)?,
             "normalmap" => self.normalmap(e, &props, &objects)?,
+            "mask" => self.mask(e, &props, &objects)?,
+            "null" => super::mask::null(),
             _ => {
                 return Err(e.err(
                     "unsupported bsdf (read: diffuse, twosided, conductor, roughconductor, \
-                     dielectric, roughdielectric, thindielectric, plastic, roughplastic, bumpmap, normalmap)",
+                     dielectric, roughdielectric, thindielectric, plastic, roughplastic, bumpmap, normalmap, mask, null)",
                 ))
             }
         };
@@ -113,6 +118,7 @@ impl Builder {
             id: None,
             texture,
             normal_map: None,
+            opacity: None,
         })
     }
 
@@ -129,6 +135,9 @@ impl Builder {
                     }
                     _ => false,
                 };
+                if x.opacity.is_some() || y.opacity.is_some() {
+                    return Err(b.err("a mask or null bsdf in a twosided of two bsdfs is not supported"));
+                }
                 if x.surface != y.surface || !same_texture(&x.texture, &y.texture) || !same_map {
                     return Err(b.err(
                         "a different bsdf on the back side is not supported (ppm-vk \
@@ -205,6 +214,7 @@ impl Builder {
             id: None,
             texture,
             normal_map: None,
+            opacity: None,
         })
     }
 
@@ -257,13 +267,30 @@ impl Builder {
                 None => crate::NormalMap::Normal { texture },
             }
         });
+        let opacity = bsdf.opacity.as_ref().map(|o| {
+            let t = match o {
+                Opacity::Texture(t) => std::borrow::Cow::Borrowed(&t.texture),
+                // A constant is a texture of one value (a checkerboard of two equal colours: no pixels).
+                Opacity::Value(v) => std::borrow::Cow::Owned(texture::Texture {
+                    name: format!("opacity {v}"),
+                    pattern: Pattern::Checkerboard {
+                        color0: Vec3::splat(*v),
+                        color1: Vec3::splat(*v),
+                    },
+                    filter: texture::Filter::Bilinear,
+                    wrap: texture::Wrap::Repeat,
+                    to_uv: texture::IDENTITY_UV,
+                }),
+            };
+            texture::intern(&mut self.scene.textures, t)
+        });
         let wanted = Material {
             name: name.to_string(),
             surface: bsdf.surface,
             emission,
             texture,
             normal_map,
-            opacity: None,
+            opacity,
             specular_texture: None,
             alpha_texture: None,
             emission_texture: None,
@@ -309,6 +336,7 @@ fn one_sided(surface: Surface) -> Bsdf {
         id: None,
         texture: None,
         normal_map: None,
+        opacity: None,
     }
 }
 
@@ -365,6 +393,7 @@ fn dielectric(e: &Elem, props: &Props) -> Result<Bsdf> {
         id: None,
         texture: None,
         normal_map: None,
+        opacity: None,
     })
 }
 
@@ -380,6 +409,7 @@ fn rough_dielectric(e: &Elem, props: &Props) -> Result<Bsdf> {
         id: None,
         texture: None,
         normal_map: None,
+        opacity: None,
     })
 }
 
@@ -421,6 +451,7 @@ fn thin_dielectric(e: &Elem, props: &Props) -> Result<Bsdf> {
         id: None,
         texture: None,
         normal_map: None,
+        opacity: None,
     })
 }
 

@@ -98,6 +98,7 @@ impl Builder {
                 id: None,
                 texture: None,
                 normal_map: None,
+                opacity: None,
             },
             e,
         ));
@@ -114,6 +115,12 @@ impl Builder {
                 }
             )));
         }
+        if emission.max_element() > 0.0 && bsdf.opacity.is_some() {
+            return Err(emitter_at.err(
+                "an area emitter on a mask or null bsdf is not supported (ppm-vk's lights emit from all of \
+                 their surface)",
+            ));
+        }
         let name = match (&bsdf.id, emission.max_element() > 0.0) {
             (Some(id), false) => id.clone(),
             _ => shape_name,
@@ -121,7 +128,9 @@ impl Builder {
         let to_world = props.transform("to_world")?;
         let flip = props.boolean("flip_normals")?;
         // A bump or normal map reads texture coordinates too (modifiers.rs).
-        let textured = bsdf.texture.is_some() || bsdf.normal_map.is_some();
+        let textured = bsdf.texture.is_some()
+            || bsdf.normal_map.is_some()
+            || matches!(bsdf.opacity, Some(super::mask::Opacity::Texture(_)));
         // An anisotropic lobe lies along Mitsuba's dp/du: a rectangle's x axis (edge_u below), a sphere's
         // longitude, a mesh's texture coordinates (or the frame of its face normal without them).
         let anisotropic = bsdf.surface.rough().is_some_and(|r| r.is_anisotropic());
@@ -196,7 +205,7 @@ impl Builder {
     }
 
     /// The bsdf a `<ref id="..">` names (a top-level one defined before it).
-    fn bsdf_ref(&self, o: &Elem) -> Result<Bsdf> {
+    pub(super) fn bsdf_ref(&self, o: &Elem) -> Result<Bsdf> {
         let id = o.required("id")?;
         self.bsdfs.get(id).cloned().ok_or_else(|| {
             let mut known: Vec<&str> = self.bsdfs.keys().map(String::as_str).collect();
