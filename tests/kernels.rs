@@ -528,6 +528,17 @@ fn photon_records_match_reference_within(
     flux_rel: f64,
     min_matched: f64,
 ) {
+    photon_records_match_reference_histograms(scene, settings, flux_rel, min_matched, 0.9)
+}
+
+/// `min_identical`: the fraction of the snapped histogram's buckets whose counts must be identical.
+fn photon_records_match_reference_histograms(
+    scene: ppm_vk_engine::Scene,
+    settings: Settings,
+    flux_rel: f64,
+    min_matched: f64,
+    min_identical: f64,
+) {
     let ctx = ctx();
     let mut r = Renderer::new(&ctx, &scene, settings).unwrap();
     let gpu = r.trace_and_gather(0, PHOTONS).unwrap();
@@ -609,7 +620,7 @@ fn photon_records_match_reference_within(
     // Snapped: a diverging path moves its few records to other buckets; ~0.1% of paths diverge, so
     // 1% of the records (or flux) displaced is ~5x the measured value, and 90% of buckets identical.
     assert!(
-        snapped.identical * 10 >= snapped.buckets * 9,
+        snapped.identical as f64 >= snapped.buckets as f64 * min_identical,
         "snapped bucket histograms: {snapped:?}"
     );
     assert!(
@@ -1630,6 +1641,162 @@ fn ray_pass_matches_reference_with_textures_unspecialized() {
 #[test]
 fn photon_records_match_reference_with_textures() {
     photon_records_match_reference_on(cornell_textured(), true, 1e-3);
+}
+
+/// cornell-spheres with Mitsuba's masks, built in code: a pane standing in the room masked by a bitmap
+/// (opacities from 0 to 1 across it), the diffuse sphere at a constant opacity of one half (rays that pass
+/// its near side meet its far side), a card of two triangles masked by a bitmap of its own (through the
+/// BVH, or written out), and a quad of opacity 0 (a null bsdf) before the back wall: every primitive's
+/// any-hit, in eye rays, shadow rays and photons.
+fn cornell_masked() -> ppm_vk_engine::Scene {
+    use glam::Vec2;
+    use ppm_vk_engine::scene::texture::{Filter, Pattern, Texture, Wrap, IDENTITY_UV};
+    use ppm_vk_engine::scene::{Material, Mesh, Quad};
+    let mut scene = cornell(RES, RES);
+    let bitmap = |w: u32, h: u32, filter| Texture {
+        name: "opacity in code".into(),
+        pattern: Pattern::Bitmap {
+            width: w,
+            height: h,
+            pixels: (0..w * h)
+                .map(|i| {
+                    let (x, y) = ((i % w) as f32 / (w - 1) as f32, (i / w) as f32 / (h - 1) as f32);
+                    Vec3::new(x, 0.5 * (x + y), y)
+                })
+                .collect(),
+        },
+        filter,
+        wrap: Wrap::Repeat,
+        to_uv: IDENTITY_UV,
+    };
+    let constant = |v: f32| Texture {
+        name: format!("opacity {v}"),
+        pattern: Pattern::Checkerboard {
+            color0: Vec3::splat(v),
+            color1: Vec3::splat(v),
+        },
+        filter: Filter::Bilinear,
+        wrap: Wrap::Repeat,
+        to_uv: IDENTITY_UV,
+    };
+    scene.textures = vec![
+        bitmap(8, 8, Filter::Bilinear),
+        constant(0.5),
+        bitmap(5, 3, Filter::Nearest),
+        constant(0.0),
+    ];
+
+    let masked = |scene: &mut ppm_vk_engine::Scene, name: &str, surface: Surface, opacity: u32| {
+        scene.materials.push(Material {
+            name: name.into(),
+            surface,
+            emission: Vec3::ZERO,
+            texture: None,
+            normal_map: None,
+            opacity: Some(opacity),
+            specular_texture: None,
+            alpha_texture: None,
+            emission_texture: None,
+        });
+        (scene.materials.len() - 1) as u32
+    };
+    let pane = masked(
+        &mut scene,
+        "pane",
+        Surface::Diffuse {
+            albedo: Vec3::new(0.8, 0.3, 0.2),
+        },
+        0,
+    );
+    let ball = masked(
+        &mut scene,
+        "ball",
+        Surface::Diffuse {
+            albedo: Vec3::new(0.2, 0.6, 0.8),
+        },
+        1,
+    );
+    let card = masked(
+        &mut scene,
+        "card",
+        Surface::Mirror {
+            reflectance: Vec3::splat(0.9),
+        },
+        2,
+    );
+    let null = masked(&mut scene, "null", Surface::Diffuse { albedo: Vec3::ZERO }, 3);
+    scene.quads.push(Quad {
+        origin: Vec3::new(0.1, 0.1, 0.3),
+        edge_u: Vec3::new(0.6, 0.0, -0.3),
+        edge_v: Vec3::new(0.0, 0.8, 0.0),
+        material: pane,
+    });
+    scene.quads.push(Quad {
+        origin: Vec3::new(-0.5, 0.2, -0.9),
+        edge_u: Vec3::new(1.0, 0.0, 0.0),
+        edge_v: Vec3::new(0.0, 1.2, 0.0),
+        material: null,
+    });
+    let diffuse = scene
+        .spheres
+        .iter()
+        .position(|s| matches!(scene.materials[s.material as usize].surface, Surface::Diffuse { .. }))
+        .unwrap();
+    scene.spheres[diffuse].material = ball;
+    let mut mesh = Mesh::with_material(
+        "card",
+        vec![
+            Vec3::new(-0.9, 0.0, 0.6),
+            Vec3::new(-0.4, 0.0, 0.9),
+            Vec3::new(-0.4, 0.5, 0.9),
+            Vec3::new(-0.9, 0.5, 0.6),
+        ],
+        vec![[0, 1, 2], [0, 2, 3]],
+        card,
+    );
+    mesh.uvs = Some(vec![
+        Vec2::new(0.0, 1.0),
+        Vec2::new(1.0, 1.0),
+        Vec2::new(1.0, 0.0),
+        Vec2::new(0.0, 0.0),
+    ]);
+    scene.meshes.push(mesh);
+    scene.validate().unwrap_or_else(|e| panic!("{e:#}"));
+    scene
+}
+
+#[test]
+fn ray_pass_matches_reference_with_masks() {
+    ray_pass_matches_reference_on(cornell_masked(), true, DirectLight::Sample);
+}
+
+/// The kernels as built: the card's two triangles through the BVH's filtered traversal.
+#[test]
+fn ray_pass_matches_reference_with_masks_unspecialized() {
+    ray_pass_matches_reference_on(cornell_masked(), false, DirectLight::Sample);
+}
+
+/// Photons that pass the half-transparent ball's near side bounce inside it, long paths whose f32 rounding
+/// (the sphere's roots, lavapipe's fused products) adds up: traced one by one, 5 of 4000 photons differ
+/// from the twin's in a record's position by more than 1 mm, and each moves ~10 records; the snapped
+/// histograms then have 88-89% of their buckets identical (0.2% of the records displaced, under the 1%
+/// bound), the rest of the comparison as for every scene.
+fn photon_records_match_reference_masked(specialize: bool) {
+    let settings = Settings {
+        specialize,
+        ..settings()
+    };
+    photon_records_match_reference_histograms(cornell_masked(), settings, 1e-3, 0.995, 0.85)
+}
+
+#[test]
+fn photon_records_match_reference_with_masks() {
+    photon_records_match_reference_masked(true);
+}
+
+#[test]
+fn photon_records_match_reference_with_masks_unspecialized() {
+    photon_records_match_reference_masked(false);
 }
 
 /// An open scene with every kind of light beyond quads and triangles: a glowing sphere, a point light, a

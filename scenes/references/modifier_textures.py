@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the textures of scenes/bump-plane.xml (issue 37): linear RGB EXR images, exact in float32.
+"""Writes the textures of scenes/bump-plane.xml and scenes/mask-pane.xml (issue 37): linear RGB EXR images, exact in float32.
 
     DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so python3 scenes/references/modifier_textures.py
 
@@ -31,3 +31,19 @@ n = np.stack([0.4 * np.sin(2 * np.pi * 4 * X), 0.4 * np.cos(2 * np.pi * 3 * Y), 
 n /= np.linalg.norm(n, axis=2, keepdims=True)
 mi.Bitmap(((n + 1) / 2).astype(np.float32)).write(os.path.join(OUT, "bump-normal.exr"))
 print("wrote", os.path.join(OUT, "bump-height.exr"), "and bump-normal.exr")
+
+# scenes/textures/mask-opacity.png (32 x 32, 8-bit grey, sRGB-encoded as an 8-bit image is read by both
+# renderers): the opacity of scenes/mask-pane.xml's pane, round holes of opacity 0 in a sheet whose
+# opacity runs from 0.25 to 1 across it (its luminance after sRGB decoding is what Mitsuba's eval_1 gives).
+M = 32
+xm = (np.arange(M) + 0.5) / M
+XM, YM = np.meshgrid(xm, xm)
+sheet = 0.25 + 0.75 * XM
+holes = ((XM * 4) % 1 - 0.5) ** 2 + ((YM * 4) % 1 - 0.5) ** 2 < 0.3**2
+linear = np.where(holes, 0.0, sheet)
+encoded = np.where(linear <= 0.0031308, 12.92 * linear, 1.055 * linear ** (1 / 2.4) - 0.055)
+grey = np.round(encoded * 255).astype(np.uint8)
+mi.Bitmap(np.repeat(grey[:, :, None], 3, axis=2), pixel_format=mi.Bitmap.PixelFormat.RGB).write(
+    os.path.join(OUT, "mask-opacity.png")
+)
+print("wrote", os.path.join(OUT, "mask-opacity.png"))

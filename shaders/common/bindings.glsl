@@ -13,7 +13,7 @@
 #include "params.glsl"
 layout(std430, binding = 1) readonly buffer Spheres { Sphere spheres[]; };
 layout(std430, binding = 2) readonly buffer Quads { Quad quads[]; };
-// The materials as 16-byte texels, five each (color, surface | emission, ior | ...): material() reads them. Texel fetches
+// The materials as 16-byte texels, MATERIAL_TEXELS each (color, surface | emission, ior | ...): material() reads them. Texel fetches
 // are vector gathers on lavapipe, where a storage-buffer load is a loop over the lanes (bvh.glsl).
 layout(binding = 3) uniform usamplerBuffer material_texels;
 // The BVH's nodes (BvhNode) and triangles (Triangle) as 16-byte texels: bvh_node() and bvh_triangle()
@@ -30,13 +30,15 @@ layout(binding = 7) uniform usamplerBuffer triangle_texels;
 // A kernel compiled for one scene knows whether any material has a texture (without one, the texture
 // index is not even read), whether any mesh is smooth-shaded (shading.glsl) and whether any rough
 // surface is anisotropic (geometry.glsl's surface_tangent), whether any has a bump or normal map
-// (normal_map.glsl), and which kinds of light it has beyond quads
+// (normal_map.glsl), whether any is masked (materials/mask.glsl: the intersection loops test opacity),
+// and which kinds of light it has beyond quads
 // and triangles (lights.glsl): glowing spheres, delta lights (point, spot, directional), an environment.
 #ifdef SCENE_CONSTANTS
 #include "scene_constants.glsl"
 #define HAS_TEXTURES SCENE_TEXTURES
 #define HAS_VERTEX_NORMALS SCENE_SHADING_NORMALS
 #define HAS_NORMAL_MAPS SCENE_NORMAL_MAPS
+#define HAS_MASKS SCENE_MASKS
 // A bump or normal map's normal goes through smooth shading's path (shading.glsl).
 #define HAS_SHADING_NORMALS (SCENE_SHADING_NORMALS || SCENE_NORMAL_MAPS)
 #define HAS_ANISOTROPY SCENE_ANISOTROPIC
@@ -47,6 +49,7 @@ layout(binding = 7) uniform usamplerBuffer triangle_texels;
 #define HAS_TEXTURES true
 #define HAS_VERTEX_NORMALS true
 #define HAS_NORMAL_MAPS true
+#define HAS_MASKS true
 #define HAS_SHADING_NORMALS true
 #define HAS_ANISOTROPY true
 #define HAS_SPHERE_LIGHTS true

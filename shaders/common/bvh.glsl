@@ -222,6 +222,13 @@ void bvh_order(inout vec4 key, inout uvec4 ref, uint i, uint j) {
 // all loops of an invocation share. A kernel with no other loops can pass BVH_LOOP_LIMIT - 1; one that
 // calls this in a loop passes what its subgroup has left, e.g. `left -= bvh_subgroup_cost(hit)` after each
 // call made by the whole subgroup together.
+//
+// An including file that defines BVH_FILTER defines bvh_filter(ray, triangle, material, bary) too: a hit
+// it answers false for is passed as if the triangle were not there (geometry.glsl: Mitsuba's mask). The
+// answer must depend on nothing but its arguments, so the traversal's order does not change the result.
+#ifdef BVH_FILTER
+bool bvh_filter(BvhRay r, uint tri, uint material, vec2 bary);
+#endif
 bool bvh_intersect(vec3 o, vec3 d, float tmin, float tmax, uint budget, bool any_hit, out BvhHit hit) {
     BvhRay r = bvh_ray(o, d);
     hit.t = tmax;
@@ -277,7 +284,11 @@ bool bvh_intersect(vec3 o, vec3 d, float tmin, float tmax, uint budget, bool any
             Triangle tr = bvh_triangle(tri);
             float t;
             vec2 bary;
-            if (bvh_triangle_test(r, tr.v0, tr.v1, tr.v2, tmin, hit.t, t, bary)) {
+            if (bvh_triangle_test(r, tr.v0, tr.v1, tr.v2, tmin, hit.t, t, bary)
+#ifdef BVH_FILTER
+                && bvh_filter(r, tri, tr.material, bary)
+#endif
+            ) {
                 hit.t = t;
                 hit.triangle = tri;
                 hit.bary = bary;

@@ -2,6 +2,8 @@
 // through the accessors of bindings.glsl.
 #ifndef GEOMETRY_GLSL
 #define GEOMETRY_GLSL
+// The traversal asks bvh_filter (below) about each triangle hit: a masked surface may let the ray pass.
+#define BVH_FILTER
 #include "bvh.glsl"
 #include "sampling.glsl"
 
@@ -73,12 +75,45 @@ const uint HIT_QUAD = 0u;     // hit.normal set in the loop
 const uint HIT_SPHERE = 1u;
 const uint HIT_TRIANGLE = 2u; // hit.normal from the triangle's vertices, after the loops
 
+// materials/mask.glsl, included at the end of this file (it reads texture.glsl, which reads Hit).
+// `prim` keys the hash: a triangle's index in the BVH's leaf order as it is, a quad's and a sphere's side
+// (0 near, 1 far) above the triangles' (ppm_vk_materials::mask::PRIM_*).
+const uint MASK_PRIM_QUAD = 0x80000000u;
+const uint MASK_PRIM_SPHERE = 0x40000000u;
+bool mask_keeps(uint m, uint key, uint prim, Hit h);
+
+// The mask key (materials/mask.glsl) of the ray trace_scene is tracing, for bvh_filter.
+uint trace_key = 0u;
+
+// bvh.glsl's any-hit filter: whether the ray stops at triangle `tri` (leaf order) of material m at
+// barycentric weights `bary`, or passes a masked surface there.
+bool bvh_filter(BvhRay r, uint tri, uint m, vec2 bary) {
+    if (!HAS_MASKS) return true;
+    Hit h;
+    h.kind = HIT_TRIANGLE;
+    h.prim = tri;
+    h.local = bary;
+    return mask_keeps(m, trace_key, tri, h);
+}
+
+// Whether the ray stops at distance t on sphere s (index i), its near root or, with `far`, its far one.
+bool sphere_stops(Sphere s, uint i, bool far, vec3 o, vec3 d, float t) {
+    if (!HAS_MASKS) return true;
+    Hit h;
+    h.kind = HIT_SPHERE;
+    h.prim = i;
+    h.normal = (o + t * d - s.center) * (1.0 / s.radius);
+    return mask_keeps(s.material, trace_key, MASK_PRIM_SPHERE | (2u * i + uint(far)), h);
+}
+
 // Nearest hit with t in (tmin, tmax); false if none. What the hit needs is taken inside the loops, where
 // the primitive's index is the loop's own. The tests run in a fixed order (spheres, quads, the triangles
 // written out, the BVH), each only accepting a hit nearer than the best so far: the CPU reference
 // (reference::trace::intersect_scene) keeps the same order, so equal distances resolve the same way.
-// With `any_hit` (shadow rays, `occluded`) the BVH's traversal ends at the first hit it finds.
-bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit hit) {
+// With `any_hit` (shadow rays, `occluded`) the BVH's traversal ends at the first hit it finds. `key` is
+// the ray's mask key (materials/mask.glsl's mask_key: a masked surface lets a ray pass by it).
+bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, uint key, out Hit hit) {
+    trace_key = key;
     hit.t = tmax;
     bool found = false;
     uint kind = HIT_QUAD;
@@ -104,8 +139,11 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit h
         if (q == 0.0) continue;
         float t0 = (dot(oc, oc) - r2) / q;
         float t = min(t0, q);
-        if (t <= tmin) t = max(t0, q);
-        if (t > tmin && t < hit.t) {
+        bool far = t <= tmin;
+        // A masked sphere the ray passes at its near side may stop it at its far side.
+        if (!far && t < hit.t && !sphere_stops(s, i, false, o, d, t)) far = true;
+        if (far) t = max(t0, q);
+        if (t > tmin && t < hit.t && (!far || sphere_stops(s, i, true, o, d, t))) {
             hit.t = t; found = true; kind = HIT_SPHERE;
             center = s.center; inv_radius = 1.0 / s.radius; hit.material = s.material;
         }
@@ -120,6 +158,12 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit h
         float a = dot(q.w, cross(rel, q.edge_v));
         float b = dot(q.w, cross(q.edge_u, rel));
         if (a < 0.0 || a > 1.0 || b < 0.0 || b > 1.0) continue;
+        if (HAS_MASKS) {
+            Hit h;
+            h.kind = HIT_QUAD;
+            h.local = vec2(a, b);
+            if (!mask_keeps(q.material, trace_key, MASK_PRIM_QUAD | i, h)) continue;
+        }
         hit.t = t; found = true; kind = HIT_QUAD;
         hit.normal = q.normal; hit.material = q.material;
         hit.local = vec2(a, b);
@@ -133,7 +177,7 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out Hit h
             Triangle tr = INLINE_TRIANGLE(i);
             float t;
             vec2 bary;
-            if (bvh_triangle_test(br, tr.v0, tr.v1, tr.v2, tmin, hit.t, t, bary)) {
+            if (bvh_triangle_test(br, tr.v0, tr.v1, tr.v2, tmin, hit.t, t, bary) && bvh_filter(br, i, tr.material, bary)) {
                 hit.t = t; found = true; kind = HIT_TRIANGLE;
                 tri = tr; hit.material = tr.material;
                 hit.prim = i; hit.local = bary;
@@ -183,14 +227,16 @@ vec3 surface_tangent(Hit h) {
     return h.dpdu;
 }
 
-bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, out Hit hit) {
-    return trace_scene(o, d, tmin, tmax, false, hit);
+bool intersect_scene(vec3 o, vec3 d, float tmin, float tmax, uint key, out Hit hit) {
+    return trace_scene(o, d, tmin, tmax, false, key, hit);
 }
 
 // Whether anything lies on o + t d for t in (0, tmax): a shadow ray. Like intersect_scene it may run out of
 // traversal steps (bvh_cut, bvh_spent): then it answers true and the caller must not use the answer.
-bool occluded(vec3 o, vec3 d, float tmax) {
+bool occluded(vec3 o, vec3 d, float tmax, uint key) {
     Hit h;
-    return trace_scene(o, d, 0.0, tmax, true, h) || bvh_cut || bvh_spent;
+    return trace_scene(o, d, 0.0, tmax, true, key, h) || bvh_cut || bvh_spent;
 }
+#include "texture.glsl"
+#include "materials/mask.glsl"
 #endif

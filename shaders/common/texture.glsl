@@ -12,6 +12,13 @@
 
 const uint TEXTURE_HEADER = 5u;
 
+// Mitsuba's luminance of a linear sRGB colour, 0.212671 r + 0.715160 g + 0.072169 b (its eval_1 of an RGB
+// texture: a mask's opacity), written so that a grey is its own value exactly (the weights sum to 1).
+float luminance(vec3 c) {
+    precise float y = c.g + 0.212671 * (c.r - c.g) + 0.072169 * (c.b - c.g);
+    return y;
+}
+
 // The texture coordinates of hit h, as Mitsuba gives them: a quad's planar coordinates (a rectangle's
 // local x, y from [-1, 1] to [0, 1]), a sphere's longitude and colatitude about the world's axes, a
 // triangle's interpolated from its vertices'.

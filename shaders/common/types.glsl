@@ -171,6 +171,8 @@ struct RenderParams {
                             // skipping their first diffuse record (photon.comp); 0: all by photons
     float glossy_alpha;     // rough conductors of at least this roughness hold hit points and photon
                             // records (rough_conductor.glsl, "glossy hit points"); above every alpha: none
+    uint masks;             // 1: some mask's opacity is not 0 or 1 throughout: each traced ray draws its key
+                            // (materials/mask.glsl)
 };
 
 // A diffuse (or glossy) point seen from a pixel (PPM pass 1). Fixed for the whole render.

@@ -207,13 +207,16 @@ void main() {
         atomicAdd(cut.capped, 1u); // per lane: a subgroup-aggregated count undercounts in this loop
 #endif
         Hit h;
-        if (!intersect_scene(o, d, 0.0, 1e30, h)) {
+        // The ray's mask key; a photon suspended here keeps the stream from before it, so that the resume
+        // round draws the same key for the same ray.
+        Rng before = rng;
+        if (!intersect_scene(o, d, 0.0, 1e30, mask_key(rng), h)) {
             // Out of traversal steps: this thread's budget is gone, so it stops. In the first round of a
             // BVH scene the photon waits for the resume round, from this intersection; in the resume round
             // it is an error (bvh_cut) or a long path's end (bvh_spent).
             if ((bvh_cut || bvh_spent) && pc.resume == 0u) {
                 uint at = atomicAdd(work.suspended, 1u);
-                suspended[at] = PhotonState(rng.state, rng.inc, o, depth, d, 0u, flux, 0u);
+                suspended[at] = PhotonState(before.state, before.inc, o, depth, d, 0u, flux, 0u);
                 break;
             }
             if (bvh_cut) { atomicAdd(cut.traversal_cut, 1u); break; }

@@ -112,10 +112,11 @@ vec3 camera_ray(uint px, uint py, vec2 jitter) {
 // Whether the shadow ray o + t w, t < d, is blocked. One that runs out of traversal steps answers yes: it is
 // counted here, as an eye path is, and the caller must then check bvh_spent and bvh_cut and drop the sample
 // (geometry.glsl: occluded).
-bool shadowed(vec3 o, vec3 w, float d) {
+// `key`: the shadow ray's mask key (materials/mask.glsl).
+bool shadowed(vec3 o, vec3 w, float d, uint key) {
     bool was_cut = bvh_cut;
     bool was_spent = bvh_spent;
-    if (!occluded(o, w, d)) return false;
+    if (!occluded(o, w, d, key)) return false;
     if (bvh_cut && !was_cut) atomicAdd(cut.traversal_cut, 1u);
     if (bvh_spent && !was_spent) atomicAdd(cut.eye_paths, 1u);
     return true;
@@ -167,7 +168,7 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint co
         s = cos_p * cos_y / (PI * d2);
     }
     if (HAS_SHADING_NORMALS && !shading_valid(w, ng, nf)) return vec3(0.0);
-    if (shadowed(o, w, d)) return vec3(0.0);
+    if (shadowed(o, w, d, mask_key(rng))) return vec3(0.0);
     vec3 fr = albedo / PI;
     if (HAS_ROUGH_CONDUCTORS && rough != 0u) {
         vec3 f;
@@ -197,7 +198,7 @@ vec3 environment_by_bsdf(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, 
     if (!(cos_p > 0.0)) return vec3(0.0);
     if (HAS_SHADING_NORMALS && !shading_valid(w, ng, nf)) return vec3(0.0);
     vec3 o = offset_ray(p, nf);
-    if (shadowed(o, w, infinite_reach(e, o))) return vec3(0.0);
+    if (shadowed(o, w, infinite_reach(e, o), mask_key(rng))) return vec3(0.0);
     float pb = cos_p / PI;
     float pl = environment_pdf(e, w) * e.cdf;
     // f_r L cos_p / pb = albedo L.
@@ -240,7 +241,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
         if (HAS_NORMAL_MAPS) { thr *= bump_shadowing(d); bump_alpha2 = 0.0; }
         if (depth >= params.max_eye_depth) { atomicAdd(cut.eye_paths, 1u); break; }
         Hit h;
-        if (!intersect_scene(o, d, 0.0, 1e30, h)) {
+        if (!intersect_scene(o, d, 0.0, 1e30, mask_key(rng), h)) {
             if (bvh_cut) atomicAdd(cut.traversal_cut, 1u);
             if (bvh_spent) atomicAdd(cut.eye_paths, 1u);
             if (HAS_ENVIRONMENT && !bvh_cut && !bvh_spent) {
@@ -358,7 +359,7 @@ void main() {
                 if (HAS_NORMAL_MAPS) { r.thr *= bump_shadowing(r.d); bump_alpha2 = 0.0; }
                 if (r.depth >= params.max_eye_depth) { atomicAdd(cut.eye_paths, 1u); break; }
                 Hit h;
-                if (!intersect_scene(r.o, r.d, 0.0, 1e30, h)) {
+                if (!intersect_scene(r.o, r.d, 0.0, 1e30, mask_key(rng), h)) {
                     if (bvh_cut) atomicAdd(cut.traversal_cut, 1u);
                     if (bvh_spent) { atomicAdd(cut.eye_paths, 1u); sp = 0u; } // no budget for the rest
                     if (HAS_ENVIRONMENT) hit_emitted += r.thr * escaped(r.d); // term (a) (dropped if cut)

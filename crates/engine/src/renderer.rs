@@ -1457,6 +1457,7 @@ fn tracing_pipeline(
             shading_normals: gpu.smooth_shading(),
             anisotropic: gpu.materials.iter().any(|m| m.alpha_u != m.alpha_v),
             normal_maps: gpu.materials.iter().any(|m| m.normal_map != 0),
+            masks: gpu.materials.iter().any(|m| m.opacity != 0),
             light_kinds: gpu.light_kinds,
         });
         let defines = [&[("SCENE_CONSTANTS", "1")][..], defines].concat();

@@ -232,6 +232,9 @@ pub struct RenderParams {
     /// Rough conductors of at least this roughness hold hit points and photon records, their BRDF
     /// evaluated per photon by the gather ("glossy hit points", rough_conductor.glsl); `f32::MAX`: none.
     pub glossy_alpha: f32,
+    /// 1: some mask's opacity is not 0 or 1 throughout, and every ray the kernels trace draws a key from
+    /// its path's random stream for the masks' choices (materials/mask.glsl); 0: no ray draws one.
+    pub masks: u32,
 }
 gpu_struct!(RenderParams {
     eye,
@@ -261,7 +264,8 @@ gpu_struct!(RenderParams {
     eye_bvh_budget,
     lookup_limit,
     direct_light,
-    glossy_alpha
+    glossy_alpha,
+    masks
 });
 
 #[repr(C)]

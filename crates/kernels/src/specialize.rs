@@ -47,6 +47,9 @@ pub struct SceneConstants<'a> {
     /// Whether any material has a bump or normal map (normal_map.glsl): without one no map is read and
     /// the hits take no dp/dv.
     pub normal_maps: bool,
+    /// Whether any material is masked (materials/mask.glsl): without one the intersection loops and the
+    /// traversal take every hit.
+    pub masks: bool,
     /// The kinds of light in `lights`, as bits `1 << LIGHT_*`: lights.glsl leaves out the code of glowing
     /// spheres, delta lights (point, spot, directional) and environments where there are none.
     pub light_kinds: u32,
@@ -103,6 +106,7 @@ pub fn scene_constants(c: &SceneConstants) -> String {
     s += &format!("const bool SCENE_SHADING_NORMALS = {};\n", c.shading_normals);
     s += &format!("const bool SCENE_ANISOTROPIC = {};\n", c.anisotropic);
     s += &format!("const bool SCENE_NORMAL_MAPS = {};\n", c.normal_maps);
+    s += &format!("const bool SCENE_MASKS = {};\n", c.masks);
     let kind = |k: u32| c.light_kinds & (1 << k) != 0;
     s += &format!(
         "const bool SCENE_SPHERE_LIGHTS = {};\nconst bool SCENE_DELTA_LIGHTS = {};\nconst bool SCENE_ENVIRONMENT = {};\n",

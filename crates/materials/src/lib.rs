@@ -7,6 +7,7 @@
 
 pub mod blend;
 pub mod conductor;
+pub mod mask;
 pub mod math;
 pub mod microfacet;
 pub mod normal_map;

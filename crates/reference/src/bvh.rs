@@ -144,7 +144,23 @@ pub fn intersect(
     tmax: f32,
     budget: u32,
 ) -> Traversal {
-    traverse(nodes, tris, o, d, tmin, tmax, budget, false)
+    traverse(nodes, tris, o, d, tmin, tmax, budget, false, |_, _| true)
+}
+
+/// [`intersect`] with bvh.glsl's `bvh_filter`: `keep(i, b)` says whether a hit on triangle i at
+/// barycentric weights b stops the ray (false: a masked surface it passes).
+#[allow(clippy::too_many_arguments)]
+pub fn intersect_filtered(
+    nodes: &[BvhNode],
+    tris: &[Triangle],
+    o: Vec3,
+    d: Vec3,
+    tmin: f32,
+    tmax: f32,
+    budget: u32,
+    keep: impl Fn(u32, Vec2) -> bool,
+) -> Traversal {
+    traverse(nodes, tris, o, d, tmin, tmax, budget, false, keep)
 }
 
 /// `bvh_intersect` with `any_hit`: a shadow ray, ended by the first hit the traversal finds.
@@ -157,7 +173,7 @@ pub fn intersect_any(
     tmax: f32,
     budget: u32,
 ) -> Traversal {
-    traverse(nodes, tris, o, d, tmin, tmax, budget, true)
+    traverse(nodes, tris, o, d, tmin, tmax, budget, true, |_, _| true)
 }
 
 // Mirrors bvh.glsl's bvh_intersect argument for argument, so the twin reads line by line against it.
@@ -171,6 +187,7 @@ fn traverse(
     tmax: f32,
     budget: u32,
     any_hit: bool,
+    keep: impl Fn(u32, Vec2) -> bool,
 ) -> Traversal {
     let r = BvhRay::new(o, d);
     let mut best = tmax;
@@ -234,7 +251,8 @@ fn traverse(
         }
         if tri != tri_end {
             let tr = &tris[tri as usize];
-            if let Some((t, bary)) = triangle_test(&r, v3(tr.v0), v3(tr.v1), v3(tr.v2), tmin, best) {
+            let found = triangle_test(&r, v3(tr.v0), v3(tr.v1), v3(tr.v2), tmin, best);
+            if let Some((t, bary)) = found.filter(|&(_, bary)| keep(tri, bary)) {
                 best = t;
                 hit = Some(BvhHit { t, triangle: tri, bary });
                 if any_hit {
@@ -255,11 +273,24 @@ fn traverse(
 /// The nearest hit by testing every triangle in order (the first of equal t wins): the check of
 /// [`intersect`].
 pub fn brute_force(tris: &[Triangle], o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<BvhHit> {
+    brute_force_filtered(tris, o, d, tmin, tmax, |_, _| true)
+}
+
+/// [`brute_force`] with [`intersect_filtered`]'s `keep`: the written-out triangles' loop of geometry.glsl.
+pub fn brute_force_filtered(
+    tris: &[Triangle],
+    o: Vec3,
+    d: Vec3,
+    tmin: f32,
+    tmax: f32,
+    keep: impl Fn(u32, Vec2) -> bool,
+) -> Option<BvhHit> {
     let r = BvhRay::new(o, d);
     let mut best = tmax;
     let mut hit = None;
     for (i, tr) in tris.iter().enumerate() {
-        if let Some((t, bary)) = triangle_test(&r, v3(tr.v0), v3(tr.v1), v3(tr.v2), tmin, best) {
+        let found = triangle_test(&r, v3(tr.v0), v3(tr.v1), v3(tr.v2), tmin, best);
+        if let Some((t, bary)) = found.filter(|&(_, bary)| keep(i as u32, bary)) {
             best = t;
             hit = Some(BvhHit {
                 t,

@@ -13,6 +13,7 @@ pub mod blend;
 pub mod bvh;
 pub mod conductor;
 pub mod lights;
+pub mod mask;
 /// Generated meshes for the BVH's tests and benchmarks.
 pub mod meshes;
 pub mod microfacet;
@@ -106,7 +107,7 @@ fn direct_light(
     if !shading::valid(w, ng, nf) {
         return Vec3::ZERO;
     }
-    if intersect_scene(g, o, w, 0.0, d).is_some() {
+    if intersect_scene(g, o, w, 0.0, d, mask::key(g, rng)).is_some() {
         return Vec3::ZERO;
     }
     let fr = match rough {
@@ -149,7 +150,7 @@ fn environment_by_bsdf(
         return Vec3::ZERO;
     }
     let o = offset_ray(g, p, nf);
-    if intersect_scene(g, o, w, 0.0, lights::infinite_reach(&e, o)).is_some() {
+    if intersect_scene(g, o, w, 0.0, lights::infinite_reach(&e, o), mask::key(g, rng)).is_some() {
         return Vec3::ZERO;
     }
     let pb = cos_p / PI;
@@ -262,9 +263,9 @@ fn eye_vertex(
     vns: &mut Vec3,
     thr: &mut Vec3,
     bump: &mut Bump,
+    rng: &mut Rng,
     cut: &mut u32,
     escaped: &mut bool,
-    rng: &mut Rng,
 ) -> Option<EyeVertex> {
     if !shading::valid(d, *vng, *vns) {
         return None;
@@ -276,7 +277,7 @@ fn eye_vertex(
         *cut += 1;
         return None;
     }
-    let Some(mut h) = intersect_scene(g, o, d, 0.0, 1e30) else {
+    let Some(mut h) = intersect_scene(g, o, d, 0.0, 1e30, mask::key(g, rng)) else {
         *escaped = true;
         return None;
     };
@@ -333,7 +334,7 @@ fn emission_sample(
             nf,
             bump,
         }) = eye_vertex(
-            g, o, d, depth, &mut vng, &mut vns, &mut thr, &mut last, cut, &mut out, rng,
+            g, o, d, depth, &mut vng, &mut vns, &mut thr, &mut last, rng, cut, &mut out,
         )
         else {
             if out {
@@ -512,9 +513,9 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                     &mut vns,
                     &mut thr,
                     &mut last,
+                    &mut rng,
                     &mut out.cut,
                     &mut out_of_scene,
-                    &mut rng,
                 ) {
                     let m = &m;
                     let diffuse = m.surface == SURFACE_DIFFUSE;
@@ -728,7 +729,7 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
     // photon.comp's `capped`, without its count.
     let cap = |f: Vec3| shading::capped(f, p.flux_fixed).0;
     for depth in 1..=p.max_photon_depth {
-        let Some(mut h) = intersect_scene(g, o, d, 0.0, 1e30) else {
+        let Some(mut h) = intersect_scene(g, o, d, 0.0, 1e30, mask::key(g, &mut rng)) else {
             return true;
         };
         blend::resolve(g, &mut h, &mut rng);

@@ -3,6 +3,7 @@
 //! ppm_vk_materials::math.
 
 use glam::{Vec2, Vec3};
+use ppm_vk_materials::mask;
 use ppm_vk_materials::math::{fresnel_dielectric, oct_decode, reflect, PI};
 
 use ppm_vk_engine::lower::GpuScene;
@@ -26,7 +27,8 @@ pub struct Hit {
     pub dp: [Vec3; 2],
 }
 
-pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
+/// `key`: the ray's mask key (mask::key).
+pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32, key: u32) -> Option<Hit> {
     let mut best = tmax;
     let mut found: Option<(u32, usize)> = None;
     // A quad's planar coordinates, a triangle's barycentric weights of v1 and v2.
@@ -47,10 +49,25 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
         }
         let t0 = (oc.dot(oc) - r2) / q;
         let mut t = t0.min(q);
-        if t <= tmin {
+        // geometry.glsl's sphere_stops: a masked sphere passed at its near side may stop the ray at its far.
+        let stops = |far: bool, t: f32| {
+            let normal = (o + t * d - v3(s.center)) * (1.0 / s.radius);
+            super::mask::keeps(
+                g,
+                s.material,
+                key,
+                mask::PRIM_SPHERE | (2 * i as u32 + far as u32),
+                || sphere_uv(normal),
+            )
+        };
+        let mut far = t <= tmin;
+        if !far && t < best && !stops(false, t) {
+            far = true;
+        }
+        if far {
             t = t0.max(q);
         }
-        if t > tmin && t < best {
+        if t > tmin && t < best && (!far || stops(true, t)) {
             best = t;
             found = Some((0, i));
         }
@@ -71,20 +88,28 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
         if !(0.0..=1.0).contains(&a) || !(0.0..=1.0).contains(&b) {
             continue;
         }
+        if !super::mask::keeps(g, q.material, key, mask::PRIM_QUAD | i as u32, || Vec2::new(a, b)) {
+            continue;
+        }
         best = t;
         found = Some((1, i));
         local = Vec2::new(a, b);
     }
+    // geometry.glsl's bvh_filter: a masked triangle may let the ray pass.
+    let keep = |tri: u32, bary: Vec2| {
+        let m = g.bvh_triangles[tri as usize].material;
+        super::mask::keeps(g, m, key, tri, || triangle_uv(g, tri as usize, bary))
+    };
     if g.triangles_inline {
         // Written into the kernels: every triangle in order, the first of equal t winning, as geometry.glsl.
-        if let Some(h) = super::bvh::brute_force(&g.bvh_triangles, o, d, tmin, best) {
+        if let Some(h) = super::bvh::brute_force_filtered(&g.bvh_triangles, o, d, tmin, best, keep) {
             best = h.t;
             found = Some((2, h.triangle as usize));
             local = h.bary;
         }
     } else if !g.bvh_triangles.is_empty() {
         // Unlimited budget: where the GPU's traversal is cut, the renderer fails instead.
-        let tr = super::bvh::intersect(&g.bvh_nodes, &g.bvh_triangles, o, d, tmin, best, u32::MAX);
+        let tr = super::bvh::intersect_filtered(&g.bvh_nodes, &g.bvh_triangles, o, d, tmin, best, u32::MAX, keep);
         if let Some(h) = tr.hit {
             best = h.t;
             found = Some((2, h.triangle as usize));
@@ -97,16 +122,11 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
         0 => {
             let s = &g.spheres[i];
             let normal = (pos - v3(s.center)) * (1.0 / s.radius);
-            // Longitude and colatitude about the world's axes.
-            let mut phi = normal.y.atan2(normal.x);
-            if phi < 0.0 {
-                phi += 2.0 * PI;
-            }
             Hit {
                 pos,
                 normal,
                 material: s.material,
-                uv: Vec2::new(phi * (0.5 / PI), normal.z.clamp(-1.0, 1.0).acos() * (1.0 / PI)),
+                uv: sphere_uv(normal),
                 smooth: None,
                 dpdu: Vec3::new(-normal.y, normal.x, 0.0),
                 dp: sphere_derivatives(normal, 1.0 / (1.0 / s.radius)),
@@ -128,14 +148,7 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
             let texels = g.triangle_texels.get(stride * i..stride * (i + 1));
             let f = |b: u32| f32::from_bits(b);
             let w = [1.0 - local.x - local.y, local.x, local.y];
-            let uv = match texels {
-                Some(t) => {
-                    w[0] * Vec2::new(f(t[0][0]), f(t[0][1]))
-                        + w[1] * Vec2::new(f(t[0][2]), f(t[0][3]))
-                        + w[2] * Vec2::new(f(t[1][0]), f(t[1][1]))
-                }
-                None => Vec2::ZERO,
-            };
+            let uv = triangle_uv(g, i, local);
             // The vertex normals interpolated (shading.glsl's shading_normal).
             let smooth = texels.filter(|t| t[2][3] != 0).and_then(|t| {
                 let n = w[0] * oct_decode(t[2][0]) + w[1] * oct_decode(t[2][1]) + w[2] * oct_decode(t[2][2]);
@@ -171,6 +184,31 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> 
             }
         }
     })
+}
+
+/// texture.glsl's `surface_uv` of a sphere at unit normal `normal`: longitude and colatitude about the
+/// world's axes.
+pub fn sphere_uv(normal: Vec3) -> Vec2 {
+    let mut phi = normal.y.atan2(normal.x);
+    if phi < 0.0 {
+        phi += 2.0 * PI;
+    }
+    Vec2::new(phi * (0.5 / PI), normal.z.clamp(-1.0, 1.0).acos() * (1.0 / PI))
+}
+
+/// texture.glsl's `surface_uv` of triangle `i` (leaf order) at barycentric weights `bary` of v1 and v2:
+/// interpolated from its vertices'; zero where no mesh has them.
+pub fn triangle_uv(g: &GpuScene, i: usize, bary: Vec2) -> Vec2 {
+    let stride = ppm_vk_kernels::layout::TRIANGLE_TEXELS as usize;
+    let f = |b: u32| f32::from_bits(b);
+    match g.triangle_texels.get(stride * i..stride * (i + 1)) {
+        Some(t) => {
+            (1.0 - bary.x - bary.y) * Vec2::new(f(t[0][0]), f(t[0][1]))
+                + bary.x * Vec2::new(f(t[0][2]), f(t[0][3]))
+                + bary.y * Vec2::new(f(t[1][0]), f(t[1][1]))
+        }
+        None => Vec2::ZERO,
+    }
 }
 
 /// `offset_ray` of geometry.glsl.
@@ -271,7 +309,7 @@ mod tests {
             assert!(hits.len() >= 10, "{name}: {} hits", hits.len());
             for (k, hit) in hits.iter().enumerate() {
                 let (o, d) = (vec(&hit["o"]), vec(&hit["d"]));
-                let h = intersect_scene(&g, o, d, 0.0, 1e30).expect("a hit");
+                let h = intersect_scene(&g, o, d, 0.0, 1e30, 0).expect("a hit");
                 assert!(
                     h.pos.distance(vec(&hit["p"])) < 1e-4,
                     "{name} {k}: hit {} against {}",

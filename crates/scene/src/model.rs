@@ -560,10 +560,15 @@ impl Scene {
             .collect();
         // Writing into a hash cannot fail.
         let _ = write!(Feed(&mut h), "{:?}", (&surfaces, &self.spheres, &self.quads));
-        // Only materials with a normal map hash it, so that every other scene keeps its hash.
+        // Only materials with a normal map (or a texture on a parameter beyond the diffuse reflectance)
+        // hash it, so that every other scene keeps its hash.
         for (i, m) in self.materials.iter().enumerate() {
             if let Some(n) = m.normal_map {
                 let _ = write!(Feed(&mut h), "normal_map{i}{n:?}");
+            }
+            let more = [m.opacity, m.specular_texture, m.alpha_texture, m.emission_texture];
+            if more.iter().any(Option::is_some) {
+                let _ = write!(Feed(&mut h), "textures{i}{more:?}");
             }
         }
         for t in &self.textures {
@@ -703,6 +708,15 @@ impl Scene {
                 if !scale.is_finite() {
                     return Err(invalid(p, format!("the bump map's scale must be finite, got {scale}")));
                 }
+            }
+        }
+        for m in &self.materials {
+            let Some(t) = m.opacity else { continue };
+            if t as usize >= self.textures.len() {
+                return Err(invalid(
+                    format!("materials.{}.opacity", m.name),
+                    format!("texture index {t} out of range ({} textures)", self.textures.len()),
+                ));
             }
         }
         for m in &self.materials {
@@ -875,6 +889,20 @@ impl Scene {
                         p,
                         format!(
                             "{}: material \"{}\" has a bump or normal map, which needs texture coordinates (one \
+                             per vertex), and the mesh has none",
+                            m.name, t.name
+                        ),
+                    ));
+                }
+                let patterned = |t: Option<u32>| {
+                    let t = t.and_then(|t| self.textures.get(t as usize));
+                    t.is_some_and(|t| matches!(t.pattern, texture::Pattern::Bitmap { .. }))
+                };
+                if let Some(t) = textured.clone().find(|t| patterned(t.opacity)) {
+                    return Err(invalid(
+                        p,
+                        format!(
+                            "{}: material \"{}\" is masked by an image, which needs texture coordinates (one \
                              per vertex), and the mesh has none",
                             m.name, t.name
                         ),

@@ -114,6 +114,7 @@ impl GpuScene {
             flux_fixed,
             direct_light: (settings.direct == crate::settings::DirectLight::Sample) as u32,
             glossy_alpha: settings.glossy_hits.unwrap_or(f32::MAX),
+            masks: draws_mask_keys(scene) as u32,
             ..Default::default()
         };
         set_camera(&mut params, &scene.camera);
@@ -248,4 +249,29 @@ fn triangles(scene: &Scene) -> Result<Bvh> {
         ));
     }
     Ok(built)
+}
+
+/// Whether the kernels' rays must draw mask keys (materials/mask.glsl): some masked material's opacity is
+/// not decided by its value alone. An opacity of exactly 0 everywhere (a `null` bsdf, a mask of 0: every
+/// ray passes) or a constant of at least 1 (every ray stops) decides without a random number, so such a
+/// scene draws the same numbers as the scene without the surface (opacity 0) or without the mask
+/// (opacity 1): its image is theirs bit for bit. A bitmap of ones is not taken as decided: its bilinear
+/// interpolation may round just below 1.
+fn draws_mask_keys(scene: &Scene) -> bool {
+    use crate::scene::texture::Pattern;
+    let decided = |t: &crate::scene::texture::Texture| {
+        let y = |c: glam::Vec3| ppm_vk_materials::mask::luminance(c).clamp(0.0, 1.0);
+        match &t.pattern {
+            Pattern::Checkerboard { color0, color1 } => {
+                let (a, b) = (y(*color0), y(*color1));
+                (a == 0.0 && b == 0.0) || (a == 1.0 && b == 1.0)
+            }
+            Pattern::Bitmap { pixels, .. } => pixels.iter().all(|&p| y(p) == 0.0),
+        }
+    };
+    scene
+        .materials
+        .iter()
+        .filter_map(|m| m.opacity)
+        .any(|t| !decided(&scene.textures[t as usize]))
 }

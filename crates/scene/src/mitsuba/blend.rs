@@ -28,9 +28,11 @@ impl Bsdf {
             .map_or(0, |b| 1 + b.first.blend_depth().max(b.second.blend_depth()))
     }
 
-    /// Whether anything in it reads texture coordinates: a texture, a bump or normal map, a blend's weight.
+    /// Whether anything in it reads texture coordinates: a texture, a bump or normal map, a blend's weight,
+    /// a mask's opacity.
     pub(super) fn textured(&self) -> bool {
-        match &self.blend {
+        let mask = matches!(self.opacity, Some(super::mask::Opacity::Texture(_)));
+        mask || match &self.blend {
             Some(b) => b.texture.is_some() || b.first.textured() || b.second.textured(),
             None => self.texture.is_some() || self.normal_map.is_some(),
         }
@@ -82,6 +84,13 @@ impl Builder {
                 "ref" => (self.bsdf_ref(o)?, o),
                 _ => return Err(o.err(format!("not expected inside {}", e.what()))),
             });
+        }
+        // The traversal reads a mask from the material a ray meets, before the blend chooses: a mask
+        // around a blend is read, one inside it is not.
+        if let Some((_, o)) = parts.iter().find(|(b, _)| b.opacity.is_some()) {
+            return Err(
+                o.err("a mask or null bsdf inside a blendbsdf is not supported (put the mask around the blend)")
+            );
         }
         let (first, second) = match <[(Bsdf, &Elem); 2]>::try_from(parts) {
             Ok([(a, _), (b, _)]) => (a, b),
@@ -150,6 +159,7 @@ impl Builder {
             texture: None,
             normal_map: None,
             blend: Some(Rc::new(blend)),
+            opacity: None,
         })
     }
 }

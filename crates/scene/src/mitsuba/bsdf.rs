@@ -9,6 +9,7 @@ use anyhow::Result;
 use glam::Vec3;
 
 use super::elem::Elem;
+use super::mask::Opacity;
 use super::properties::{color, number, Props};
 use super::texture::{same_texture, Tex};
 use super::Builder;
@@ -38,6 +39,8 @@ pub(super) struct Bsdf {
     /// A `blendbsdf`: its weight and components (blend.rs); `surface` is then a `Surface::Blend` whose
     /// indices [`Builder::material`] sets, `texture` and `normal_map` are `None`.
     pub(super) blend: Option<Rc<Blend>>,
+    /// A `mask` around it (or a `null` bsdf): mask.rs.
+    pub(super) opacity: Option<Opacity>,
 }
 
 /// A `blendbsdf` as read (blend.rs): its weight (a constant, or the luminance of `texture`) and its two components.
@@ -84,7 +87,7 @@ impl Builder {
         let id = e.attr("id").map(str::to_string);
         let nested: Vec<&Elem> = objects.iter().copied().filter(|c| c.tag == "bsdf").collect();
         // A bump or normal map also holds textures (and refs to them or to its bsdf): modifiers.rs.
-        let modifier = matches!(e.kind(), "bumpmap" | "normalmap" | "blendbsdf");
+        let modifier = matches!(e.kind(), "bumpmap" | "normalmap" | "blendbsdf" | "mask");
         if let Some(o) = objects.iter().find(|c| c.tag != "bsdf" && !modifier) {
             return Err(o.err(format!("not expected inside {}", e.what())));
         }
@@ -106,11 +109,13 @@ impl Builder {
             "bumpmap" => self.bumpmap(e, &props, &objects)?,
             "normalmap" => self.normalmap(e, &props, &objects)?,
             "blendbsdf" => self.blendbsdf(e, &props, &objects)?,
+            "mask" => self.mask(e, &props, &objects)?,
+            "null" => super::mask::null(),
             _ => {
                 return Err(e.err(
                     "unsupported bsdf (read: diffuse, twosided, conductor, roughconductor, \
                      dielectric, roughdielectric, thindielectric, plastic, roughplastic, bumpmap, normalmap, \
-                     blendbsdf)",
+                     blendbsdf, mask, null)",
                 ))
             }
         };
@@ -128,6 +133,7 @@ impl Builder {
             texture,
             normal_map: None,
             blend: None,
+            opacity: None,
         })
     }
 
@@ -147,6 +153,9 @@ impl Builder {
                     }
                     _ => false,
                 };
+                if x.opacity.is_some() || y.opacity.is_some() {
+                    return Err(b.err("a mask or null bsdf in a twosided of two bsdfs is not supported"));
+                }
                 if x.surface != y.surface || !same_texture(&x.texture, &y.texture) || !same_map {
                     return Err(b.err(
                         "a different bsdf on the back side is not supported (ppm-vk \
@@ -232,6 +241,7 @@ impl Builder {
             texture,
             normal_map: None,
             blend: None,
+            opacity: None,
         })
     }
 
@@ -298,13 +308,30 @@ impl Builder {
                 None => crate::NormalMap::Normal { texture },
             }
         });
+        let opacity = bsdf.opacity.as_ref().map(|o| {
+            let t = match o {
+                Opacity::Texture(t) => std::borrow::Cow::Borrowed(&t.texture),
+                // A constant is a texture of one value (a checkerboard of two equal colours: no pixels).
+                Opacity::Value(v) => std::borrow::Cow::Owned(texture::Texture {
+                    name: format!("opacity {v}"),
+                    pattern: Pattern::Checkerboard {
+                        color0: Vec3::splat(*v),
+                        color1: Vec3::splat(*v),
+                    },
+                    filter: texture::Filter::Bilinear,
+                    wrap: texture::Wrap::Repeat,
+                    to_uv: texture::IDENTITY_UV,
+                }),
+            };
+            texture::intern(&mut self.scene.textures, t)
+        });
         let wanted = Material {
             name: name.to_string(),
             surface,
             emission,
             texture,
             normal_map,
-            opacity: None,
+            opacity,
             specular_texture: None,
             alpha_texture: None,
             emission_texture: None,
@@ -351,6 +378,7 @@ fn one_sided(surface: Surface) -> Bsdf {
         texture: None,
         normal_map: None,
         blend: None,
+        opacity: None,
     }
 }
 
@@ -408,6 +436,7 @@ fn dielectric(e: &Elem, props: &Props) -> Result<Bsdf> {
         texture: None,
         normal_map: None,
         blend: None,
+        opacity: None,
     })
 }
 
@@ -424,6 +453,7 @@ fn rough_dielectric(e: &Elem, props: &Props) -> Result<Bsdf> {
         texture: None,
         normal_map: None,
         blend: None,
+        opacity: None,
     })
 }
 
@@ -466,6 +496,7 @@ fn thin_dielectric(e: &Elem, props: &Props) -> Result<Bsdf> {
         texture: None,
         normal_map: None,
         blend: None,
+        opacity: None,
     })
 }
 

@@ -31,6 +31,7 @@ mod elem;
 mod emitter;
 mod instance;
 mod integrator;
+mod mask;
 mod modifiers;
 mod properties;
 mod sensor;

@@ -99,6 +99,7 @@ impl Builder {
                 texture: None,
                 normal_map: None,
                 blend: None,
+                opacity: None,
             },
             e,
         ));
@@ -115,6 +116,12 @@ impl Builder {
                     _ => "conductor",
                 }
             )));
+        }
+        if emission.max_element() > 0.0 && bsdf.opacity.is_some() {
+            return Err(emitter_at.err(
+                "an area emitter on a mask or null bsdf is not supported (ppm-vk's lights emit from all of \
+                 their surface)",
+            ));
         }
         let name = match (&bsdf.id, emission.max_element() > 0.0) {
             (Some(id), false) => id.clone(),
