@@ -139,7 +139,7 @@ impl Builder {
     }
 
     /// A `<texture>` element, or a `<ref>` to a top-level one.
-    fn texture_or_ref(&self, t: &Elem) -> Result<Rc<Tex>> {
+    pub(super) fn texture_or_ref(&self, t: &Elem) -> Result<Rc<Tex>> {
         if t.tag != "ref" {
             return Ok(Rc::new(self.texture(t)?));
         }

@@ -3,7 +3,6 @@
 //! [`Builder::shape`], which place the scene's quads, spheres and meshes.
 
 use std::collections::HashMap;
-use std::rc::Rc;
 
 use anyhow::Result;
 use glam::{DAffine3, DMat3, DVec3, Vec3};
@@ -98,6 +97,8 @@ impl Builder {
                 id: None,
                 texture: None,
                 normal_map: None,
+                specular: None,
+                alpha: None,
             },
             e,
         ));
@@ -121,7 +122,7 @@ impl Builder {
         let to_world = props.transform("to_world")?;
         let flip = props.boolean("flip_normals")?;
         // A bump or normal map reads texture coordinates too (modifiers.rs).
-        let textured = bsdf.texture.is_some() || bsdf.normal_map.is_some();
+        let textured = bsdf.textured();
         // An anisotropic lobe lies along Mitsuba's dp/du: a rectangle's x axis (edge_u below), a sphere's
         // longitude, a mesh's texture coordinates (or the frame of its face normal without them).
         let anisotropic = bsdf.surface.rough().is_some_and(|r| r.is_anisotropic());
@@ -145,22 +146,17 @@ impl Builder {
                  supported yet",
             ));
         }
-        let material = match (&bsdf.texture, backwards) {
-            (Some(t), true) => {
-                let mirrored = Texture {
+        let material = if backwards {
+            let turned_bsdf = bsdf.map_textures(|t| Tex {
+                texture: Texture {
                     to_uv: texture::compose_uv(t.texture.to_uv, [-1.0, 0.0, 1.0, 0.0, 1.0, 0.0]),
                     ..t.texture.clone()
-                };
-                let turned_bsdf = Bsdf {
-                    texture: Some(Rc::new(Tex {
-                        texture: mirrored,
-                        at: t.at.clone(),
-                    })),
-                    ..bsdf.clone()
-                };
-                self.material(&name, &turned_bsdf, emission, bsdf_at)
-            }
-            _ => self.material(&name, &bsdf, emission, bsdf_at),
+                },
+                at: t.at.clone(),
+            });
+            self.material(&name, &turned_bsdf, emission, bsdf_at)
+        } else {
+            self.material(&name, &bsdf, emission, bsdf_at)
         };
         let common = Common {
             e,
