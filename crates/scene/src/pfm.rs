@@ -8,8 +8,6 @@ use std::io::Read;
 
 use glam::Vec3;
 
-use crate::texture::{MAX_TEXTURE_PIXELS, MAX_TEXTURE_SIDE};
-
 /// Whether `head` (a file's first bytes) starts like a PFM.
 pub fn is_pfm(head: &[u8]) -> bool {
     head.len() >= 3 && head[0] == b'P' && (head[1] == b'F' || head[1] == b'f') && head[2].is_ascii_whitespace()
@@ -46,9 +44,9 @@ fn token(r: &mut impl Read, what: &str) -> Result<String, String> {
 }
 
 /// The image the PFM file `r` holds: width, height and linear RGB pixels from the top row (a grey
-/// one's value in all three channels). Errors: a header that is not a PFM's, a side outside
-/// 1..=MAX_TEXTURE_SIDE or more than MAX_TEXTURE_PIXELS pixels, data cut short, a value that is not finite.
-pub fn read(r: &mut impl Read) -> Result<(u32, u32, Vec<Vec3>), String> {
+/// one's value in all three channels). Errors: a header that is not a PFM's, a side outside 1..=max_side or
+/// more than max_pixels pixels (the texture bounds: texture.rs), data cut short, a value that is not finite.
+pub fn read(r: &mut impl Read, max_side: u32, max_pixels: u64) -> Result<(u32, u32, Vec<Vec3>), String> {
     let mut magic = [0u8; 3];
     r.read_exact(&mut magic)
         .map_err(|_| "not a PFM image: it does not start with \"PF\" or \"Pf\"".to_string())?;
@@ -58,10 +56,8 @@ pub fn read(r: &mut impl Read) -> Result<(u32, u32, Vec<Vec3>), String> {
     let channels = if magic[1] == b'F' { 3 } else { 1 };
     let side = |t: &str, what: &str| -> Result<u32, String> {
         match t.parse::<u64>() {
-            Ok(n) if (1..=MAX_TEXTURE_SIDE as u64).contains(&n) => Ok(n as u32),
-            Ok(n) => Err(format!(
-                "PFM image {what} {n}: each side must be in 1..={MAX_TEXTURE_SIDE}"
-            )),
+            Ok(n) if (1..=max_side as u64).contains(&n) => Ok(n as u32),
+            Ok(n) => Err(format!("PFM image {what} {n}: each side must be in 1..={max_side}")),
             Err(_) => Err(format!("PFM header: its {what} \"{t}\" is not a whole number")),
         }
     };
@@ -76,9 +72,9 @@ pub fn read(r: &mut impl Read) -> Result<(u32, u32, Vec<Vec3>), String> {
             ))
         }
     };
-    if width as u64 * height as u64 > MAX_TEXTURE_PIXELS {
+    if width as u64 * height as u64 > max_pixels {
         return Err(format!(
-            "PFM image of {width} x {height} pixels: at most {MAX_TEXTURE_PIXELS} pixels (8192 x 8192)"
+            "PFM image of {width} x {height} pixels: at most {max_pixels} pixels"
         ));
     }
     let count = width as usize * height as usize * channels;
@@ -135,6 +131,11 @@ pub fn read(r: &mut impl Read) -> Result<(u32, u32, Vec<Vec3>), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::texture::{MAX_TEXTURE_PIXELS, MAX_TEXTURE_SIDE};
+
+    fn read(r: &mut impl Read) -> Result<(u32, u32, Vec<Vec3>), String> {
+        super::read(r, MAX_TEXTURE_SIDE, MAX_TEXTURE_PIXELS)
+    }
 
     fn pfm(header: &str, values: &[f32], little: bool) -> Vec<u8> {
         let mut bytes = header.as_bytes().to_vec();

@@ -157,7 +157,7 @@ pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), Strin
     use std::io::BufRead as _;
     let head = reader.fill_buf().map_err(|e| format!("cannot read the image: {e}"))?;
     if crate::pfm::is_pfm(head) {
-        return crate::pfm::read(&mut reader);
+        return crate::pfm::read(&mut reader, MAX_TEXTURE_SIDE, MAX_TEXTURE_PIXELS);
     }
     // By its first bytes; a TGA has no signature, so by its extension then.
     let format = image::ImageReader::new(&mut reader)
