@@ -75,6 +75,7 @@ fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
                 "scenes/textures/wood.png",
                 "scenes/references/textures/gray.png",
                 "scenes/references/textures/gradient.exr",
+                "scenes/references/textures/grey.pfm",
             ],
         ),
         (
@@ -739,6 +740,53 @@ fn damaged_images_are_refused_in_sentences() {
     let e = load_fails(textured(&dir, "crc.png"));
     assert!(e.contains("crc.png") && e.contains("damaged"), "{e}");
     assert!(!e.contains("ChunkType") && !e.contains('{'), "{e}");
+}
+
+/// PFM images (crates/scene/src/pfm.rs): one read; a bad header, data cut short, sides beyond
+/// MAX_TEXTURE_SIDE or MAX_TEXTURE_PIXELS (refused from the header, before any allocation), a NaN pixel
+/// and a scale that is not finite are refused in sentences naming the file.
+#[test]
+fn damaged_pfms_are_refused_in_sentences() {
+    let dir = scratch("pfm");
+    let pfm = |name: &str, header: &str, values: &[f32]| {
+        let mut bytes = header.as_bytes().to_vec();
+        for v in values {
+            bytes.extend(v.to_le_bytes());
+        }
+        std::fs::write(dir.join(name), bytes).unwrap();
+        textured(&dir, name)
+    };
+    let good = pfm("good.pfm", "PF\n2 1\n-1\n", &[0.1, 0.2, 0.3, 0.4, 0.5, 0.6]);
+    let scene = Scene::load(&good).unwrap();
+    assert_eq!(scene.textures[0].pixel_count(), 2);
+    for (name, header, values, said) in [
+        ("magic.pfm", "PX\n2 1\n-1\n", &[0.5f32; 6][..], "first bytes"),
+        (
+            "width.pfm",
+            "PF\nwide 1\n-1\n",
+            &[0.5; 6][..],
+            "width \"wide\" is not a whole number",
+        ),
+        ("cut.pfm", "PF\n2 1\n-1\n", &[0.5; 5][..], "cut short"),
+        (
+            "huge.pfm",
+            "PF\n4000000000 4000000000\n-1\n",
+            &[][..],
+            "each side must be in 1..=",
+        ),
+        ("many.pfm", "PF\n16384 16384\n-1\n", &[][..], "at most"),
+        (
+            "nan.pfm",
+            "Pf\n2 1\n-1\n",
+            &[0.5, f32::NAN][..],
+            "values must be finite",
+        ),
+        ("scale.pfm", "PF\n2 1\nnan\n", &[0.5; 6][..], "is not a finite number"),
+    ] {
+        let path = pfm(name, header, values);
+        let e = load_fails(path);
+        assert!(e.contains(name) && e.contains(said), "{name}: {e}");
+    }
 }
 
 /// An EXR of 16384 x 4096 pixels, at MAX_TEXTURE_SIDE and MAX_TEXTURE_PIXELS, loads (the image crate's

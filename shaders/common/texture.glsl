@@ -79,11 +79,32 @@ vec3 texture_value(uint at, vec2 uv) {
     return (1.0 - w.y) * ((1.0 - w.x) * c00 + w.x * c10) + w.y * ((1.0 - w.x) * c01 + w.x * c11);
 }
 
-// Material m (material() read it) at hit h with its texture applied: a diffuse surface's albedo, or a
+// Material m's textures on other parameters than the diffuse reflectance (its sixth texel) at hit h:
+// specular_reflectance becomes m.color ((rough) conductors, mirrors, thin dielectrics: their constant
+// there); alpha, the luminance of its texture's value (Mitsuba's eval_1 of an RGB texture, its
+// src/textures/bitmap.cpp) floored at 1e-4 (its MicrofacetDistribution), becomes m.alpha_u and
+// m.alpha_v, which hit_microfacet (microfacet.glsl) reads in place of the material's.
+void apply_parameter_textures(inout Material m, Hit h) {
+    uvec4 t = texelFetch(material_texels, int(MATERIAL_TEXELS * h.material + 5u));
+    m.specular_texture = t.y;
+    m.alpha_texture = t.z;
+    if (t.y == 0u && t.z == 0u) return;
+    vec2 uv = surface_uv(h);
+    if (t.y != 0u) m.color = texture_value(t.y - 1u, uv);
+    if (t.z != 0u) {
+        const vec3 Y = vec3(0.212671, 0.715160, 0.072169); // Mitsuba's luminance
+        m.alpha_u = max(dot(texture_value(t.z - 1u, uv), Y), 1e-4);
+        m.alpha_v = m.alpha_u;
+    }
+}
+
+// Material m (material() read it) at hit h with its textures applied: a diffuse surface's albedo, or a
 // plastic's diffuse factor from the texture's diffuse_reflectance (as the host makes Material.color for
-// a constant one: crates/materials/src/plastic.rs).
+// a constant one: crates/materials/src/plastic.rs), and apply_parameter_textures'.
 void apply_texture(inout Material m, Hit h) {
-    if (!HAS_TEXTURES || m.texture == 0u) return;
+    if (!HAS_TEXTURES) return;
+    apply_parameter_textures(m, h);
+    if (m.texture == 0u) return;
     vec3 value = texture_value(m.texture - 1u, surface_uv(h));
     if (m.surface == SURFACE_PLASTIC) {
         vec3 terms, bound;

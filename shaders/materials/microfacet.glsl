@@ -42,6 +42,17 @@ Microfacet material_microfacet(uint i) {
     return Microfacet(t.z, uintBitsToFloat(t.x), uintBitsToFloat(t.y));
 }
 
+// The distribution of material i at a hit, m as apply_texture left it: its alpha textured there, if it
+// has an alpha texture (texture.glsl's apply_parameter_textures).
+Microfacet hit_microfacet(uint i, Material m) {
+    Microfacet mf = material_microfacet(i);
+    if (m.alpha_texture != 0u) {
+        mf.au = m.alpha_u;
+        mf.av = m.alpha_v;
+    }
+    return mf;
+}
+
 // Material i's table (Material.table: a rough plastic's coat).
 uint material_table(uint i) {
     return texelFetch(material_texels, int(MATERIAL_TEXELS * i + 4u)).w;

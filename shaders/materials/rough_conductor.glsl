@@ -88,14 +88,16 @@ vec3 rough_conductor_ratio(RoughView v, vec3 wi, vec3 n) {
 }
 
 // Whether eye paths leave hit points on material i (a rough conductor) rather than sample through it: an
-// isotropic one of roughness at least glossy_alpha (a hit point holds no tangent for an anisotropic lobe).
+// isotropic one of roughness at least glossy_alpha (a hit point holds no tangent for an anisotropic lobe),
+// whose alpha is not a texture (the gather evaluates the BRDF per photon without the hit's uv).
 bool glossy_hit(uint i) {
     Microfacet mf = material_microfacet(i);
-    return mf.au >= params.glossy_alpha && mf.au == mf.av;
+    return mf.au >= params.glossy_alpha && mf.au == mf.av
+        && texelFetch(material_texels, int(MATERIAL_TEXELS * i + 5u)).z == 0u;
 }
 
 #ifndef ROUGH_EVAL_ONLY
-// One bounce off rough conductor i (`m` as material() read it) at pos, dpdu its tangent (frame): o and d
+// One bounce off rough conductor i (`m` as apply_texture left it) at pos, dpdu its tangent (frame): o and d
 // become the reflected ray; returns its weight, 0 where the sampled direction goes below the surface (the
 // path ends there).
 vec3 rough_conductor_bounce(uint i, Material m, vec3 pos, vec3 nf, vec3 dpdu, vec2 u, inout vec3 o,
@@ -104,7 +106,7 @@ vec3 rough_conductor_bounce(uint i, Material m, vec3 pos, vec3 nf, vec3 dpdu, ve
     frame(nf, dpdu, t, b);
     vec3 wi = -to_local(d, t, b, nf);
     if (wi.z <= 0.0) return vec3(0.0);
-    Microfacet mf = material_microfacet(i);
+    Microfacet mf = hit_microfacet(i, m);
     vec3 h = mf_sample_visible(mf, wi, u);
     vec3 wo = reflect(-wi, h);
     if (wo.z <= 0.0) return vec3(0.0);

@@ -18,17 +18,16 @@
 #define HAS_ROUGH_GLASS true
 #endif
 
-// One bounce off rough dielectric i of index ior (inside over outside) at pos, arriving along d from the
+// One bounce off a rough dielectric of distribution mf (hit_microfacet) and index ior (inside over outside) at pos, arriving along d from the
 // front (outside) or not, nf facing d, dpdu its tangent (frame): o and d become the new ray; u chooses
 // the branch, u2 the normal. Returns the weight, 0 where the sampled direction leaves on the wrong side
 // (the path ends there).
-float rough_dielectric_bounce(uint i, float ior, vec3 pos, vec3 nf, vec3 dpdu, bool front, float u, vec2 u2,
+float rough_dielectric_bounce(Microfacet mf, float ior, vec3 pos, vec3 nf, vec3 dpdu, bool front, float u, vec2 u2,
                               inout vec3 o, inout vec3 d) {
     vec3 t, b;
     frame(nf, dpdu, t, b);
     vec3 wi = -to_local(d, t, b, nf);
     if (wi.z <= 0.0) return 0.0;
-    Microfacet mf = material_microfacet(i);
     vec3 h = mf_sample_visible(mf, wi, u2);
     float eta = front ? 1.0 / ior : ior; // incident index over transmitted
     float cos_i = dot(wi, h);
@@ -55,7 +54,7 @@ vec3 rough_tangent(uint i, Hit h) {
     return mf.au != mf.av ? surface_tangent(h) : vec3(0.0);
 }
 
-// The bounce of an eye path or a photon off material i (`m` as material() read it) at hit h, if it is
+// The bounce of an eye path or a photon off material i (`m` as apply_texture left it) at hit h, if it is
 // rough: draws its numbers from rng, moves the ray (o, d) on, multiplies w by the weight (0: the path
 // ends) and returns true; false for every other surface, untouched.
 bool rough_bounce(uint i, Material m, Hit h, vec3 nf, bool front, inout Rng rng, inout vec3 o,
@@ -70,7 +69,7 @@ bool rough_bounce(uint i, Material m, Hit h, vec3 nf, bool front, inout Rng rng,
         float u = rng_float(rng);
         float u1 = rng_float(rng);
         float u2 = rng_float(rng);
-        w *= rough_dielectric_bounce(i, m.ior, h.pos, nf, rough_tangent(i, h), front, u, vec2(u1, u2), o, d);
+        w *= rough_dielectric_bounce(hit_microfacet(i, m), m.ior, h.pos, nf, rough_tangent(i, h), front, u, vec2(u1, u2), o, d);
         return true;
     }
     return false;

@@ -193,9 +193,13 @@ fn escaped(g: &GpuScene, d: Vec3) -> Vec3 {
     lights::environment_radiance(g, &e, d)
 }
 
-/// rough_conductor.glsl's `glossy_hit`: a rough conductor of roughness at least `glossy_alpha`.
+/// rough_conductor.glsl's `glossy_hit`: an isotropic rough conductor of roughness at least
+/// `glossy_alpha`, its alpha not a texture.
 fn glossy_hit(g: &GpuScene, m: &Material) -> bool {
-    m.surface == SURFACE_ROUGH_CONDUCTOR && m.alpha_u >= g.params.glossy_alpha && m.alpha_u == m.alpha_v
+    m.surface == SURFACE_ROUGH_CONDUCTOR
+        && m.alpha_u >= g.params.glossy_alpha
+        && m.alpha_u == m.alpha_v
+        && m.alpha_texture == 0
 }
 
 /// rough_dielectric.glsl's `rough_bounce` at hit `h`: for a rough conductor or rough glass, the new origin,

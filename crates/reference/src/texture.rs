@@ -57,8 +57,24 @@ pub fn value(texels: &[[u32; 4]], at: u32, uv: Vec2) -> Vec3 {
     (1.0 - w.y) * ((1.0 - w.x) * c(0, 0) + w.x * c(1, 0)) + w.y * ((1.0 - w.x) * c(0, 1) + w.x * c(1, 1))
 }
 
+/// texture.glsl's `apply_parameter_textures`: specular_reflectance's texture becomes the colour, alpha's
+/// luminance (floored at Mitsuba's 1e-4) both alphas.
+fn apply_parameter_textures(g: &GpuScene, m: &Material, uv: Vec2) -> Material {
+    let mut out = *m;
+    if m.specular_texture != 0 {
+        out.color = value(&g.textures, m.specular_texture - 1, uv).to_array();
+    }
+    if m.alpha_texture != 0 {
+        let y = Vec3::new(0.212671, 0.715160, 0.072169); // Mitsuba's luminance
+        out.alpha_u = value(&g.textures, m.alpha_texture - 1, uv).dot(y).max(1e-4);
+        out.alpha_v = out.alpha_u;
+    }
+    out
+}
+
 /// texture.glsl's `apply_texture`: material `m` at texture coordinates `uv`.
 pub fn apply(g: &GpuScene, m: &Material, uv: Vec2) -> Material {
+    let m = &apply_parameter_textures(g, m, uv);
     if m.texture == 0 {
         return *m;
     }

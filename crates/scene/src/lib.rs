@@ -17,6 +17,7 @@ mod load;
 mod mitsuba;
 mod model;
 mod obj;
+pub mod pfm;
 mod ply;
 mod serialized;
 pub mod texture;

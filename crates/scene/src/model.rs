@@ -710,6 +710,56 @@ impl Scene {
                 }
             }
         }
+        // specular_reflectance and alpha textures: in range, on a surface that reads them (specular: one
+        // whose constant reflectance bounds the texture, as the diffuse one's; alpha: an isotropic rough
+        // conductor or glass, its texture's luminance at each point the alpha).
+        for m in &self.materials {
+            for (field, t) in [
+                ("specular_texture", m.specular_texture),
+                ("alpha_texture", m.alpha_texture),
+            ] {
+                let Some(t) = t else { continue };
+                let p = format!("materials.{}.{field}", m.name);
+                let Some(texture) = self.textures.get(t as usize) else {
+                    return Err(invalid(
+                        p,
+                        format!("texture index {t} out of range ({} textures)", self.textures.len()),
+                    ));
+                };
+                let bound = match (field, m.surface) {
+                    (
+                        "specular_texture",
+                        Surface::Mirror { reflectance }
+                        | Surface::Conductor { reflectance, .. }
+                        | Surface::RoughConductor { reflectance, .. }
+                        | Surface::ThinDielectric { reflectance, .. },
+                    ) => Some(reflectance),
+                    ("alpha_texture", Surface::RoughConductor { rough, .. } | Surface::RoughGlass { rough, .. })
+                        if !rough.is_anisotropic() =>
+                    {
+                        None
+                    }
+                    _ => {
+                        return Err(invalid(
+                            p,
+                            "not read on this surface (specular_texture: (rough) conductors, mirrors and thin \
+                             dielectrics; alpha_texture: isotropic rough conductors and glass)",
+                        ))
+                    }
+                };
+                if let Some(constant) = bound.filter(|c| texture.max().cmpgt(*c).any()) {
+                    return Err(invalid(
+                        p,
+                        format!(
+                            "the surface's constant reflectance {} is below the largest value of texture \"{}\" \
+                             (it must bound the texture: set it to Texture::max())",
+                            fmt_vec(constant.to_array()),
+                            texture.name
+                        ),
+                    ));
+                }
+            }
+        }
         for m in &self.materials {
             let Some(t) = m.opacity else { continue };
             if t as usize >= self.textures.len() {

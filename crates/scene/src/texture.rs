@@ -140,7 +140,7 @@ fn jpeg_is_complete(bytes: &[u8]) -> bool {
 }
 
 /// Reads an image file (PNG, JPEG, EXR, Radiance HDR, TGA, BMP, PPM/PGM: those of Mitsuba's Bitmap formats
-/// that the image crate decodes) as linear RGB, its top row first: 8- and 16-bit images are taken as
+/// that the image crate decodes; PFM: pfm.rs) as linear RGB, its top row first: 8- and 16-bit images are taken as
 /// sRGB-encoded and decoded unless `raw` (Mitsuba's rule; alpha is dropped), floating-point ones (EXR,
 /// HDR) as linear already. Only a regular file of at most [`MAX_IMAGE_BYTES`](crate::MAX_IMAGE_BYTES)
 /// is opened. The error says what is wrong with the file, without its name (the caller's message
@@ -153,6 +153,12 @@ pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), Strin
             e => e.to_string(),
         })?;
     let mut reader = BufReader::new(file);
+    // A PFM (which the image crate does not read): by its first bytes, read whole (the file's bound).
+    use std::io::BufRead as _;
+    let head = reader.fill_buf().map_err(|e| format!("cannot read the image: {e}"))?;
+    if crate::pfm::is_pfm(head) {
+        return crate::pfm::read(&mut reader, MAX_TEXTURE_SIDE, MAX_TEXTURE_PIXELS);
+    }
     // By its first bytes; a TGA has no signature, so by its extension then.
     let format = image::ImageReader::new(&mut reader)
         .with_guessed_format()

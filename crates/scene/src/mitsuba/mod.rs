@@ -442,10 +442,10 @@ mod tests {
                 "parameter not read by ppm-vk",
             ),
             (
-                r#"<shape type="cube"><bsdf type="conductor"><texture name="specular_reflectance" type="checkerboard"/></bsdf></shape>"#,
-                r#"<texture type="checkerboard" name="specular_reflectance">"#,
+                r#"<shape type="cube"><bsdf type="conductor"><texture name="eta" type="checkerboard"/></bsdf></shape>"#,
+                r#"<texture type="checkerboard" name="eta">"#,
                 12,
-                "a texture on specular_reflectance is not supported: only diffuse reflectance",
+                "a texture on eta is not supported: read on diffuse reflectances",
             ),
             (
                 r#"<emitter type="envmap"/>"#,

@@ -268,8 +268,9 @@ fn blackbody(e: &Elem, kelvin: f64, scale: f64, usage: Use) -> Result<[f64; 3]> 
 /// Why a texture on parameter `name` is refused.
 fn texture_refused(name: &str) -> String {
     format!(
-        "a texture on {name} is not supported: only diffuse reflectance (diffuse reflectance, plastic \
-         diffuse_reflectance) reads textures"
+        "a texture on {name} is not supported: read on diffuse reflectances (diffuse reflectance, plastic \
+         diffuse_reflectance), specular_reflectance (conductor, roughconductor, thindielectric) and alpha \
+         (roughconductor, roughdielectric)"
     )
 }
 

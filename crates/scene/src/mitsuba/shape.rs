@@ -3,7 +3,6 @@
 //! [`Builder::shape`], which place the scene's quads, spheres and meshes.
 
 use std::collections::HashMap;
-use std::rc::Rc;
 
 use anyhow::Result;
 use glam::{DAffine3, DMat3, DVec3, Vec3};
@@ -100,6 +99,8 @@ impl Builder {
                 normal_map: None,
                 blend: None,
                 opacity: None,
+                specular: None,
+                alpha: None,
             },
             e,
         ));
@@ -160,22 +161,17 @@ impl Builder {
                  supported yet",
             ));
         }
-        let material = match (&bsdf.texture, backwards) {
-            (Some(t), true) => {
-                let mirrored = Texture {
+        let material = if backwards {
+            let turned_bsdf = bsdf.map_textures(|t| Tex {
+                texture: Texture {
                     to_uv: texture::compose_uv(t.texture.to_uv, [-1.0, 0.0, 1.0, 0.0, 1.0, 0.0]),
                     ..t.texture.clone()
-                };
-                let turned_bsdf = Bsdf {
-                    texture: Some(Rc::new(Tex {
-                        texture: mirrored,
-                        at: t.at.clone(),
-                    })),
-                    ..bsdf.clone()
-                };
-                self.material(&name, &turned_bsdf, emission, bsdf_at)
-            }
-            _ => self.material(&name, &bsdf, emission, bsdf_at),
+                },
+                at: t.at.clone(),
+            });
+            self.material(&name, &turned_bsdf, emission, bsdf_at)
+        } else {
+            self.material(&name, &bsdf, emission, bsdf_at)
         };
         let common = Common {
             e,

@@ -304,13 +304,13 @@ mod tests {
                 format!(r#"<shape type="rectangle"><bsdf type="conductor">{}</bsdf></shape>"#, tex.replace("reflectance", "eta")),
                 r#"<texture type="bitmap" name="eta">"#,
                 12,
-                "a texture on eta is not supported: only diffuse reflectance",
+                "a texture on eta is not supported: read on diffuse reflectances",
             ),
             (
                 format!(r#"<shape type="rectangle"><bsdf type="plastic">{}</bsdf></shape>"#, tex.replace("reflectance", "specular_reflectance")),
                 r#"<texture type="bitmap" name="specular_reflectance">"#,
                 12,
-                "a texture on specular_reflectance is not supported",
+                "a texture on plastic's specular_reflectance is not supported",
             ),
             (
                 format!(r#"<shape type="rectangle"><emitter type="area">{}</emitter></shape>"#, tex.replace("reflectance", "radiance")),
