@@ -34,7 +34,9 @@ impl Bsdf {
         let mask = matches!(self.opacity, Some(super::mask::Opacity::Texture(_)));
         mask || match &self.blend {
             Some(b) => b.texture.is_some() || b.first.textured() || b.second.textured(),
-            None => self.texture.is_some() || self.normal_map.is_some(),
+            None => {
+                self.texture.is_some() || self.normal_map.is_some() || self.specular.is_some() || self.alpha.is_some()
+            }
         }
     }
 
@@ -160,6 +162,8 @@ impl Builder {
             normal_map: None,
             blend: Some(Rc::new(blend)),
             opacity: None,
+            specular: None,
+            alpha: None,
         })
     }
 }

@@ -81,6 +81,8 @@ pub(super) fn null() -> Bsdf {
         normal_map: None,
         blend: None,
         opacity: Some(Opacity::Value(0.0)),
+        specular: None,
+        alpha: None,
     }
 }
 
