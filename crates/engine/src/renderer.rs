@@ -1452,7 +1452,7 @@ fn tracing_pipeline(
             inline_triangles: gpu.triangles_inline,
             lights: &gpu.lights,
             surfaces: gpu.materials.iter().fold(0, |bits, m| bits | 1 << m.surface),
-            textures: gpu.materials.iter().any(|m| m.texture != 0),
+            textures: gpu.materials.iter().any(|m| m.texture != 0 || m.emission_texture != 0),
             rough_plastics: gpu.materials.iter().any(|m| m.table != 0),
             shading_normals: gpu.smooth_shading(),
             anisotropic: gpu.materials.iter().any(|m| m.alpha_u != m.alpha_v),

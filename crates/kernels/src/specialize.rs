@@ -178,6 +178,8 @@ pub fn scene_constants(c: &SceneConstants) -> String {
     };
     // The fields after the kind, zero for quads and triangles (lights.glsl's emitter_of fills them alike).
     const NO_MORE: &str = "vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, 0u";
+    // A quad's last field is its radiance texture (Emitter::table).
+    const QUAD_NO_MORE: &str = "vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, ";
     s += &array(
         "Emitter",
         "SCENE_EMITTERS",
@@ -185,7 +187,12 @@ pub fn scene_constants(c: &SceneConstants) -> String {
             .iter()
             .map(|l| {
                 // The flux a photon starts with, divided here exactly as photon.comp would (f32).
-                let flux = if l.kind == LIGHT_SPOT { l.flux } else { l.power }.map(|p| p / l.prob);
+                let flux = if l.kind == LIGHT_SPOT || l.texture != 0 {
+                    l.flux
+                } else {
+                    l.power
+                }
+                .map(|p| p / l.prob);
                 if l.kind == LIGHT_TRIANGLE {
                     // Edges subtracted in f32 as photon.comp's buffer path does; the normal is computed
                     // there from them (choose_emitter), not written here.
@@ -202,13 +209,14 @@ pub fn scene_constants(c: &SceneConstants) -> String {
                 if l.kind == LIGHT_QUAD {
                     let q = &quads[l.index as usize];
                     return format!(
-                        "Emitter({}, {}, {}, {}, {}, {}, {LIGHT_QUAD}u, {NO_MORE})",
+                        "Emitter({}, {}, {}, {}, {}, {}, {LIGHT_QUAD}u, {QUAD_NO_MORE}{}u)",
                         v(q.origin),
                         v(q.edge_u),
                         v(q.edge_v),
                         v(q.normal),
                         v(flux),
-                        f(l.cdf)
+                        f(l.cdf),
+                        l.texture
                     );
                 }
                 // As emitter_of: an environment's value is not divided by its prob (its cdf, as light 0).

@@ -31,7 +31,7 @@ pub struct Emitter {
 
 /// lights.glsl's `emitter_of`.
 pub fn emitter_of(g: &GpuScene, light: &Light) -> Emitter {
-    let flux = v3(if light.kind == LIGHT_SPOT {
+    let flux = v3(if light.kind == LIGHT_SPOT || light.texture != 0 {
         light.flux
     } else {
         light.power
@@ -61,6 +61,7 @@ pub fn emitter_of(g: &GpuScene, light: &Light) -> Emitter {
     if light.kind == LIGHT_QUAD {
         let q = &g.quads[light.index as usize];
         (e.origin, e.edge_u, e.edge_v, e.normal) = (v3(q.origin), v3(q.edge_u), v3(q.edge_v), v3(q.normal));
+        e.table = light.texture;
         return e;
     }
     e.origin = v3(light.origin);
@@ -93,6 +94,15 @@ pub fn choose_emitter(g: &GpuScene, u: f32) -> Emitter {
 /// lights.glsl's `first_emitter`: light 0, the environment when there is one.
 pub fn first_emitter(g: &GpuScene) -> Emitter {
     emitter_of(g, &g.lights[0])
+}
+
+/// lights.glsl's `emitter_radiance`: what multiplies `e.flux` at `emitter_point(e, a, b)` (a quad's
+/// radiance texture at uv (a, b), else 1).
+pub fn emitter_radiance(g: &GpuScene, e: &Emitter, a: f32, b: f32) -> Vec3 {
+    if e.kind != LIGHT_QUAD || e.table == 0 {
+        return Vec3::ONE;
+    }
+    crate::texture::value(&g.textures, e.table - 1, glam::Vec2::new(a, b))
 }
 
 /// lights.glsl's `is_area`.

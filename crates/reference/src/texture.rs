@@ -58,9 +58,14 @@ pub fn value(texels: &[[u32; 4]], at: u32, uv: Vec2) -> Vec3 {
 }
 
 /// texture.glsl's `apply_texture`: material `m` at texture coordinates `uv`.
+/// An emitter's radiance texture gives its emission there.
 pub fn apply(g: &GpuScene, m: &Material, uv: Vec2) -> Material {
+    let mut m = *m;
+    if v3(m.emission).max_element() > 0.0 && m.emission_texture != 0 {
+        m.emission = value(&g.textures, m.emission_texture - 1, uv).to_array();
+    }
     if m.texture == 0 {
-        return *m;
+        return m;
     }
     let mut value = value(&g.textures, m.texture - 1, uv);
     if m.surface == SURFACE_PLASTIC {
@@ -74,7 +79,7 @@ pub fn apply(g: &GpuScene, m: &Material, uv: Vec2) -> Material {
     }
     Material {
         color: value.to_array(),
-        ..*m
+        ..m
     }
 }
 

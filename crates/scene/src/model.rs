@@ -669,12 +669,28 @@ impl Scene {
     /// material reading a bad one, `textures[i]` one that none reads).
     fn check_textures(&self) -> Result<(), Invalid> {
         for (i, t) in self.textures.iter().enumerate() {
-            if let Err(message) = t.check() {
+            let this = Some(i as u32);
+            // A texture that nothing reads as a reflectance (an area light's radiance, or nothing) holds
+            // radiances: unbounded.
+            let radiance = !self.materials.iter().any(|m| {
+                m.texture == this
+                    || m.normal_map.is_some_and(|n| Some(n.texture()) == this)
+                    || m.opacity == this
+                    || m.specular_texture == this
+                    || m.alpha_texture == this
+            });
+            let checked = if radiance { t.check_radiance() } else { t.check() };
+            if let Err(message) = checked {
                 let path = self
                     .materials
                     .iter()
-                    .find(|m| m.texture == Some(i as u32))
-                    .map_or_else(|| format!("textures[{i}]"), |m| format!("materials.{}.texture", m.name));
+                    .find(|m| m.texture == this)
+                    .map(|m| format!("materials.{}.texture", m.name))
+                    .or_else(|| {
+                        let m = self.materials.iter().find(|m| m.emission_texture == this)?;
+                        Some(format!("materials.{}.emission_texture", m.name))
+                    })
+                    .unwrap_or_else(|| format!("textures[{i}]"));
                 return Err(invalid(path, format!("texture \"{}\": {message}", t.name)));
             }
         }
@@ -695,6 +711,29 @@ impl Scene {
                 if !scale.is_finite() {
                     return Err(invalid(p, format!("the bump map's scale must be finite, got {scale}")));
                 }
+            }
+        }
+        for m in &self.materials {
+            let Some(t) = m.emission_texture else { continue };
+            let p = format!("materials.{}.emission_texture", m.name);
+            let Some(texture) = self.textures.get(t as usize) else {
+                return Err(invalid(
+                    p,
+                    format!("texture index {t} out of range ({} textures)", self.textures.len()),
+                ));
+            };
+            // Material::emission is the texture's largest value (what makes the material a light).
+            if texture.max() != m.emission {
+                return Err(invalid(
+                    p,
+                    format!(
+                        "the emission {} is not the largest value of radiance texture \"{}\", {} (set it to \
+                         Texture::max())",
+                        fmt_vec(m.emission.to_array()),
+                        texture.name,
+                        fmt_vec(texture.max().to_array())
+                    ),
+                ));
             }
         }
         for m in &self.materials {
@@ -778,7 +817,15 @@ impl Scene {
                     ),
                 ));
             }
-            material(&format!("{p}.material"), s.material)?;
+            if material(&format!("{p}.material"), s.material)?
+                .emission_texture
+                .is_some()
+            {
+                return Err(invalid(
+                    format!("{p}.material"),
+                    "a radiance texture (emission_texture) is read on quads only",
+                ));
+            }
         }
         for (i, q) in self.quads.iter().enumerate() {
             check_quad(q, &format!("quad[{i}]"))?;
@@ -787,6 +834,21 @@ impl Scene {
         for (i, m) in self.meshes.iter().enumerate() {
             let p = format!("mesh[{i}]");
             check_mesh(m, &p, self.materials.len())?;
+            // A radiance texture is read on quads only (the lights' table samples no other).
+            if let Some(t) = m
+                .materials
+                .iter()
+                .map(|&k| &self.materials[k as usize])
+                .find(|t| t.emission_texture.is_some())
+            {
+                return Err(invalid(
+                    p,
+                    format!(
+                        "{}: material \"{}\" has a radiance texture, which is read on quads only",
+                        m.name, t.name
+                    ),
+                ));
+            }
             if m.uvs.is_none() {
                 let textured = m.materials.iter().map(|&k| &self.materials[k as usize]);
                 if let Some(t) = textured.clone().find(|t| t.normal_map.is_some()) {

@@ -11,6 +11,7 @@ use ppm_vk_kernels::layout::{
 };
 
 use crate::error::{Error, Result};
+use crate::scene::texture::{Filter, Pattern, Texture, Wrap};
 use crate::scene::{Emitter, EnvMap, Environment, Scene};
 
 /// What [`lights`] builds.
@@ -37,8 +38,14 @@ fn max3(v: [f32; 3]) -> f64 {
 
 /// The lights of `scene` (`triangles`: its BVH's, in leaf order), in this order: the environment (light 0,
 /// which lights.glsl's first_emitter reads), emitting quads, triangles, spheres, then the other emitters.
-/// An environment map's tables are appended to `textures` (lights.glsl reads them there).
-pub fn lights(scene: &Scene, triangles: &[Triangle], textures: &mut Vec<[u32; 4]>) -> Result<LightTable> {
+/// An environment map's tables are appended to `textures` (lights.glsl reads them there); `texture_at` is
+/// the texel of each scene texture's header there (a quad's radiance texture).
+pub fn lights(
+    scene: &Scene,
+    triangles: &[Triangle],
+    texture_at: &[u32],
+    textures: &mut Vec<[u32; 4]>,
+) -> Result<LightTable> {
     let (lo, hi) = scene.bounds();
     // The scene's bounding sphere, a little larger (Mitsuba's, for the same reason: photons from the sun
     // and the sky start outside it).
@@ -69,12 +76,22 @@ pub fn lights(scene: &Scene, triangles: &[Triangle], textures: &mut Vec<[u32; 4]
     }
     for qi in scene.lights() {
         let q = &scene.quads[qi as usize];
-        entries.push(area_light(
-            qi,
-            LIGHT_QUAD,
-            scene.materials[q.material as usize].emission,
-            q.area(),
-        ));
+        let m = &scene.materials[q.material as usize];
+        let Some(t) = m.emission_texture else {
+            entries.push(area_light(qi, LIGHT_QUAD, m.emission, q.area()));
+            continue;
+        };
+        // A radiance texture (Mitsuba's area emitter with a textured `radiance`): photons leave uniformly
+        // in area with flux Le(uv) A pi / prob, unbiased for any prob; the power that sets prob is the
+        // texture's mean over the quad's uv square times A pi, and the bound its largest value's.
+        let texture = &scene.textures[t as usize];
+        let per_radiance = q.area() as f64 * PI;
+        let mut entry = area_light(qi, LIGHT_QUAD, Vec3::ZERO, q.area());
+        entry.light.power = (texture_mean(texture) * per_radiance).as_vec3().to_array();
+        entry.light.flux = [per_radiance as f32; 3];
+        entry.light.texture = texture_at[t as usize] + 1;
+        entry.flux_bound = texture.max().max_element() as f64 * per_radiance;
+        entries.push(entry);
     }
     for (ti, t) in triangles.iter().enumerate() {
         let e = scene.materials[t.material as usize].emission;
@@ -158,6 +175,93 @@ pub fn lights(scene: &Scene, triangles: &[Triangle], textures: &mut Vec<[u32; 4]
         max_flux,
         kinds,
     })
+}
+
+/// Texture `t`'s value at its coordinates `st` (after to_uv), in f64: texture.glsl's texture_value.
+fn texture_at_st(t: &Texture, s: f64, u: f64) -> DVec3 {
+    let (width, height, pixels) = match &t.pattern {
+        Pattern::Checkerboard { color0, color1 } => {
+            let upper = (s - s.floor() > 0.5, u - u.floor() > 0.5);
+            return if upper.0 == upper.1 { color0 } else { color1 }.as_dvec3();
+        }
+        Pattern::Bitmap { width, height, pixels } => (*width as i64, *height as i64, pixels),
+    };
+    let wrap = |i: i64, n: i64| match t.wrap {
+        Wrap::Clamp => i.clamp(0, n - 1),
+        Wrap::Repeat => i.rem_euclid(n),
+        Wrap::Mirror => {
+            let m = i.rem_euclid(n);
+            if i.div_euclid(n) & 1 != 0 {
+                n - 1 - m
+            } else {
+                m
+            }
+        }
+    };
+    let px = |x: i64, y: i64| pixels[(wrap(y, height) * width + wrap(x, width)) as usize].as_dvec3();
+    let (x, y) = (s * width as f64, u * height as f64);
+    if t.filter == Filter::Nearest {
+        return px(x.floor() as i64, y.floor() as i64);
+    }
+    let (x, y) = (x - 0.5, y - 0.5);
+    let (i, j) = (x.floor(), y.floor());
+    let (fx, fy) = (x - i, y - j);
+    let (i, j) = (i as i64, j as i64);
+    (1.0 - fy) * ((1.0 - fx) * px(i, j) + fx * px(i + 1, j)) + fy * ((1.0 - fx) * px(i, j + 1) + fx * px(i + 1, j + 1))
+}
+
+/// Most patches [`texture_mean`] sums exactly; beyond (a to_uv that repeats a large image many times),
+/// and for a to_uv that turns the image, a midpoint rule of `MEAN_QUADRATURE`^2 points instead.
+const MAX_MEAN_PATCHES: f64 = (1u64 << 24) as f64;
+const MEAN_QUADRATURE: usize = 1024;
+
+/// The mean of texture `t` over the unit square of surface coordinates (a quad's uv): exact (to f64
+/// rounding) where to_uv neither turns nor shears it. The texture is bilinear (or constant) on each patch
+/// of the grid of step 1 / (2 width) by 1 / (2 height) in its coordinates (pixel edges and centres; a
+/// checkerboard's halves), and a bilinear function's integral over a rectangle is its area times its
+/// value at the centre: the sum over the patches that the image of the square cuts. Otherwise a midpoint
+/// rule: its error only moves photons between lights (prob), never the image's expectation, as each
+/// photon's flux is Le(uv) A pi / prob.
+fn texture_mean(t: &Texture) -> DVec3 {
+    let [a, b, c, d, e, f] = t.to_uv.map(f64::from);
+    let (w, h) = match t.pattern {
+        Pattern::Bitmap { width, height, .. } => (width as f64, height as f64),
+        Pattern::Checkerboard { .. } => (1.0, 1.0),
+    };
+    let (ds, dt) = (0.5 / w, 0.5 / h);
+    let patches = (a.abs() / ds + 2.0) * (e.abs() / dt + 2.0);
+    if b == 0.0 && d == 0.0 && a != 0.0 && e != 0.0 && patches <= MAX_MEAN_PATCHES {
+        let (s0, s1) = (c.min(a + c), c.max(a + c));
+        let (t0, t1) = (f.min(e + f), f.max(e + f));
+        let cuts = |lo: f64, hi: f64, step: f64| {
+            let mut v = vec![lo];
+            let mut k = (lo / step).floor() + 1.0;
+            while k * step < hi {
+                v.push(k * step);
+                k += 1.0;
+            }
+            v.push(hi);
+            v
+        };
+        let (xs, ys) = (cuts(s0, s1, ds), cuts(t0, t1, dt));
+        let mut sum = DVec3::ZERO;
+        for y in ys.windows(2) {
+            for x in xs.windows(2) {
+                let centre = texture_at_st(t, 0.5 * (x[0] + x[1]), 0.5 * (y[0] + y[1]));
+                sum += centre * ((x[1] - x[0]) * (y[1] - y[0]));
+            }
+        }
+        return sum / ((s1 - s0) * (t1 - t0));
+    }
+    let n = MEAN_QUADRATURE;
+    let mut sum = DVec3::ZERO;
+    for j in 0..n {
+        for i in 0..n {
+            let (u, v) = ((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
+            sum += texture_at_st(t, a * u + b * v + c, d * u + e * v + f);
+        }
+    }
+    sum / (n * n) as f64
 }
 
 /// A unit vector perpendicular to unit n (any one: the frames lights.glsl draws directions in).

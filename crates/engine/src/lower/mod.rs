@@ -83,7 +83,7 @@ impl GpuScene {
         let spheres = spheres(scene);
         let quads = quads(scene);
         let built = triangles(scene)?;
-        let table = lights::lights(scene, &built.triangles, &mut textures)?;
+        let table = lights::lights(scene, &built.triangles, &texture_at, &mut textures)?;
         let flux_fixed = lights::flux_fixed(scene, table.max_flux)?;
         let (lights, total_power, light_kinds) = (table.lights, table.total_power, table.kinds);
         let (lo, hi) = scene.bounds();

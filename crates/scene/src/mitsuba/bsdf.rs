@@ -245,11 +245,20 @@ impl Builder {
 
     /// Index of the scene material for `bsdf` with `emission`, named `name` (made on first use; the
     /// same name for different contents gets a suffix).
-    pub(super) fn material(&mut self, name: &str, bsdf: &Bsdf, emission: Vec3, e: &Elem) -> u32 {
+    pub(super) fn material(
+        &mut self,
+        name: &str,
+        bsdf: &Bsdf,
+        emission: Vec3,
+        radiance: Option<&(texture::Texture, Elem)>,
+        e: &Elem,
+    ) -> u32 {
         let texture = bsdf
             .texture
             .as_ref()
             .map(|t| texture::intern(&mut self.scene.textures, std::borrow::Cow::Borrowed(&t.texture)));
+        let emission_texture =
+            radiance.map(|(t, _)| texture::intern(&mut self.scene.textures, std::borrow::Cow::Borrowed(t)));
         let normal_map = bsdf.normal_map.as_ref().map(|p| {
             let texture = texture::intern(&mut self.scene.textures, std::borrow::Cow::Borrowed(&p.texture.texture));
             match p.bump_scale {
@@ -266,7 +275,7 @@ impl Builder {
             opacity: None,
             specular_texture: None,
             alpha_texture: None,
-            emission_texture: None,
+            emission_texture,
         };
         let mut candidate = name.to_string();
         for n in 2.. {
@@ -288,6 +297,10 @@ impl Builder {
         if let Some(t) = &bsdf.texture {
             self.origins
                 .insert(format!("materials.{candidate}.texture"), t.at.clone());
+        }
+        if let Some((_, at)) = radiance {
+            self.origins
+                .insert(format!("materials.{candidate}.emission_texture"), at.clone());
         }
         if let Some(p) = &bsdf.normal_map {
             self.origins

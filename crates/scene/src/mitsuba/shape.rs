@@ -10,7 +10,6 @@ use glam::{DAffine3, DMat3, DVec3, Vec3};
 
 use super::bsdf::Bsdf;
 use super::elem::Elem;
-use super::emitter;
 use super::properties::Props;
 use super::texture::Tex;
 use super::Builder;
@@ -64,7 +63,7 @@ impl Builder {
         self.shapes += 1;
         let (props, objects) = Props::of(e);
         let mut bsdf: Option<(Bsdf, &Elem)> = None;
-        let mut emission: Option<(Vec3, &Elem)> = None;
+        let mut emission: Option<((Vec3, Option<Rc<Tex>>), &Elem)> = None;
         for o in objects {
             match o.tag.as_str() {
                 "bsdf" | "ref" => {
@@ -82,7 +81,7 @@ impl Builder {
                     if emission.is_some() {
                         return Err(o.err("a second emitter: a shape has one (as in Mitsuba)"));
                     }
-                    emission = Some((emitter::area(o)?, o));
+                    emission = Some((self.area(o)?, o));
                 }
                 "medium" => return Err(o.err("participating media are not supported")),
                 _ => return Err(o.err(format!("not expected inside {}", e.what()))),
@@ -102,7 +101,23 @@ impl Builder {
             e,
         ));
         let shape_name = e.attr("id").map_or_else(|| format!("shape[{index}]"), str::to_string);
-        let (emission, emitter_at) = emission.unwrap_or((Vec3::ZERO, e));
+        let ((emission, radiance_texture), emitter_at) = emission.unwrap_or(((Vec3::ZERO, None), e));
+        // A textured radiance: Material::emission holds the texture's largest value in each channel (what
+        // makes the material a light; the light's power and photon bound come from the texture itself).
+        let emission = radiance_texture.as_ref().map_or(emission, |t| t.texture.max());
+        if let Some(t) = &radiance_texture {
+            if e.kind() != "rectangle" {
+                return Err(t.at.err(format!(
+                    "a texture on an area emitter's radiance on a {} is not supported yet (read on rectangles)",
+                    e.kind()
+                )));
+            }
+            if emission.max_element() <= 0.0 {
+                return Err(t
+                    .at
+                    .err("the radiance texture is black everywhere: the emitter emits nothing"));
+            }
+        }
         if emission.max_element() > 0.0 && !matches!(bsdf.surface, Surface::Diffuse { .. }) {
             return Err(emitter_at.err(format!(
                 "an area emitter on a {} surface: ppm-vk lights are diffuse (or black) only",
@@ -121,7 +136,7 @@ impl Builder {
         let to_world = props.transform("to_world")?;
         let flip = props.boolean("flip_normals")?;
         // A bump or normal map reads texture coordinates too (modifiers.rs).
-        let textured = bsdf.texture.is_some() || bsdf.normal_map.is_some();
+        let textured = bsdf.texture.is_some() || bsdf.normal_map.is_some() || radiance_texture.is_some();
         // An anisotropic lobe lies along Mitsuba's dp/du: a rectangle's x axis (edge_u below), a sphere's
         // longitude, a mesh's texture coordinates (or the frame of its face normal without them).
         let anisotropic = bsdf.surface.rough().is_some_and(|r| r.is_anisotropic());
@@ -145,12 +160,23 @@ impl Builder {
                  supported yet",
             ));
         }
+        // The textures read at (1 - u, v) on a backwards rectangle: to_uv takes them back to (u, v) first.
+        let mirrored = |t: &Texture| Texture {
+            to_uv: texture::compose_uv(t.to_uv, [-1.0, 0.0, 1.0, 0.0, 1.0, 0.0]),
+            ..t.clone()
+        };
+        let radiance_texture = radiance_texture.map(|t| {
+            let texture = if backwards {
+                mirrored(&t.texture)
+            } else {
+                t.texture.clone()
+            };
+            (texture, t.at.clone())
+        });
+        let radiance_texture = radiance_texture.as_ref();
         let material = match (&bsdf.texture, backwards) {
             (Some(t), true) => {
-                let mirrored = Texture {
-                    to_uv: texture::compose_uv(t.texture.to_uv, [-1.0, 0.0, 1.0, 0.0, 1.0, 0.0]),
-                    ..t.texture.clone()
-                };
+                let mirrored = mirrored(&t.texture);
                 let turned_bsdf = Bsdf {
                     texture: Some(Rc::new(Tex {
                         texture: mirrored,
@@ -158,9 +184,9 @@ impl Builder {
                     })),
                     ..bsdf.clone()
                 };
-                self.material(&name, &turned_bsdf, emission, bsdf_at)
+                self.material(&name, &turned_bsdf, emission, radiance_texture, bsdf_at)
             }
-            _ => self.material(&name, &bsdf, emission, bsdf_at),
+            _ => self.material(&name, &bsdf, emission, radiance_texture, bsdf_at),
         };
         let common = Common {
             e,
