@@ -486,3 +486,116 @@ pub fn flux_fixed(scene: &Scene, max_flux: f64) -> Result<f32> {
     }
     Ok(flux_fixed)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::texture::IDENTITY_UV;
+
+    fn bitmap(w: u32, h: u32, filter: Filter, wrap: Wrap, to_uv: [f32; 6]) -> Texture {
+        Texture {
+            name: "t".into(),
+            pattern: Pattern::Bitmap {
+                width: w,
+                height: h,
+                pixels: (0..w * h)
+                    .map(|i| Vec3::new((i % 7) as f32, (i * i % 5) as f32 * 0.5, 1.0 + (i % w) as f32))
+                    .collect(),
+            },
+            filter,
+            wrap,
+            to_uv,
+        }
+    }
+
+    /// The midpoint rule on an n x n grid of the unit square of surface coordinates.
+    fn midpoint(t: &Texture, n: usize) -> DVec3 {
+        let [a, b, c, d, e, f] = t.to_uv.map(f64::from);
+        let mut sum = DVec3::ZERO;
+        for j in 0..n {
+            for i in 0..n {
+                let (u, v) = ((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
+                sum += texture_at_st(t, a * u + b * v + c, d * u + e * v + f);
+            }
+        }
+        sum / (n * n) as f64
+    }
+
+    /// texture_mean is exact: a repeating bitmap's mean over one period is its pixels' mean (each
+    /// pixel's tent or box integrates to 1 / (w h)), a checkerboard's over whole periods its colours';
+    /// a clamped, mirrored or offset one agrees with a dense midpoint rule as the rule converges.
+    #[test]
+    fn texture_means_are_exact() {
+        for filter in [Filter::Bilinear, Filter::Nearest] {
+            let t = bitmap(5, 3, filter, Wrap::Repeat, IDENTITY_UV);
+            let Pattern::Bitmap { pixels, .. } = &t.pattern else {
+                unreachable!()
+            };
+            let mean = pixels.iter().map(|p| p.as_dvec3()).sum::<DVec3>() / pixels.len() as f64;
+            assert!((texture_mean(&t) - mean).abs().max_element() < 1e-12, "{filter:?}");
+        }
+        let checker = Texture {
+            name: "c".into(),
+            pattern: Pattern::Checkerboard {
+                color0: Vec3::new(1.0, 2.0, 3.0),
+                color1: Vec3::new(5.0, 0.0, 1.0),
+            },
+            filter: Filter::Bilinear,
+            wrap: Wrap::Repeat,
+            to_uv: [2.0, 0.0, 0.0, 0.0, 3.0, 0.0],
+        };
+        assert!((texture_mean(&checker) - DVec3::new(3.0, 1.0, 2.0)).abs().max_element() < 1e-12);
+        for (wrap, to_uv) in [
+            (Wrap::Clamp, [1.3, 0.0, -0.2, 0.0, 0.7, 0.1]),
+            (Wrap::Mirror, [-2.5, 0.0, 0.3, 0.0, 1.5, -0.4]),
+        ] {
+            let t = bitmap(4, 6, Filter::Bilinear, wrap, to_uv);
+            let (exact, dense) = (texture_mean(&t), midpoint(&t, 4000));
+            // The midpoint rule's error here: at most ~1e-4 (its cells that straddle a patch's edge).
+            assert!(
+                (exact - dense).abs().max_element() < 1e-3,
+                "{wrap:?}: {exact} against {dense}"
+            );
+        }
+    }
+
+    /// A textured quad light's power is its texture's mean times A pi, its photons' flux per unit of
+    /// radiance A pi / prob, and the bound on one photon's flux the texture's largest value times A pi.
+    #[test]
+    fn a_textured_lights_power_and_bound_come_from_its_texture() {
+        let mut scene = Scene::parse(
+            r#"name = "t"
+[camera]
+eye = [0.0, 1.0, 3.0]
+look_at = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+vfov = 40.0
+resolution = [8, 8]
+[materials.glow]
+emission = [1.0, 1.0, 1.0]
+[[quad]]
+origin = [0.0, 1.0, 0.0]
+edge_u = [2.0, 0.0, 0.0]
+edge_v = [0.0, 0.0, 1.5]
+material = "glow"
+"#,
+            "t.toml",
+        )
+        .unwrap();
+        let t = bitmap(5, 3, Filter::Bilinear, Wrap::Repeat, IDENTITY_UV);
+        let (mean, most) = (texture_mean(&t), t.max());
+        scene.textures.push(t);
+        scene.materials[0].emission_texture = Some(0);
+        scene.materials[0].emission = most;
+        scene.validate().unwrap();
+        let table = lights(&scene, &[], &[7], &mut Vec::new()).unwrap();
+        let l = &table.lights[0];
+        let a_pi = 3.0 * PI;
+        assert_eq!((l.kind, l.texture, l.prob), (LIGHT_QUAD, 8, 1.0));
+        assert_eq!(l.flux, [a_pi as f32; 3]);
+        for c in 0..3 {
+            assert!((l.power[c] as f64 / (mean[c] * a_pi) - 1.0).abs() < 1e-6);
+        }
+        assert!((table.max_flux / (most.max_element() as f64 * a_pi) - 1.0).abs() < 1e-12);
+    }
+}
