@@ -1635,8 +1635,8 @@ fn photon_records_match_reference_with_textures() {
 
 /// cornell_textured with its light's radiance a texture (issue 37, Mitsuba's area emitter with a textured
 /// `radiance`): a 6 x 4 bitmap from 0.5 to 30 (the test's records need flux in every channel), turned by its
-/// to_uv and clamped; eye rays see it (term (a)), shadow rays (term (d)) and photons take it at their
-/// points of the light.
+/// to_uv and clamped, on the ceiling's quad and on the card's two triangles (at their texture coordinates);
+/// eye rays see it (term (a)), shadow rays (term (d)) and photons take it at their points of the lights.
 fn cornell_textured_light() -> ppm_vk_engine::Scene {
     use ppm_vk_engine::scene::texture::{Filter, Pattern, Texture, Wrap};
     let mut scene = cornell_textured();
@@ -1663,6 +1663,15 @@ fn cornell_textured_light() -> ppm_vk_engine::Scene {
     let m = scene.quads[lights[0] as usize].material as usize;
     scene.materials[m].emission_texture = Some(t);
     scene.materials[m].emission = scene.textures[t as usize].max();
+    // The card (two triangles with texture coordinates, and an albedo texture) glows with it too.
+    let card = scene
+        .meshes
+        .iter()
+        .find(|m| m.name == "card")
+        .expect("the card")
+        .materials[0] as usize;
+    scene.materials[card].emission_texture = Some(t);
+    scene.materials[card].emission = scene.textures[t as usize].max();
     scene.validate().unwrap_or_else(|e| panic!("{e:#}"));
     scene
 }

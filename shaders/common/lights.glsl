@@ -16,7 +16,7 @@ Emitter emitter_of(Light light) {
     if (light.kind == LIGHT_TRIANGLE) {
         Triangle tr = bvh_triangle(light.index);
         return Emitter(tr.v0, tr.v1 - tr.v0, tr.v2 - tr.v0, bvh_normal(tr), flux, light.cdf, LIGHT_TRIANGLE,
-                       vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, 0u);
+                       vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, light.texture != 0u ? light.index + 1u : 0u);
     }
     if (light.kind == LIGHT_QUAD) {
         Quad q = quads[light.index];
@@ -72,11 +72,23 @@ vec3 emitter_point(Emitter e, float a, float b) {
 }
 
 // What multiplies e.flux at emitter_point(e, a, b): a quad's radiance texture there (its uv is (a, b), as
-// a hit's planar coordinates), else 1 (e.flux is then the whole flux). As Mitsuba 3's area emitter with a
-// textured radiance, sampled uniformly in area: the flux Le(uv) A pi / prob is unbiased for any prob.
+// a hit's planar coordinates), a textured triangle's (e.table - 1 is the triangle: its material's texture
+// at its interpolated uv, as surface_uv), else 1 (e.flux is then the whole flux). As Mitsuba 3's area
+// emitter with a textured radiance, sampled uniformly in area: the flux Le(uv) A pi / prob is unbiased for
+// any prob.
 vec3 emitter_radiance(Emitter e, float a, float b) {
-    if (!HAS_TEXTURES || e.kind != LIGHT_QUAD || e.table == 0u) return vec3(1.0);
-    return texture_value(e.table - 1u, vec2(a, b));
+    if (!HAS_TEXTURES || e.table == 0u || e.kind > LIGHT_TRIANGLE) return vec3(1.0);
+    if (e.kind == LIGHT_QUAD) return texture_value(e.table - 1u, vec2(a, b));
+    if (a + b > 1.0) { // emitter_point's fold
+        a = 1.0 - a;
+        b = 1.0 - b;
+    }
+    uint prim = e.table - 1u;
+    uint m = bvh_triangle(prim).material;
+    uint radiance = texelFetch(material_texels, int(MATERIAL_TEXELS * m + 5u)).w;
+    vec4 t = uintBitsToFloat(texelFetch(triangle_texels, int(TRIANGLE_TEXELS * prim)));
+    vec2 t2 = uintBitsToFloat(texelFetch(triangle_texels, int(TRIANGLE_TEXELS * prim + 1u)).xy);
+    return texture_value(radiance - 1u, (1.0 - a - b) * t.xy + a * t.zw + b * t2);
 }
 
 // A quad or triangle: sampled by emitter_point and the cosine about its normal (the code every scene had

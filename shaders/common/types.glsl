@@ -101,8 +101,9 @@ struct Emitter {
     float cutoff;
     float inv_width;
     uint table;      // an environment map's first texel in texture_texels (lights.glsl); 0xffffffff: constant;
-                     // a quad's radiance texture (0: none, else 1 + its header's texel; flux is then per
-                     // unit of radiance: lights.glsl's emitter_radiance)
+                     // a quad's radiance texture (0: none, else 1 + its header's texel), a textured
+                     // triangle's 1 + its index (flux is then per unit of radiance: lights.glsl's
+                     // emitter_radiance)
 };
 
 const uint LIGHT_QUAD = 0u;
@@ -134,7 +135,7 @@ struct Light {
     float inv_width;
     vec3 flux;       // Emitter::flux, when it is not power / prob (a spot's; a textured quad's per unit
                      // radiance, area pi: its photons carry flux * Le(uv) / prob)
-    uint texture;    // a quad's radiance texture: 0 none, else 1 + the texel of its header (Emitter::table)
+    uint texture;    // a quad's or triangle's radiance texture: 0 none, else 1 + the texel of its header
 };
 
 // Constants of one render, written once by the host.

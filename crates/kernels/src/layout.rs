@@ -164,7 +164,7 @@ pub struct Light {
     /// A spot's photon flux before its falloff; a quad with a radiance texture's per unit of radiance,
     /// area pi (zero for the other kinds: power / prob).
     pub flux: [f32; 3],
-    /// A quad's radiance texture: 0 for none, else 1 + the texel of its header (Emitter::table).
+    /// A quad's or triangle's radiance texture: 0 for none, else 1 + the texel of its header.
     pub texture: u32,
 }
 gpu_struct!(Light {

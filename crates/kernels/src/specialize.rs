@@ -178,7 +178,7 @@ pub fn scene_constants(c: &SceneConstants) -> String {
     };
     // The fields after the kind, zero for quads and triangles (lights.glsl's emitter_of fills them alike).
     const NO_MORE: &str = "vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, 0u";
-    // A quad's last field is its radiance texture (Emitter::table).
+    // A quad's last field is its radiance texture, a textured triangle's 1 + its index (Emitter::table).
     const QUAD_NO_MORE: &str = "vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, ";
     s += &array(
         "Emitter",
@@ -198,12 +198,13 @@ pub fn scene_constants(c: &SceneConstants) -> String {
                     // there from them (choose_emitter), not written here.
                     let t = &c.triangles[l.index as usize];
                     return format!(
-                        "Emitter({}, {}, {}, vec3(0.0), {}, {}, {LIGHT_TRIANGLE}u, {NO_MORE})",
+                        "Emitter({}, {}, {}, vec3(0.0), {}, {}, {LIGHT_TRIANGLE}u, {QUAD_NO_MORE}{}u)",
                         v(t.v0),
                         v(sub(t.v1, t.v0)),
                         v(sub(t.v2, t.v0)),
                         v(flux),
-                        f(l.cdf)
+                        f(l.cdf),
+                        if l.texture != 0 { l.index + 1 } else { 0 }
                     );
                 }
                 if l.kind == LIGHT_QUAD {

@@ -56,6 +56,7 @@ pub fn emitter_of(g: &GpuScene, light: &Light) -> Emitter {
         let t = &g.bvh_triangles[light.index as usize];
         (e.origin, e.edge_u, e.edge_v) = (v3(t.v0), v3(t.v1) - v3(t.v0), v3(t.v2) - v3(t.v0));
         e.normal = bvh::normal(t);
+        e.table = if light.texture != 0 { light.index + 1 } else { 0 };
         return e;
     }
     if light.kind == LIGHT_QUAD {
@@ -97,12 +98,25 @@ pub fn first_emitter(g: &GpuScene) -> Emitter {
 }
 
 /// lights.glsl's `emitter_radiance`: what multiplies `e.flux` at `emitter_point(e, a, b)` (a quad's
-/// radiance texture at uv (a, b), else 1).
-pub fn emitter_radiance(g: &GpuScene, e: &Emitter, a: f32, b: f32) -> Vec3 {
-    if e.kind != LIGHT_QUAD || e.table == 0 {
+/// radiance texture at uv (a, b), a textured triangle's at its interpolated uv, else 1).
+pub fn emitter_radiance(g: &GpuScene, e: &Emitter, mut a: f32, mut b: f32) -> Vec3 {
+    if e.table == 0 || e.kind > LIGHT_TRIANGLE {
         return Vec3::ONE;
     }
-    crate::texture::value(&g.textures, e.table - 1, glam::Vec2::new(a, b))
+    if e.kind == LIGHT_QUAD {
+        return crate::texture::value(&g.textures, e.table - 1, glam::Vec2::new(a, b));
+    }
+    if a + b > 1.0 {
+        (a, b) = (1.0 - a, 1.0 - b);
+    }
+    let prim = (e.table - 1) as usize;
+    let m = &g.materials[g.bvh_triangles[prim].material as usize];
+    let f = |x: u32| f32::from_bits(x);
+    let (t, t2) = (g.triangle_texels[3 * prim], g.triangle_texels[3 * prim + 1]);
+    let uv = (1.0 - a - b) * glam::Vec2::new(f(t[0]), f(t[1]))
+        + a * glam::Vec2::new(f(t[2]), f(t[3]))
+        + b * glam::Vec2::new(f(t2[0]), f(t2[1]));
+    crate::texture::value(&g.textures, m.emission_texture - 1, uv)
 }
 
 /// lights.glsl's `is_area`.

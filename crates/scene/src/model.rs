@@ -823,7 +823,7 @@ impl Scene {
             {
                 return Err(invalid(
                     format!("{p}.material"),
-                    "a radiance texture (emission_texture) is read on quads only",
+                    "a radiance texture (emission_texture) is read on quads and triangles only",
                 ));
             }
         }
@@ -834,21 +834,6 @@ impl Scene {
         for (i, m) in self.meshes.iter().enumerate() {
             let p = format!("mesh[{i}]");
             check_mesh(m, &p, self.materials.len())?;
-            // A radiance texture is read on quads only (the lights' table samples no other).
-            if let Some(t) = m
-                .materials
-                .iter()
-                .map(|&k| &self.materials[k as usize])
-                .find(|t| t.emission_texture.is_some())
-            {
-                return Err(invalid(
-                    p,
-                    format!(
-                        "{}: material \"{}\" has a radiance texture, which is read on quads only",
-                        m.name, t.name
-                    ),
-                ));
-            }
             if m.uvs.is_none() {
                 let textured = m.materials.iter().map(|&k| &self.materials[k as usize]);
                 if let Some(t) = textured.clone().find(|t| t.normal_map.is_some()) {
@@ -861,7 +846,10 @@ impl Scene {
                         ),
                     ));
                 }
-                if let Some(t) = textured.clone().find(|t| t.texture.is_some()) {
+                if let Some(t) = textured
+                    .clone()
+                    .find(|t| t.texture.is_some() || t.emission_texture.is_some())
+                {
                     return Err(invalid(
                         p,
                         format!(

@@ -39,10 +39,12 @@ fn max3(v: [f32; 3]) -> f64 {
 /// The lights of `scene` (`triangles`: its BVH's, in leaf order), in this order: the environment (light 0,
 /// which lights.glsl's first_emitter reads), emitting quads, triangles, spheres, then the other emitters.
 /// An environment map's tables are appended to `textures` (lights.glsl reads them there); `texture_at` is
-/// the texel of each scene texture's header there (a quad's radiance texture).
+/// the texel of each scene texture's header there (a radiance texture), `triangle_texels` the triangles'
+/// texture coordinates (textures::triangle_texels).
 pub fn lights(
     scene: &Scene,
     triangles: &[Triangle],
+    triangle_texels: &[[u32; 4]],
     texture_at: &[u32],
     textures: &mut Vec<[u32; 4]>,
 ) -> Result<LightTable> {
@@ -94,15 +96,32 @@ pub fn lights(
         entries.push(entry);
     }
     for (ti, t) in triangles.iter().enumerate() {
-        let e = scene.materials[t.material as usize].emission;
+        let m = &scene.materials[t.material as usize];
+        let e = m.emission;
         if e.max_element() > 0.0 {
             let (v0, v1, v2) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
-            entries.push(area_light(
-                ti as u32,
-                LIGHT_TRIANGLE,
-                e,
-                0.5 * (v1 - v0).cross(v2 - v0).length(),
-            ));
+            let area = 0.5 * (v1 - v0).cross(v2 - v0).length();
+            let Some(k) = m.emission_texture else {
+                entries.push(area_light(ti as u32, LIGHT_TRIANGLE, e, area));
+                continue;
+            };
+            // A radiance texture: photons leave uniformly in area with flux Le(uv) A pi / prob (unbiased
+            // for any prob); the power that sets prob is the texture's largest value over the triangle's
+            // texels times A pi (a bound: prob > 0 wherever Le > 0, and no photon carries more than
+            // power / prob), lights.glsl's emitter_radiance reading its material's texture there.
+            let texture = &scene.textures[k as usize];
+            let at = 3 * ti;
+            let f = |x: u32| f32::from_bits(x);
+            let (a, c) = (triangle_texels[at], triangle_texels[at + 1]);
+            let uv = [[f(a[0]), f(a[1])], [f(a[2]), f(a[3])], [f(c[0]), f(c[1])]];
+            let most = texture_max_over(texture, uv).as_dvec3();
+            let per_radiance = area as f64 * PI;
+            let mut entry = area_light(ti as u32, LIGHT_TRIANGLE, Vec3::ZERO, area);
+            entry.light.power = (most * per_radiance).as_vec3().to_array();
+            entry.light.flux = [per_radiance as f32; 3];
+            entry.light.texture = texture_at[k as usize] + 1;
+            entry.flux_bound = most.max_element() * per_radiance;
+            entries.push(entry);
         }
     }
     for (si, s) in scene.spheres.iter().enumerate() {
@@ -177,16 +196,9 @@ pub fn lights(
     })
 }
 
-/// Texture `t`'s value at its coordinates `st` (after to_uv), in f64: texture.glsl's texture_value.
-fn texture_at_st(t: &Texture, s: f64, u: f64) -> DVec3 {
-    let (width, height, pixels) = match &t.pattern {
-        Pattern::Checkerboard { color0, color1 } => {
-            let upper = (s - s.floor() > 0.5, u - u.floor() > 0.5);
-            return if upper.0 == upper.1 { color0 } else { color1 }.as_dvec3();
-        }
-        Pattern::Bitmap { width, height, pixels } => (*width as i64, *height as i64, pixels),
-    };
-    let wrap = |i: i64, n: i64| match t.wrap {
+/// Pixel index i of a side of n, wrapped (texture.glsl's wrap_pixel).
+fn wrap_index(wrap: Wrap, i: i64, n: i64) -> i64 {
+    match wrap {
         Wrap::Clamp => i.clamp(0, n - 1),
         Wrap::Repeat => i.rem_euclid(n),
         Wrap::Mirror => {
@@ -197,7 +209,19 @@ fn texture_at_st(t: &Texture, s: f64, u: f64) -> DVec3 {
                 m
             }
         }
+    }
+}
+
+/// Texture `t`'s value at its coordinates `st` (after to_uv), in f64: texture.glsl's texture_value.
+fn texture_at_st(t: &Texture, s: f64, u: f64) -> DVec3 {
+    let (width, height, pixels) = match &t.pattern {
+        Pattern::Checkerboard { color0, color1 } => {
+            let upper = (s - s.floor() > 0.5, u - u.floor() > 0.5);
+            return if upper.0 == upper.1 { color0 } else { color1 }.as_dvec3();
+        }
+        Pattern::Bitmap { width, height, pixels } => (*width as i64, *height as i64, pixels),
     };
+    let wrap = |i: i64, n: i64| wrap_index(t.wrap, i, n);
     let px = |x: i64, y: i64| pixels[(wrap(y, height) * width + wrap(x, width)) as usize].as_dvec3();
     let (x, y) = (s * width as f64, u * height as f64);
     if t.filter == Filter::Nearest {
@@ -208,6 +232,43 @@ fn texture_at_st(t: &Texture, s: f64, u: f64) -> DVec3 {
     let (fx, fy) = (x - i, y - j);
     let (i, j) = (i as i64, j as i64);
     (1.0 - fy) * ((1.0 - fx) * px(i, j) + fx * px(i + 1, j)) + fy * ((1.0 - fx) * px(i, j + 1) + fx * px(i + 1, j + 1))
+}
+
+/// Most pixels [`texture_max_over`] scans for one triangle; beyond, the whole image's largest value.
+const MAX_SCANNED_PIXELS: i64 = 1 << 16;
+
+/// The largest value per channel texture `t` takes on the triangle of surface coordinates `uv`: the
+/// largest of the pixels (wrapped) that its coordinates' bounding box, widened by a pixel each way,
+/// reaches (bilinear and nearest lookups mix no others); a checkerboard's larger colour.
+fn texture_max_over(t: &Texture, uv: [[f32; 2]; 3]) -> Vec3 {
+    let Pattern::Bitmap { width, height, pixels } = &t.pattern else {
+        return t.max();
+    };
+    let [a, b, c, d, e, f] = t.to_uv.map(f64::from);
+    let st = uv.map(|[u, v]| (a * u as f64 + b * v as f64 + c, d * u as f64 + e * v as f64 + f));
+    let (w, h) = (*width as i64, *height as i64);
+    let range = |lo: f64, hi: f64, n: i64| {
+        let (i0, i1) = ((lo * n as f64).floor() - 1.0, (hi * n as f64).floor() + 1.0);
+        if !(i0.is_finite() && i1.is_finite()) || i1 - i0 + 1.0 >= n as f64 {
+            (0, n - 1)
+        } else {
+            (i0 as i64, i1 as i64)
+        }
+    };
+    let fold = |g: fn(f64, f64) -> f64, pick: fn(&(f64, f64)) -> f64| st.iter().map(pick).fold(pick(&st[0]), g);
+    let (x0, x1) = range(fold(f64::min, |p| p.0), fold(f64::max, |p| p.0), w);
+    let (y0, y1) = range(fold(f64::min, |p| p.1), fold(f64::max, |p| p.1), h);
+    if (x1 - x0 + 1) * (y1 - y0 + 1) > MAX_SCANNED_PIXELS {
+        return t.max();
+    }
+    let wrap = |i: i64, n: i64| wrap_index(t.wrap, i, n);
+    let mut most = Vec3::ZERO;
+    for y in y0..=y1 {
+        for x in x0..=x1 {
+            most = most.max(pixels[(wrap(y, h) * w + wrap(x, w)) as usize]);
+        }
+    }
+    most
 }
 
 /// Most patches [`texture_mean`] sums exactly; beyond (a to_uv that repeats a large image many times),
@@ -588,7 +649,7 @@ material = "glow"
         scene.materials[0].emission_texture = Some(0);
         scene.materials[0].emission = most;
         scene.validate().unwrap();
-        let table = lights(&scene, &[], &[7], &mut Vec::new()).unwrap();
+        let table = lights(&scene, &[], &[], &[7], &mut Vec::new()).unwrap();
         let l = &table.lights[0];
         let a_pi = 3.0 * PI;
         assert_eq!((l.kind, l.texture, l.prob), (LIGHT_QUAD, 8, 1.0));

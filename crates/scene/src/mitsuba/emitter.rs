@@ -643,11 +643,11 @@ mod tests {
         assert!(e.contains("a second emitter"), "{e}");
     }
 
-    /// A texture on an area emitter's radiance (Mitsuba 3's src/emitters/area.cpp): read on rectangles
-    /// (an EXR's values above 1 kept: radiances are unbounded), Material::emission its largest value,
-    /// mirrored like a bsdf's texture on a turned rectangle; refused on other shapes and for negative values.
+    /// A texture on an area emitter's radiance (Mitsuba 3's src/emitters/area.cpp): read on rectangles and
+    /// meshes (an EXR's values above 1 kept: radiances are unbounded), Material::emission its largest value,
+    /// mirrored like a bsdf's texture on a turned rectangle; refused on spheres and for negative values.
     #[test]
-    fn textured_radiance_on_rectangles() {
+    fn textured_radiance_on_rectangles_and_meshes() {
         let dir = TempDir::new("mitsuba-area-texture");
         write_float_image(&dir, "glow.exr", |x, y| [x as f32 * 5.0, 2.0, y as f32 + 0.5]);
         let emitter = r#"<emitter type="area"><texture type="bitmap" name="radiance">
@@ -672,16 +672,19 @@ mod tests {
         let turned = &s.materials[s.quads[2].material as usize];
         let t = &s.textures[turned.emission_texture.unwrap() as usize];
         assert_eq!(t.to_uv, [-1.0, 0.0, 1.0, 0.0, 1.0, 0.0]);
-        for shape in ["sphere", "cube", "disk"] {
-            let e = load_in(&dir, &format!(r#"<shape type="{shape}">{emitter}</shape>"#), &[]).unwrap_err();
-            let e = format!("{e:#}");
-            assert!(
-                e.contains(&format!(
-                    "a texture on an area emitter's radiance on a {shape} is not supported yet"
-                )),
-                "{e}"
-            );
+        // Meshes (with texture coordinates) read it too; spheres are refused by name.
+        for shape in ["cube", "disk", "cylinder"] {
+            let s = load_in(&dir, &format!(r#"<shape type="{shape}">{emitter}</shape>"#), &[])
+                .unwrap_or_else(|e| panic!("{shape}: {e:#}"));
+            let m = &s.materials[s.meshes[0].materials[0] as usize];
+            assert!(m.emission_texture.is_some() && s.meshes[0].uvs.is_some(), "{shape}");
         }
+        let e = load_in(&dir, &format!(r#"<shape type="sphere">{emitter}</shape>"#), &[]).unwrap_err();
+        let e = format!("{e:#}");
+        assert!(
+            e.contains("a texture on an area emitter's radiance on a sphere is not supported yet"),
+            "{e}"
+        );
         write_float_image(&dir, "negative.exr", |x, _| [1.0 - x as f32, 1.0, 1.0]);
         let e = load_in(
             &dir,

@@ -106,11 +106,11 @@ impl Builder {
         // makes the material a light; the light's power and photon bound come from the texture itself).
         let emission = radiance_texture.as_ref().map_or(emission, |t| t.texture.max());
         if let Some(t) = &radiance_texture {
-            if e.kind() != "rectangle" {
-                return Err(t.at.err(format!(
-                    "a texture on an area emitter's radiance on a {} is not supported yet (read on rectangles)",
-                    e.kind()
-                )));
+            if e.kind() == "sphere" {
+                return Err(t.at.err(
+                    "a texture on an area emitter's radiance on a sphere is not supported yet (read on rectangles \
+                     and meshes: obj, ply, serialized, cube, disk, cylinder)",
+                ));
             }
             if emission.max_element() <= 0.0 {
                 return Err(t
