@@ -14,12 +14,39 @@ use ppm_vk_engine::{Mode, Scene, Settings};
 
 const REFERENCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/references");
 
-fn textured_light() -> Scene {
+fn load(name: &str) -> Scene {
     let root = env!("CARGO_MANIFEST_DIR");
-    let scene =
-        Scene::load(Path::new(&format!("{root}/scenes/textured-light.xml"))).unwrap_or_else(|e| panic!("{e:#}"));
+    let scene = Scene::load(Path::new(&format!("{root}/scenes/{name}.xml"))).unwrap_or_else(|e| panic!("{e:#}"));
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     scene
+}
+
+fn textured_light() -> Scene {
+    load("textured-light")
+}
+
+/// `name`'s render (SPPM, 8 x 200k photons) against its Mitsuba reference: the image's mean per channel
+/// within 1%.
+fn matches_mitsuba(name: &str, scene: &Scene) {
+    let reference = Reference::load(Path::new(&format!("{REFERENCES}/{name}.exr"))).unwrap();
+    let ctx = ctx();
+    let image = render(&ctx, scene, settings(), 8);
+    assert_clean(&ctx);
+    assert_eq!(
+        (image.width, image.height),
+        (reference.image.width, reference.image.height)
+    );
+    let (got, want) = (image.mean(), reference.image.mean());
+    println!("{name}: mean {got:.5?}, Mitsuba {want:.5?}");
+    for c in 0..3 {
+        let ratio = got[c] / want[c];
+        println!("channel {c}: ratio {ratio:.5}");
+        assert!(
+            (ratio - 1.0).abs() < 0.01,
+            "channel {c}: {:+.2}% off Mitsuba's",
+            100.0 * (ratio - 1.0)
+        );
+    }
 }
 
 fn settings() -> Settings {
@@ -35,7 +62,6 @@ fn settings() -> Settings {
 /// The image's mean per channel within 1% of Mitsuba's.
 #[test]
 fn textured_light_matches_mitsuba() {
-    let reference = Reference::load(Path::new(&format!("{REFERENCES}/textured-light.exr"))).unwrap();
     let scene = textured_light();
     let light = scene
         .materials
@@ -47,24 +73,19 @@ fn textured_light_matches_mitsuba() {
         Vec3::new(18.0, 6.0, 10.0),
         "the texture's largest values"
     );
-    let ctx = ctx();
-    let image = render(&ctx, &scene, settings(), 8);
-    assert_clean(&ctx);
-    assert_eq!(
-        (image.width, image.height),
-        (reference.image.width, reference.image.height)
+    matches_mitsuba("textured-light", &scene);
+}
+
+/// The same light as an OBJ square of two triangles (scenes/textured-light-mesh.xml): a mesh light, Le at
+/// its triangles' interpolated texture coordinates.
+#[test]
+fn textured_mesh_light_matches_mitsuba() {
+    let scene = load("textured-light-mesh");
+    assert!(
+        scene.meshes.iter().any(|m| m.uvs.is_some()),
+        "a mesh with texture coordinates"
     );
-    let (got, want) = (image.mean(), reference.image.mean());
-    println!("textured-light: mean {got:.5?}, Mitsuba {want:.5?}");
-    for c in 0..3 {
-        let ratio = got[c] / want[c];
-        println!("channel {c}: ratio {ratio:.5}");
-        assert!(
-            (ratio - 1.0).abs() < 0.01,
-            "channel {c}: {:+.2}% off Mitsuba's",
-            100.0 * (ratio - 1.0)
-        );
-    }
+    matches_mitsuba("textured-light-mesh", &scene);
 }
 
 /// A radiance texture that is one colour everywhere renders as that constant radiance: pixel by pixel
