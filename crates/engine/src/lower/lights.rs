@@ -620,6 +620,44 @@ mod tests {
         }
     }
 
+    /// texture_max_over bounds the texture everywhere on the triangle (dense samples of it never exceed
+    /// it) under each filter and wrap mode, a turning to_uv, and triangles from tiny to many periods wide
+    /// (where it falls back to the image's largest value).
+    #[test]
+    fn the_triangle_bound_holds_over_the_triangle() {
+        let cases = [
+            (Filter::Bilinear, Wrap::Repeat, [1.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
+            (Filter::Nearest, Wrap::Clamp, [0.8, 0.3, 0.1, -0.2, 1.1, 0.05]),
+            (Filter::Bilinear, Wrap::Mirror, [-2.5, 0.4, 0.3, 0.1, 1.5, -0.4]),
+        ];
+        let triangles = [
+            [[0.1, 0.1], [0.15, 0.1], [0.1, 0.17]],
+            [[0.3, 0.6], [0.9, 0.2], [0.5, 0.95]],
+            [[-0.7, 0.2], [0.4, -0.3], [0.05, 1.3]],
+            [[0.0, 0.0], [40.0, 0.0], [0.0, 30.0]],
+        ];
+        for (filter, wrap, to_uv) in cases {
+            let t = bitmap(9, 7, filter, wrap, to_uv);
+            let [a, b, c, d, e, f] = to_uv.map(f64::from);
+            for uv in triangles {
+                let bound = texture_max_over(&t, uv).as_dvec3();
+                let n = 60;
+                for i in 0..=n {
+                    for j in 0..=n - i {
+                        let (p, q) = (i as f64 / n as f64, j as f64 / n as f64);
+                        let at = |k: usize| (1.0 - p - q) * uv[0][k] as f64 + p * uv[1][k] as f64 + q * uv[2][k] as f64;
+                        let (u, v) = (at(0), at(1));
+                        let value = texture_at_st(&t, a * u + b * v + c, d * u + e * v + f);
+                        assert!(
+                            value.cmple(bound + 1e-12).all(),
+                            "{filter:?} {wrap:?} {uv:?}: {value} over {bound}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
     /// A textured quad light's power is its texture's mean times A pi, its photons' flux per unit of
     /// radiance A pi / prob, and the bound on one photon's flux the texture's largest value times A pi.
     #[test]

@@ -52,6 +52,9 @@ struct Common<'a> {
     anisotropic: bool,
 }
 
+/// An area emitter's radiance: a colour, or a texture (its largest value taken later).
+type Radiance = (Vec3, Option<Rc<Tex>>);
+
 impl Builder {
     /// A `<shape>`: its bsdf and emitter, its material, then its type's reader; every property must have
     /// been read by then.
@@ -63,7 +66,7 @@ impl Builder {
         self.shapes += 1;
         let (props, objects) = Props::of(e);
         let mut bsdf: Option<(Bsdf, &Elem)> = None;
-        let mut emission: Option<((Vec3, Option<Rc<Tex>>), &Elem)> = None;
+        let mut emission: Option<(Radiance, &Elem)> = None;
         for o in objects {
             match o.tag.as_str() {
                 "bsdf" | "ref" => {
