@@ -95,6 +95,7 @@ fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
                 "scenes/legacy/cornell-spheres.xml",
                 "scenes/bump-plane.xml",
                 "scenes/blend-plane.xml",
+                "scenes/textured-light-mesh.xml",
             ],
         ),
         ("spd", load_spd, vec!["scenes/references/spectra-test.spd"]),
@@ -524,6 +525,65 @@ fn hostile_bump_and_normal_maps_are_refused() {
     ];
     for (i, (body, says)) in cases.iter().enumerate() {
         let e = load_fails(xml_scene(&dir, &format!("m{i}.xml"), body));
+        assert!(e.contains(says), "{body}: {e}");
+    }
+}
+
+/// Radiance textures (an area emitter's `radiance`, issue 37) with a NaN, an infinite or a negative pixel,
+/// a `ref` to no texture, one on a sphere, one on a mesh without texture coordinates: an error naming the
+/// element or file, never a panic.
+#[test]
+fn hostile_radiance_textures_are_refused() {
+    let dir = scratch("radiance");
+    let exr = |name: &str, bad: f32| {
+        let img = image::Rgb32FImage::from_fn(3, 2, |x, y| {
+            image::Rgb([1.0, if (x, y) == (2, 1) { bad } else { 2.0 }, 0.5])
+        });
+        img.save(dir.join(name)).unwrap();
+    };
+    exr("nan.exr", f32::NAN);
+    exr("inf.exr", f32::INFINITY);
+    exr("neg.exr", -1.0);
+    exr("good.exr", 3.0);
+    std::fs::write(dir.join("bare.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let light = |shape: &str, extra: &str, radiance: &str| {
+        format!("<shape type=\"{shape}\">{extra}<emitter type=\"area\">{radiance}</emitter></shape>")
+    };
+    let bitmap = |file: &str| {
+        format!("<texture type=\"bitmap\" name=\"radiance\"><string name=\"filename\" value=\"{file}\"/></texture>")
+    };
+    let cases = [
+        (
+            light("rectangle", "", &bitmap("nan.exr")),
+            "a radiance must be finite and at least 0",
+        ),
+        (
+            light("rectangle", "", &bitmap("inf.exr")),
+            "a radiance must be finite and at least 0",
+        ),
+        (
+            light("rectangle", "", &bitmap("neg.exr")),
+            "a radiance must be finite and at least 0",
+        ),
+        (
+            light("rectangle", "", "<ref name=\"radiance\" id=\"nowhere\"/>"),
+            "no texture with id \"nowhere\"",
+        ),
+        (
+            light("sphere", "", &bitmap("good.exr")),
+            "radiance on a sphere is not supported",
+        ),
+        (
+            light(
+                "obj",
+                "<string name=\"filename\" value=\"bare.obj\"/>",
+                &bitmap("good.exr"),
+            ),
+            "bare.obj",
+        ),
+    ];
+    for (i, (body, says)) in cases.iter().enumerate() {
+        let e = load_fails(xml_scene(&dir, &format!("r{i}.xml"), body));
         assert!(e.contains(says), "{body}: {e}");
     }
 }

@@ -569,11 +569,12 @@ fn photon_records_match_reference_histograms(
     let start = match g.smooth_shading() {
         true => [(ppm_vk_kernels::layout::FLUX_CAP_FIXED / g.params.flux_fixed as f64) as f32; 3],
         // Lights of one kind start every photon with the same flux; other kinds vary it (a spot's
-        // falloff, an environment's L / pdf) up to the bound the fixed-point scale was set from.
+        // falloff, an environment's L / pdf, a radiance texture) up to the bound the fixed-point scale
+        // was set from.
         false
             if g.lights
                 .iter()
-                .all(|l| l.kind <= ppm_vk_kernels::layout::LIGHT_TRIANGLE) =>
+                .all(|l| l.kind <= ppm_vk_kernels::layout::LIGHT_TRIANGLE && l.texture == 0) =>
         {
             g.lights[0].power.map(|p| p / g.lights[0].prob)
         }
@@ -1797,6 +1798,66 @@ fn photon_records_match_reference_with_masks() {
 #[test]
 fn photon_records_match_reference_with_masks_unspecialized() {
     photon_records_match_reference_masked(false);
+}
+
+/// cornell_textured with its light's radiance a texture (issue 37, Mitsuba's area emitter with a textured
+/// `radiance`): a 6 x 4 bitmap from 0.5 to 30 (the test's records need flux in every channel), turned by its
+/// to_uv and clamped, on the ceiling's quad and on the card's two triangles (at their texture coordinates);
+/// eye rays see it (term (a)), shadow rays (term (d)) and photons take it at their points of the lights.
+fn cornell_textured_light() -> ppm_vk_engine::Scene {
+    use ppm_vk_engine::scene::texture::{Filter, Pattern, Texture, Wrap};
+    let mut scene = cornell_textured();
+    let (w, h) = (6u32, 4u32);
+    scene.textures.push(Texture {
+        name: "radiance".into(),
+        pattern: Pattern::Bitmap {
+            width: w,
+            height: h,
+            pixels: (0..w * h)
+                .map(|i| {
+                    let (x, y) = ((i % w) as f32 / (w - 1) as f32, (i / w) as f32 / (h - 1) as f32);
+                    Vec3::new(0.5 + 30.0 * x, 0.5 + 20.0 * y, 0.5 + 10.0 * (x + y))
+                })
+                .collect(),
+        },
+        filter: Filter::Bilinear,
+        wrap: Wrap::Clamp,
+        to_uv: [0.8, 0.3, 0.1, -0.2, 1.1, 0.05],
+    });
+    let t = scene.textures.len() as u32 - 1;
+    let lights = scene.lights();
+    assert!(!lights.is_empty());
+    let m = scene.quads[lights[0] as usize].material as usize;
+    scene.materials[m].emission_texture = Some(t);
+    scene.materials[m].emission = scene.textures[t as usize].max();
+    // The card (two triangles with texture coordinates, and an albedo texture) glows with it too.
+    let card = scene
+        .meshes
+        .iter()
+        .find(|m| m.name == "card")
+        .expect("the card")
+        .materials[0] as usize;
+    scene.materials[card].emission_texture = Some(t);
+    scene.materials[card].emission = scene.textures[t as usize].max();
+    scene.validate().unwrap_or_else(|e| panic!("{e:#}"));
+    scene
+}
+
+#[test]
+fn ray_pass_matches_reference_with_a_textured_light() {
+    ray_pass_matches_reference_on(cornell_textured_light(), true, DirectLight::Sample);
+}
+
+/// The kernels as built: the light read from the buffer (emitter_of), not compiled in.
+#[test]
+fn ray_pass_matches_reference_with_a_textured_light_unspecialized() {
+    ray_pass_matches_reference_on(cornell_textured_light(), false, DirectLight::Sample);
+}
+
+/// Photons leave the light with flux (A pi / prob) Le(uv) at their points.
+#[test]
+fn photon_records_match_reference_with_a_textured_light() {
+    photon_records_match_reference_on(cornell_textured_light(), true, 1e-3);
 }
 
 /// An open scene with every kind of light beyond quads and triangles: a glowing sphere, a point light, a

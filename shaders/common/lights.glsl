@@ -12,16 +12,16 @@
 
 // The Emitter of a light record (its quad or triangle read from the scene).
 Emitter emitter_of(Light light) {
-    vec3 flux = (light.kind == LIGHT_SPOT ? light.flux : light.power) / light.prob;
+    vec3 flux = (light.kind == LIGHT_SPOT || light.texture != 0u ? light.flux : light.power) / light.prob;
     if (light.kind == LIGHT_TRIANGLE) {
         Triangle tr = bvh_triangle(light.index);
         return Emitter(tr.v0, tr.v1 - tr.v0, tr.v2 - tr.v0, bvh_normal(tr), flux, light.cdf, LIGHT_TRIANGLE,
-                       vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, 0u);
+                       vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, light.texture != 0u ? light.index + 1u : 0u);
     }
     if (light.kind == LIGHT_QUAD) {
         Quad q = quads[light.index];
         return Emitter(q.origin, q.edge_u, q.edge_v, q.normal, flux, light.cdf, LIGHT_QUAD, vec3(0.0), 0.0, 0.0,
-                       0.0, 0.0, 0.0, 0u);
+                       0.0, 0.0, 0.0, light.texture);
     }
     vec3 value = light.kind == LIGHT_ENVIRONMENT ? light.value : light.value / light.prob;
     return Emitter(light.origin, light.edge_u, cross(light.edge_u, light.normal), light.normal, flux, light.cdf,
@@ -69,6 +69,26 @@ vec3 emitter_point(Emitter e, float a, float b) {
         b = 1.0 - b;
     }
     return e.origin + a * e.edge_u + b * e.edge_v;
+}
+
+// What multiplies e.flux at emitter_point(e, a, b): a quad's radiance texture there (its uv is (a, b), as
+// a hit's planar coordinates), a textured triangle's (e.table - 1 is the triangle: its material's texture
+// at its interpolated uv, as surface_uv), else 1 (e.flux is then the whole flux). As Mitsuba 3's area
+// emitter with a textured radiance, sampled uniformly in area: the flux Le(uv) A pi / prob is unbiased for
+// any prob.
+vec3 emitter_radiance(Emitter e, float a, float b) {
+    if (!HAS_TEXTURES || e.table == 0u || e.kind > LIGHT_TRIANGLE) return vec3(1.0);
+    if (e.kind == LIGHT_QUAD) return texture_value(e.table - 1u, vec2(a, b));
+    if (a + b > 1.0) { // emitter_point's fold
+        a = 1.0 - a;
+        b = 1.0 - b;
+    }
+    uint prim = e.table - 1u;
+    uint m = bvh_triangle(prim).material;
+    uint radiance = texelFetch(material_texels, int(MATERIAL_TEXELS * m + 5u)).w;
+    vec4 t = uintBitsToFloat(texelFetch(triangle_texels, int(TRIANGLE_TEXELS * prim)));
+    vec2 t2 = uintBitsToFloat(texelFetch(triangle_texels, int(TRIANGLE_TEXELS * prim + 1u)).xy);
+    return texture_value(radiance - 1u, (1.0 - a - b) * t.xy + a * t.zw + b * t2);
 }
 
 // A quad or triangle: sampled by emitter_point and the cosine about its normal (the code every scene had

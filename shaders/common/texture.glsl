@@ -101,9 +101,14 @@ void apply_parameter_textures(inout Material m, Hit h) {
 // Material m (material() read it) at hit h with its textures applied: a diffuse surface's albedo, or a
 // plastic's diffuse factor from the texture's diffuse_reflectance (as the host makes Material.color for
 // a constant one: crates/materials/src/plastic.rs), and apply_parameter_textures'.
+// An emitter's radiance texture (the sixth texel's w, read only where it emits) gives its emission there.
 void apply_texture(inout Material m, Hit h) {
     if (!HAS_TEXTURES) return;
     apply_parameter_textures(m, h);
+    if (max(m.emission.r, max(m.emission.g, m.emission.b)) > 0.0) {
+        uint radiance = texelFetch(material_texels, int(MATERIAL_TEXELS * h.material + 5u)).w;
+        if (radiance != 0u) m.emission = texture_value(radiance - 1u, surface_uv(h));
+    }
     if (m.texture == 0u) return;
     vec3 value = texture_value(m.texture - 1u, surface_uv(h));
     if (m.surface == SURFACE_PLASTIC) {

@@ -104,7 +104,10 @@ struct Emitter {
     float cos_beam;   // angle in radians, and 1 / (cutoff - beam) (falloff linear in the angle, as Mitsuba's)
     float cutoff;
     float inv_width;
-    uint table;      // an environment map's first texel in texture_texels (lights.glsl); 0xffffffff: constant
+    uint table;      // an environment map's first texel in texture_texels (lights.glsl); 0xffffffff: constant;
+                     // a quad's radiance texture (0: none, else 1 + its header's texel), a textured
+                     // triangle's 1 + its index (flux is then per unit of radiance: lights.glsl's
+                     // emitter_radiance)
 };
 
 const uint LIGHT_QUAD = 0u;
@@ -134,8 +137,9 @@ struct Light {
     float cutoff;
     vec3 value;      // not yet divided by prob
     float inv_width;
-    vec3 flux;       // Emitter::flux, when it is not power / prob (a spot's)
-    float pad0;
+    vec3 flux;       // Emitter::flux, when it is not power / prob (a spot's; a textured quad's per unit
+                     // radiance, area pi: its photons carry flux * Le(uv) / prob)
+    uint texture;    // a quad's or triangle's radiance texture: 0 none, else 1 + the texel of its header
 };
 
 // Constants of one render, written once by the host.

@@ -180,7 +180,7 @@ void main() {
                 vng = lobe;
                 vns = lobe;
                 pending = true;
-                flux = e.flux;
+                flux = e.flux * emitter_radiance(e, a, b);
             }
             leave = false;
             depth = 0u;

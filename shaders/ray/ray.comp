@@ -164,7 +164,7 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint co
         cos_p = dot(nf, w);
         float cos_y = -dot(e.normal, w);
         if (cos_p <= 0.0 || cos_y <= 0.0 || d2 <= 0.0) return vec3(0.0);
-        lflux = e.flux;
+        lflux = e.flux * emitter_radiance(e, a, b);
         s = cos_p * cos_y / (PI * d2);
     }
     if (HAS_SHADING_NORMALS && !shading_valid(w, ng, nf)) return vec3(0.0);

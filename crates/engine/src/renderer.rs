@@ -1455,7 +1455,7 @@ fn tracing_pipeline(
             textures: gpu
                 .materials
                 .iter()
-                .any(|m| m.texture != 0 || m.specular_texture != 0 || m.alpha_texture != 0),
+                .any(|m| m.texture != 0 || m.specular_texture != 0 || m.alpha_texture != 0 || m.emission_texture != 0),
             rough_plastics: gpu.materials.iter().any(|m| m.table != 0),
             shading_normals: gpu.smooth_shading(),
             anisotropic: gpu.materials.iter().any(|m| m.alpha_u != m.alpha_v),

@@ -164,9 +164,11 @@ pub struct Light {
     /// Radiance, intensity or irradiance (types.glsl's Emitter::value), not yet divided by `prob`.
     pub value: [f32; 3],
     pub inv_width: f32,
-    /// A spot's photon flux before its falloff (zero for the other kinds: power / prob).
+    /// A spot's photon flux before its falloff; a quad with a radiance texture's per unit of radiance,
+    /// area pi (zero for the other kinds: power / prob).
     pub flux: [f32; 3],
-    pub pad0: f32,
+    /// A quad's or triangle's radiance texture: 0 for none, else 1 + the texel of its header.
+    pub texture: u32,
 }
 gpu_struct!(Light {
     index,
@@ -184,7 +186,7 @@ gpu_struct!(Light {
     value,
     inv_width,
     flux,
-    pad0
+    texture
 });
 /// `Light::kind` (types.glsl).
 pub use crate::reflected::constants::{

@@ -184,6 +184,8 @@ pub fn scene_constants(c: &SceneConstants) -> String {
     };
     // The fields after the kind, zero for quads and triangles (lights.glsl's emitter_of fills them alike).
     const NO_MORE: &str = "vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, 0u";
+    // A quad's last field is its radiance texture, a textured triangle's 1 + its index (Emitter::table).
+    const QUAD_NO_MORE: &str = "vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, ";
     s += &array(
         "Emitter",
         "SCENE_EMITTERS",
@@ -191,30 +193,37 @@ pub fn scene_constants(c: &SceneConstants) -> String {
             .iter()
             .map(|l| {
                 // The flux a photon starts with, divided here exactly as photon.comp would (f32).
-                let flux = if l.kind == LIGHT_SPOT { l.flux } else { l.power }.map(|p| p / l.prob);
+                let flux = if l.kind == LIGHT_SPOT || l.texture != 0 {
+                    l.flux
+                } else {
+                    l.power
+                }
+                .map(|p| p / l.prob);
                 if l.kind == LIGHT_TRIANGLE {
                     // Edges subtracted in f32 as photon.comp's buffer path does; the normal is computed
                     // there from them (choose_emitter), not written here.
                     let t = &c.triangles[l.index as usize];
                     return format!(
-                        "Emitter({}, {}, {}, vec3(0.0), {}, {}, {LIGHT_TRIANGLE}u, {NO_MORE})",
+                        "Emitter({}, {}, {}, vec3(0.0), {}, {}, {LIGHT_TRIANGLE}u, {QUAD_NO_MORE}{}u)",
                         v(t.v0),
                         v(sub(t.v1, t.v0)),
                         v(sub(t.v2, t.v0)),
                         v(flux),
-                        f(l.cdf)
+                        f(l.cdf),
+                        if l.texture != 0 { l.index + 1 } else { 0 }
                     );
                 }
                 if l.kind == LIGHT_QUAD {
                     let q = &quads[l.index as usize];
                     return format!(
-                        "Emitter({}, {}, {}, {}, {}, {}, {LIGHT_QUAD}u, {NO_MORE})",
+                        "Emitter({}, {}, {}, {}, {}, {}, {LIGHT_QUAD}u, {QUAD_NO_MORE}{}u)",
                         v(q.origin),
                         v(q.edge_u),
                         v(q.edge_v),
                         v(q.normal),
                         v(flux),
-                        f(l.cdf)
+                        f(l.cdf),
+                        l.texture
                     );
                 }
                 // As emitter_of: an environment's value is not divided by its prob (its cdf, as light 0).

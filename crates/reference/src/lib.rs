@@ -37,7 +37,7 @@ use ppm_vk_kernels::photon::SALT_EMISSION;
 use ppm_vk_kernels::ray::RayPush;
 use ppm_vk_materials::math::{cosine_direction, fresnel_dielectric, oct_decode, oct_encode, reflect, v3, PI};
 
-use lights::{choose_emitter, emitter_point, first_emitter, is_area, light_sample, LightSample};
+use lights::{choose_emitter, emitter_point, emitter_radiance, first_emitter, is_area, light_sample, LightSample};
 use normal_map::Bump;
 use ppm_vk_engine::lower::GpuScene;
 use ppm_vk_engine::settings::ProbeMode;
@@ -101,7 +101,7 @@ fn direct_light(
         if cos_p <= 0.0 || cos_y <= 0.0 || d2 <= 0.0 {
             return Vec3::ZERO;
         }
-        lflux = e.flux;
+        lflux = e.flux * emitter_radiance(g, &e, a, b);
         s = cos_p * cos_y / (PI * d2);
     }
     if !shading::valid(w, ng, nf) {
@@ -728,7 +728,7 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
         let u1 = rng.float();
         let u2 = rng.float();
         d = cosine_direction(e.normal, u1, u2);
-        flux = e.flux;
+        flux = e.flux * emitter_radiance(g, &e, a, b);
     }
     // photon.comp's `capped`, without its count.
     let cap = |f: Vec3| shading::capped(f, p.flux_fixed).0;

@@ -31,7 +31,7 @@ pub struct Emitter {
 
 /// lights.glsl's `emitter_of`.
 pub fn emitter_of(g: &GpuScene, light: &Light) -> Emitter {
-    let flux = v3(if light.kind == LIGHT_SPOT {
+    let flux = v3(if light.kind == LIGHT_SPOT || light.texture != 0 {
         light.flux
     } else {
         light.power
@@ -56,11 +56,13 @@ pub fn emitter_of(g: &GpuScene, light: &Light) -> Emitter {
         let t = &g.bvh_triangles[light.index as usize];
         (e.origin, e.edge_u, e.edge_v) = (v3(t.v0), v3(t.v1) - v3(t.v0), v3(t.v2) - v3(t.v0));
         e.normal = bvh::normal(t);
+        e.table = if light.texture != 0 { light.index + 1 } else { 0 };
         return e;
     }
     if light.kind == LIGHT_QUAD {
         let q = &g.quads[light.index as usize];
         (e.origin, e.edge_u, e.edge_v, e.normal) = (v3(q.origin), v3(q.edge_u), v3(q.edge_v), v3(q.normal));
+        e.table = light.texture;
         return e;
     }
     e.origin = v3(light.origin);
@@ -93,6 +95,28 @@ pub fn choose_emitter(g: &GpuScene, u: f32) -> Emitter {
 /// lights.glsl's `first_emitter`: light 0, the environment when there is one.
 pub fn first_emitter(g: &GpuScene) -> Emitter {
     emitter_of(g, &g.lights[0])
+}
+
+/// lights.glsl's `emitter_radiance`: what multiplies `e.flux` at `emitter_point(e, a, b)` (a quad's
+/// radiance texture at uv (a, b), a textured triangle's at its interpolated uv, else 1).
+pub fn emitter_radiance(g: &GpuScene, e: &Emitter, mut a: f32, mut b: f32) -> Vec3 {
+    if e.table == 0 || e.kind > LIGHT_TRIANGLE {
+        return Vec3::ONE;
+    }
+    if e.kind == LIGHT_QUAD {
+        return crate::texture::value(&g.textures, e.table - 1, glam::Vec2::new(a, b));
+    }
+    if a + b > 1.0 {
+        (a, b) = (1.0 - a, 1.0 - b);
+    }
+    let prim = (e.table - 1) as usize;
+    let m = &g.materials[g.bvh_triangles[prim].material as usize];
+    let f = |x: u32| f32::from_bits(x);
+    let (t, t2) = (g.triangle_texels[3 * prim], g.triangle_texels[3 * prim + 1]);
+    let uv = (1.0 - a - b) * glam::Vec2::new(f(t[0]), f(t[1]))
+        + a * glam::Vec2::new(f(t[2]), f(t[3]))
+        + b * glam::Vec2::new(f(t2[0]), f(t2[1]));
+    crate::texture::value(&g.textures, m.emission_texture - 1, uv)
 }
 
 /// lights.glsl's `is_area`.

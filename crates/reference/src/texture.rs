@@ -73,10 +73,14 @@ fn apply_parameter_textures(g: &GpuScene, m: &Material, uv: Vec2) -> Material {
 }
 
 /// texture.glsl's `apply_texture`: material `m` at texture coordinates `uv`.
+/// An emitter's radiance texture gives its emission there.
 pub fn apply(g: &GpuScene, m: &Material, uv: Vec2) -> Material {
-    let m = &apply_parameter_textures(g, m, uv);
+    let mut m = apply_parameter_textures(g, m, uv);
+    if v3(m.emission).max_element() > 0.0 && m.emission_texture != 0 {
+        m.emission = value(&g.textures, m.emission_texture - 1, uv).to_array();
+    }
     if m.texture == 0 {
-        return *m;
+        return m;
     }
     let mut value = value(&g.textures, m.texture - 1, uv);
     if m.surface == SURFACE_PLASTIC {
@@ -90,7 +94,7 @@ pub fn apply(g: &GpuScene, m: &Material, uv: Vec2) -> Material {
     }
     Material {
         color: value.to_array(),
-        ..*m
+        ..m
     }
 }
 

@@ -682,12 +682,28 @@ impl Scene {
     /// material reading a bad one, `textures[i]` one that none reads).
     fn check_textures(&self) -> Result<(), Invalid> {
         for (i, t) in self.textures.iter().enumerate() {
-            if let Err(message) = t.check() {
+            let this = Some(i as u32);
+            // A texture that nothing reads as a reflectance (an area light's radiance, or nothing) holds
+            // radiances: unbounded.
+            let radiance = !self.materials.iter().any(|m| {
+                m.texture == this
+                    || m.normal_map.is_some_and(|n| Some(n.texture()) == this)
+                    || m.opacity == this
+                    || m.specular_texture == this
+                    || m.alpha_texture == this
+            });
+            let checked = if radiance { t.check_radiance() } else { t.check() };
+            if let Err(message) = checked {
                 let path = self
                     .materials
                     .iter()
-                    .find(|m| m.texture == Some(i as u32))
-                    .map_or_else(|| format!("textures[{i}]"), |m| format!("materials.{}.texture", m.name));
+                    .find(|m| m.texture == this)
+                    .map(|m| format!("materials.{}.texture", m.name))
+                    .or_else(|| {
+                        let m = self.materials.iter().find(|m| m.emission_texture == this)?;
+                        Some(format!("materials.{}.emission_texture", m.name))
+                    })
+                    .unwrap_or_else(|| format!("textures[{i}]"));
                 return Err(invalid(path, format!("texture \"{}\": {message}", t.name)));
             }
         }
@@ -766,6 +782,29 @@ impl Scene {
                 return Err(invalid(
                     format!("materials.{}.opacity", m.name),
                     format!("texture index {t} out of range ({} textures)", self.textures.len()),
+                ));
+            }
+        }
+        for m in &self.materials {
+            let Some(t) = m.emission_texture else { continue };
+            let p = format!("materials.{}.emission_texture", m.name);
+            let Some(texture) = self.textures.get(t as usize) else {
+                return Err(invalid(
+                    p,
+                    format!("texture index {t} out of range ({} textures)", self.textures.len()),
+                ));
+            };
+            // Material::emission is the texture's largest value (what makes the material a light).
+            if texture.max() != m.emission {
+                return Err(invalid(
+                    p,
+                    format!(
+                        "the emission {} is not the largest value of radiance texture \"{}\", {} (set it to \
+                         Texture::max())",
+                        fmt_vec(m.emission.to_array()),
+                        texture.name,
+                        fmt_vec(texture.max().to_array())
+                    ),
                 ));
             }
         }
@@ -918,7 +957,15 @@ impl Scene {
                     ),
                 ));
             }
-            material(&format!("{p}.material"), s.material)?;
+            if material(&format!("{p}.material"), s.material)?
+                .emission_texture
+                .is_some()
+            {
+                return Err(invalid(
+                    format!("{p}.material"),
+                    "a radiance texture (emission_texture) is read on quads and triangles only",
+                ));
+            }
         }
         for (i, q) in self.quads.iter().enumerate() {
             check_quad(q, &format!("quad[{i}]"))?;
@@ -958,7 +1005,10 @@ impl Scene {
                         ),
                     ));
                 }
-                if let Some(t) = textured.clone().find(|t| t.texture.is_some()) {
+                if let Some(t) = textured
+                    .clone()
+                    .find(|t| t.texture.is_some() || t.emission_texture.is_some())
+                {
                     return Err(invalid(
                         p,
                         format!(

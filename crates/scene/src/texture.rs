@@ -314,6 +314,16 @@ impl Texture {
     /// Checks what a renderer relies on: a bitmap's size within [`MAX_TEXTURE_SIDE`] and its pixel count,
     /// every value a reflectance (finite, in [0, 1]), a finite `to_uv`.
     pub fn check(&self) -> Result<(), String> {
+        self.check_as(false)
+    }
+
+    /// [`Texture::check`] for a texture of radiances (an area light's `radiance`, as Mitsuba reads it:
+    /// unbounded): every value finite and at least 0 instead of a reflectance.
+    pub fn check_radiance(&self) -> Result<(), String> {
+        self.check_as(true)
+    }
+
+    fn check_as(&self, radiance: bool) -> Result<(), String> {
         if let Pattern::Bitmap { width, height, pixels } = &self.pattern {
             if !(1..=MAX_TEXTURE_SIDE).contains(width) || !(1..=MAX_TEXTURE_SIDE).contains(height) {
                 return Err(format!(
@@ -324,7 +334,19 @@ impl Texture {
                 return Err(format!("{} pixels for {width} x {height}", pixels.len()));
             }
         }
-        if let Some(bad) = self.out_of_range() {
+        if radiance {
+            let bad = |v: &Vec3| !(v.is_finite() && v.cmpge(Vec3::ZERO).all());
+            let found = match &self.pattern {
+                Pattern::Bitmap { pixels, .. } => pixels.iter().find(|p| bad(p)).copied(),
+                Pattern::Checkerboard { color0, color1 } => [*color0, *color1].into_iter().find(bad),
+            };
+            if let Some(v) = found {
+                return Err(format!(
+                    "a value of {}: a radiance must be finite and at least 0",
+                    crate::error::fmt_vec(v.to_array())
+                ));
+            }
+        } else if let Some(bad) = self.out_of_range() {
             return Err(format!("{bad}: a reflectance must be finite and in [0, 1]"));
         }
         if !self.to_uv.iter().all(|x| x.is_finite()) {

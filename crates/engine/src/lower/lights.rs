@@ -11,6 +11,7 @@ use ppm_vk_kernels::layout::{
 };
 
 use crate::error::{Error, Result};
+use crate::scene::texture::{Filter, Pattern, Texture, Wrap};
 use crate::scene::{Emitter, EnvMap, Environment, Scene};
 
 /// What [`lights`] builds.
@@ -37,8 +38,16 @@ fn max3(v: [f32; 3]) -> f64 {
 
 /// The lights of `scene` (`triangles`: its BVH's, in leaf order), in this order: the environment (light 0,
 /// which lights.glsl's first_emitter reads), emitting quads, triangles, spheres, then the other emitters.
-/// An environment map's tables are appended to `textures` (lights.glsl reads them there).
-pub fn lights(scene: &Scene, triangles: &[Triangle], textures: &mut Vec<[u32; 4]>) -> Result<LightTable> {
+/// An environment map's tables are appended to `textures` (lights.glsl reads them there); `texture_at` is
+/// the texel of each scene texture's header there (a radiance texture), `triangle_texels` the triangles'
+/// texture coordinates (textures::triangle_texels).
+pub fn lights(
+    scene: &Scene,
+    triangles: &[Triangle],
+    triangle_texels: &[[u32; 4]],
+    texture_at: &[u32],
+    textures: &mut Vec<[u32; 4]>,
+) -> Result<LightTable> {
     let (lo, hi) = scene.bounds();
     // The scene's bounding sphere, a little larger (Mitsuba's, for the same reason: photons from the sun
     // and the sky start outside it).
@@ -69,23 +78,50 @@ pub fn lights(scene: &Scene, triangles: &[Triangle], textures: &mut Vec<[u32; 4]
     }
     for qi in scene.lights() {
         let q = &scene.quads[qi as usize];
-        entries.push(area_light(
-            qi,
-            LIGHT_QUAD,
-            scene.materials[q.material as usize].emission,
-            q.area(),
-        ));
+        let m = &scene.materials[q.material as usize];
+        let Some(t) = m.emission_texture else {
+            entries.push(area_light(qi, LIGHT_QUAD, m.emission, q.area()));
+            continue;
+        };
+        // A radiance texture (Mitsuba's area emitter with a textured `radiance`): photons leave uniformly
+        // in area with flux Le(uv) A pi / prob, unbiased for any prob; the power that sets prob is the
+        // texture's mean over the quad's uv square times A pi, and the bound its largest value's.
+        let texture = &scene.textures[t as usize];
+        let per_radiance = q.area() as f64 * PI;
+        let mut entry = area_light(qi, LIGHT_QUAD, Vec3::ZERO, q.area());
+        entry.light.power = (texture_mean(texture) * per_radiance).as_vec3().to_array();
+        entry.light.flux = [per_radiance as f32; 3];
+        entry.light.texture = texture_at[t as usize] + 1;
+        entry.flux_bound = texture.max().max_element() as f64 * per_radiance;
+        entries.push(entry);
     }
     for (ti, t) in triangles.iter().enumerate() {
-        let e = scene.materials[t.material as usize].emission;
+        let m = &scene.materials[t.material as usize];
+        let e = m.emission;
         if e.max_element() > 0.0 {
             let (v0, v1, v2) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
-            entries.push(area_light(
-                ti as u32,
-                LIGHT_TRIANGLE,
-                e,
-                0.5 * (v1 - v0).cross(v2 - v0).length(),
-            ));
+            let area = 0.5 * (v1 - v0).cross(v2 - v0).length();
+            let Some(k) = m.emission_texture else {
+                entries.push(area_light(ti as u32, LIGHT_TRIANGLE, e, area));
+                continue;
+            };
+            // A radiance texture: photons leave uniformly in area with flux Le(uv) A pi / prob (unbiased
+            // for any prob); the power that sets prob is the texture's largest value over the triangle's
+            // texels times A pi (a bound: prob > 0 wherever Le > 0, and no photon carries more than
+            // power / prob), lights.glsl's emitter_radiance reading its material's texture there.
+            let texture = &scene.textures[k as usize];
+            let at = 3 * ti;
+            let f = |x: u32| f32::from_bits(x);
+            let (a, c) = (triangle_texels[at], triangle_texels[at + 1]);
+            let uv = [[f(a[0]), f(a[1])], [f(a[2]), f(a[3])], [f(c[0]), f(c[1])]];
+            let most = texture_max_over(texture, uv).as_dvec3();
+            let per_radiance = area as f64 * PI;
+            let mut entry = area_light(ti as u32, LIGHT_TRIANGLE, Vec3::ZERO, area);
+            entry.light.power = (most * per_radiance).as_vec3().to_array();
+            entry.light.flux = [per_radiance as f32; 3];
+            entry.light.texture = texture_at[k as usize] + 1;
+            entry.flux_bound = most.max_element() * per_radiance;
+            entries.push(entry);
         }
     }
     for (si, s) in scene.spheres.iter().enumerate() {
@@ -158,6 +194,135 @@ pub fn lights(scene: &Scene, triangles: &[Triangle], textures: &mut Vec<[u32; 4]
         max_flux,
         kinds,
     })
+}
+
+/// Pixel index i of a side of n, wrapped (texture.glsl's wrap_pixel).
+fn wrap_index(wrap: Wrap, i: i64, n: i64) -> i64 {
+    match wrap {
+        Wrap::Clamp => i.clamp(0, n - 1),
+        Wrap::Repeat => i.rem_euclid(n),
+        Wrap::Mirror => {
+            let m = i.rem_euclid(n);
+            if i.div_euclid(n) & 1 != 0 {
+                n - 1 - m
+            } else {
+                m
+            }
+        }
+    }
+}
+
+/// Texture `t`'s value at its coordinates `st` (after to_uv), in f64: texture.glsl's texture_value.
+fn texture_at_st(t: &Texture, s: f64, u: f64) -> DVec3 {
+    let (width, height, pixels) = match &t.pattern {
+        Pattern::Checkerboard { color0, color1 } => {
+            let upper = (s - s.floor() > 0.5, u - u.floor() > 0.5);
+            return if upper.0 == upper.1 { color0 } else { color1 }.as_dvec3();
+        }
+        Pattern::Bitmap { width, height, pixels } => (*width as i64, *height as i64, pixels),
+    };
+    let wrap = |i: i64, n: i64| wrap_index(t.wrap, i, n);
+    let px = |x: i64, y: i64| pixels[(wrap(y, height) * width + wrap(x, width)) as usize].as_dvec3();
+    let (x, y) = (s * width as f64, u * height as f64);
+    if t.filter == Filter::Nearest {
+        return px(x.floor() as i64, y.floor() as i64);
+    }
+    let (x, y) = (x - 0.5, y - 0.5);
+    let (i, j) = (x.floor(), y.floor());
+    let (fx, fy) = (x - i, y - j);
+    let (i, j) = (i as i64, j as i64);
+    (1.0 - fy) * ((1.0 - fx) * px(i, j) + fx * px(i + 1, j)) + fy * ((1.0 - fx) * px(i, j + 1) + fx * px(i + 1, j + 1))
+}
+
+/// Most pixels [`texture_max_over`] scans for one triangle; beyond, the whole image's largest value.
+const MAX_SCANNED_PIXELS: i64 = 1 << 16;
+
+/// The largest value per channel texture `t` takes on the triangle of surface coordinates `uv`: the
+/// largest of the pixels (wrapped) that its coordinates' bounding box, widened by a pixel each way,
+/// reaches (bilinear and nearest lookups mix no others); a checkerboard's larger colour.
+fn texture_max_over(t: &Texture, uv: [[f32; 2]; 3]) -> Vec3 {
+    let Pattern::Bitmap { width, height, pixels } = &t.pattern else {
+        return t.max();
+    };
+    let [a, b, c, d, e, f] = t.to_uv.map(f64::from);
+    let st = uv.map(|[u, v]| (a * u as f64 + b * v as f64 + c, d * u as f64 + e * v as f64 + f));
+    let (w, h) = (*width as i64, *height as i64);
+    let range = |lo: f64, hi: f64, n: i64| {
+        let (i0, i1) = ((lo * n as f64).floor() - 1.0, (hi * n as f64).floor() + 1.0);
+        if !(i0.is_finite() && i1.is_finite()) || i1 - i0 + 1.0 >= n as f64 {
+            (0, n - 1)
+        } else {
+            (i0 as i64, i1 as i64)
+        }
+    };
+    let fold = |g: fn(f64, f64) -> f64, pick: fn(&(f64, f64)) -> f64| st.iter().map(pick).fold(pick(&st[0]), g);
+    let (x0, x1) = range(fold(f64::min, |p| p.0), fold(f64::max, |p| p.0), w);
+    let (y0, y1) = range(fold(f64::min, |p| p.1), fold(f64::max, |p| p.1), h);
+    if (x1 - x0 + 1) * (y1 - y0 + 1) > MAX_SCANNED_PIXELS {
+        return t.max();
+    }
+    let wrap = |i: i64, n: i64| wrap_index(t.wrap, i, n);
+    let mut most = Vec3::ZERO;
+    for y in y0..=y1 {
+        for x in x0..=x1 {
+            most = most.max(pixels[(wrap(y, h) * w + wrap(x, w)) as usize]);
+        }
+    }
+    most
+}
+
+/// Most patches [`texture_mean`] sums exactly; beyond (a to_uv that repeats a large image many times),
+/// and for a to_uv that turns the image, a midpoint rule of `MEAN_QUADRATURE`^2 points instead.
+const MAX_MEAN_PATCHES: f64 = (1u64 << 24) as f64;
+const MEAN_QUADRATURE: usize = 1024;
+
+/// The mean of texture `t` over the unit square of surface coordinates (a quad's uv): exact (to f64
+/// rounding) where to_uv neither turns nor shears it. The texture is bilinear (or constant) on each patch
+/// of the grid of step 1 / (2 width) by 1 / (2 height) in its coordinates (pixel edges and centres; a
+/// checkerboard's halves), and a bilinear function's integral over a rectangle is its area times its
+/// value at the centre: the sum over the patches that the image of the square cuts. Otherwise a midpoint
+/// rule: its error only moves photons between lights (prob), never the image's expectation, as each
+/// photon's flux is Le(uv) A pi / prob.
+fn texture_mean(t: &Texture) -> DVec3 {
+    let [a, b, c, d, e, f] = t.to_uv.map(f64::from);
+    let (w, h) = match t.pattern {
+        Pattern::Bitmap { width, height, .. } => (width as f64, height as f64),
+        Pattern::Checkerboard { .. } => (1.0, 1.0),
+    };
+    let (ds, dt) = (0.5 / w, 0.5 / h);
+    let patches = (a.abs() / ds + 2.0) * (e.abs() / dt + 2.0);
+    if b == 0.0 && d == 0.0 && a != 0.0 && e != 0.0 && patches <= MAX_MEAN_PATCHES {
+        let (s0, s1) = (c.min(a + c), c.max(a + c));
+        let (t0, t1) = (f.min(e + f), f.max(e + f));
+        let cuts = |lo: f64, hi: f64, step: f64| {
+            let mut v = vec![lo];
+            let mut k = (lo / step).floor() + 1.0;
+            while k * step < hi {
+                v.push(k * step);
+                k += 1.0;
+            }
+            v.push(hi);
+            v
+        };
+        let (xs, ys) = (cuts(s0, s1, ds), cuts(t0, t1, dt));
+        let mut sum = DVec3::ZERO;
+        for y in ys.windows(2) {
+            for x in xs.windows(2) {
+                let centre = texture_at_st(t, 0.5 * (x[0] + x[1]), 0.5 * (y[0] + y[1]));
+                sum += centre * ((x[1] - x[0]) * (y[1] - y[0]));
+            }
+        }
+        return sum / ((s1 - s0) * (t1 - t0));
+    }
+    let n = MEAN_QUADRATURE;
+    let mut sum = DVec3::ZERO;
+    for j in 0..n {
+        for i in 0..n {
+            let (u, v) = ((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
+            sum += texture_at_st(t, a * u + b * v + c, d * u + e * v + f);
+        }
+    }
+    sum / (n * n) as f64
 }
 
 /// A unit vector perpendicular to unit n (any one: the frames lights.glsl draws directions in).
@@ -381,4 +546,155 @@ pub fn flux_fixed(scene: &Scene, max_flux: f64) -> Result<f32> {
         ));
     }
     Ok(flux_fixed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::texture::IDENTITY_UV;
+
+    fn bitmap(w: u32, h: u32, filter: Filter, wrap: Wrap, to_uv: [f32; 6]) -> Texture {
+        Texture {
+            name: "t".into(),
+            pattern: Pattern::Bitmap {
+                width: w,
+                height: h,
+                pixels: (0..w * h)
+                    .map(|i| Vec3::new((i % 7) as f32, (i * i % 5) as f32 * 0.5, 1.0 + (i % w) as f32))
+                    .collect(),
+            },
+            filter,
+            wrap,
+            to_uv,
+        }
+    }
+
+    /// The midpoint rule on an n x n grid of the unit square of surface coordinates.
+    fn midpoint(t: &Texture, n: usize) -> DVec3 {
+        let [a, b, c, d, e, f] = t.to_uv.map(f64::from);
+        let mut sum = DVec3::ZERO;
+        for j in 0..n {
+            for i in 0..n {
+                let (u, v) = ((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
+                sum += texture_at_st(t, a * u + b * v + c, d * u + e * v + f);
+            }
+        }
+        sum / (n * n) as f64
+    }
+
+    /// texture_mean is exact: a repeating bitmap's mean over one period is its pixels' mean (each
+    /// pixel's tent or box integrates to 1 / (w h)), a checkerboard's over whole periods its colours';
+    /// a clamped, mirrored or offset one agrees with a dense midpoint rule as the rule converges.
+    #[test]
+    fn texture_means_are_exact() {
+        for filter in [Filter::Bilinear, Filter::Nearest] {
+            let t = bitmap(5, 3, filter, Wrap::Repeat, IDENTITY_UV);
+            let Pattern::Bitmap { pixels, .. } = &t.pattern else {
+                unreachable!()
+            };
+            let mean = pixels.iter().map(|p| p.as_dvec3()).sum::<DVec3>() / pixels.len() as f64;
+            assert!((texture_mean(&t) - mean).abs().max_element() < 1e-12, "{filter:?}");
+        }
+        let checker = Texture {
+            name: "c".into(),
+            pattern: Pattern::Checkerboard {
+                color0: Vec3::new(1.0, 2.0, 3.0),
+                color1: Vec3::new(5.0, 0.0, 1.0),
+            },
+            filter: Filter::Bilinear,
+            wrap: Wrap::Repeat,
+            to_uv: [2.0, 0.0, 0.0, 0.0, 3.0, 0.0],
+        };
+        assert!((texture_mean(&checker) - DVec3::new(3.0, 1.0, 2.0)).abs().max_element() < 1e-12);
+        for (wrap, to_uv) in [
+            (Wrap::Clamp, [1.3, 0.0, -0.2, 0.0, 0.7, 0.1]),
+            (Wrap::Mirror, [-2.5, 0.0, 0.3, 0.0, 1.5, -0.4]),
+        ] {
+            let t = bitmap(4, 6, Filter::Bilinear, wrap, to_uv);
+            let (exact, dense) = (texture_mean(&t), midpoint(&t, 4000));
+            // The midpoint rule's error here: at most ~1e-4 (its cells that straddle a patch's edge).
+            assert!(
+                (exact - dense).abs().max_element() < 1e-3,
+                "{wrap:?}: {exact} against {dense}"
+            );
+        }
+    }
+
+    /// texture_max_over bounds the texture everywhere on the triangle (dense samples of it never exceed
+    /// it) under each filter and wrap mode, a turning to_uv, and triangles from tiny to many periods wide
+    /// (where it falls back to the image's largest value).
+    #[test]
+    fn the_triangle_bound_holds_over_the_triangle() {
+        let cases = [
+            (Filter::Bilinear, Wrap::Repeat, [1.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
+            (Filter::Nearest, Wrap::Clamp, [0.8, 0.3, 0.1, -0.2, 1.1, 0.05]),
+            (Filter::Bilinear, Wrap::Mirror, [-2.5, 0.4, 0.3, 0.1, 1.5, -0.4]),
+        ];
+        let triangles = [
+            [[0.1, 0.1], [0.15, 0.1], [0.1, 0.17]],
+            [[0.3, 0.6], [0.9, 0.2], [0.5, 0.95]],
+            [[-0.7, 0.2], [0.4, -0.3], [0.05, 1.3]],
+            [[0.0, 0.0], [40.0, 0.0], [0.0, 30.0]],
+        ];
+        for (filter, wrap, to_uv) in cases {
+            let t = bitmap(9, 7, filter, wrap, to_uv);
+            let [a, b, c, d, e, f] = to_uv.map(f64::from);
+            for uv in triangles {
+                let bound = texture_max_over(&t, uv).as_dvec3();
+                let n = 60;
+                for i in 0..=n {
+                    for j in 0..=n - i {
+                        let (p, q) = (i as f64 / n as f64, j as f64 / n as f64);
+                        let at = |k: usize| (1.0 - p - q) * uv[0][k] as f64 + p * uv[1][k] as f64 + q * uv[2][k] as f64;
+                        let (u, v) = (at(0), at(1));
+                        let value = texture_at_st(&t, a * u + b * v + c, d * u + e * v + f);
+                        assert!(
+                            value.cmple(bound + 1e-12).all(),
+                            "{filter:?} {wrap:?} {uv:?}: {value} over {bound}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// A textured quad light's power is its texture's mean times A pi, its photons' flux per unit of
+    /// radiance A pi / prob, and the bound on one photon's flux the texture's largest value times A pi.
+    #[test]
+    fn a_textured_lights_power_and_bound_come_from_its_texture() {
+        let mut scene = Scene::parse(
+            r#"name = "t"
+[camera]
+eye = [0.0, 1.0, 3.0]
+look_at = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+vfov = 40.0
+resolution = [8, 8]
+[materials.glow]
+emission = [1.0, 1.0, 1.0]
+[[quad]]
+origin = [0.0, 1.0, 0.0]
+edge_u = [2.0, 0.0, 0.0]
+edge_v = [0.0, 0.0, 1.5]
+material = "glow"
+"#,
+            "t.toml",
+        )
+        .unwrap();
+        let t = bitmap(5, 3, Filter::Bilinear, Wrap::Repeat, IDENTITY_UV);
+        let (mean, most) = (texture_mean(&t), t.max());
+        scene.textures.push(t);
+        scene.materials[0].emission_texture = Some(0);
+        scene.materials[0].emission = most;
+        scene.validate().unwrap();
+        let table = lights(&scene, &[], &[], &[7], &mut Vec::new()).unwrap();
+        let l = &table.lights[0];
+        let a_pi = 3.0 * PI;
+        assert_eq!((l.kind, l.texture, l.prob), (LIGHT_QUAD, 8, 1.0));
+        assert_eq!(l.flux, [a_pi as f32; 3]);
+        for c in 0..3 {
+            assert!((l.power[c] as f64 / (mean[c] * a_pi) - 1.0).abs() < 1e-6);
+        }
+        assert!((table.max_flux / (most.max_element() as f64 * a_pi) - 1.0).abs() < 1e-12);
+    }
 }

@@ -83,7 +83,8 @@ impl GpuScene {
         let spheres = spheres(scene);
         let quads = quads(scene);
         let built = triangles(scene)?;
-        let table = lights::lights(scene, &built.triangles, &mut textures)?;
+        let triangle_texels = textures::triangle_texels(scene, &built.triangles);
+        let table = lights::lights(scene, &built.triangles, &triangle_texels, &texture_at, &mut textures)?;
         let flux_fixed = lights::flux_fixed(scene, table.max_flux)?;
         let (lights, total_power, light_kinds) = (table.lights, table.total_power, table.kinds);
         let (lo, hi) = scene.bounds();
@@ -123,7 +124,6 @@ impl GpuScene {
             && !built.triangles.is_empty()
             && built.triangles.len() <= settings.max_inline_triangles as usize
             && spheres.len() + quads.len() <= MAX_INLINE_PRIMITIVES;
-        let triangle_texels = textures::triangle_texels(scene, &built.triangles);
         let mut g = GpuScene {
             textures,
             triangle_texels,

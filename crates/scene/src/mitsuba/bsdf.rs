@@ -333,14 +333,21 @@ impl Builder {
 
     /// Index of the scene material for `bsdf` with `emission`, named `name` (made on first use; the
     /// same name for different contents gets a suffix).
-    pub(super) fn material(&mut self, name: &str, bsdf: &Bsdf, emission: Vec3, e: &Elem) -> u32 {
+    pub(super) fn material(
+        &mut self,
+        name: &str,
+        bsdf: &Bsdf,
+        emission: Vec3,
+        radiance: Option<&(texture::Texture, Elem)>,
+        e: &Elem,
+    ) -> u32 {
         // A blend: its components' materials first (named by their ids, else after it), then the blend of
         // them, whose texture is its weight's.
         let (surface, weight_texture) = match &bsdf.blend {
             Some(b) => {
                 let part = |p: &Bsdf, k: u32| p.id.clone().unwrap_or_else(|| format!("{name}.{k}"));
-                let first = self.material(&part(&b.first, 0), &b.first, Vec3::ZERO, e);
-                let second = self.material(&part(&b.second, 1), &b.second, Vec3::ZERO, e);
+                let first = self.material(&part(&b.first, 0), &b.first, Vec3::ZERO, None, e);
+                let second = self.material(&part(&b.second, 1), &b.second, Vec3::ZERO, None, e);
                 let surface = Surface::Blend {
                     weight: b.weight,
                     first,
@@ -352,6 +359,8 @@ impl Builder {
         };
         let texture =
             weight_texture.map(|t| texture::intern(&mut self.scene.textures, std::borrow::Cow::Borrowed(&t.texture)));
+        let emission_texture =
+            radiance.map(|(t, _)| texture::intern(&mut self.scene.textures, std::borrow::Cow::Borrowed(t)));
         let normal_map = bsdf.normal_map.as_ref().map(|p| {
             let texture = texture::intern(&mut self.scene.textures, std::borrow::Cow::Borrowed(&p.texture.texture));
             match p.bump_scale {
@@ -391,7 +400,7 @@ impl Builder {
             opacity,
             specular_texture,
             alpha_texture,
-            emission_texture: None,
+            emission_texture,
         };
         let mut candidate = name.to_string();
         for n in 2.. {
@@ -419,6 +428,10 @@ impl Builder {
                 self.origins
                     .insert(format!("materials.{candidate}.{field}"), t.at.clone());
             }
+        }
+        if let Some((_, at)) = radiance {
+            self.origins
+                .insert(format!("materials.{candidate}.emission_texture"), at.clone());
         }
         if let Some(p) = &bsdf.normal_map {
             self.origins

@@ -2,11 +2,14 @@
 //! surface of their own at the top level (point, spot, directional, constant, envmap), read with Mitsuba
 //! 3's parameters and defaults into `Scene::emitters`.
 
+use std::rc::Rc;
+
 use anyhow::Result;
 use glam::{DAffine3, DMat3, DVec3, Mat3, Vec3};
 
 use super::elem::Elem;
 use super::properties::Props;
+use super::texture::Tex;
 use super::Builder;
 use crate::emitter::{Emitter, EnvMap, Environment};
 use crate::texture;
@@ -184,22 +187,42 @@ fn environment_to_world(e: &Elem, props: &Props) -> Result<Mat3> {
     Ok(m.matrix3.as_mat3())
 }
 
-/// The radiance of an `<emitter>` inside a shape (Mitsuba's default 1).
-pub(super) fn area(o: &Elem) -> Result<Vec3> {
-    if o.kind() != "area" {
-        return Err(o.err(format!(
-            "a {} emitter inside a shape: only area emitters belong on shapes (put the others at the top level)",
-            o.kind()
-        )));
+impl Builder {
+    /// The radiance of an `<emitter>` inside a shape (Mitsuba's default 1): a colour, or a texture (nested,
+    /// or a `ref` to a top-level one), as Mitsuba 3's src/emitters/area.cpp reads it: Le at each point from
+    /// the shape's uv. A texture's values are radiances: unbounded (finite and at least 0: the scene's check).
+    pub(super) fn area(&self, o: &Elem) -> Result<(Vec3, Option<Rc<Tex>>)> {
+        if o.kind() != "area" {
+            return Err(o.err(format!(
+                "a {} emitter inside a shape: only area emitters belong on shapes (put the others at the top level)",
+                o.kind()
+            )));
+        }
+        let (ep, rest) = Props::of(o);
+        if let Some(r) = rest.first() {
+            return Err(r.err(format!("not expected inside {}", o.what())));
+        }
+        let texture = match ep.get("radiance") {
+            Some(p) if p.tag == "texture" => Some(Rc::new(self.texture(p)?)),
+            Some(p) if p.tag == "ref" => {
+                let id = p.required("id")?;
+                Some(
+                    self.textures
+                        .get(id)
+                        .cloned()
+                        .ok_or_else(|| p.err(format!("no texture with id \"{id}\" defined before it")))?,
+                )
+            }
+            _ => None,
+        };
+        let radiance = match &texture {
+            Some(_) => Vec3::ZERO, // set by the caller from the texture (Material::emission)
+            None => ep.color("radiance")?.unwrap_or(Vec3::ONE),
+        };
+        ep.ignore(&["sampling_weight"]); // Mitsuba's chance of choosing it for a shadow ray: noise only
+        ep.finish()?;
+        Ok((radiance, texture))
     }
-    let (ep, rest) = Props::of(o);
-    if let Some(r) = rest.first() {
-        return Err(r.err(format!("not expected inside {}", o.what())));
-    }
-    let radiance = ep.color("radiance")?.unwrap_or(Vec3::ONE);
-    ep.ignore(&["sampling_weight"]); // Mitsuba's chance of choosing it for a shadow ray: noise only
-    ep.finish()?;
-    Ok(radiance)
 }
 
 #[cfg(test)]
@@ -618,5 +641,62 @@ mod tests {
         }
         let e = error(r#"<shape type="sphere"><emitter type="area"/><emitter type="area"/></shape>"#);
         assert!(e.contains("a second emitter"), "{e}");
+    }
+
+    /// A texture on an area emitter's radiance (Mitsuba 3's src/emitters/area.cpp): read on rectangles and
+    /// meshes (an EXR's values above 1 kept: radiances are unbounded), Material::emission its largest value,
+    /// mirrored like a bsdf's texture on a turned rectangle; refused on spheres and for negative values.
+    #[test]
+    fn textured_radiance_on_rectangles_and_meshes() {
+        let dir = TempDir::new("mitsuba-area-texture");
+        write_float_image(&dir, "glow.exr", |x, y| [x as f32 * 5.0, 2.0, y as f32 + 0.5]);
+        let emitter = r#"<emitter type="area"><texture type="bitmap" name="radiance">
+              <string name="filename" value="glow.exr"/></texture></emitter>"#;
+        let s = load_in(
+            &dir,
+            &format!(
+                r#"<shape type="rectangle"><bsdf type="diffuse"/>{emitter}</shape>
+                   <texture type="bitmap" id="t"><string name="filename" value="glow.exr"/></texture>
+                   <shape type="rectangle"><boolean name="flip_normals" value="true"/>
+                     <emitter type="area"><ref name="radiance" id="t"/></emitter></shape>"#
+            ),
+            &[],
+        )
+        .unwrap_or_else(|e| panic!("{e:#}"));
+        let m = &s.materials[s.quads[1].material as usize]; // quads[0]: the lamp of the test head
+        let t = &s.textures[m.emission_texture.expect("a radiance texture") as usize];
+        assert_eq!(m.emission, Vec3::new(15.0, 2.0, 1.5));
+        assert_eq!((m.emission, t.to_uv), (t.max(), texture::IDENTITY_UV));
+        assert!(m.texture.is_none() && m.is_light());
+        // The flipped one runs its first edge backwards: its texture reads (1 - u, v).
+        let turned = &s.materials[s.quads[2].material as usize];
+        let t = &s.textures[turned.emission_texture.unwrap() as usize];
+        assert_eq!(t.to_uv, [-1.0, 0.0, 1.0, 0.0, 1.0, 0.0]);
+        // Meshes (with texture coordinates) read it too; spheres are refused by name.
+        for shape in ["cube", "disk", "cylinder"] {
+            let s = load_in(&dir, &format!(r#"<shape type="{shape}">{emitter}</shape>"#), &[])
+                .unwrap_or_else(|e| panic!("{shape}: {e:#}"));
+            let m = &s.materials[s.meshes[0].materials[0] as usize];
+            assert!(m.emission_texture.is_some() && s.meshes[0].uvs.is_some(), "{shape}");
+        }
+        let e = load_in(&dir, &format!(r#"<shape type="sphere">{emitter}</shape>"#), &[]).unwrap_err();
+        let e = format!("{e:#}");
+        assert!(
+            e.contains("a texture on an area emitter's radiance on a sphere is not supported yet"),
+            "{e}"
+        );
+        write_float_image(&dir, "negative.exr", |x, _| [1.0 - x as f32, 1.0, 1.0]);
+        let e = load_in(
+            &dir,
+            r#"<shape type="rectangle"><emitter type="area"><texture type="bitmap" name="radiance">
+                 <string name="filename" value="negative.exr"/></texture></emitter></shape>"#,
+            &[],
+        )
+        .unwrap_err();
+        let e = format!("{e:#}");
+        assert!(
+            e.contains("a radiance must be finite and at least 0") && e.contains("scene.xml:12:"),
+            "{e}"
+        );
     }
 }

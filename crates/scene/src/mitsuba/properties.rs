@@ -39,9 +39,10 @@ impl<'a> Props<'a> {
         let mut items = Vec::new();
         let mut objects = Vec::new();
         for c in &owner.children {
-            // In a bsdf, a named `ref` is a parameter (a top-level texture); in a shape, `<ref id=".."
-            // name="bsdf"/>` stays the shape's bsdf.
-            let parameter = PROPERTY_TAGS.contains(&c.tag.as_str()) || (c.tag == "ref" && owner.tag == "bsdf");
+            // In a bsdf or an emitter, a named `ref` is a parameter (a top-level texture); in a shape,
+            // `<ref id=".." name="bsdf"/>` stays the shape's bsdf.
+            let parameter = PROPERTY_TAGS.contains(&c.tag.as_str())
+                || (c.tag == "ref" && matches!(owner.tag.as_str(), "bsdf" | "emitter"));
             if parameter && c.attr("name").is_some() {
                 items.push((c, Cell::new(false)));
             } else {

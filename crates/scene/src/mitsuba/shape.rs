@@ -3,13 +3,13 @@
 //! [`Builder::shape`], which place the scene's quads, spheres and meshes.
 
 use std::collections::HashMap;
+use std::rc::Rc;
 
 use anyhow::Result;
 use glam::{DAffine3, DMat3, DVec3, Vec3};
 
 use super::bsdf::Bsdf;
 use super::elem::Elem;
-use super::emitter;
 use super::properties::Props;
 use super::texture::Tex;
 use super::Builder;
@@ -52,6 +52,9 @@ struct Common<'a> {
     anisotropic: bool,
 }
 
+/// An area emitter's radiance: a colour, or a texture (its largest value taken later).
+type Radiance = (Vec3, Option<Rc<Tex>>);
+
 impl Builder {
     /// A `<shape>`: its bsdf and emitter, its material, then its type's reader; every property must have
     /// been read by then.
@@ -63,7 +66,7 @@ impl Builder {
         self.shapes += 1;
         let (props, objects) = Props::of(e);
         let mut bsdf: Option<(Bsdf, &Elem)> = None;
-        let mut emission: Option<(Vec3, &Elem)> = None;
+        let mut emission: Option<(Radiance, &Elem)> = None;
         for o in objects {
             match o.tag.as_str() {
                 "bsdf" | "ref" => {
@@ -81,7 +84,7 @@ impl Builder {
                     if emission.is_some() {
                         return Err(o.err("a second emitter: a shape has one (as in Mitsuba)"));
                     }
-                    emission = Some((emitter::area(o)?, o));
+                    emission = Some((self.area(o)?, o));
                 }
                 "medium" => return Err(o.err("participating media are not supported")),
                 _ => return Err(o.err(format!("not expected inside {}", e.what()))),
@@ -105,7 +108,23 @@ impl Builder {
             e,
         ));
         let shape_name = e.attr("id").map_or_else(|| format!("shape[{index}]"), str::to_string);
-        let (emission, emitter_at) = emission.unwrap_or((Vec3::ZERO, e));
+        let ((emission, radiance_texture), emitter_at) = emission.unwrap_or(((Vec3::ZERO, None), e));
+        // A textured radiance: Material::emission holds the texture's largest value in each channel (what
+        // makes the material a light; the light's power and photon bound come from the texture itself).
+        let emission = radiance_texture.as_ref().map_or(emission, |t| t.texture.max());
+        if let Some(t) = &radiance_texture {
+            if e.kind() == "sphere" {
+                return Err(t.at.err(
+                    "a texture on an area emitter's radiance on a sphere is not supported yet (read on rectangles \
+                     and meshes: obj, ply, serialized, cube, disk, cylinder)",
+                ));
+            }
+            if emission.max_element() <= 0.0 {
+                return Err(t
+                    .at
+                    .err("the radiance texture is black everywhere: the emitter emits nothing"));
+            }
+        }
         if emission.max_element() > 0.0 && !matches!(bsdf.surface, Surface::Diffuse { .. }) {
             return Err(emitter_at.err(format!(
                 "an area emitter on a {} surface: ppm-vk lights are diffuse (or black) only",
@@ -131,7 +150,7 @@ impl Builder {
         let to_world = props.transform("to_world")?;
         let flip = props.boolean("flip_normals")?;
         // A bump or normal map reads texture coordinates too (modifiers.rs).
-        let textured = bsdf.textured();
+        let textured = bsdf.textured() || radiance_texture.is_some();
         // An anisotropic lobe lies along Mitsuba's dp/du: a rectangle's x axis (edge_u below), a sphere's
         // longitude, a mesh's texture coordinates (or the frame of its face normal without them).
         let anisotropic = (bsdf.leaves().iter()).any(|l| l.surface.rough().is_some_and(|r| r.is_anisotropic()));
@@ -161,17 +180,28 @@ impl Builder {
                  supported yet",
             ));
         }
+        // The textures read at (1 - u, v) on a backwards rectangle: to_uv takes them back to (u, v) first.
+        let mirrored = |t: &Texture| Texture {
+            to_uv: texture::compose_uv(t.to_uv, [-1.0, 0.0, 1.0, 0.0, 1.0, 0.0]),
+            ..t.clone()
+        };
+        let radiance_texture = radiance_texture.map(|t| {
+            let texture = if backwards {
+                mirrored(&t.texture)
+            } else {
+                t.texture.clone()
+            };
+            (texture, t.at.clone())
+        });
+        let radiance_texture = radiance_texture.as_ref();
         let material = if backwards {
             let turned_bsdf = bsdf.map_textures(|t| Tex {
-                texture: Texture {
-                    to_uv: texture::compose_uv(t.texture.to_uv, [-1.0, 0.0, 1.0, 0.0, 1.0, 0.0]),
-                    ..t.texture.clone()
-                },
+                texture: mirrored(&t.texture),
                 at: t.at.clone(),
             });
-            self.material(&name, &turned_bsdf, emission, bsdf_at)
+            self.material(&name, &turned_bsdf, emission, radiance_texture, bsdf_at)
         } else {
-            self.material(&name, &bsdf, emission, bsdf_at)
+            self.material(&name, &bsdf, emission, radiance_texture, bsdf_at)
         };
         let common = Common {
             e,

@@ -313,10 +313,10 @@ mod tests {
                 "a texture on plastic's specular_reflectance is not supported",
             ),
             (
-                format!(r#"<shape type="rectangle"><emitter type="area">{}</emitter></shape>"#, tex.replace("reflectance", "radiance")),
+                format!(r#"<shape type="sphere"><emitter type="area">{}</emitter></shape>"#, tex.replace("reflectance", "radiance")),
                 r#"<texture type="bitmap" name="radiance">"#,
                 12,
-                "a texture on radiance is not supported",
+                "a texture on an area emitter's radiance on a sphere is not supported yet",
             ),
             (
                 format!(r#"<shape type="sphere"><transform name="to_world"><rotate x="1" angle="30"/></transform><bsdf type="diffuse">{tex}</bsdf></shape>"#),
