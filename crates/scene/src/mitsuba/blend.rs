@@ -31,7 +31,7 @@ impl Bsdf {
     /// Whether anything in it reads texture coordinates: a texture, a bump or normal map, a blend's weight,
     /// a mask's opacity.
     pub(super) fn textured(&self) -> bool {
-        let mask = matches!(self.opacity, Some(super::mask::Opacity::Texture(_)));
+        let mask = matches!(self.opacity, Some(super::bsdf::Opacity::Texture(_)));
         mask || match &self.blend {
             Some(b) => b.texture.is_some() || b.first.textured() || b.second.textured(),
             None => {

@@ -9,7 +9,6 @@ use anyhow::Result;
 use glam::Vec3;
 
 use super::elem::Elem;
-use super::mask::Opacity;
 use super::properties::{color, number, Props};
 use super::texture::{same_texture, Tex};
 use super::Builder;
@@ -22,6 +21,14 @@ use crate::{conductors, Material, Microfacet, Surface};
 pub(super) struct Perturbation {
     pub(super) texture: Rc<Tex>,
     pub(super) bump_scale: Option<f32>,
+}
+
+/// A mask's opacity as read (mask.rs): a constant, or a texture (Mitsuba's eval_1 of it: for RGB the
+/// luminance), both clamped to [0, 1] where they are used, as Mitsuba's `eval_opacity`.
+#[derive(Clone, Debug)]
+pub(super) enum Opacity {
+    Value(f32),
+    Texture(Rc<Tex>),
 }
 
 /// A BSDF as ppm-vk reads it.
@@ -133,7 +140,7 @@ impl Builder {
             "normalmap" => self.normalmap(e, &props, &objects)?,
             "blendbsdf" => self.blendbsdf(e, &props, &objects)?,
             "mask" => self.mask(e, &props, &objects)?,
-            "null" => super::mask::null(),
+            "null" => self.null(),
             _ => {
                 return Err(e.err(
                     "unsupported bsdf (read: diffuse, twosided, conductor, roughconductor, \

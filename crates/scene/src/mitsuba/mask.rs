@@ -2,25 +2,14 @@
 //! `opacity`, else straight through: src/bsdfs/mask.cpp) and `null` (always straight through:
 //! src/bsdfs/null.cpp), read as an opacity on the material (shaders/materials/mask.glsl decides per ray).
 
-use std::rc::Rc;
-
 use anyhow::Result;
 use glam::Vec3;
 
-use super::bsdf::Bsdf;
+use super::bsdf::{Bsdf, Opacity};
 use super::elem::Elem;
 use super::properties::{color, Props};
-use super::texture::Tex;
 use super::Builder;
 use crate::Surface;
-
-/// A mask's opacity as read: a constant, or a texture (Mitsuba's eval_1 of it: for RGB the luminance),
-/// both clamped to [0, 1] where they are used, as Mitsuba's `eval_opacity`.
-#[derive(Clone, Debug)]
-pub(super) enum Opacity {
-    Value(f32),
-    Texture(Rc<Tex>),
-}
 
 impl Builder {
     /// Mitsuba's `mask`: one nested bsdf (an element or a `ref`) and `opacity` (a float, a colour or a
@@ -68,21 +57,21 @@ impl Builder {
             ..inner
         })
     }
-}
 
-/// Mitsuba's `null`: no surface for any ray (opacity 0). Only as the bsdf of an invisible shape here:
-/// ppm-vk has no media for it to bound, and a light on it is refused (shape.rs).
-pub(super) fn null() -> Bsdf {
-    Bsdf {
-        surface: Surface::Diffuse { albedo: Vec3::ZERO },
-        two_sided: false,
-        id: None,
-        texture: None,
-        normal_map: None,
-        blend: None,
-        opacity: Some(Opacity::Value(0.0)),
-        specular: None,
-        alpha: None,
+    /// Mitsuba's `null`: no surface for any ray (opacity 0). Only as the bsdf of an invisible shape here:
+    /// ppm-vk has no media for it to bound, and a light on it is refused (shape.rs).
+    pub(super) fn null(&self) -> Bsdf {
+        Bsdf {
+            surface: Surface::Diffuse { albedo: Vec3::ZERO },
+            two_sided: false,
+            id: None,
+            texture: None,
+            normal_map: None,
+            blend: None,
+            opacity: Some(Opacity::Value(0.0)),
+            specular: None,
+            alpha: None,
+        }
     }
 }
 
