@@ -75,7 +75,7 @@ fn formats() -> Vec<(&'static str, Load, Vec<&'static str>)> {
                 "scenes/textures/wood.png",
                 "scenes/references/textures/gray.png",
                 "scenes/references/textures/gradient.exr",
-                "scenes/references/textures/grey.pfm",
+                "scenes/references/textures/unit.pfm",
             ],
         ),
         (

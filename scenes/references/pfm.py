@@ -5,6 +5,8 @@ Writes, beside this script:
   textures/rgb.pfm   4 x 3 RGB, written by mi.Bitmap.write (little-endian, scale -1)
   textures/grey.pfm  3 x 2 grey ("Pf"), written by mi.Bitmap.write
   textures/big.pfm   3 x 2 RGB written here big-endian with scale 2 (Mitsuba multiplies by |scale|)
+  textures/unit.pfm  3 x 2 RGB in [0, 1] (a reflectance texture), written by mi.Bitmap.write (the seed of
+                     tests/hostile_input.rs's mutated images)
   pfm.json           per file: width, height, channels and the pixels Mitsuba's mi.Bitmap reads back
                      (rows from the top, each pixel its channels)
 Run: DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so python3 pfm.py
@@ -28,6 +30,8 @@ rgb = np.array(
 grey = np.array([[[0.25 + 0.5 * x + 0.11 * y * y * y] for x in range(3)] for y in range(2)], dtype=np.float32)
 mi.Bitmap(rgb, mi.Bitmap.PixelFormat.RGB).write(os.path.join(here, "textures/rgb.pfm"))
 mi.Bitmap(grey, mi.Bitmap.PixelFormat.Y).write(os.path.join(here, "textures/grey.pfm"))
+unit = np.array([[[0.1 + 0.3 * x, 0.9 - 0.4 * y, 0.05 * (x + y)] for x in range(3)] for y in range(2)], dtype=np.float32)
+mi.Bitmap(unit, mi.Bitmap.PixelFormat.RGB).write(os.path.join(here, "textures/unit.pfm"))
 
 # Big-endian (scale > 0) with scale 2, rows bottom to top as the format stores them.
 big = np.array([[[0.5 + x + 3 * y, 0.25 * x, 0.125 * y + 0.01] for x in range(3)] for y in range(2)], dtype=np.float32)
@@ -38,7 +42,7 @@ with open(os.path.join(here, "textures/big.pfm"), "wb") as f:
             f.write(struct.pack(">3f", *px))
 
 out = {}
-for name in ["rgb.pfm", "grey.pfm", "big.pfm"]:
+for name in ["rgb.pfm", "grey.pfm", "big.pfm", "unit.pfm"]:
     b = mi.Bitmap(os.path.join(here, "textures", name))
     a = np.array(b)
     if a.ndim == 2:

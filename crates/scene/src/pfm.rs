@@ -161,7 +161,7 @@ mod tests {
         assert_eq!(px, vec![Vec3::splat(0.5), Vec3::splat(1.5), Vec3::splat(2.5)]);
     }
 
-    /// The PFMs scenes/references/pfm.py wrote (two by Mitsuba's mi.Bitmap, one big-endian with scale 2
+    /// The PFMs scenes/references/pfm.py wrote (three by Mitsuba's mi.Bitmap, one big-endian with scale 2
     /// by hand) read as Mitsuba 3 reads them (pfm.json): every channel of every pixel equal, through
     /// texture::read_image as scenes read images.
     #[test]
@@ -170,7 +170,7 @@ mod tests {
         let text = std::fs::read_to_string(format!("{dir}/pfm.json")).unwrap();
         let json: serde_json::Value = serde_json::from_str(&text).unwrap();
         let files = json["files"].as_object().unwrap();
-        assert_eq!(files.len(), 3);
+        assert_eq!(files.len(), 4);
         for (name, want) in files {
             let path = std::path::PathBuf::from(format!("{dir}/textures/{name}"));
             for raw in [false, true] {
