@@ -10,9 +10,10 @@
 // The choice is a hash of a key the ray drew from its path's random stream before it was traced
 // (mask_key) and of the primitive, not a draw inside the traversal: the traversal visits primitives in an
 // order that depends on the tree, and a hash gives the same answer whatever the order (and for the same
-// primitive met twice by one ray); two primitives, or two rays, decide independently. Scenes without masks
-// draw no key, so their paths draw the same numbers as before; the CPU twin (crates/materials/src/mask.rs)
-// is the same integer arithmetic. The two sides of a sphere are two primitives.
+// primitive met twice by one ray); two primitives, or two rays, decide independently. Scenes without masks,
+// or whose masks are all 0 or 1 (RenderParams.masks), draw no key, so their paths draw the same numbers as
+// without them; the CPU twin (crates/materials/src/mask.rs) is the same integer arithmetic. The two sides
+// of a sphere are two primitives.
 #ifndef MASK_GLSL
 #define MASK_GLSL
 
