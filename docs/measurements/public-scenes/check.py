@@ -52,7 +52,7 @@ def mean_exr(path):
     return np.array(mi.Bitmap(path)).reshape(-1, 3).astype(np.float64).mean(axis=0)
 
 
-def mitsuba_render(path, size, spp, out):
+def mitsuba_render(path, size, spp, out, integrator="path"):
     import mitsuba as mi
 
     scene = mi.load_file(path)
@@ -60,7 +60,7 @@ def mitsuba_render(path, size, spp, out):
     params = mi.traverse(sensor)
     params["film.size"] = list(size)
     params.update()
-    integrator = mi.load_dict({"type": "path", "max_depth": -1})
+    integrator = mi.load_dict({"type": integrator, "max_depth": -1})
     image = mi.render(scene, sensor=sensor, integrator=integrator, spp=spp, seed=7)
     mi.Bitmap(image).write(out)
 
@@ -76,6 +76,8 @@ def main():
     ap.add_argument("--spp", type=int, default=256)
     ap.add_argument("--max-width", type=int, default=128)
     ap.add_argument("--only", nargs="*", default=None, help="substrings of the files to try")
+    ap.add_argument("--integrator", default="path",
+                    help="Mitsuba's integrator (volpath for masks: its path takes a mask as opaque to shadow rays)")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     if args.render:
@@ -120,7 +122,7 @@ def main():
                 if r.returncode != 0:
                     row.update(status="render failed", why=first_error(r.stderr))
                 else:
-                    mitsuba_render(path, (w, h), args.spp, theirs)
+                    mitsuba_render(path, (w, h), args.spp, theirs, args.integrator)
                     t2 = time.time()
                     a, b = mean_exr(ours), mean_exr(theirs)
                     row.update(
