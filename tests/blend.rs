@@ -178,65 +178,26 @@ fn write_blend_of_red_and_blue() -> std::path::PathBuf {
 /// left and right halves) within 1% per channel.
 #[test]
 fn blends_match_mitsuba() {
-    use ppm_vk_engine::metrics::Reference;
-    use ppm_vk_engine::Mode;
-    let reference = Reference::load(std::path::Path::new(&format!(
-        "{ROOT}/scenes/references/blend-plane.exr"
-    )))
-    .unwrap_or_else(|e| panic!("{e:#}"));
-    let scene = Scene::load_with(
-        format!("{ROOT}/scenes/blend-plane.xml"),
-        &[("res".to_string(), "64".to_string())],
-    )
-    .unwrap_or_else(|e| panic!("{e:#}"));
-    assert!(
-        scene.warnings.iter().all(|w| w.contains("one-sided")),
-        "{:?}",
-        scene.warnings
-    );
-    let settings = Settings {
-        mode: Mode::Sppm,
-        photons_per_pass: 200_000,
-        ..Settings::default()
-    };
-    let ctx = ctx();
-    let image = render(&ctx, &scene, settings, 12);
-    assert_clean(&ctx);
-    let want = &reference.image;
-    assert_eq!((image.width, image.height), (want.width, want.height));
-    let half = |img: &RgbImage, right: bool| -> [f64; 3] {
-        let mut sum = [0f64; 3];
-        let mut n = 0;
-        for (i, p) in img.pixels.iter().enumerate() {
-            if ((i as u32 % img.width) >= img.width / 2) == right {
-                n += 1;
-                for c in 0..3 {
-                    sum[c] += p[c] as f64;
-                }
-            }
-        }
-        sum.map(|s| s / n as f64)
-    };
-    let mut worst = 0f64;
-    for (what, got, want) in [
-        ("image", image.mean(), want.mean()),
-        ("diffuse / rough gold (left)", half(&image, false), half(want, false)),
-        (
+    let scene = mitsuba_scene("blend-plane", &[("res", "64")]);
+    let (image, want) = against_mitsuba(&scene, "blend-plane", 12);
+    let (w, h) = (image.width, image.height);
+    let half = |img: &RgbImage, right: bool| window_mean(img, if right { w / 2..w } else { 0..w / 2 }, 0..h);
+    let worst = [
+        assert_means_within("image", image.mean(), want.mean(), 0.01),
+        assert_means_within(
+            "diffuse / rough gold (left)",
+            half(&image, false),
+            half(&want, false),
+            0.01,
+        ),
+        assert_means_within(
             "textured-weight diffuse pair (right)",
             half(&image, true),
-            half(want, true),
+            half(&want, true),
+            0.01,
         ),
-    ] {
-        let ratio = [0, 1, 2].map(|c| got[c] / want[c]);
-        println!("{what}: mean {got:.5?}, Mitsuba {want:.5?}, ratio {ratio:.4?}");
-        for (c, r) in ratio.iter().enumerate() {
-            worst = worst.max((r - 1.0).abs());
-            assert!(
-                (r - 1.0).abs() < 0.01,
-                "{what}, channel {c}: {:+.2}% off Mitsuba's",
-                100.0 * (r - 1.0)
-            );
-        }
-    }
+    ]
+    .into_iter()
+    .fold(0f64, f64::max);
     println!("largest difference {:.2}%", 100.0 * worst);
 }

@@ -11,7 +11,6 @@ use glam::Vec3;
 use ppm_vk_engine::scene::texture::{Filter, Pattern, Texture, Wrap, IDENTITY_UV};
 use ppm_vk_engine::scene::{Material, Mesh, Quad, Surface};
 use ppm_vk_engine::{DirectLight, RgbImage, Scene, Settings};
-use sha2::Digest;
 
 const RES: u32 = 24;
 
@@ -23,14 +22,6 @@ fn settings() -> Settings {
         light_samples: 2,
         ..Settings::default()
     }
-}
-
-fn image_sha256(image: &RgbImage) -> String {
-    let mut h = sha2::Sha256::new();
-    for v in image.pixels.iter().flatten() {
-        h.update(v.to_bits().to_le_bytes());
-    }
-    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
 }
 
 /// A constant opacity, as the Mitsuba reader makes one: a checkerboard of two equal colours.
@@ -87,7 +78,7 @@ fn opacity_one_is_the_surface_opaque_bit_for_bit() {
     let a = render(&ctx, &plain, settings(), 2);
     let b = render(&ctx, &with, settings(), 2);
     assert!(mean(&a) > 0.01, "a dark image proves nothing");
-    assert_eq!(image_sha256(&a), image_sha256(&b), "opacity 1 changed the image");
+    assert_eq!(pixels_sha256(&a), pixels_sha256(&b), "opacity 1 changed the image");
     assert_clean(&ctx);
 }
 
@@ -133,7 +124,7 @@ fn opacity_zero_is_the_surface_removed_bit_for_bit() {
     let a = render(&ctx, &plain, settings(), 2);
     let b = render(&ctx, &with, settings(), 2);
     assert!(mean(&a) > 0.01, "a dark image proves nothing");
-    assert_eq!(image_sha256(&a), image_sha256(&b), "opacity 0 changed the image");
+    assert_eq!(pixels_sha256(&a), pixels_sha256(&b), "opacity 0 changed the image");
     assert_clean(&ctx);
 }
 
@@ -237,55 +228,11 @@ fn a_half_transparent_pane_lets_through_one_minus_its_opacity() {
 /// (the floor under it), within 1% per channel.
 #[test]
 fn masks_match_mitsuba() {
-    use ppm_vk_engine::metrics::Reference;
-    use ppm_vk_engine::Mode;
-    let root = env!("CARGO_MANIFEST_DIR");
-    let reference = Reference::load(std::path::Path::new(&format!("{root}/scenes/references/mask-pane.exr")))
-        .unwrap_or_else(|e| panic!("{e:#}"));
-    let scene =
-        Scene::load(std::path::Path::new(&format!("{root}/scenes/mask-pane.xml"))).unwrap_or_else(|e| panic!("{e:#}"));
-    assert!(
-        scene.warnings.iter().all(|w| w.contains("one-sided")),
-        "{:?}",
-        scene.warnings
-    );
-    let settings = Settings {
-        mode: Mode::Sppm,
-        photons_per_pass: 200_000,
-        ..Settings::default()
-    };
-    let ctx = ctx();
-    let image = render(&ctx, &scene, settings, 12);
-    assert_clean(&ctx);
-    let want = &reference.image;
-    assert_eq!((image.width, image.height), (want.width, want.height));
+    let scene = mitsuba_scene("mask-pane", &[]);
+    let (image, want) = against_mitsuba(&scene, "mask-pane", 12);
     // The floor under the pane: rows 55% to 80% down, columns 15% to 45% across (the pane's shadow).
-    let region = |img: &RgbImage| -> [f64; 3] {
-        let (w, h) = (img.width as usize, img.height as usize);
-        let mut sum = [0f64; 3];
-        let mut n = 0;
-        for y in h * 55 / 100..h * 80 / 100 {
-            for x in w * 15 / 100..w * 45 / 100 {
-                n += 1;
-                for (s, v) in sum.iter_mut().zip(img.pixels[y * w + x]) {
-                    *s += v as f64;
-                }
-            }
-        }
-        sum.map(|s| s / n as f64)
-    };
-    for (what, got, want) in [
-        ("image", image.mean(), want.mean()),
-        ("the pane's shadow", region(&image), region(want)),
-    ] {
-        println!("{what}: mean {got:.5?}, Mitsuba {want:.5?}");
-        for c in 0..3 {
-            let rel = got[c] / want[c] - 1.0;
-            assert!(
-                rel.abs() < 0.01,
-                "{what}, channel {c}: {:+.2}% off Mitsuba's",
-                100.0 * rel
-            );
-        }
-    }
+    let (w, h) = (image.width, image.height);
+    let shadow = |img: &RgbImage| window_mean(img, w * 15 / 100..w * 45 / 100, h * 55 / 100..h * 80 / 100);
+    assert_means_within("image", image.mean(), want.mean(), 0.01);
+    assert_means_within("the pane's shadow", shadow(&image), shadow(&want), 0.01);
 }

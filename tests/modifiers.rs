@@ -9,7 +9,6 @@ use glam::Vec3;
 use ppm_vk_engine::scene::texture::{Filter, Pattern, Texture, Wrap, IDENTITY_UV};
 use ppm_vk_engine::scene::NormalMap;
 use ppm_vk_engine::{RgbImage, Scene, Settings};
-use sha2::Digest;
 
 const RES: u32 = 24;
 
@@ -21,14 +20,6 @@ fn settings() -> Settings {
         light_samples: 2,
         ..Settings::default()
     }
-}
-
-fn image_sha256(image: &RgbImage) -> String {
-    let mut h = sha2::Sha256::new();
-    for v in image.pixels.iter().flatten() {
-        h.update(v.to_bits().to_le_bytes());
-    }
-    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
 }
 
 /// `scene` with `texture` added and every material given `map(texture index)`.
@@ -58,7 +49,7 @@ fn renders_unchanged(texture: Texture, map: impl Fn(u32) -> NormalMap) {
     let b = render(&ctx, &with, settings(), 2);
     let mean = a.pixels.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * a.pixels.len()) as f64;
     assert!(mean > 0.01, "a dark image proves nothing: mean {mean}");
-    assert_eq!(image_sha256(&a), image_sha256(&b), "the map changed the image");
+    assert_eq!(pixels_sha256(&a), pixels_sha256(&b), "the map changed the image");
     assert_clean(&ctx);
 }
 
@@ -216,56 +207,16 @@ material = "light"
 /// and each plane's (the left and right halves of the image) within 1% per channel.
 #[test]
 fn bump_and_normal_maps_match_mitsuba() {
-    use ppm_vk_engine::metrics::Reference;
-    use ppm_vk_engine::Mode;
-    let root = env!("CARGO_MANIFEST_DIR");
-    let reference = Reference::load(std::path::Path::new(&format!(
-        "{root}/scenes/references/bump-plane.exr"
-    )))
-    .unwrap_or_else(|e| panic!("{e:#}"));
-    let scene =
-        Scene::load(std::path::Path::new(&format!("{root}/scenes/bump-plane.xml"))).unwrap_or_else(|e| panic!("{e:#}"));
-    assert!(
-        scene.warnings.iter().all(|w| w.contains("one-sided")),
-        "{:?}",
-        scene.warnings
+    let scene = mitsuba_scene("bump-plane", &[]);
+    let (image, want) = against_mitsuba(&scene, "bump-plane", 12);
+    let (w, h) = (image.width, image.height);
+    let half = |img: &RgbImage, right: bool| window_mean(img, if right { w / 2..w } else { 0..w / 2 }, 0..h);
+    assert_means_within("image", image.mean(), want.mean(), 0.01);
+    assert_means_within("bumpmapped plane (left)", half(&image, false), half(&want, false), 0.01);
+    assert_means_within(
+        "normal-mapped plane (right)",
+        half(&image, true),
+        half(&want, true),
+        0.01,
     );
-    let settings = Settings {
-        mode: Mode::Sppm,
-        photons_per_pass: 200_000,
-        ..Settings::default()
-    };
-    let ctx = ctx();
-    let image = render(&ctx, &scene, settings, 12);
-    assert_clean(&ctx);
-    let want = &reference.image;
-    assert_eq!((image.width, image.height), (want.width, want.height));
-    let half = |img: &RgbImage, right: bool| -> [f64; 3] {
-        let mut sum = [0f64; 3];
-        let mut n = 0;
-        for (i, p) in img.pixels.iter().enumerate() {
-            if ((i as u32 % img.width) >= img.width / 2) == right {
-                n += 1;
-                for c in 0..3 {
-                    sum[c] += p[c] as f64;
-                }
-            }
-        }
-        sum.map(|s| s / n as f64)
-    };
-    for (what, got, want) in [
-        ("image", image.mean(), want.mean()),
-        ("bumpmapped plane (left)", half(&image, false), half(want, false)),
-        ("normal-mapped plane (right)", half(&image, true), half(want, true)),
-    ] {
-        println!("{what}: mean {got:.5?}, Mitsuba {want:.5?}");
-        for c in 0..3 {
-            let rel = got[c] / want[c] - 1.0;
-            assert!(
-                rel.abs() < 0.01,
-                "{what}, channel {c}: {:+.2}% off Mitsuba's",
-                100.0 * rel
-            );
-        }
-    }
 }

@@ -9,7 +9,7 @@ use common::*;
 use glam::Vec3;
 use ppm_vk_engine::scene::texture::{Filter, Pattern, Texture, Wrap, IDENTITY_UV};
 use ppm_vk_engine::scene::{Microfacet, Surface};
-use ppm_vk_engine::{Mode, Scene, Settings};
+use ppm_vk_engine::{Scene, Settings};
 
 /// Mitsuba 3 on scenes/textured-params.xml (a roughconductor whose alpha is a bitmap, a GGX
 /// roughconductor whose specular_reflectance is a checkerboard and a conductor whose
@@ -18,70 +18,20 @@ use ppm_vk_engine::{Mode, Scene, Settings};
 /// channel, and each plane's (the image's thirds; measured: image -0.13% at most, thirds 0.23%).
 #[test]
 fn parameter_textures_match_mitsuba() {
-    use ppm_vk_engine::metrics::Reference;
-    let root = env!("CARGO_MANIFEST_DIR");
-    let reference = Reference::load(std::path::Path::new(&format!(
-        "{root}/scenes/references/textured-params.exr"
-    )))
-    .unwrap_or_else(|e| panic!("{e:#}"));
-    let scene = Scene::load(std::path::Path::new(&format!("{root}/scenes/textured-params.xml")))
-        .unwrap_or_else(|e| panic!("{e:#}"));
-    assert!(
-        scene.warnings.iter().all(|w| w.contains("one-sided")),
-        "{:?}",
-        scene.warnings
-    );
+    let scene = mitsuba_scene("textured-params", &[]);
     assert_eq!(
         scene.materials.iter().filter(|m| m.alpha_texture.is_some()).count()
             + scene.materials.iter().filter(|m| m.specular_texture.is_some()).count(),
         3
     );
-    let settings = Settings {
-        mode: Mode::Sppm,
-        photons_per_pass: 200_000,
-        ..Settings::default()
-    };
-    let ctx = ctx();
-    let image = render(&ctx, &scene, settings, 12);
-    assert_clean(&ctx);
-    let want = &reference.image;
-    assert_eq!((image.width, image.height), (want.width, want.height));
-    let third = |img: &ppm_vk_engine::RgbImage, k: u32| -> [f64; 3] {
-        let mut sum = [0f64; 3];
-        let mut n = 0;
-        for (i, p) in img.pixels.iter().enumerate() {
-            if (i as u32 % img.width) * 3 / img.width == k {
-                n += 1;
-                for c in 0..3 {
-                    sum[c] += p[c] as f64;
-                }
-            }
-        }
-        sum.map(|s| s / n as f64)
-    };
+    let (image, want) = against_mitsuba(&scene, "textured-params", 12);
+    let (w, h) = (image.width, image.height);
+    // Measured within 0.25% (SPPM, 12 x 200k photons).
     for k in 0..3 {
-        let (got, want) = (third(&image, k), third(want, k));
-        let ratio = [0, 1, 2].map(|c| got[c] / want[c]);
-        println!("third {k}: mean {got:.5?}, Mitsuba {want:.5?}, ratio {ratio:.4?}");
-        // Measured within 0.25% (SPPM, 12 x 200k photons).
-        for (c, r) in ratio.iter().enumerate() {
-            assert!(
-                (r - 1.0).abs() < 0.01,
-                "third {k}, channel {c}: {:+.2}% off Mitsuba's",
-                100.0 * (r - 1.0)
-            );
-        }
+        let third = |img| window_mean(img, k * w / 3..(k + 1) * w / 3, 0..h);
+        assert_means_within(&format!("third {k}"), third(&image), third(&want), 0.01);
     }
-    let (got, want) = (image.mean(), want.mean());
-    let ratio = [0, 1, 2].map(|c| got[c] / want[c]);
-    println!("image: mean {got:.5?}, Mitsuba {want:.5?}, ratio {ratio:.4?}");
-    for (c, r) in ratio.iter().enumerate() {
-        assert!(
-            (r - 1.0).abs() < 0.01,
-            "channel {c}: {:+.2}% off Mitsuba's",
-            100.0 * (r - 1.0)
-        );
-    }
+    assert_means_within("image", image.mean(), want.mean(), 0.01);
 }
 
 /// A texture whose every value is the surface's constant renders bit for bit as the constant: a 1 x 1

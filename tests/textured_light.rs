@@ -6,13 +6,10 @@ mod common;
 
 use std::path::Path;
 
-use common::{assert_clean, ctx, render};
+use common::{against_mitsuba, assert_clean, assert_means_within, ctx, render};
 use glam::Vec3;
-use ppm_vk_engine::metrics::Reference;
 use ppm_vk_engine::scene::texture::{Filter, Pattern, Texture, Wrap, IDENTITY_UV};
 use ppm_vk_engine::{Mode, Scene, Settings};
-
-const REFERENCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/references");
 
 fn load(name: &str) -> Scene {
     let root = env!("CARGO_MANIFEST_DIR");
@@ -28,25 +25,8 @@ fn textured_light() -> Scene {
 /// `name`'s render (SPPM, 8 x 200k photons) against its Mitsuba reference: the image's mean per channel
 /// within 1%.
 fn matches_mitsuba(name: &str, scene: &Scene) {
-    let reference = Reference::load(Path::new(&format!("{REFERENCES}/{name}.exr"))).unwrap();
-    let ctx = ctx();
-    let image = render(&ctx, scene, settings(), 8);
-    assert_clean(&ctx);
-    assert_eq!(
-        (image.width, image.height),
-        (reference.image.width, reference.image.height)
-    );
-    let (got, want) = (image.mean(), reference.image.mean());
-    println!("{name}: mean {got:.5?}, Mitsuba {want:.5?}");
-    for c in 0..3 {
-        let ratio = got[c] / want[c];
-        println!("channel {c}: ratio {ratio:.5}");
-        assert!(
-            (ratio - 1.0).abs() < 0.01,
-            "channel {c}: {:+.2}% off Mitsuba's",
-            100.0 * (ratio - 1.0)
-        );
-    }
+    let (image, want) = against_mitsuba(scene, name, 8);
+    assert_means_within(name, image.mean(), want.mean(), 0.01);
 }
 
 fn settings() -> Settings {

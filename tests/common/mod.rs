@@ -188,3 +188,85 @@ pub fn sorted_records(mut records: Vec<ppm_vk_engine::layout::Photon>) -> Vec<[u
     keys.sort_unstable();
     keys
 }
+
+/// scenes/NAME.xml, with `-D` parameters `defines`: a scene written to be rendered by Mitsuba 3 too, which
+/// must load with no warning but Mitsuba's one-sided bsdfs'.
+pub fn mitsuba_scene(name: &str, defines: &[(&str, &str)]) -> Scene {
+    let defines: Vec<(String, String)> = defines.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+    let path = format!("{}/scenes/{name}.xml", env!("CARGO_MANIFEST_DIR"));
+    let scene = Scene::load_with(path, &defines).unwrap_or_else(|e| panic!("{e:#}"));
+    assert!(
+        scene.warnings.iter().all(|w| w.contains("one-sided")),
+        "{:?}",
+        scene.warnings
+    );
+    scene
+}
+
+/// `scene` rendered by SPPM (`passes` of 200k photons) and its Mitsuba reference
+/// scenes/references/REFERENCE.exr: (ours, Mitsuba's), the same size, validation clean.
+pub fn against_mitsuba(
+    scene: &Scene,
+    reference: &str,
+    passes: u32,
+) -> (ppm_vk_engine::RgbImage, ppm_vk_engine::RgbImage) {
+    let path = format!("{}/scenes/references/{reference}.exr", env!("CARGO_MANIFEST_DIR"));
+    let want = ppm_vk_engine::metrics::Reference::load(Path::new(&path))
+        .unwrap_or_else(|e| panic!("{e:#}"))
+        .image;
+    let settings = ppm_vk_engine::Settings {
+        mode: ppm_vk_engine::Mode::Sppm,
+        photons_per_pass: 200_000,
+        ..ppm_vk_engine::Settings::default()
+    };
+    let ctx = ctx();
+    let image = render(&ctx, scene, settings, passes);
+    assert_clean(&ctx);
+    assert_eq!((image.width, image.height), (want.width, want.height));
+    (image, want)
+}
+
+/// Each channel's mean over the pixels in columns `cols` and rows `rows` of `image`.
+pub fn window_mean(
+    image: &ppm_vk_engine::RgbImage,
+    cols: std::ops::Range<u32>,
+    rows: std::ops::Range<u32>,
+) -> [f64; 3] {
+    let mut sum = [0f64; 3];
+    let mut n = 0;
+    for y in rows {
+        for x in cols.clone() {
+            n += 1;
+            let p = image.pixels[(y * image.width + x) as usize];
+            for (s, v) in sum.iter_mut().zip(p) {
+                *s += v as f64;
+            }
+        }
+    }
+    sum.map(|s| s / n as f64)
+}
+
+/// Asserts each channel of `got` within `rel` of `want`'s (printing both and their ratio); returns the
+/// largest |ratio - 1|.
+pub fn assert_means_within(what: &str, got: [f64; 3], want: [f64; 3], rel: f64) -> f64 {
+    let ratio = [0, 1, 2].map(|c| got[c] / want[c]);
+    println!("{what}: mean {got:.5?}, Mitsuba {want:.5?}, ratio {ratio:.5?}");
+    for (c, r) in ratio.iter().enumerate() {
+        assert!(
+            (r - 1.0).abs() < rel,
+            "{what}, channel {c}: {:+.2}% off Mitsuba's",
+            100.0 * (r - 1.0)
+        );
+    }
+    ratio.iter().fold(0f64, |w, r| w.max((r - 1.0).abs()))
+}
+
+/// SHA-256 (hex) of an image's pixel values (bit for bit comparisons of two renders).
+pub fn pixels_sha256(image: &ppm_vk_engine::RgbImage) -> String {
+    use sha2::Digest;
+    let mut h = sha2::Sha256::new();
+    for v in image.pixels.iter().flatten() {
+        h.update(v.to_bits().to_le_bytes());
+    }
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
