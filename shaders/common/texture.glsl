@@ -83,9 +83,8 @@ vec3 texture_value(uint at, vec2 uv) {
 // specular_reflectance becomes m.color ((rough) conductors, mirrors, thin dielectrics: their constant
 // there); alpha, the luminance of its texture's value (Mitsuba's eval_1 of an RGB texture, its
 // src/textures/bitmap.cpp) floored at 1e-4 (its MicrofacetDistribution), becomes m.alpha_u and
-// m.alpha_v, which hit_microfacet (microfacet.glsl) reads in place of the material's.
-void apply_parameter_textures(inout Material m, Hit h) {
-    uvec4 t = texelFetch(material_texels, int(MATERIAL_TEXELS * h.material + 5u));
+// m.alpha_v, which hit_microfacet (microfacet.glsl) reads in place of the material's. `t`: that texel.
+void apply_parameter_textures(inout Material m, Hit h, uvec4 t) {
     m.specular_texture = t.y;
     m.alpha_texture = t.z;
     if (t.y == 0u && t.z == 0u) return;
@@ -104,10 +103,11 @@ void apply_parameter_textures(inout Material m, Hit h) {
 // An emitter's radiance texture (the sixth texel's w, read only where it emits) gives its emission there.
 void apply_texture(inout Material m, Hit h) {
     if (!HAS_TEXTURES) return;
-    apply_parameter_textures(m, h);
-    if (max(m.emission.r, max(m.emission.g, m.emission.b)) > 0.0) {
-        uint radiance = texelFetch(material_texels, int(MATERIAL_TEXELS * h.material + 5u)).w;
-        if (radiance != 0u) m.emission = texture_value(radiance - 1u, surface_uv(h));
+    // The sixth texel, read once: opacity, specular_reflectance, alpha, radiance (types.glsl).
+    uvec4 slots = texelFetch(material_texels, int(MATERIAL_TEXELS * h.material + 5u));
+    apply_parameter_textures(m, h, slots);
+    if (slots.w != 0u && max(m.emission.r, max(m.emission.g, m.emission.b)) > 0.0) {
+        m.emission = texture_value(slots.w - 1u, surface_uv(h));
     }
     if (m.texture == 0u) return;
     vec3 value = texture_value(m.texture - 1u, surface_uv(h));
