@@ -39,7 +39,8 @@ pub struct CompareArgs {
     /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone". Words joined by
     /// `+`: ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass),
     /// gh=A (glossy hit points on rough conductors of alpha >= A), nogh (none), photons (direct light by the photons) or
-    /// sample (by light sampling, the default), ls=N (light samples).
+    /// sample (by light sampling, the default), ls=N (light samples), gl=mis|bsdf|lights (the light rough
+    /// vertices reflect straight from a light: both strategies, the default, or one of them).
     #[arg(
         long,
         default_value = "ppm; ppm+probe; ppm+probe-sf; ppm+cone; ppm+probe+cone; ppm+probe-sf+cone"
@@ -112,9 +113,17 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
             "nogh" => s.glossy_hits = None,
             "photons" => s.direct = ppm_vk_engine::DirectLight::Photons,
             "sample" => s.direct = ppm_vk_engine::DirectLight::Sample,
+            "gl" => {
+                s.glossy_light = match value {
+                    Some("mis") => ppm_vk_engine::GlossyLight::Mis,
+                    Some("bsdf") => ppm_vk_engine::GlossyLight::Bsdf,
+                    Some("lights") => ppm_vk_engine::GlossyLight::Lights,
+                    _ => bail!("variant {name:?}: gl takes mis, bsdf or lights"),
+                }
+            }
             other => bail!(
                 "variant {name:?}: unknown word {other:?} (ppm, sppm, probe, probe-sf, cone[=K], beta=F, alpha=A, es=N, \
-                 ls=N, gh=A, nogh, photons, sample)"
+                 ls=N, gh=A, nogh, photons, sample, gl=mis|bsdf|lights)"
             ),
         }
     }

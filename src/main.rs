@@ -179,6 +179,12 @@ pub(crate) struct SettingsArgs {
     /// (docs/accuracy.md compares the two).
     #[arg(long, value_name = "ALPHA", default_value = GLOSSY_DEFAULT, value_parser = parse_glossy)]
     glossy_hits: Glossy,
+    /// The light rough surfaces that eye paths sample through reflect straight from a light: `mis` by a
+    /// shadow ray and the lobe's direction weighed by multiple importance sampling, `bsdf` by the lobe's
+    /// direction alone (points, spots and the sun still by shadow rays), `lights` by shadow rays alone
+    /// (glowing spheres still by the lobe).
+    #[arg(long, value_enum, default_value_t = GlossyLightArg::Mis)]
+    glossy_light: GlossyLightArg,
     /// Photon probing (eq. 7-9): `paper` is eq. 9 as printed, `scale-free` is r' = r (1 + lambda / r^2).
     #[arg(long, value_enum, default_value_t = ProbeArg::Off)]
     probe: ProbeArg,
@@ -211,6 +217,7 @@ impl SettingsArgs {
             direct: self.direct.into(),
             light_samples: self.light_samples,
             glossy_hits: self.glossy_hits.0,
+            glossy_light: self.glossy_light.into(),
             ..Settings::default()
         };
         settings.validate()?;
@@ -303,6 +310,23 @@ impl From<ModeArg> for Mode {
         match m {
             ModeArg::Ppm => Mode::Ppm,
             ModeArg::Sppm => Mode::Sppm,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum GlossyLightArg {
+    Mis,
+    Bsdf,
+    Lights,
+}
+
+impl From<GlossyLightArg> for ppm_vk_engine::GlossyLight {
+    fn from(g: GlossyLightArg) -> ppm_vk_engine::GlossyLight {
+        match g {
+            GlossyLightArg::Mis => ppm_vk_engine::GlossyLight::Mis,
+            GlossyLightArg::Bsdf => ppm_vk_engine::GlossyLight::Bsdf,
+            GlossyLightArg::Lights => ppm_vk_engine::GlossyLight::Lights,
         }
     }
 }

@@ -16,11 +16,11 @@ Emitter emitter_of(Light light) {
     if (light.kind == LIGHT_TRIANGLE) {
         Triangle tr = bvh_triangle(light.index);
         return Emitter(tr.v0, tr.v1 - tr.v0, tr.v2 - tr.v0, bvh_normal(tr), flux, light.cdf, LIGHT_TRIANGLE,
-                       vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, light.texture != 0u ? light.index + 1u : 0u);
+                       light.value, 0.0, 0.0, 0.0, 0.0, 0.0, light.texture != 0u ? light.index + 1u : 0u);
     }
     if (light.kind == LIGHT_QUAD) {
         Quad q = quads[light.index];
-        return Emitter(q.origin, q.edge_u, q.edge_v, q.normal, flux, light.cdf, LIGHT_QUAD, vec3(0.0), 0.0, 0.0,
+        return Emitter(q.origin, q.edge_u, q.edge_v, q.normal, flux, light.cdf, LIGHT_QUAD, light.value, 0.0, 0.0,
                        0.0, 0.0, 0.0, light.texture);
     }
     vec3 value = light.kind == LIGHT_ENVIRONMENT ? light.value : light.value / light.prob;

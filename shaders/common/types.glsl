@@ -98,7 +98,8 @@ struct Emitter {
     float cdf;
     uint kind;       // LIGHT_*
     vec3 value;      // a sphere's radiance, a point's or spot's intensity, a directional light's irradiance,
-                     // each divided by prob; an environment's radiance or scale (its prob is its cdf: light 0)
+                     // each divided by prob; an environment's radiance or scale (its prob is its cdf: light 0);
+                     // a quad's or triangle's radiance, not divided (1 where a texture gives it)
     float radius;
     float cos_cutoff; // a spot's: where its falloff reaches 0, and where it starts (cos_beam), the cutoff
     float cos_beam;   // angle in radians, and 1 / (cutoff - beam) (falloff linear in the angle, as Mitsuba's)
@@ -135,7 +136,7 @@ struct Light {
     float cos_beam;
     vec3 edge_u;
     float cutoff;
-    vec3 value;      // not yet divided by prob
+    vec3 value;      // not yet divided by prob; a quad's or triangle's radiance (1 where a texture gives it)
     float inv_width;
     vec3 flux;       // Emitter::flux, when it is not power / prob (a spot's; a textured quad's per unit
                      // radiance, area pi: its photons carry flux * Le(uv) / prob)
@@ -177,7 +178,17 @@ struct RenderParams {
                             // records (rough_conductor.glsl, "glossy hit points"); above every alpha: none
     uint masks;             // 1: some mask's opacity is not 0 or 1 throughout: each traced ray draws its key
                             // (materials/mask.glsl)
+    float light_power;      // the lights' power, channels summed (the light table's total): the density
+                            // ray/glossy_light.glsl weighs an area light's samples by
+    uint glossy_light;      // GLOSSY_LIGHT_*: how eye paths take the light their rough vertices reflect
 };
+
+// RenderParams.glossy_light (ray/glossy_light.glsl): the light a rough vertex reflects straight from an
+// emitter by both strategies weighed by the power heuristic, by its lobe's sampled direction alone (delta
+// lights still by shadow rays), or by shadow rays alone (glowing spheres still by the lobe).
+const uint GLOSSY_LIGHT_BSDF = 0u;
+const uint GLOSSY_LIGHT_MIS = 1u;
+const uint GLOSSY_LIGHT_LIGHTS = 2u;
 
 // A diffuse (or glossy) point seen from a pixel (PPM pass 1). Fixed for the whole render.
 struct HitPoint {

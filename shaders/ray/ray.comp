@@ -48,7 +48,10 @@
 // takes the base's term (d) there and goes on along the coat, without choosing between them. Rough
 // conductors and rough glass are S too: every path samples one direction of their lobes, with the exact
 // weight f cos / pdf (rough_conductor.glsl, rough_dielectric.glsl), and leaves no hit point there; the
-// photons do the same with the same weights, so the partition above is unchanged. A rough conductor of
+// photons do the same with the same weights, so the partition above is unchanged. The E S* L paths whose
+// last S is such a rough vertex are taken both by that sampled direction and by a shadow ray from the
+// vertex, weighed by multiple importance sampling (glossy_light.glsl): still term (a), and still one
+// estimate of it. A rough conductor of
 // roughness at least params.glossy_alpha is a D instead (a glossy hit point): the eye paths end there
 // with a hit point and term (d) by its BRDF, the photons leave a record there (but the first landing) and
 // go on by sampling its lobe, and the gather evaluates its BRDF per photon; the partition is again the
@@ -216,6 +219,8 @@ vec3 direct_diffuse(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint 
     return l;
 }
 
+#include "glossy_light.glsl"
+
 // The environment seen along d where an eye path leaves the scene (term (a)); 0 without one.
 vec3 escaped(vec3 d) {
     if (!HAS_ENVIRONMENT) return vec3(0.0);
@@ -234,6 +239,9 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
     vec3 sum = vec3(0.0); // term (d) at the plastics passed on the way
     vec3 vng = d, vns = d; // the last vertex's normals, which d must lie on the same side of (shading.glsl)
     bump_alpha2 = 0.0;
+    // Where d left a rough vertex: its lobe's density of d and the vertex (glossy_light.glsl); 0 else.
+    float lobe_pdf = 0.0;
+    vec3 lobe_from = vec3(0.0);
     for (uint depth = 0u;; depth++) {
         bvh_sync();
         if (HAS_SHADING_NORMALS && !shading_valid(d, vng, vns)) break;
@@ -245,7 +253,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             if (bvh_cut) atomicAdd(cut.traversal_cut, 1u);
             if (bvh_spent) atomicAdd(cut.eye_paths, 1u);
             if (HAS_ENVIRONMENT && !bvh_cut && !bvh_spent) {
-                vec3 e = thr * escaped(d);
+                vec3 e = thr * escaped(d) * escape_weight(lobe_pdf, d);
                 if (max3(e) > 0.0) seen = true;
                 sum += e;
             }
@@ -260,8 +268,11 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
         if (HAS_SHADING_NORMALS && !shading_valid(d, ng, nf)) break;
         vng = ng;
         vns = nf;
+        float lobe_in = lobe_pdf;
+        lobe_pdf = 0.0;
         if (m.surface == SURFACE_DIFFUSE) {
-            vec3 e = front ? thr * m.emission : vec3(0.0); // emitters are one-sided
+            // Emitters are one-sided; after a rough vertex the emission is weighed against its shadow ray.
+            vec3 e = front ? thr * m.emission * lobe_weight(lobe_in, lobe_from, h, m.emission) : vec3(0.0);
             if (max(e.r, max(e.g, e.b)) > 0.0) seen = true;
             if (params.direct_light != 0u) {
                 vec3 l = direct_diffuse(h.pos, nf, ng, m.color, 0.0, 0u, rng);
@@ -308,8 +319,16 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             thr *= thin_branch(h.material, m, h.pos, nf, rng_float(rng), o, d);
             continue;
         }
-        if (rough_bounce(h.material, m, h, nf, front, rng, o, d, thr)) {
+        if (rough_vertex(m, h.material)) {
+            // The light this vertex reflects straight from an emitter, by a shadow ray (glossy_light.glsl),
+            // then the lobe's direction, whose emission met next is weighed against it.
+            vec3 wo = -d;
+            sum += thr * rough_light(h.material, m, h, nf, ng, front, wo, rng, lit);
+            if (bvh_spent || bvh_cut) break; // counted by shadowed; the sample is dropped
+            rough_bounce(h.material, m, h, nf, front, rng, o, d, thr);
             if (max3(thr) <= 0.0) break;
+            lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, d);
+            lobe_from = h.pos;
             continue;
         }
         glass_branch(h.pos, nf, front, m.ior, rng_float(rng), o, d);
@@ -352,6 +371,10 @@ void main() {
             // is stacked only where it does.
             vec3 vng = r.d, vns = r.d;
             bump_alpha2 = 0.0; // a stacked branch took its vertex's term when stacked
+            // Where r.d left a rough vertex: its lobe's density of r.d and the vertex (glossy_light.glsl);
+            // a stacked branch leaves glass, a delta vertex.
+            float lobe_pdf = 0.0;
+            vec3 lobe_from = vec3(0.0);
             for (;;) {
                 bvh_sync();
                 if (HAS_SHADING_NORMALS && !shading_valid(r.d, vng, vns)) break;
@@ -362,7 +385,7 @@ void main() {
                 if (!intersect_scene(r.o, r.d, 0.0, 1e30, mask_key(rng), h)) {
                     if (bvh_cut) atomicAdd(cut.traversal_cut, 1u);
                     if (bvh_spent) { atomicAdd(cut.eye_paths, 1u); sp = 0u; } // no budget for the rest
-                    if (HAS_ENVIRONMENT) hit_emitted += r.thr * escaped(r.d); // term (a) (dropped if cut)
+                    if (HAS_ENVIRONMENT) hit_emitted += r.thr * escaped(r.d) * escape_weight(lobe_pdf, r.d); // term (a) (dropped if cut)
                     break;
                 }
                 resolve_blend(h, rng); // before anything reads the hit's material (blend.glsl)
@@ -374,6 +397,8 @@ void main() {
                 if (HAS_SHADING_NORMALS && !shading_valid(r.d, ng, nf)) break;
                 vng = ng;
                 vns = nf;
+                float lobe_in = lobe_pdf;
+                lobe_pdf = 0.0;
                 bool diffuse = m.surface == SURFACE_DIFFUSE;
                 if (diffuse || (HAS_PLASTICS && m.surface == SURFACE_PLASTIC)) {
                     // A diffuse surface, or a plastic's base under its coat: the hit point and term (d).
@@ -386,7 +411,8 @@ void main() {
                     uint table = 0u;
                     vec3 coat_d = r.d;
                     if (diffuse) {
-                        if (front) hit_emitted += r.thr * m.emission; // emitters are one-sided
+                        // Emitters are one-sided; after a rough vertex weighed against its shadow ray.
+                        if (front) hit_emitted += r.thr * m.emission * lobe_weight(lobe_in, lobe_from, h, m.emission);
                     } else if (HAS_PLASTICS) {
                         table = HAS_ROUGH_PLASTICS ? material_table(h.material) : 0u;
                         plastic_lobes(h.material, m, table, nf, rng, coat_d, spec, diff);
@@ -435,8 +461,18 @@ void main() {
                     break;
                 }
                 r.depth++;
-                if (rough_bounce(h.material, m, h, nf, front, rng, r.o, r.d, r.thr)) {
+                if (rough_vertex(m, h.material)) {
+                    // As the emission samples: a shadow ray where this path is one of them, then the lobe.
+                    vec3 wo = -r.d;
+                    if (hit_is_sample) {
+                        bool unused = false;
+                        hit_emitted += r.thr * rough_light(h.material, m, h, nf, ng, front, wo, rng, unused);
+                        if (bvh_spent) { sp = 0u; break; } // counted there; no budget for the rest
+                    }
+                    rough_bounce(h.material, m, h, nf, front, rng, r.o, r.d, r.thr);
                     if (max3(r.thr) <= 0.0) break;
+                    if (hit_is_sample) lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, r.d);
+                    lobe_from = h.pos;
                     continue;
                 }
                 if (HAS_THIN && m.surface == SURFACE_THIN) {

@@ -52,7 +52,7 @@ pub use ppm_vk_kernels::layout::PathCounters;
 pub use ppm_vk_kernels::photon::PathLimits;
 pub use renderer::{spread_marks, CancelToken, Renderer};
 pub use scene::Scene;
-pub use settings::{DirectLight, Mode, ProbeMode, Settings};
+pub use settings::{DirectLight, GlossyLight, Mode, ProbeMode, Settings};
 pub use stats::{PassStats, PhotonVariant, ProbeReport};
 
 /// Opens a Vulkan device (see [`ContextOptions`]); a failure is [`Error::Device`].

@@ -47,6 +47,22 @@ pub enum DirectLight {
     Photons,
 }
 
+/// How eye paths take the light that their rough vertices (rough conductors and rough glass they sample
+/// through) reflect straight from an emitter (shaders/ray/glossy_light.glsl).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum GlossyLight {
+    /// Both a shadow ray to a light and the lobe's own sampled direction, weighed by the power heuristic
+    /// (Veach 1997), as a path tracer does: each where it has the lower variance.
+    #[default]
+    Mis,
+    /// The lobe's sampled direction alone, as before (points, spots and the sun, which no direction
+    /// meets, by shadow rays).
+    Bsdf,
+    /// Shadow rays alone (glowing spheres, which they do not sample here, by the lobe).
+    Lights,
+}
+
 /// How to render. `Settings::default()` is stochastic PPM (at equal time it had the lower whole-image error
 /// on the paper's scene from 10 s on: docs/accuracy.md, "What the numbers show") with the paper's other settings.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -98,6 +114,10 @@ pub struct Settings {
     /// by the eye paths (shaders/materials/rough_conductor.glsl; docs/accuracy.md compares the two).
     #[serde(default = "default_glossy_hits")]
     pub glossy_hits: Option<f32>,
+    /// How the light that rough vertices reflect straight from an emitter is taken (multiple importance
+    /// sampling by default).
+    #[serde(default)]
+    pub glossy_light: GlossyLight,
     /// Compile the tracing kernels with the scene inlined as constants (faster; same results up to the
     /// last bit of a fused multiply-add). `false` uses the kernels as built.
     pub specialize: bool,
@@ -141,6 +161,7 @@ impl Default for Settings {
             direct: default_direct(),
             light_samples: default_light_samples(),
             glossy_hits: Some(DEFAULT_GLOSSY_ALPHA),
+            glossy_light: GlossyLight::Mis,
             specialize: true,
             max_inline_triangles: default_inline_triangles(),
             grid_buckets: None,

@@ -8,6 +8,8 @@ use crate::gpu_struct;
 /// How many blends deep blend.glsl resolves a hit's material (ppm_vk_materials::blend::MAX_BLEND_DEPTH,
 /// checked equal where the engine lowers blends).
 pub use crate::reflected::constants::MAX_BLEND_DEPTH;
+/// `RenderParams::glossy_light` (ray/glossy_light.glsl).
+pub use crate::reflected::constants::{GLOSSY_LIGHT_BSDF, GLOSSY_LIGHT_LIGHTS, GLOSSY_LIGHT_MIS};
 /// `Material::distribution` of a rough surface (microfacet.glsl).
 pub use crate::reflected::constants::{MICROFACET_BECKMANN, MICROFACET_GGX};
 /// `Material::surface`: which BSDF (types.glsl).
@@ -161,7 +163,8 @@ pub struct Light {
     /// `edge_u x normal` (types.glsl's Emitter: edge_v).
     pub edge_u: [f32; 3],
     pub cutoff: f32,
-    /// Radiance, intensity or irradiance (types.glsl's Emitter::value), not yet divided by `prob`.
+    /// Radiance, intensity or irradiance (types.glsl's Emitter::value), not yet divided by `prob`; a quad's
+    /// or triangle's radiance, never divided (1 where a texture gives it).
     pub value: [f32; 3],
     pub inv_width: f32,
     /// A spot's photon flux before its falloff; a quad with a radiance texture's per unit of radiance,
@@ -237,6 +240,11 @@ pub struct RenderParams {
     /// 1: some mask's opacity is not 0 or 1 throughout, and every ray the kernels trace draws a key from
     /// its path's random stream for the masks' choices (materials/mask.glsl); 0: no ray draws one.
     pub masks: u32,
+    /// The lights' power, channels summed (the light table's total): an area light's samples are weighed
+    /// by pi Le / light_power per unit area at rough vertices (ray/glossy_light.glsl).
+    pub light_power: f32,
+    /// `GLOSSY_LIGHT_*`: how eye paths take the light their rough vertices reflect straight from an emitter.
+    pub glossy_light: u32,
 }
 gpu_struct!(RenderParams {
     eye,
@@ -267,7 +275,9 @@ gpu_struct!(RenderParams {
     lookup_limit,
     direct_light,
     glossy_alpha,
-    masks
+    masks,
+    light_power,
+    glossy_light
 });
 
 #[repr(C)]

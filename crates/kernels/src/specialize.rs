@@ -184,8 +184,10 @@ pub fn scene_constants(c: &SceneConstants) -> String {
     };
     // The fields after the kind, zero for quads and triangles (lights.glsl's emitter_of fills them alike).
     const NO_MORE: &str = "vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, 0u";
-    // A quad's last field is its radiance texture, a textured triangle's 1 + its index (Emitter::table).
-    const QUAD_NO_MORE: &str = "vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, ";
+    // A quad's or triangle's value is its radiance, not divided (lights.glsl's emitter_of); the fields
+    // after it are zero but the last, its radiance texture, a textured triangle's 1 + its index
+    // (Emitter::table).
+    const QUAD_NO_MORE: &str = "0.0, 0.0, 0.0, 0.0, 0.0, ";
     s += &array(
         "Emitter",
         "SCENE_EMITTERS",
@@ -204,25 +206,27 @@ pub fn scene_constants(c: &SceneConstants) -> String {
                     // there from them (choose_emitter), not written here.
                     let t = &c.triangles[l.index as usize];
                     return format!(
-                        "Emitter({}, {}, {}, vec3(0.0), {}, {}, {LIGHT_TRIANGLE}u, {QUAD_NO_MORE}{}u)",
+                        "Emitter({}, {}, {}, vec3(0.0), {}, {}, {LIGHT_TRIANGLE}u, {}, {QUAD_NO_MORE}{}u)",
                         v(t.v0),
                         v(sub(t.v1, t.v0)),
                         v(sub(t.v2, t.v0)),
                         v(flux),
                         f(l.cdf),
+                        v(l.value),
                         if l.texture != 0 { l.index + 1 } else { 0 }
                     );
                 }
                 if l.kind == LIGHT_QUAD {
                     let q = &quads[l.index as usize];
                     return format!(
-                        "Emitter({}, {}, {}, {}, {}, {}, {LIGHT_QUAD}u, {QUAD_NO_MORE}{}u)",
+                        "Emitter({}, {}, {}, {}, {}, {}, {LIGHT_QUAD}u, {}, {QUAD_NO_MORE}{}u)",
                         v(q.origin),
                         v(q.edge_u),
                         v(q.edge_v),
                         v(q.normal),
                         v(flux),
                         f(l.cdf),
+                        v(l.value),
                         l.texture
                     );
                 }

@@ -12,6 +12,7 @@
 pub mod blend;
 pub mod bvh;
 pub mod conductor;
+pub mod glossy_light;
 pub mod lights;
 pub mod mask;
 /// Generated meshes for the BVH's tests and benchmarks.
@@ -42,6 +43,7 @@ use normal_map::Bump;
 use ppm_vk_engine::lower::GpuScene;
 use ppm_vk_engine::settings::ProbeMode;
 use rng::Rng;
+use rough_conductor::glossy_hit;
 use trace::{glass_branch, intersect_scene, offset_ray};
 
 /// The camera ray through point `jitter` of pixel (px, py), as ray.comp's `camera_ray`.
@@ -193,15 +195,6 @@ fn escaped(g: &GpuScene, d: Vec3) -> Vec3 {
     lights::environment_radiance(g, &e, d)
 }
 
-/// rough_conductor.glsl's `glossy_hit`: an isotropic rough conductor of roughness at least
-/// `glossy_alpha`, its alpha not a texture.
-fn glossy_hit(g: &GpuScene, m: &Material) -> bool {
-    m.surface == SURFACE_ROUGH_CONDUCTOR
-        && m.alpha_u >= g.params.glossy_alpha
-        && m.alpha_u == m.alpha_v
-        && m.alpha_texture == 0
-}
-
 /// rough_dielectric.glsl's `rough_bounce` at hit `h`: for a rough conductor or rough glass, the new origin,
 /// direction and weight (zero: the path ends), its numbers drawn from `rng` in the kernel's order; None
 /// for every other surface. An anisotropic lobe lies along the hit's dp/du (`rough_tangent`).
@@ -328,6 +321,8 @@ fn emission_sample(
     // The last vertex's normals, which d must lie on the same side of (shading.glsl).
     let (mut vng, mut vns) = (d, d);
     let mut last = Bump::default();
+    // Where d left a rough vertex: its lobe's density of d and the vertex (glossy_light.glsl); 0 else.
+    let (mut lobe_pdf, mut lobe_from) = (0f32, Vec3::ZERO);
     for depth in 0.. {
         let mut out = false;
         let Some(EyeVertex {
@@ -342,15 +337,20 @@ fn emission_sample(
         )
         else {
             if out {
-                let e = thr * escaped(g, d);
+                let e = thr * escaped(g, d) * glossy_light::escape_weight(g, lobe_pdf, d);
                 *seen |= e.max_element() > 0.0;
                 sum += e;
             }
             break;
         };
         let m = &m;
+        let lobe_in = std::mem::take(&mut lobe_pdf);
         if m.surface == SURFACE_DIFFUSE {
-            let mut e = if front { thr * v3(m.emission) } else { Vec3::ZERO };
+            let mut e = if front {
+                thr * v3(m.emission) * glossy_light::lobe_weight(g, lobe_in, lobe_from, &h, v3(m.emission))
+            } else {
+                Vec3::ZERO
+            };
             *seen |= e.max_element() > 0.0;
             if g.params.direct_light != 0 {
                 let l = direct_diffuse(g, h.pos, nf, ng, v3(m.color), None, &bump, rng);
@@ -394,12 +394,18 @@ fn emission_sample(
             thr *= w;
             continue;
         }
-        if let Some((o2, d2, w)) = rough_bounce(g, m, &h, nf, front, rng, d) {
+        if glossy_light::rough_vertex(g, m) {
+            // The light this vertex reflects straight from an emitter by a shadow ray, then the lobe.
+            let wo = -d;
+            sum += thr * glossy_light::rough_light(g, m, &h, nf, ng, front, wo, &bump, rng, lit);
+            let (o2, d2, w) = rough_bounce(g, m, &h, nf, front, rng, d).expect("a rough surface");
             (o, d) = (o2, d2);
             thr *= w;
             if thr.max_element() <= 0.0 {
                 return sum;
             }
+            lobe_pdf = glossy_light::lobe_density(g, m, &h, nf, front, wo, d);
+            lobe_from = h.pos;
             continue;
         }
         (o, d) = glass_branch(g, h.pos, nf, front, m.ior, rng.float(), d);
@@ -499,8 +505,9 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                 // The last vertex's normals (shading.glsl); a branch is stacked only where d suits them.
                 let (mut vng, mut vns) = (d, d);
                 let mut out_of_scene = false;
-                // A stacked branch took its vertex's term when stacked.
+                // A stacked branch took its vertex's term when stacked, and leaves glass (a delta vertex).
                 let mut last = Bump::default();
+                let (mut lobe_pdf, mut lobe_from) = (0f32, Vec3::ZERO);
                 while let Some(EyeVertex {
                     h,
                     m,
@@ -522,6 +529,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                     &mut out_of_scene,
                 ) {
                     let m = &m;
+                    let lobe_in = std::mem::take(&mut lobe_pdf);
                     let diffuse = m.surface == SURFACE_DIFFUSE;
                     if diffuse || m.surface == SURFACE_PLASTIC {
                         // ray.comp: a diffuse surface, or a plastic's base and coat (both lobes while
@@ -531,7 +539,8 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         let mut coat_d = d;
                         if diffuse {
                             if front {
-                                hit_emitted += thr * v3(m.emission);
+                                let le = v3(m.emission);
+                                hit_emitted += thr * le * glossy_light::lobe_weight(g, lobe_in, lobe_from, &h, le);
                             }
                         } else {
                             (coat_d, spec, diff) = plastic::plastic_lobes(g, m, nf, &mut rng, d);
@@ -599,12 +608,24 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         break;
                     }
                     depth += 1;
-                    if let Some((o2, d2, w)) = rough_bounce(g, m, &h, nf, front, &mut rng, d) {
+                    if glossy_light::rough_vertex(g, m) {
+                        // As the emission samples: a shadow ray where this path is one of them, the lobe.
+                        let wo = -d;
+                        if hit_is_sample {
+                            let mut unused = false;
+                            hit_emitted += thr
+                                * glossy_light::rough_light(g, m, &h, nf, ng, front, wo, &bump, &mut rng, &mut unused);
+                        }
+                        let (o2, d2, w) = rough_bounce(g, m, &h, nf, front, &mut rng, d).expect("a rough surface");
                         (o, d) = (o2, d2);
                         thr *= w;
                         if thr.max_element() <= 0.0 {
                             break;
                         }
+                        if hit_is_sample {
+                            lobe_pdf = glossy_light::lobe_density(g, m, &h, nf, front, wo, d);
+                        }
+                        lobe_from = h.pos;
                         continue;
                     }
                     if m.surface == SURFACE_THIN {
@@ -654,7 +675,8 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                     }
                 }
                 if out_of_scene {
-                    hit_emitted += thr * escaped(g, d); // term (a)
+                    hit_emitted += thr * escaped(g, d) * glossy_light::escape_weight(g, lobe_pdf, d);
+                    // term (a)
                 }
             }
             for s in slot..slots {

@@ -56,12 +56,14 @@ pub fn emitter_of(g: &GpuScene, light: &Light) -> Emitter {
         let t = &g.bvh_triangles[light.index as usize];
         (e.origin, e.edge_u, e.edge_v) = (v3(t.v0), v3(t.v1) - v3(t.v0), v3(t.v2) - v3(t.v0));
         e.normal = bvh::normal(t);
+        e.value = v3(light.value);
         e.table = if light.texture != 0 { light.index + 1 } else { 0 };
         return e;
     }
     if light.kind == LIGHT_QUAD {
         let q = &g.quads[light.index as usize];
         (e.origin, e.edge_u, e.edge_v, e.normal) = (v3(q.origin), v3(q.edge_u), v3(q.edge_v), v3(q.normal));
+        e.value = v3(light.value);
         e.table = light.texture;
         return e;
     }

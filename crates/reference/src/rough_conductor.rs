@@ -7,7 +7,7 @@
 //! its density by a chi-square test.
 
 use glam::{Vec2, Vec3};
-use ppm_vk_kernels::layout::Material;
+use ppm_vk_kernels::layout::{Material, SURFACE_ROUGH_CONDUCTOR};
 
 use ppm_vk_materials::conductor::fresnel_conductor;
 use ppm_vk_materials::math::{frame, onb, reflect, to_local, v3};
@@ -67,6 +67,15 @@ pub fn hit_weight(m: &Material, thr: Vec3, cos_o: f32) -> Vec3 {
 pub fn ratio(m: &Material, wi: Vec3, wo: Vec3, n: Vec3) -> Vec3 {
     let (s, f) = terms(m, wi, wo, n);
     (f * (s / bound(&microfacet::of(m)))).min(Vec3::ONE)
+}
+
+/// rough_conductor.glsl's `glossy_hit`: an isotropic rough conductor of roughness at least
+/// `glossy_alpha`, its alpha not a texture.
+pub fn glossy_hit(g: &GpuScene, m: &Material) -> bool {
+    m.surface == SURFACE_ROUGH_CONDUCTOR
+        && m.alpha_u >= g.params.glossy_alpha
+        && m.alpha_u == m.alpha_v
+        && m.alpha_texture == 0
 }
 
 /// rough_conductor.glsl's `rough_conductor_bounce`: the new origin, direction and weight of a path

@@ -22,6 +22,8 @@ pub struct Hit {
     pub smooth: Option<Vec3>,
     /// Mitsuba's dp/du, not unit (geometry.glsl's `surface_tangent`).
     pub dpdu: Vec3,
+    /// A sphere's (geometry.glsl's HIT_SPHERE): glossy_light.glsl weighs their emission apart.
+    pub sphere: bool,
     /// Mitsuba's dp/du and dp/dv, not unit, as a bump or normal map reads them (normal_map.glsl's
     /// `surface_derivatives`).
     pub dp: [Vec3; 2],
@@ -129,6 +131,7 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32, key
                 uv: sphere_uv(normal),
                 smooth: None,
                 dpdu: Vec3::new(-normal.y, normal.x, 0.0),
+                sphere: true,
                 dp: sphere_derivatives(normal, 1.0 / (1.0 / s.radius)),
             }
         }
@@ -139,6 +142,7 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32, key
             uv: local,
             smooth: None,
             dpdu: v3(g.quads[i].edge_u),
+            sphere: false,
             dp: [v3(g.quads[i].edge_u), v3(g.quads[i].edge_v)],
         },
         _ => {
@@ -180,6 +184,7 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32, key
                 uv,
                 smooth,
                 dpdu,
+                sphere: false,
                 dp,
             }
         }

@@ -64,6 +64,8 @@ pub fn lights(
                 index,
                 kind,
                 power: power.to_array(),
+                // Le, which shadow rays at rough vertices weigh against the lobe (ray/glossy_light.glsl).
+                value: emission.to_array(),
                 ..Default::default()
             },
             flux_bound: max3(power.to_array()),
@@ -91,6 +93,7 @@ pub fn lights(
         let mut entry = area_light(qi, LIGHT_QUAD, Vec3::ZERO, q.area());
         entry.light.power = (texture_mean(texture) * per_radiance).as_vec3().to_array();
         entry.light.flux = [per_radiance as f32; 3];
+        entry.light.value = [1.0; 3]; // the texture gives Le
         entry.light.texture = texture_at[t as usize] + 1;
         entry.flux_bound = texture.max().max_element() as f64 * per_radiance;
         entries.push(entry);
@@ -119,6 +122,7 @@ pub fn lights(
             let mut entry = area_light(ti as u32, LIGHT_TRIANGLE, Vec3::ZERO, area);
             entry.light.power = (most * per_radiance).as_vec3().to_array();
             entry.light.flux = [per_radiance as f32; 3];
+            entry.light.value = [1.0; 3]; // the texture gives Le
             entry.light.texture = texture_at[k as usize] + 1;
             entry.flux_bound = most.max_element() * per_radiance;
             entries.push(entry);

@@ -5,13 +5,16 @@
 //! `grid.rs` (starting radius, grid cell and buckets) in turn.
 
 use glam::Vec3;
-use ppm_vk_kernels::layout::{self, BvhNode, Light, Material, Quad, RenderParams, Sphere, Triangle};
+use ppm_vk_kernels::layout::{
+    self, BvhNode, Light, Material, Quad, RenderParams, Sphere, Triangle, GLOSSY_LIGHT_BSDF, GLOSSY_LIGHT_LIGHTS,
+    GLOSSY_LIGHT_MIS,
+};
 use ppm_vk_kernels::specialize::MAX_INLINE_PRIMITIVES;
 
 use crate::bvh::{self, Bvh, BvhOptions, BvhStats, TriangleInput};
 use crate::error::{Error, Result};
 use crate::scene::Scene;
-use crate::settings::Settings;
+use crate::settings::{GlossyLight, Settings};
 
 mod grid;
 mod lights;
@@ -116,6 +119,12 @@ impl GpuScene {
             direct_light: (settings.direct == crate::settings::DirectLight::Sample) as u32,
             glossy_alpha: settings.glossy_hits.unwrap_or(f32::MAX),
             masks: draws_mask_keys(scene) as u32,
+            light_power: total_power.iter().sum::<f64>() as f32,
+            glossy_light: match settings.glossy_light {
+                GlossyLight::Mis => GLOSSY_LIGHT_MIS,
+                GlossyLight::Bsdf => GLOSSY_LIGHT_BSDF,
+                GlossyLight::Lights => GLOSSY_LIGHT_LIGHTS,
+            },
             ..Default::default()
         };
         set_camera(&mut params, &scene.camera);
