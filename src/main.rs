@@ -185,7 +185,8 @@ pub(crate) struct SettingsArgs {
     /// (glowing spheres still by the lobe).
     #[arg(long, value_enum, default_value_t = GlossyLightArg::Mis)]
     glossy_light: GlossyLightArg,
-    /// Photon probing (eq. 7-9): `paper` is eq. 9 as printed, `scale-free` is r' = r (1 + lambda / r^2).
+    /// Photon probing (eq. 7-9): `paper` is eq. 9 as printed, `scale-free` is r' = r (1 + lambda / r^2),
+    /// `nearest` the radius that holds --probe-k probe photons (r' = r sqrt(k / N), at most 2 r).
     #[arg(long, value_enum, default_value_t = ProbeArg::Off)]
     probe: ProbeArg,
     /// beta of eq. 9 as a fraction of r in (0, 1) (the paper's best: 0.2 = r/5).
@@ -194,6 +195,10 @@ pub(crate) struct SettingsArgs {
     /// Photons the probe pass emits (default: --photons-per-pass, as in the paper).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=ppm_vk_engine::settings::MAX_PHOTONS_PER_PASS as i64))]
     probe_photons: Option<u32>,
+    /// With `--probe nearest`: the probe photons each starting radius is to hold (r' = r sqrt(k / N),
+    /// at most 2 r), at least 1.
+    #[arg(long, default_value_t = ppm_vk_engine::settings::DEFAULT_PROBE_K)]
+    probe_k: f32,
     /// Cone filter (eq. 10-14): its constant k >= 1, or `off`.
     #[arg(long, default_value = "off", value_parser = parse_cone)]
     cone: Cone,
@@ -212,6 +217,7 @@ impl SettingsArgs {
             probe: self.probe.into(),
             probe_beta: self.beta,
             probe_photons: self.probe_photons,
+            probe_k: self.probe_k,
             cone_k: self.cone.0,
             emission_samples: self.emission_samples,
             direct: self.direct.into(),
@@ -351,6 +357,7 @@ pub(crate) enum ProbeArg {
     Off,
     Paper,
     ScaleFree,
+    Nearest,
 }
 
 impl From<ProbeArg> for ProbeMode {
@@ -359,6 +366,7 @@ impl From<ProbeArg> for ProbeMode {
             ProbeArg::Off => ProbeMode::Off,
             ProbeArg::Paper => ProbeMode::Paper,
             ProbeArg::ScaleFree => ProbeMode::ScaleFree,
+            ProbeArg::Nearest => ProbeMode::Nearest,
         }
     }
 }

@@ -12,6 +12,14 @@ use ppm_vk_reference as reference;
 const RES: u32 = 32;
 const PROBE_PHOTONS: u32 = 20_000;
 
+/// The probe's constant for `settings`' rule: k for the nearest rule, beta otherwise.
+fn param(settings: &Settings) -> f32 {
+    match settings.probe {
+        ProbeMode::Nearest => settings.probe_k,
+        _ => settings.probe_beta,
+    }
+}
+
 fn settings(probe: ProbeMode) -> Settings {
     Settings {
         mode: ppm_vk_engine::Mode::Ppm,
@@ -41,7 +49,7 @@ fn gpu_and_cpu_probe(r: &Renderer) -> ProbeResults {
         };
         hits.len()
     ];
-    let cpu = reference::probe(&hits, &start, &photons, r.settings().probe, r.settings().probe_beta);
+    let cpu = reference::probe(&hits, &start, &photons, r.settings().probe, param(r.settings()));
     (hits, gpu, cpu, r0)
 }
 
@@ -115,7 +123,7 @@ fn probe_identical_photons(mode: ProbeMode) {
     let hits = r.read_hit_points().unwrap();
     r.finish_probe().unwrap();
     let after = r.read_stats().unwrap();
-    let cpu = reference::probe(&hits, &start, &records, mode, r.settings().probe_beta);
+    let cpu = reference::probe(&hits, &start, &records, mode, param(r.settings()));
     let mut live = 0;
     for (i, h) in hits.iter().enumerate() {
         if h.is_empty() {
@@ -146,6 +154,40 @@ fn probe_identical_photons(mode: ProbeMode) {
 fn probe_kernel_matches_reference_on_identical_photons() {
     probe_identical_photons(ProbeMode::Paper);
     probe_identical_photons(ProbeMode::ScaleFree);
+    probe_identical_photons(ProbeMode::Nearest);
+}
+
+/// The nearest rule (r' = r min(sqrt(k / N), 2)) on the GPU against the CPU probe (which counts each
+/// hit point's probe photons by brute force), and what it does with the density: where the probe photons
+/// crowd (more than k within r: the glass sphere's caustic, the walls by the light) it shrinks the radius,
+/// where few arrive it grows it, to at most 2 r.
+#[test]
+fn nearest_probe_matches_reference_and_follows_the_photons() {
+    let ctx = ctx();
+    let s = Settings {
+        probe_k: 200.0,
+        ..settings(ProbeMode::Nearest)
+    };
+    let r = Renderer::new(&ctx, &cornell(RES, RES), s).unwrap();
+    let (hits, gpu, cpu, r0) = gpu_and_cpu_probe(&r);
+    let (mut live, mut agree, mut shrunk, mut grown) = (0usize, 0usize, 0usize, 0usize);
+    for (i, h) in hits.iter().enumerate() {
+        if h.is_empty() {
+            continue;
+        }
+        live += 1;
+        let (g, c) = (gpu[i].r2, cpu[i].1);
+        // As probe_case: paths that diverged at a threshold move a few hit points' counts.
+        agree += ((g - c).abs() <= 2e-4 * c) as usize;
+        assert!(g <= 4.0 * r0 * r0 * (1.0 + 1e-9), "slot {i}: r'^2 {g} beyond (2 r)^2");
+        shrunk += (g < r0 * r0 * (1.0 - 1e-9)) as usize;
+        grown += (g > r0 * r0 * (1.0 + 1e-9)) as usize;
+    }
+    println!("nearest: {agree} of {live} agree with the CPU probe; {shrunk} shrunk, {grown} grown");
+    assert!(agree * 100 >= live * 90, "only {agree} of {live} hit points agree");
+    assert!(shrunk > 0 && grown > 0, "{shrunk} shrunk, {grown} grown");
+    drop(r);
+    assert_clean(&ctx);
 }
 
 #[test]
@@ -195,6 +237,19 @@ fn scale_free_probe_renders_the_same_at_any_scale() {
             assert!((m[c] / base[c] - 1.0).abs() < 0.01, "scale {s}: mean {m:?} vs {base:?}");
         }
         assert!((g / g1 - 1.0).abs() < 0.01, "scale {s}: radius growth {g} vs {g1}");
+    }
+}
+
+#[test]
+fn nearest_probe_renders_the_same_at_any_scale() {
+    // A ratio of photon counts: the same radii, relative to the scene, at every scale.
+    let (base, g1) = render_scaled(1.0, ProbeMode::Nearest, 4);
+    for s in [1e-3f32, 1e3] {
+        let (m, g) = render_scaled(s, ProbeMode::Nearest, 4);
+        for c in 0..3 {
+            assert!((m[c] / base[c] - 1.0).abs() < 0.01, "scale {s}: mean {m:?} vs {base:?}");
+        }
+        assert!((g / g1 - 1.0).abs() < 0.01, "scale {s}: radius change {g} vs {g1}");
     }
 }
 

@@ -6,8 +6,14 @@
 //   1: lambda / r^2 = sum / N (eq. 7; no photon counts as sparse: lambda = r^2), then
 //      paper (mode 1):      r' = r                  if lambda / r <= beta, else r (1 + lambda / r)    (eq. 9)
 //      scale-free (mode 2): r' = r                  if lambda / r <= beta, else r (1 + lambda / r^2)
-//      with beta = beta_frac * r, so the test is lambda / r^2 <= beta_frac in both. Stores r'^2 and
-//      lambda / r^2 (HitStats.probe), and clears the accumulator.
+//      with beta = beta_frac * r, so the test is lambda / r^2 <= beta_frac in both;
+//      nearest (mode 3):    r' = r min(sqrt(k / N), 2), N the probe photons within r (none: 2 r): the
+//      radius that would hold k of them at the density they have within r, as classic photon mapping
+//      gathers its k nearest photons. Free of units (a ratio of counts), it shrinks radii where photons
+//      crowd (a caustic) and grows them where they are few, as far as the scale-free rule's most (2 r:
+//      larger radii make every lookup span more grid cells, whose size the largest radius sets). SPPM's
+//      update (eq. 3) shrinks every radius from there on, so the estimate stays consistent.
+//      Stores r'^2 and lambda / r^2 (HitStats.probe), and clears the accumulator.
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 64) in;
@@ -24,8 +30,8 @@ layout(std430, binding = 7) writeonly buffer Status { uint lookup_status; }; // 
 layout(push_constant) uniform ProbePush {
     uint count;      // entries of `order`
     uint phase;
-    uint mode;       // 1 paper, 2 scale-free
-    float beta_frac; // beta as a fraction of r (the paper's best: 1/5)
+    uint mode;       // 1 paper, 2 scale-free, 3 nearest
+    float param;     // modes 1, 2: beta as a fraction of r (the paper's best: 1/5); mode 3: k
 } pc;
 #include "neighbours.glsl"
 #include "invocation.glsl"
@@ -51,7 +57,9 @@ void set_radius(uint i) {
     double ratio = a.m > 0u ? double(a.flux_r) / double(PROBE_FIXED) / double(a.m) : 1.0;
     double r = sqrt(s.r2);
     double grow = 1.0;
-    if (ratio > double(pc.beta_frac)) {
+    if (pc.mode == 3u) {
+        grow = a.m > 0u ? min(sqrt(double(pc.param) / double(a.m)), 2.0) : 2.0;
+    } else if (ratio > double(pc.param)) {
         double lambda = ratio * s.r2;
         grow = pc.mode == 1u ? 1.0 + lambda / r   // eq. 9 as printed: adds an area to a length
                              : 1.0 + ratio;       // the scale-free variant

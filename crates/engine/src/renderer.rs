@@ -10,7 +10,7 @@ use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers};
 use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, PhotonWork, RenderParams, Triangle};
 use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PathLimits, PhotonPush, SALT_EYE, SALT_PHOTON, SALT_PROBE};
-use ppm_vk_kernels::probe::{self, ProbePush, MODE_PAPER, MODE_SCALE_FREE};
+use ppm_vk_kernels::probe::{self, ProbePush, MODE_NEAREST, MODE_PAPER, MODE_SCALE_FREE};
 use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers, JITTER_RANDOM};
 use ppm_vk_kernels::resolve::{self, ResolvePush};
 use ppm_vk_kernels::specialize::{self, SceneConstants, MAX_INLINE_PRIMITIVES};
@@ -772,15 +772,16 @@ impl Renderer {
     }
 
     fn probe_push(&self, phase: u32) -> ProbePush {
-        let mode = match self.settings.probe {
-            ProbeMode::Paper => MODE_PAPER,
-            _ => MODE_SCALE_FREE,
+        let (mode, param) = match self.settings.probe {
+            ProbeMode::Paper => (MODE_PAPER, self.settings.probe_beta),
+            ProbeMode::Nearest => (MODE_NEAREST, self.settings.probe_k),
+            _ => (MODE_SCALE_FREE, self.settings.probe_beta),
         };
         ProbePush {
             count: self.active,
             phase,
             mode,
-            beta_frac: self.settings.probe_beta,
+            param,
         }
     }
 

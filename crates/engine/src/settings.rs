@@ -33,6 +33,10 @@ pub enum ProbeMode {
     Paper,
     /// r' = r (1 + lambda / r^2): the same rule without eq. 9's dependence on the scene's units.
     ScaleFree,
+    /// r' = r min(sqrt(k / N), 2), N the probe photons within r (`Settings::probe_k`): the radius that
+    /// holds k of them, as classic photon mapping's k nearest; smaller where photons crowd (caustics),
+    /// larger where they are few. Free of units.
+    Nearest,
 }
 
 /// How the light that reaches the eye paths' first diffuse points straight from an emitter is estimated.
@@ -85,6 +89,9 @@ pub struct Settings {
     pub probe_beta: f32,
     /// Photons the probe pass emits; `None`: `photons_per_pass`, as in the paper.
     pub probe_photons: Option<u32>,
+    /// With `probe: Nearest`, the probe photons each starting radius is to hold.
+    #[serde(default = "default_probe_k")]
+    pub probe_k: f32,
     /// Hit points per pixel: glass splits an eye path into both Fresnel branches up to this many leaves
     /// (PPM; SPPM always has one).
     pub hit_slots: u32,
@@ -154,6 +161,7 @@ impl Default for Settings {
             probe: ProbeMode::Off,
             probe_beta: 0.2,
             probe_photons: None,
+            probe_k: DEFAULT_PROBE_K,
             hit_slots: 4,
             max_eye_depth: 1024,
             max_photon_depth: 4096,
@@ -169,6 +177,13 @@ impl Default for Settings {
             split_submissions: false,
         }
     }
+}
+
+/// `Settings::probe_k`'s default.
+pub const DEFAULT_PROBE_K: f32 = 64.0;
+
+fn default_probe_k() -> f32 {
+    DEFAULT_PROBE_K
 }
 
 fn default_direct() -> DirectLight {
@@ -248,6 +263,12 @@ impl Settings {
                     format!("must be positive and finite, got {r}"),
                 ));
             }
+        }
+        if !(self.probe_k.is_finite() && self.probe_k >= 1.0) {
+            return Err(invalid(
+                "probe_k",
+                format!("must be at least 1 photon, got {}", self.probe_k),
+            ));
         }
         if !(self.probe_beta.is_finite() && self.probe_beta > 0.0 && self.probe_beta < 1.0) {
             return Err(invalid(

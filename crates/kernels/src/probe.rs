@@ -12,6 +12,8 @@ use crate::push_struct;
 pub const MODE_PAPER: u32 = 1;
 /// r' = r (1 + lambda / r^2).
 pub const MODE_SCALE_FREE: u32 = 2;
+/// r' = r sqrt(k / N): the radius that holds k probe photons where they are N within r.
+pub const MODE_NEAREST: u32 = 3;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -21,8 +23,8 @@ pub struct ProbePush {
     /// 0: accumulate a batch of probe photons; 1: set the radii.
     pub phase: u32,
     pub mode: u32,
-    /// beta as a fraction of r.
-    pub beta_frac: f32,
+    /// The mode's constant: beta as a fraction of r (paper, scale-free), k (nearest).
+    pub param: f32,
 }
 push_struct!(ProbePush, PROBE);
 

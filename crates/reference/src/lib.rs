@@ -959,7 +959,16 @@ pub fn lambda_ratio(d2: &[f64], r2: f64) -> f64 {
 /// Eq. 9: the starting radius from r and lambda / r^2, with beta = `beta_frac` r. The test lambda / r <=
 /// beta is lambda / r^2 <= beta_frac in both modes; above it the paper enlarges to r (1 + lambda / r), the
 /// scale-free variant to r (1 + lambda / r^2).
-pub fn probe_radius(r: f64, ratio: f64, mode: ProbeMode, beta_frac: f64) -> f64 {
+/// Nearest (`count` probe photons within r, `param` k): r min(sqrt(k / count), 2), 2 r without one.
+pub fn probe_radius(r: f64, ratio: f64, count: usize, mode: ProbeMode, param: f64) -> f64 {
+    if mode == ProbeMode::Nearest {
+        return r * if count > 0 {
+            (param / count as f64).sqrt().min(2.0)
+        } else {
+            2.0
+        };
+    }
+    let beta_frac = param;
     if mode == ProbeMode::Off || ratio <= beta_frac {
         return r;
     }
@@ -975,7 +984,7 @@ pub fn probe(
     stats: &[HitStats],
     photons: &[Photon],
     mode: ProbeMode,
-    beta_frac: f32,
+    param: f32,
 ) -> Vec<(f64, f64)> {
     hits.iter()
         .zip(stats)
@@ -995,7 +1004,7 @@ pub fn probe(
                 })
                 .collect();
             let ratio = lambda_ratio(&d2, st.r2);
-            let r = probe_radius(st.r2.sqrt(), ratio, mode, beta_frac as f64);
+            let r = probe_radius(st.r2.sqrt(), ratio, d2.len(), mode, param as f64);
             (ratio, r * r)
         })
         .collect()
@@ -1028,25 +1037,25 @@ mod tests {
         let r = 0.5;
         for mode in [ProbeMode::Paper, ProbeMode::ScaleFree] {
             // lambda / r <= beta keeps r, exactly at the boundary too.
-            assert_eq!(probe_radius(r, 0.2, mode, 0.2), r);
-            assert_eq!(probe_radius(r, 0.0, mode, 0.2), r);
+            assert_eq!(probe_radius(r, 0.2, 0, mode, 0.2), r);
+            assert_eq!(probe_radius(r, 0.0, 0, mode, 0.2), r);
         }
         // Just above: the paper adds lambda (an area) to r: r (1 + lambda / r) = r + lambda.
         let ratio = 0.2 + 1e-12;
-        assert!((probe_radius(r, ratio, ProbeMode::Paper, 0.2) - (r + ratio * r * r)).abs() < 1e-15);
-        assert!((probe_radius(r, ratio, ProbeMode::ScaleFree, 0.2) - r * (1.0 + ratio)).abs() < 1e-15);
+        assert!((probe_radius(r, ratio, 0, ProbeMode::Paper, 0.2) - (r + ratio * r * r)).abs() < 1e-15);
+        assert!((probe_radius(r, ratio, 0, ProbeMode::ScaleFree, 0.2) - r * (1.0 + ratio)).abs() < 1e-15);
         // The scale-free rule does not depend on units; the paper's does.
         let (a, b) = (
-            probe_radius(1.0, 0.5, ProbeMode::ScaleFree, 0.2),
-            probe_radius(1000.0, 0.5, ProbeMode::ScaleFree, 0.2),
+            probe_radius(1.0, 0.5, 0, ProbeMode::ScaleFree, 0.2),
+            probe_radius(1000.0, 0.5, 0, ProbeMode::ScaleFree, 0.2),
         );
         assert!((b / a - 1000.0).abs() < 1e-9);
         let (a, b) = (
-            probe_radius(1.0, 0.5, ProbeMode::Paper, 0.2),
-            probe_radius(1000.0, 0.5, ProbeMode::Paper, 0.2),
+            probe_radius(1.0, 0.5, 0, ProbeMode::Paper, 0.2),
+            probe_radius(1000.0, 0.5, 0, ProbeMode::Paper, 0.2),
         );
         assert!((b / a - 1000.0).abs() > 100.0, "paper rule: {a} vs {b}");
-        assert_eq!(probe_radius(r, 0.9, ProbeMode::Off, 0.2), r);
+        assert_eq!(probe_radius(r, 0.9, 0, ProbeMode::Off, 0.2), r);
     }
 
     #[test]
