@@ -208,6 +208,8 @@ struct Renderer {
 }
 
 impl Renderer {
+    /// `f` on the renderer, with the GIL released while it waits for the lock and works: a pass in flight
+    /// on another thread never holds up this interpreter's other threads.
     fn with<T: Send>(
         &self,
         py: Python<'_>,
@@ -315,7 +317,7 @@ impl Renderer {
 
     /// The camera as a dict: eye, look_at, up, vfov (degrees), width, height.
     fn camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let c = *self.inner.lock().unwrap_or_else(|p| p.into_inner()).camera();
+        let c = self.with(py, |r| Ok(*r.camera()))?;
         let d = PyDict::new(py);
         d.set_item("eye", c.eye.to_array())?;
         d.set_item("look_at", c.look_at.to_array())?;
@@ -328,14 +330,14 @@ impl Renderer {
 
     /// Photon passes done.
     #[getter]
-    fn passes(&self) -> u64 {
-        self.inner.lock().unwrap_or_else(|p| p.into_inner()).passes()
+    fn passes(&self, py: Python<'_>) -> PyResult<u64> {
+        self.with(py, |r| Ok(r.passes()))
     }
 
     /// The settings in force, as JSON (the engine's field names).
-    fn settings_json(&self) -> PyResult<String> {
-        let r = self.inner.lock().unwrap_or_else(|p| p.into_inner());
-        serde_json::to_string(r.settings()).map_err(|e| PyValueError::new_err(e.to_string()))
+    fn settings_json(&self, py: Python<'_>) -> PyResult<String> {
+        let settings = self.with(py, |r| Ok(r.settings().clone()))?;
+        serde_json::to_string(&settings).map_err(|e| PyValueError::new_err(e.to_string()))
     }
 
     /// The scene's name.
@@ -346,16 +348,16 @@ impl Renderer {
 
     /// The device's name and kind.
     #[getter]
-    fn device(&self) -> String {
-        let r = self.inner.lock().unwrap_or_else(|p| p.into_inner());
-        let info = r.context().info();
-        format!("{} ({}, {})", info.name, info.kind, info.driver)
+    fn device(&self, py: Python<'_>) -> PyResult<String> {
+        self.with(py, |r| {
+            let info = r.context().info();
+            Ok(format!("{} ({}, {})", info.name, info.kind, info.driver))
+        })
     }
 
     /// The validation layer's messages so far (empty unless opened with `validation=True`).
-    fn validation_messages(&self) -> Vec<String> {
-        let r = self.inner.lock().unwrap_or_else(|p| p.into_inner());
-        r.context().validation_messages()
+    fn validation_messages(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        self.with(py, |r| Ok(r.context().validation_messages()))
     }
 }
 
