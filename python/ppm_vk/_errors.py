@@ -66,9 +66,11 @@ class IoError(Error, OSError):
         self.filename = filename
         self.errno = errno
         self.strerror = message
+        self._message = message
 
     def __str__(self) -> str:
-        return self.strerror
+        # OSError's own would write "[Errno n] strerror: filename"; the engine's message says it all.
+        return self._message
 
 
 class CheckpointError(Error):

@@ -175,16 +175,22 @@ def test_cancel_ends_a_pass_and_the_render_goes_on(cache_dir):
     with pytest.raises(ppm_vk.CancelledError):
         renderer.pass_()
     assert renderer.passes == 1 and renderer.image().tobytes() == before.tobytes()
-    # From another thread, while a long pass runs (16 batches of 2^20 photons; the pass checks between them).
+    # From another thread, while a long pass runs (16 batches of 2^20 photons; the pass checks between them):
+    # on lavapipe it takes tens of seconds, so the cancel lands in it.
     big = ppm_vk.Renderer(CORNELL, **small(cache_dir, photons_per_pass=1 << 24))
     timer = threading.Timer(0.5, big.cancel)
     timer.start()
     try:
+        big.pass_()
+        finished = True
+    except ppm_vk.CancelledError:
+        finished = False
+    timer.join()
+    if finished:
+        # A device that finished 2^24 photons within 0.5 s: the cancel ends the next pass instead.
         with pytest.raises(ppm_vk.CancelledError):
             big.pass_()
-    finally:
-        timer.cancel()
-    assert big.passes == 0
+    assert big.passes == (1 if finished else 0)
     # The next pass goes on.
     assert renderer.pass_().index == 2
     renderer.check_validation()
@@ -192,24 +198,49 @@ def test_cancel_ends_a_pass_and_the_render_goes_on(cache_dir):
 
 
 def test_the_gil_is_released_while_a_pass_runs(cache_dir):
-    renderer = ppm_vk.Renderer(CORNELL, **small(cache_dir, photons_per_pass=400_000))
-    stamps, stop = [], threading.Event()
+    # A pass long enough to tell (0.2 s): 400k photons on lavapipe, more on a faster device.
+    for photons in (400_000, 1 << 24):
+        renderer = ppm_vk.Renderer(CORNELL, **small(cache_dir, photons_per_pass=photons))
+        stamps, stop = [], threading.Event()
 
-    def tick():
-        while not stop.is_set():
-            stamps.append(time.monotonic())
-            time.sleep(0.001)
+        def tick():
+            while not stop.is_set():
+                stamps.append(time.monotonic())
+                time.sleep(0.001)
 
-    thread = threading.Thread(target=tick)
-    thread.start()
-    try:
-        start = time.monotonic()
-        renderer.pass_()
-        end = time.monotonic()
-    finally:
-        stop.set()
-        thread.join()
+        thread = threading.Thread(target=tick)
+        thread.start()
+        try:
+            start = time.monotonic()
+            renderer.pass_()
+            end = time.monotonic()
+        finally:
+            stop.set()
+            thread.join()
+        if end - start > 0.2:
+            break
     assert end - start > 0.2, "the pass was too short to tell"
     # Holding the GIL, the pass would have kept the thread from running at all between its start and end.
     inside = [t for t in stamps if start + 0.05 < t < end - 0.05]
     assert len(inside) >= 10, f"{len(inside)} ticks of another Python thread during a {end - start:.2f} s pass"
+    renderer.check_validation()
+
+
+def test_time_renders_at_least_one_pass(cache_dir):
+    renderer = ppm_vk.Renderer(CORNELL, **small(cache_dir))
+    image = renderer.render(time=0.001)
+    # The pass started in time finishes, as `render --time`.
+    assert renderer.passes >= 1 and image.mean() > 0
+
+
+def test_images_in_and_out(tmp_path):
+    with pytest.raises(ppm_vk.IoError) as e:
+        ppm_vk.read_exr(tmp_path / "none.exr")
+    assert e.value.filename == str(tmp_path / "none.exr")
+    # The tone mapping: 0 and 1 are the ends of sRGB, 2**-exposure scales.
+    image = ppm_vk.Image(np.array([[[0.0, 1.0, 0.5]]], dtype=np.float32))
+    assert ppm_vk.Image(image * 2).to_png(-1.0) == image.to_png()
+    with pytest.raises(ppm_vk.SettingsError) as e:
+        image.to_png(float("nan"))
+    assert e.value.field == "exposure"
+    assert ppm_vk.Image(np.zeros((4, 4), dtype=np.float32))._repr_png_() is None
