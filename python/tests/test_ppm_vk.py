@@ -2,6 +2,9 @@
 (lavapipe in CI) with the Vulkan validation layer on, as the Rust tests run (tests/common/mod.rs): every
 render here passes validation=True and fails on any message. Small images and few passes: lavapipe is slow."""
 
+import ast
+import dataclasses
+import pathlib
 import struct
 import threading
 import time
@@ -244,3 +247,22 @@ def test_images_in_and_out(tmp_path):
         image.to_png(float("nan"))
     assert e.value.field == "exposure"
     assert ppm_vk.Image(np.zeros((4, 4), dtype=np.float32))._repr_png_() is None
+
+
+def test_the_stubs_match_the_package():
+    """__init__.pyi names what the package has, and its Renderer keywords are the engine's settings (and
+    the flag names), so editors complete what runs."""
+    stub = ast.parse((pathlib.Path(ppm_vk.__file__).parent / "__init__.pyi").read_text())
+    top = {n.name: n for n in stub.body if isinstance(n, (ast.ClassDef, ast.FunctionDef))}
+    assert set(top) >= {"render", "Renderer", "Image", "PassStats", "read_exr", "default_settings"}
+    for name in top:
+        assert hasattr(ppm_vk, name), name
+    stub_methods = {n.name for n in top["Renderer"].body if isinstance(n, ast.FunctionDef)}
+    public = {m for m in dir(ppm_vk.Renderer) if not m.startswith("_")}
+    assert public == stub_methods - {"__init__"}
+    init = next(n for n in top["Renderer"].body if isinstance(n, ast.FunctionDef) and n.name == "__init__")
+    keywords = {a.arg for a in init.args.kwonlyargs} - {"progress", "resolution", "device", "validation",
+                                                       "pipeline_cache"}
+    assert keywords == set(ppm_vk.default_settings()) | {"radius", "beta", "cone"}
+    assert {f.name for f in dataclasses.fields(ppm_vk.PassStats)} == {
+        n.target.id for n in top["PassStats"].body if isinstance(n, ast.AnnAssign)}
