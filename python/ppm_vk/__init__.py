@@ -167,7 +167,7 @@ class Renderer:
         self._native = _native.Renderer(
             os.fspath(scene),
             _defines(params),
-            json.dumps(settings),
+            _settings_json(settings),
             resolution,
             (
                 None if device is None else str(device),
@@ -266,6 +266,20 @@ class Renderer:
                 f"the validation layer reported {len(msgs)} message(s):\n" + "\n".join(msgs),
                 context="validation",
             )
+
+
+def _settings_json(settings: Mapping[str, Any]) -> str:
+    """The keyword settings as the JSON object the extension reads (numpy scalars as their Python values)."""
+    plain = {}
+    for name, value in settings.items():
+        if isinstance(value, np.generic):
+            value = value.item()
+        try:
+            json.dumps(value, allow_nan=False)
+        except (TypeError, ValueError):
+            raise SettingsError(f"settings: {name}: cannot use {value!r}", field=name) from None
+        plain[name] = value
+    return json.dumps(plain)
 
 
 def _check_length(passes: Optional[int], time: Optional[float]) -> None:

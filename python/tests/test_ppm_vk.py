@@ -58,7 +58,8 @@ def test_flag_names_and_off_are_the_cli_settings(tmp_path, cache_dir, cli):
     exr = tmp_path / "cli.exr"
     cli("render", CORNELL, *cli_flags(3, 2), "--radius", 0.05, "--cone", 1.5, "--glossy-hits", "off", "--mode",
         "ppm", "--out", exr)
-    renderer = ppm_vk.Renderer(CORNELL, radius=0.05, cone=1.5, glossy_hits="off", mode="ppm", seed=3,
+    # numpy scalars are their values.
+    renderer = ppm_vk.Renderer(CORNELL, radius=0.05, cone=1.5, glossy_hits="off", mode="ppm", seed=np.uint32(3),
                                **small(cache_dir))
     settings = renderer.settings
     assert (settings["initial_radius"], settings["cone_k"], settings["glossy_hits"], settings["mode"]) == (
@@ -152,6 +153,12 @@ def test_bad_settings_name_their_field(cache_dir):
     with pytest.raises(ppm_vk.SettingsError) as e:
         ppm_vk.Renderer(CORNELL, resolution=(0, 8), pipeline_cache=cache_dir)
     assert e.value.field == "resolution"
+    with pytest.raises(ppm_vk.SettingsError) as e:
+        ppm_vk.Renderer(CORNELL, alpha=float("nan"), pipeline_cache=cache_dir)
+    assert e.value.field == "alpha"
+    with pytest.raises(ppm_vk.SettingsError) as e:
+        ppm_vk.Renderer(CORNELL, seed=object(), pipeline_cache=cache_dir)
+    assert e.value.field == "seed"
     with pytest.raises(ppm_vk.SettingsError):
         ppm_vk.render(CORNELL, passes=1, time=1.0, pipeline_cache=cache_dir)
 
