@@ -146,8 +146,9 @@ class Renderer:
 
     ``scene`` is a TOML or Mitsuba XML file; ``params`` sets a Mitsuba scene's ``$name`` defaults
     (``{"res": 256}``, as ``render -D res=256``). ``progress``, if given, is called with each pass's
-    :class:`PassStats`. The device works with the GIL released, and :meth:`cancel` may be called from
-    another thread while a pass runs.
+    :class:`PassStats`. ``resume`` continues a :meth:`checkpoint` (or ``render --checkpoint``) of the same
+    scene, settings and build, bit for bit; one that does not fit is a :class:`CheckpointError`. The device
+    works with the GIL released, and :meth:`cancel` may be called from another thread while a pass runs.
     """
 
     def __init__(
@@ -160,6 +161,7 @@ class Renderer:
         device: Optional[str] = None,
         validation: bool = False,
         pipeline_cache: Optional[PathLike] = None,
+        resume: Optional[PathLike] = None,
         **settings: Any,
     ) -> None:
         if resolution is not None:
@@ -174,6 +176,7 @@ class Renderer:
                 bool(validation),
                 None if pipeline_cache is None else os.fspath(pipeline_cache),
             ),
+            None if resume is None else os.fspath(resume),
         )
         self.progress = progress
         self.validation = bool(validation)
@@ -214,6 +217,11 @@ class Renderer:
     def save(self, path: PathLike) -> None:
         """Writes the current image: ``.exr`` (linear float) or ``.png`` (tone-mapped sRGB), as ``render``."""
         self._native.save(os.fspath(path))
+
+    def checkpoint(self, path: PathLike) -> None:
+        """Saves the whole state of the render to ``path``, for ``Renderer(..., resume=path)`` or ``ppm-vk
+        render --resume`` of the same build (written atomically)."""
+        self._native.checkpoint(os.fspath(path))
 
     def set_camera(
         self,

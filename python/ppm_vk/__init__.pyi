@@ -80,6 +80,7 @@ class Renderer:
         device: Optional[str] = None,
         validation: bool = False,
         pipeline_cache: Optional[PathLike] = None,
+        resume: Optional[PathLike] = None,
         mode: str = ...,
         photons_per_pass: int = ...,
         alpha: float = ...,
@@ -110,6 +111,7 @@ class Renderer:
     def cancel(self) -> None: ...
     def image(self) -> Image: ...
     def save(self, path: PathLike) -> None: ...
+    def checkpoint(self, path: PathLike) -> None: ...
     def set_camera(
         self,
         eye: Optional[Sequence[float]] = None,

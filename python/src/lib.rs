@@ -3,17 +3,23 @@
 //! this module raises (ppm_vk/_errors.py), so that they can subclass both `ppm_vk.Error` and the
 //! builtin a Python program expects (`OSError`, `ValueError`, `TypeError`).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray3, PyUntypedArrayMethods};
-use ppm_vk_engine::{open_device, CancelToken, ContextOptions, Error, PassStats, RgbImage, Scene, Settings};
+use ppm_vk_engine::{
+    open_device, CancelToken, Checkpoint, ContextOptions, Error, PassStats, RgbImage, Scene, Settings,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
 /// Settings under the `render` command's flag names, where those differ from the engine's field names.
 const FLAG_NAMES: &[(&str, &str)] = &[("radius", "initial_radius"), ("beta", "probe_beta"), ("cone", "cone_k")];
+
+/// The build a checkpoint names (python/build.rs, as the binary's): its kernels and engine must be the ones
+/// that continue it.
+const BUILD: &str = env!("PPM_VK_GIT_REV");
 
 /// Settings that take `"off"` for none, as their flags do.
 const OFF_MEANS_NONE: &[&str] = &["cone_k", "glossy_hits"];
@@ -100,6 +106,20 @@ fn unknown_setting(py: Python<'_>, name: &str, known: &[String]) -> PyErr {
         FLAG_NAMES.iter().map(|(f, _)| *f).collect::<Vec<_>>().join(", ")
     );
     raise(py, "UnknownSettingError", message, |d| d.set_item("field", name))
+}
+
+/// A checkpoint's load or save failure (the engine reports them through `anyhow`) as the engine's case:
+/// [`Error::Io`] where a file could not be read or written, else `otherwise` (refused, damaged).
+fn checkpoint_error(path: &Path, e: anyhow::Error, otherwise: fn(String) -> Error) -> Error {
+    let message = format!("{e:#}");
+    let io_kind = e.chain().find_map(|c| match c.downcast_ref::<Error>() {
+        Some(Error::Io { error, .. }) => Some(error.kind()),
+        _ => c.downcast_ref::<std::io::Error>().map(|io| io.kind()),
+    });
+    match io_kind {
+        Some(kind) => Error::io(path, std::io::Error::new(kind, message)),
+        None => otherwise(message),
+    }
 }
 
 /// The engine's `Settings` from keyword settings as a JSON object: the engine's defaults (as `render`'s),
@@ -227,9 +247,9 @@ impl Renderer {
 impl Renderer {
     /// Loads `scene` (with `defines` for a Mitsuba scene's `$name`s), opens the device (`device`: its
     /// name or index, validation, the pipeline cache's directory) and sets the render up (kernels, BVH,
-    /// first eye pass, probe pass).
+    /// first eye pass, probe pass), or continues the checkpoint `resume` of the same scene and settings.
     #[new]
-    #[pyo3(signature = (scene, defines, settings_json, resolution, device))]
+    #[pyo3(signature = (scene, defines, settings_json, resolution, device, resume))]
     fn new(
         py: Python<'_>,
         scene: PathBuf,
@@ -237,6 +257,7 @@ impl Renderer {
         settings_json: &str,
         resolution: Option<(u32, u32)>,
         device: (Option<String>, bool, Option<PathBuf>),
+        resume: Option<PathBuf>,
     ) -> PyResult<Renderer> {
         let settings = settings_from_json(py, settings_json)?;
         if let Some((w, h)) = resolution {
@@ -253,10 +274,21 @@ impl Renderer {
                     Some((w, h)) => scene.with_resolution(w, h),
                     None => scene,
                 };
+                // A checkpoint that does not fit is refused before the device opens.
+                let resumed = match &resume {
+                    Some(path) => Some(
+                        Checkpoint::load_for(path, &scene, &settings, BUILD)
+                            .map_err(|e| checkpoint_error(path, e, |message| Error::Checkpoint { message }))?,
+                    ),
+                    None => None,
+                };
                 // Built here: the options hold a display handle, which may not cross threads.
                 let (device, validation, pipeline_cache) = device;
                 let ctx = open_device(&device_options(device, validation, pipeline_cache))?;
-                let renderer = ppm_vk_engine::Renderer::new(&ctx, &scene, settings)?;
+                let renderer = match &resumed {
+                    Some(c) => ppm_vk_engine::Renderer::resume(&ctx, &scene, settings, c, BUILD)?,
+                    None => ppm_vk_engine::Renderer::new(&ctx, &scene, settings)?,
+                };
                 Ok((renderer, scene.name.clone()))
             })
             .or_raise(py)?;
@@ -293,6 +325,15 @@ impl Renderer {
     /// Writes the current image: .exr (linear) or .png (tone-mapped sRGB), as `render --out` does.
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         self.with(py, |r| r.image()?.save(&path))
+    }
+
+    /// Saves the whole state of the render to `path`, for `Renderer(..., resume=path)` (or `ppm-vk render
+    /// --resume` of the same build) to continue bit for bit.
+    fn checkpoint(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        self.with(py, |r| {
+            let saved = r.checkpoint(BUILD)?.save(&path);
+            saved.map_err(|e| checkpoint_error(&path, e, |message| Error::Checkpoint { message }))
+        })
     }
 
     /// Moves the camera (the fields given; the others stay) and starts the render again from its first pass.

@@ -107,6 +107,30 @@ def test_set_camera_restarts_the_render(cache_dir):
     assert "vfov" in bad.value.field
 
 
+def test_a_checkpoint_resumes_bit_for_bit_and_refuses_another_render(tmp_path, cache_dir):
+    ckpt = tmp_path / "render.ckpt"
+    renderer = ppm_vk.Renderer(CORNELL, **small(cache_dir))
+    renderer.render(passes=1)
+    renderer.checkpoint(ckpt)
+    whole = renderer.render(passes=3)
+    resumed = ppm_vk.Renderer(CORNELL, resume=ckpt, **small(cache_dir))
+    assert resumed.passes == 1
+    assert resumed.render(passes=3).tobytes() == whole.tobytes()
+    # Another seed, a damaged file, no file: refused before the device opens.
+    with pytest.raises(ppm_vk.CheckpointError) as e:
+        ppm_vk.Renderer(CORNELL, resume=ckpt, **small(cache_dir, seed=5))
+    assert "seed" in str(e.value)
+    damaged = tmp_path / "damaged.ckpt"
+    damaged.write_bytes(ckpt.read_bytes()[:-100])
+    with pytest.raises(ppm_vk.CheckpointError):
+        ppm_vk.Renderer(CORNELL, resume=damaged, **small(cache_dir))
+    with pytest.raises(ppm_vk.IoError) as e:
+        ppm_vk.Renderer(CORNELL, resume=tmp_path / "none.ckpt", **small(cache_dir))
+    assert e.value.filename == str(tmp_path / "none.ckpt")
+    with pytest.raises(ppm_vk.IoError):
+        renderer.checkpoint(tmp_path / "no-such-dir" / "r.ckpt")
+
+
 def test_a_bad_scene_is_a_scene_error_with_file_line_column_field(tmp_path, cache_dir):
     lines = CORNELL.read_text().splitlines()
     n = next(i for i, l in enumerate(lines) if l.lstrip().startswith("radius"))
@@ -269,7 +293,7 @@ def test_the_stubs_match_the_package():
     assert public == stub_methods - {"__init__"}
     init = next(n for n in top["Renderer"].body if isinstance(n, ast.FunctionDef) and n.name == "__init__")
     keywords = {a.arg for a in init.args.kwonlyargs} - {"progress", "resolution", "device", "validation",
-                                                       "pipeline_cache"}
+                                                       "pipeline_cache", "resume"}
     assert keywords == set(ppm_vk.default_settings()) | {"radius", "beta", "cone"}
     assert {f.name for f in dataclasses.fields(ppm_vk.PassStats)} == {
         n.target.id for n in top["PassStats"].body if isinstance(n, ast.AnnAssign)}
