@@ -158,7 +158,7 @@ class Renderer:
         *,
         progress: Optional[Callable[[PassStats], Any]] = None,
         resolution: Optional[Tuple[int, int]] = None,
-        device: Optional[str] = None,
+        device: Optional[Union[int, str]] = None,
         validation: bool = False,
         pipeline_cache: Optional[PathLike] = None,
         resume: Optional[PathLike] = None,
@@ -179,7 +179,6 @@ class Renderer:
             None if resume is None else os.fspath(resume),
         )
         self.progress = progress
-        self.validation = bool(validation)
 
     def pass_(self) -> PassStats:
         """One photon pass (with its eye pass in SPPM); returns its statistics. Raises

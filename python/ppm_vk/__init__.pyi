@@ -69,7 +69,6 @@ def read_exr(path: PathLike) -> Image:
 class Renderer:
     """A render in progress on one device."""
     progress: Optional[Callable[[PassStats], Any]]
-    validation: bool
     def __init__(
         self,
         scene: PathLike,
@@ -77,7 +76,7 @@ class Renderer:
         *,
         progress: Optional[Callable[[PassStats], Any]] = None,
         resolution: Optional[Tuple[int, int]] = None,
-        device: Optional[str] = None,
+        device: Optional[Union[int, str]] = None,
         validation: bool = False,
         pipeline_cache: Optional[PathLike] = None,
         resume: Optional[PathLike] = None,
@@ -140,7 +139,7 @@ def render(
     *,
     progress: Optional[Callable[[PassStats], Any]] = None,
     resolution: Optional[Tuple[int, int]] = None,
-    device: Optional[str] = None,
+    device: Optional[Union[int, str]] = None,
     validation: bool = False,
     pipeline_cache: Optional[PathLike] = None,
     **settings: Any,

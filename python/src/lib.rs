@@ -168,23 +168,9 @@ fn device_options(device: Option<String>, validation: bool, pipeline_cache: Opti
         device: device.or_else(|| std::env::var("PPM_VK_DEVICE").ok()),
         pipeline_cache: pipeline_cache
             .or_else(|| std::env::var_os("PPM_VK_CACHE_DIR").map(PathBuf::from))
-            .or_else(default_cache_dir),
+            .or_else(ContextOptions::default_pipeline_cache),
         present: None,
     }
-}
-
-/// `$XDG_CACHE_HOME/ppm-vk`, else `~/.cache/ppm-vk`: the CLI's default pipeline cache, so the package and
-/// the binary share compiled kernels.
-fn default_cache_dir() -> Option<PathBuf> {
-    let xdg = std::env::var_os("XDG_CACHE_HOME")
-        .map(PathBuf::from)
-        .filter(|p| p.is_absolute());
-    let home = || {
-        std::env::var_os("HOME")
-            .map(|h| PathBuf::from(h).join(".cache"))
-            .filter(|p| p.is_absolute())
-    };
-    xdg.or_else(home).map(|d| d.join("ppm-vk"))
 }
 
 /// An image as a float32 array of shape (height, width, 3).
