@@ -495,6 +495,12 @@ mod tests {
         img.save_png(&path, 1.0).unwrap();
         let png = image::open(&path).unwrap().into_rgb8();
         assert_eq!(png.get_pixel(1, 0).0[0], 188);
+        // In memory, the same file byte for byte.
+        assert_eq!(img.encode_png(1.0).unwrap(), fs::read(&path).unwrap());
+        assert!(matches!(
+            img.encode_png(f32::NAN),
+            Err(crate::Error::Settings { field: "exposure", .. })
+        ));
         assert!(img.save_png(&path, f32::NAN).is_err());
         assert!(!path.with_extension("tmp.png").exists());
         fs::remove_dir_all(&dir).unwrap();
