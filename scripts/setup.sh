@@ -29,6 +29,7 @@ DEBIAN_PACKAGES=(
   "libwayland-client0:Wayland client library (ppm-vk view on Wayland)"
   "xvfb:a headless X server the viewer's tests open their windows on"
   "python3:the layering check of scripts/test (scripts/import-cycles.py)"
+  "python3-venv:the Python package's environment (scripts/python-install; pip fetches maturin, numpy, pytest)"
 )
 
 if ! command -v cargo >/dev/null 2>&1; then

@@ -74,7 +74,10 @@ impl DeviceArgs {
     pub fn open_for(&self, present: Option<ppm_vk_engine::raw_window_handle::RawDisplayHandle>) -> Result<Context> {
         let pipeline_cache = match self.no_pipeline_cache {
             true => None,
-            false => self.pipeline_cache.clone().or_else(default_cache_dir),
+            false => self
+                .pipeline_cache
+                .clone()
+                .or_else(ContextOptions::default_pipeline_cache),
         };
         let ctx = open_device(&ContextOptions {
             validation: self.validate,
@@ -87,19 +90,6 @@ impl DeviceArgs {
         }
         Ok(ctx)
     }
-}
-
-/// `$XDG_CACHE_HOME/ppm-vk`, else `~/.cache/ppm-vk` (the XDG base directory rules); `None` without either.
-fn default_cache_dir() -> Option<PathBuf> {
-    let xdg = std::env::var_os("XDG_CACHE_HOME")
-        .map(PathBuf::from)
-        .filter(|p| p.is_absolute());
-    let home = || {
-        std::env::var_os("HOME")
-            .map(|h| PathBuf::from(h).join(".cache"))
-            .filter(|p| p.is_absolute())
-    };
-    xdg.or_else(home).map(|d| d.join("ppm-vk"))
 }
 
 /// Saves the pipeline cache now (the context saves it when dropped too, but silently): a failure is a

@@ -27,6 +27,22 @@ pub struct ContextOptions {
     pub present: Option<raw_window_handle::RawDisplayHandle>,
 }
 
+impl ContextOptions {
+    /// Where the pipeline cache lives by default: `$XDG_CACHE_HOME/ppm-vk`, else `~/.cache/ppm-vk` (the XDG
+    /// base directory rules); `None` without either. The binary and the Python package share it.
+    pub fn default_pipeline_cache() -> Option<PathBuf> {
+        let xdg = std::env::var_os("XDG_CACHE_HOME")
+            .map(PathBuf::from)
+            .filter(|p| p.is_absolute());
+        let home = || {
+            std::env::var_os("HOME")
+                .map(|h| PathBuf::from(h).join(".cache"))
+                .filter(|p| p.is_absolute())
+        };
+        xdg.or_else(home).map(|d| d.join("ppm-vk"))
+    }
+}
+
 /// What a physical device is, for listings and run reports.
 #[derive(Clone, Debug)]
 pub struct DeviceInfo {

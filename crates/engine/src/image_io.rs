@@ -213,11 +213,32 @@ impl RgbImage {
     }
 
     fn save_png_inner(&self, path: &Path, exposure: f32) -> Result<()> {
-        ensure!(
-            exposure.is_finite(),
-            "writing {}: exposure must be finite, got {exposure}",
-            path.display()
-        );
+        let buf = self
+            .tonemapped(exposure)
+            .with_context(|| format!("writing {}", path.display()))?;
+        write_atomically(path, "png", |w| Ok(buf.write_to(w, ImageFormat::Png)?))
+    }
+
+    /// The PNG [`RgbImage::save_png`] writes, in memory (for a notebook's inline image); a non-finite
+    /// exposure is [`crate::Error::Settings`].
+    pub fn encode_png(&self, exposure: f32) -> crate::Result<Vec<u8>> {
+        if !exposure.is_finite() {
+            let message = format!("must be finite, got {exposure}");
+            return Err(crate::Error::Settings {
+                field: "exposure",
+                message,
+            });
+        }
+        let mut out = std::io::Cursor::new(Vec::new());
+        self.tonemapped(exposure)
+            .and_then(|buf| Ok(buf.write_to(&mut out, ImageFormat::Png)?))
+            .map_err(|e| crate::Error::io("PNG in memory", std::io::Error::other(format!("{e:#}"))))?;
+        Ok(out.into_inner())
+    }
+
+    /// Scaled by 2^`exposure`, clamped to [0, 1], sRGB-encoded to 8 bits; NaN becomes black.
+    fn tonemapped(&self, exposure: f32) -> Result<ImageBuffer<Rgb<u8>, Vec<u8>>> {
+        ensure!(exposure.is_finite(), "exposure must be finite, got {exposure}");
         let scale = exposure.exp2();
         let raw: Vec<u8> = self
             .pixels
@@ -225,10 +246,8 @@ impl RgbImage {
             .flatten()
             .map(|&v| srgb_encode_u8(v * scale))
             .collect();
-        let buf = ImageBuffer::<Rgb<u8>, _>::from_raw(self.width, self.height, raw)
+        ImageBuffer::<Rgb<u8>, _>::from_raw(self.width, self.height, raw)
             .context("pixel buffer does not match the image size")
-            .with_context(|| format!("writing {}", path.display()))?;
-        write_atomically(path, "png", |w| Ok(buf.write_to(w, ImageFormat::Png)?))
     }
 
     /// Chooses the format by extension: `.exr` (linear float) or `.png` (sRGB, exposure 0).
@@ -476,6 +495,12 @@ mod tests {
         img.save_png(&path, 1.0).unwrap();
         let png = image::open(&path).unwrap().into_rgb8();
         assert_eq!(png.get_pixel(1, 0).0[0], 188);
+        // In memory, the same file byte for byte.
+        assert_eq!(img.encode_png(1.0).unwrap(), fs::read(&path).unwrap());
+        assert!(matches!(
+            img.encode_png(f32::NAN),
+            Err(crate::Error::Settings { field: "exposure", .. })
+        ));
         assert!(img.save_png(&path, f32::NAN).is_err());
         assert!(!path.with_extension("tmp.png").exists());
         fs::remove_dir_all(&dir).unwrap();
