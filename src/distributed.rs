@@ -37,7 +37,10 @@ fn part_path(args: &RenderArgs, scene_name: &str, job: &Job) -> Result<PathBuf> 
         Some(p) => p.clone(),
         None => PathBuf::from(format!("{scene_name}.worker-{}-of-{}.part", job.worker, job.of)),
     };
-    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
     if matches!(ext.as_deref(), Some("exr") | Some("png")) {
         bail!(
             "--out {}: a worker writes a part for `ppm-vk merge`, not an image (name it .part)",
@@ -152,9 +155,7 @@ pub fn run(args: MergeArgs) -> Result<()> {
     if !info.missing.is_empty() {
         eprintln!(
             "warning: workers {:?} of {} were not given: the image has {} of the render's passes",
-            info.missing,
-            info.of,
-            info.passes
+            info.missing, info.of, info.passes
         );
     }
     let error = match &reference {

@@ -322,7 +322,13 @@ pub(crate) fn settings_diff(a: &Settings, b: &Settings, a_is: &str, b_is: &str) 
         (serde_json::Value::Object(a), serde_json::Value::Object(b)) => a
             .iter()
             .filter(|(k, v)| b.get(*k) != Some(v))
-            .map(|(k, v)| format!("{k}: {} {a_is}, {} {b_is}", show(v), b.get(k).map_or("none".into(), show)))
+            .map(|(k, v)| {
+                format!(
+                    "{k}: {} {a_is}, {} {b_is}",
+                    show(v),
+                    b.get(k).map_or("none".into(), show)
+                )
+            })
             .collect(),
         _ => vec![],
     })

@@ -62,9 +62,10 @@ const TRAILER: usize = 32;
 pub const MAX_WORKERS: u32 = 1 << 16;
 /// Fixed-point units per unit of radiance in a part's sums: 2^40 (radiance to within 1e-12).
 pub const FIXED_ONE: f64 = (1u64 << 40) as f64;
-/// Largest radiance one pass may give a pixel (2^64): far past any real scene's, and small enough that
-/// the sums of [`MAX_PASSES`] such passes stay within i128's range with [`FIXED_ONE`].
-pub const MAX_PIXEL_VALUE: f64 = 18_446_744_073_709_551_616.0;
+/// Largest value one pass may give a pixel's sum (2^48, 2.8e14): far past any real scene's radiance, and
+/// small enough that the sums of [`MAX_PASSES`] such passes stay within i128 with [`FIXED_ONE`]
+/// (2^48 * 2^40 * 2^32 = 2^120).
+pub const MAX_PIXEL_VALUE: f64 = 281_474_976_710_656.0;
 
 /// How the workers split a render (module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -91,12 +92,20 @@ impl Job {
     pub fn validate(&self) -> Result<()> {
         let bad = |field: &'static str, message: String| Err(Error::Settings { field, message });
         if !(1..=MAX_WORKERS).contains(&self.of) {
-            return bad("of", format!("the workers must be in 1..={MAX_WORKERS}, got {}", self.of));
+            return bad(
+                "of",
+                format!("the workers must be in 1..={MAX_WORKERS}, got {}", self.of),
+            );
         }
         if self.worker >= self.of {
             return bad(
                 "worker",
-                format!("worker {} of {}: workers count from 0 to {}", self.worker, self.of, self.of - 1),
+                format!(
+                    "worker {} of {}: workers count from 0 to {}",
+                    self.worker,
+                    self.of,
+                    self.of - 1
+                ),
             );
         }
         let total = (self.of as u64).checked_mul(self.passes);
@@ -270,7 +279,11 @@ pub fn render_part(
             let mut add = || -> anyhow::Result<()> {
                 for (i, (sum, px)) in radiance.iter_mut().zip(&image.pixels).enumerate() {
                     let what = || format!("pixel {i}");
-                    *sum = [fixed(px[0] as f64, what)?, fixed(px[1] as f64, what)?, fixed(px[2] as f64, what)?];
+                    *sum = [
+                        fixed(px[0] as f64, what)?,
+                        fixed(px[1] as f64, what)?,
+                        fixed(px[2] as f64, what)?,
+                    ];
                 }
                 Ok(())
             };
@@ -316,7 +329,12 @@ impl Part {
         crate::image_io::write_atomically(path, "part", |w| {
             use std::io::Write as _;
             let mut sha = sha2::Sha256::new();
-            let prefix = [&MAGIC[..], &FORMAT.to_le_bytes(), &(header.len() as u32).to_le_bytes(), &header];
+            let prefix = [
+                &MAGIC[..],
+                &FORMAT.to_le_bytes(),
+                &(header.len() as u32).to_le_bytes(),
+                &header,
+            ];
             for p in prefix.into_iter().chain(self.payload()) {
                 w.write_all(p)?;
                 sha.update(p);
@@ -345,7 +363,10 @@ impl Part {
         file.read_exact(&mut prefix[16..]).context("reading the part")?;
         let header = parse_header(&prefix)?;
         let total = expected_len(&header, header_len)?;
-        ensure!(total == len, "{len} bytes, the header lists {total} (truncated or damaged)");
+        ensure!(
+            total == len,
+            "{len} bytes, the header lists {total} (truncated or damaged)"
+        );
         let mut bytes = prefix;
         bytes.reserve_exact((len as usize).saturating_sub(bytes.len()));
         file.take(len - bytes.len() as u64)
@@ -390,7 +411,10 @@ fn check_prefix(bytes: &[u8], len: u64) -> anyhow::Result<usize> {
     ensure!(bytes.len() >= 16 && &bytes[..8] == MAGIC, "not a ppm-vk part");
     let word = |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
     let format = word(8);
-    ensure!(format == FORMAT, "format version {format}, this build reads version {FORMAT}");
+    ensure!(
+        format == FORMAT,
+        "format version {format}, this build reads version {FORMAT}"
+    );
     let header = word(12);
     ensure!(
         header <= MAX_HEADER && 16 + header as u64 + TRAILER as u64 <= len,
@@ -445,7 +469,11 @@ pub fn merge(parts: &[Part]) -> anyhow::Result<(RgbImage, MergeInfo)> {
         let b = &p.header;
         let (x, y) = (name(a), name(b));
         if b.build != a.build {
-            bail!("{y}'s part was written by build {}, {x}'s by build {}: merge parts of one build", b.build, a.build);
+            bail!(
+                "{y}'s part was written by build {}, {x}'s by build {}: merge parts of one build",
+                b.build,
+                a.build
+            );
         }
         if b.scene_sha256 != a.scene_sha256 {
             bail!(
@@ -483,20 +511,29 @@ pub fn merge(parts: &[Part]) -> anyhow::Result<(RgbImage, MergeInfo)> {
             a.job.passes
         );
         // Sizes equal through the scene hash; checked all the same, as the sums are indexed by them.
-        ensure!((b.width, b.height) == (a.width, a.height), "{y}'s image size differs from {x}'s");
+        ensure!(
+            (b.width, b.height) == (a.width, a.height),
+            "{y}'s image size differs from {x}'s"
+        );
     }
     let mut order: Vec<&Part> = parts.iter().collect();
     order.sort_by_key(|p| p.header.job.worker);
-    if let Some(w) = order.windows(2).find(|w| w[0].header.job.worker == w[1].header.job.worker) {
+    if let Some(w) = order
+        .windows(2)
+        .find(|w| w[0].header.job.worker == w[1].header.job.worker)
+    {
         bail!("worker {} of {} is given twice", w[0].header.job.worker, a.job.of);
     }
     let pixels = a.width as usize * a.height as usize;
-    let (mut radiance, mut emission, mut samples) = (vec![[0i128; 3]; pixels], vec![[0i128; 3]; pixels], vec![0u64; pixels]);
+    let (mut radiance, mut emission, mut samples) =
+        (vec![[0i128; 3]; pixels], vec![[0i128; 3]; pixels], vec![0u64; pixels]);
     for p in &order {
         for i in 0..pixels {
             add3(&mut radiance[i], p.radiance[i])?;
             add3(&mut emission[i], p.emission[i])?;
-            samples[i] = samples[i].checked_add(p.samples[i]).context("an emission sample count overflows")?;
+            samples[i] = samples[i]
+                .checked_add(p.samples[i])
+                .context("an emission sample count overflows")?;
         }
     }
     let workers: Vec<u32> = order.iter().map(|p| p.header.job.worker).collect();
@@ -522,4 +559,205 @@ pub fn merge(parts: &[Part]) -> anyhow::Result<(RgbImage, MergeInfo)> {
         photons: passes * a.settings.photons_per_pass as u64,
     };
     Ok((image, info))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 2x1 part of worker `worker` of `of`, its sums distinct per worker.
+    fn part(worker: u32, of: u32) -> Part {
+        let w = worker as i128;
+        Part {
+            header: PartHeader {
+                build: "b1".into(),
+                scene_name: "s".into(),
+                scene_sha256: "00".into(),
+                width: 2,
+                height: 1,
+                settings: Settings::default(),
+                job: Job {
+                    method: Method::Probabilistic,
+                    worker,
+                    of,
+                    passes: 3,
+                },
+                sections: vec![],
+            },
+            radiance: vec![[(1 + w) << 40, 2 << 40, 3], [4, 5 + w, 6]],
+            emission: vec![[7 << 40, 0, 0], [0, 0, 1 << 40]],
+            samples: vec![2, 0],
+        }
+        .seal()
+    }
+
+    /// A file's bytes with `header` (JSON as given) and `payload`, under a correct checksum: what a
+    /// hostile writer would make.
+    fn file(header: &[u8], payload: &[u8]) -> Vec<u8> {
+        let mut bytes = [
+            &MAGIC[..],
+            &FORMAT.to_le_bytes(),
+            &(header.len() as u32).to_le_bytes(),
+            header,
+            payload,
+        ]
+        .concat();
+        let sha = sha2::Sha256::digest(&bytes);
+        bytes.extend_from_slice(&sha);
+        bytes
+    }
+
+    fn scratch(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("ppm-vk-part-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir.join(name)
+    }
+
+    #[test]
+    fn round_trip_is_exact() {
+        let p = part(1, 2);
+        let path = scratch("round-trip.part");
+        p.save(&path).unwrap();
+        assert_eq!(Part::load(&path).unwrap(), p);
+    }
+
+    /// The merge divides the radiance sums by the passes and the emission sums by their samples, in any
+    /// order of the parts.
+    #[test]
+    fn merge_is_the_mean_in_any_order() {
+        let (a, b) = (part(0, 2), part(1, 2));
+        let (image, info) = merge(&[b.clone(), a.clone()]).unwrap();
+        assert_eq!(merge(&[a, b]).unwrap(), (image.clone(), info.clone()));
+        assert_eq!((info.passes, info.workers, info.missing), (6, vec![0, 1], vec![]));
+        // Pixel 0: radiance (1 + 2) / 6 passes, plus emission 14 / 4 samples.
+        assert_eq!(image.pixels[0][0], (3.0 / 6.0 + 14.0 / 4.0) as f32);
+        assert_eq!(image.pixels[0][1], (4.0 / 6.0) as f32);
+        // Pixel 1: no samples, so the emission sum is divided by 1.
+        assert_eq!(image.pixels[1][2], (12.0 / 6.0 / FIXED_ONE + 2.0) as f32);
+        let (_, info) = merge(&[part(2, 4)]).unwrap();
+        assert_eq!(info.missing, vec![0, 1, 3]);
+    }
+
+    #[test]
+    fn mismatched_parts_are_refused_saying_which() {
+        let err = |parts: &[Part]| format!("{:#}", merge(parts).unwrap_err());
+        let a = part(0, 2);
+        let edit = |f: fn(&mut PartHeader)| {
+            let mut b = part(1, 2);
+            f(&mut b.header);
+            err(&[a.clone(), b])
+        };
+        let e = edit(|h| h.build = "b2".into());
+        assert!(
+            e.contains("worker 1 of 2's part was written by build b2, worker 0 of 2's by build b1"),
+            "{e}"
+        );
+        let e = edit(|h| h.scene_sha256 = "11".into());
+        assert!(e.contains("is of another scene"), "{e}");
+        let e = edit(|h| h.settings.alpha = 0.5);
+        assert!(
+            e.contains("other settings (alpha: 0.5 for worker 1 of 2, 0.7 for worker 0 of 2)"),
+            "{e}"
+        );
+        let e = edit(|h| h.job.method = Method::Independent);
+        assert!(e.contains("is of method Independent"), "{e}");
+        let e = edit(|h| h.job.passes = 4);
+        assert!(e.contains("has 4 passes, worker 0 of 2's 3"), "{e}");
+        let e = err(&[a.clone(), part(1, 3)]);
+        assert!(e.contains("split between 3 workers, worker 0 of 2's between 2"), "{e}");
+        let e = err(&[a.clone(), part(1, 2), a.clone()]);
+        assert!(e.contains("worker 0 of 2 is given twice"), "{e}");
+        assert!(err(&[]).contains("no parts"));
+    }
+
+    #[test]
+    fn damaged_files_are_refused_with_the_reason() {
+        let path = scratch("damaged.part");
+        part(0, 1).save(&path).unwrap();
+        let good = std::fs::read(&path).unwrap();
+        let err = |b: &[u8]| format!("{:#}", Part::parse(b).unwrap_err());
+        // Every truncation is an error, never a panic.
+        for n in 0..good.len() {
+            let e = err(&good[..n]);
+            assert!(
+                e.contains("truncated") || e.contains("not a ppm-vk part"),
+                "{n} bytes: {e}"
+            );
+        }
+        assert!(err(b"PPMVKCKP a checkpoint, not a part").contains("not a ppm-vk part"));
+        let mut v2 = good.clone();
+        v2[8] = 2;
+        assert!(err(&v2).contains("format version 2"));
+        for at in [20, good.len() / 2, good.len() - 1] {
+            let mut flipped = good.clone();
+            flipped[at] ^= 1;
+            let e = err(&flipped);
+            assert!(
+                e.contains("checksum") || e.contains("parsing the header"),
+                "byte {at}: {e}"
+            );
+        }
+        let e = format!("{:#}", Part::load(Path::new("/dev/zero")).unwrap_err());
+        assert!(e.contains("not a regular file"), "{e}");
+    }
+
+    /// Headers under a correct checksum that no render writes: refused from the header alone, before any
+    /// sum is read or allocated.
+    #[test]
+    fn hostile_headers_are_refused() {
+        let good = part(0, 2).header;
+        let with = |f: fn(&mut PartHeader)| {
+            let mut h = good.clone();
+            f(&mut h);
+            let bytes = file(&serde_json::to_vec(&h).unwrap(), &[]);
+            format!("{:#}", Part::parse(&bytes).unwrap_err())
+        };
+        let e = with(|h| h.job.worker = 2);
+        assert!(e.contains("worker 2 of 2: workers count from 0 to 1"), "{e}");
+        let e = with(|h| h.job.of = 0);
+        assert!(e.contains("the workers must be in 1..=65536, got 0"), "{e}");
+        let e = with(|h| h.width = u32::MAX);
+        assert!(e.contains("image size 4294967295x1"), "{e}");
+        let e = with(|h| h.sections = vec![u64::MAX, u64::MAX, 16]);
+        assert!(e.contains("its sections are"), "{e}");
+        let e = with(|h| h.settings.photons_per_pass = 0);
+        assert!(e.contains("photons_per_pass"), "{e}");
+        let e = with(|h| h.job.passes = 0);
+        assert!(e.contains("must be at least 1"), "{e}");
+        // A correct header whose sums are missing is a short file.
+        let e = with(|_| ());
+        assert!(e.contains("the header lists"), "{e}");
+        let e = format!("{:#}", Part::parse(&file(b"{\"build\": [", &[])).unwrap_err());
+        assert!(e.contains("parsing the header"), "{e}");
+    }
+
+    #[test]
+    fn job_limits_hold_at_their_bounds() {
+        let job = |worker, of, passes| Job {
+            method: Method::Probabilistic,
+            worker,
+            of,
+            passes,
+        };
+        assert!(job(MAX_WORKERS - 1, MAX_WORKERS, 1).validate().is_ok());
+        assert!(job(0, MAX_WORKERS + 1, 1).validate().is_err());
+        assert!(job(0, 1, MAX_PASSES).validate().is_ok());
+        assert!(job(0, 1, MAX_PASSES + 1).validate().is_err());
+        assert!(job(0, 2, MAX_PASSES / 2 + 1).validate().is_err());
+        assert!(job(0, MAX_WORKERS, u64::MAX).validate().is_err());
+        let passes: Vec<u64> = job(1, 3, 4).pass_indices().collect();
+        assert_eq!(passes, [1, 4, 7, 10]);
+    }
+
+    #[test]
+    fn pixel_values_hold_at_their_bound() {
+        let below = MAX_PIXEL_VALUE * (1.0 - f64::EPSILON);
+        assert_eq!(fixed(below, String::new).unwrap(), (below * FIXED_ONE) as i128);
+        let e = format!("{:#}", fixed(MAX_PIXEL_VALUE, || "pixel 3".into()).unwrap_err());
+        assert!(e.contains("pixel 3: 281474976710656 is not a finite radiance"), "{e}");
+        assert!(fixed(f64::NAN, String::new).is_err());
+        // MAX_PASSES passes at the bound still sum within i128.
+        let most = (MAX_PIXEL_VALUE * FIXED_ONE) as i128;
+        assert!(most.checked_mul(MAX_PASSES as i128).is_some());
+    }
 }

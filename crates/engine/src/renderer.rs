@@ -1066,7 +1066,10 @@ impl Renderer {
         let per_pass = self.settings.photons_per_pass as u64;
         let emitted = index.checked_mul(per_pass).filter(|_| index < checkpoint::MAX_PASSES);
         let Some(emitted) = emitted else {
-            let message = format!("pass {index} is past the last a render may have ({})", checkpoint::MAX_PASSES);
+            let message = format!(
+                "pass {index} is past the last a render may have ({})",
+                checkpoint::MAX_PASSES
+            );
             return Err(Error::Settings {
                 field: "passes",
                 message,
@@ -1083,7 +1086,9 @@ impl Renderer {
                 probe: s.probe,
             })
             .collect();
-        self.ctx.upload(&self.stats, bytemuck::cast_slice(&stats)).device(what)?;
+        self.ctx
+            .upload(&self.stats, bytemuck::cast_slice(&stats))
+            .device(what)?;
         self.ctx
             .run(|cmd| {
                 self.direct.cmd_fill(cmd, 0);
@@ -1108,7 +1113,11 @@ impl Renderer {
             .map(|pixel| {
                 pixel.iter().fold([0.0; 3], |sum, s| {
                     let area = norm * s.r2;
-                    [sum[0] + s.tau_r / area, sum[1] + s.tau_g / area, sum[2] + s.tau_b / area]
+                    [
+                        sum[0] + s.tau_r / area,
+                        sum[1] + s.tau_g / area,
+                        sum[2] + s.tau_b / area,
+                    ]
                 })
             })
             .collect();
