@@ -8,7 +8,7 @@ use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_vk_engine::distributed::{merge, render_part, Job, Method, Part};
-use ppm_vk_engine::metrics::{compare, ErrorStats, Reference};
+use ppm_vk_engine::metrics::{compare, ErrorStats, Reference, Region};
 use ppm_vk_engine::CancelToken;
 
 use crate::{outputs, save_pipeline_cache, watch_signals, Ended, RenderArgs, BUILD};
@@ -116,6 +116,10 @@ pub struct MergeArgs {
     /// Reference image (EXR) to measure the merged image's error against.
     #[arg(long)]
     reference: Option<PathBuf>,
+    /// A region to score on its own against --reference, NAME:X0,Y0,W,H in the reference's pixels
+    /// (origin top left); repeatable.
+    #[arg(long = "region", value_parser = crate::parse_region, requires = "reference")]
+    regions: Vec<Region>,
     /// Write what was merged (and the error, with --reference) as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -128,6 +132,7 @@ struct MergeRecord {
     info: ppm_vk_engine::distributed::MergeInfo,
     out: String,
     error: Option<ErrorStats>,
+    region_errors: std::collections::BTreeMap<String, ErrorStats>,
 }
 
 /// `merge`: the parts into one image.
@@ -169,12 +174,24 @@ pub fn run(args: MergeArgs) -> Result<()> {
         }
         None => None,
     };
+    let mut region_errors = std::collections::BTreeMap::new();
+    if let Some(r) = &reference {
+        for region in &args.regions {
+            let e = compare(&image, r, Some(region), true)?;
+            println!(
+                "  {:<12} RMSE {:.4}, relMSE {:.5}, bias {:+.4}",
+                region.name, e.rmse, e.rel_mse, e.mean_bias
+            );
+            region_errors.insert(region.name.clone(), e);
+        }
+    }
     if let Some(path) = &args.json {
         let record = MergeRecord {
             parts: args.parts.iter().map(|p| p.display().to_string()).collect(),
             info,
             out: out.display().to_string(),
             error,
+            region_errors,
         };
         let text = serde_json::to_string_pretty(&record).context("encoding the merge record")?;
         std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;

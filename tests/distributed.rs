@@ -153,13 +153,9 @@ fn independent_parts_merge_into_the_mean_of_their_renders() {
     });
     assert_ne!(pixels_sha256(&renders[0]), pixels_sha256(&renders[1]));
     for (i, px) in image.pixels.iter().enumerate() {
-        for c in 0..3 {
+        for (c, &got) in px.iter().enumerate() {
             let want = (renders[0].pixels[i][c] as f64 + renders[1].pixels[i][c] as f64) / 2.0;
-            assert!(
-                close(px[c] as f64, want, 1e-6, 1e-9),
-                "pixel {i}: {} against {want}",
-                px[c]
-            );
+            assert!(close(got as f64, want, 1e-6, 1e-9), "pixel {i}: {got} against {want}");
         }
     }
     assert_clean(&ctx);

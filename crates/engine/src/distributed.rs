@@ -525,6 +525,14 @@ pub fn merge(parts: &[Part]) -> anyhow::Result<(RgbImage, MergeInfo)> {
         bail!("worker {} of {} is given twice", w[0].header.job.worker, a.job.of);
     }
     let pixels = a.width as usize * a.height as usize;
+    // `Part::load` checks these; a part built in code may not have come through it.
+    for p in parts {
+        ensure!(
+            [p.radiance.len(), p.emission.len(), p.samples.len()] == [pixels; 3],
+            "{}'s part does not hold {pixels} pixels of each sum",
+            name(&p.header)
+        );
+    }
     let (mut radiance, mut emission, mut samples) =
         (vec![[0i128; 3]; pixels], vec![[0i128; 3]; pixels], vec![0u64; pixels]);
     for p in &order {
@@ -665,6 +673,13 @@ mod tests {
         assert!(e.contains("has 4 passes, worker 0 of 2's 3"), "{e}");
         let e = err(&[a.clone(), part(1, 3)]);
         assert!(e.contains("split between 3 workers, worker 0 of 2's between 2"), "{e}");
+        let mut short = part(1, 2);
+        short.samples.pop();
+        let e = err(&[a.clone(), short]);
+        assert!(
+            e.contains("worker 1 of 2's part does not hold 2 pixels of each sum"),
+            "{e}"
+        );
         let e = err(&[a.clone(), part(1, 2), a.clone()]);
         assert!(e.contains("worker 0 of 2 is given twice"), "{e}");
         assert!(err(&[]).contains("no parts"));
@@ -729,6 +744,33 @@ mod tests {
         assert!(e.contains("the header lists"), "{e}");
         let e = format!("{:#}", Part::parse(&file(b"{\"build\": [", &[])).unwrap_err());
         assert!(e.contains("parsing the header"), "{e}");
+    }
+
+    /// Every byte of a good header replaced by each of a few characters that change numbers, strings and
+    /// structure, the checksum made right again: each file parses or is refused, never a panic, and what
+    /// parses is a part whose sums fit its header.
+    #[test]
+    fn edited_headers_never_panic() {
+        let p = part(1, 2);
+        let header = serde_json::to_vec(&p.header).unwrap();
+        let payload: Vec<u8> = p.payload().concat();
+        let (mut parsed, mut refused) = (0, 0);
+        for at in 0..header.len() {
+            for c in *b"9-0\"{}e:," {
+                let mut h = header.clone();
+                h[at] = c;
+                match Part::parse(&file(&h, &payload)) {
+                    Ok(q) => {
+                        let pixels = (q.header.width * q.header.height) as usize;
+                        assert_eq!([q.radiance.len(), q.emission.len(), q.samples.len()], [pixels; 3]);
+                        parsed += 1;
+                    }
+                    Err(_) => refused += 1,
+                }
+            }
+        }
+        // Both outcomes happen: the edits reach the checks, not only the JSON parser.
+        assert!(parsed > 0 && refused > 0, "{parsed} parsed, {refused} refused");
     }
 
     #[test]

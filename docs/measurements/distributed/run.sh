@@ -10,6 +10,12 @@ scenes=${*:-cornell-spheres cornell-smooth}
 total=${TOTAL_PASSES:-32}
 flags="--resolution ${RES:-128x128} --photons-per-pass ${PHOTONS:-50000} --seed $seed"
 mkdir -p "$out"
+regions_of() { # boxes in the reference's pixels
+  case $1 in
+    cornell-spheres) echo "--region caustic:250,436,70,40 --region interior:16,16,480,480" ;;
+    cornell-smooth) echo "--region interior:8,8,240,240" ;;
+  esac
+}
 ref_of() {
   case $1 in
     cornell-spheres) echo "$root/../shared/reference/cornell-spheres.exr" ;;
@@ -23,7 +29,7 @@ run() { # scene method workers
       -o "$out/$tag-w$k.part" --force >/dev/null 2>>"$out/log.txt"
     parts+=("$out/$tag-w$k.part")
   done
-  "$bin" merge "${parts[@]}" -o "$out/$tag.exr" --force --reference "$(ref_of "$scene")" --json "$out/$tag.json" \
+  "$bin" merge "${parts[@]}" -o "$out/$tag.exr" --force --reference "$(ref_of "$scene")" $(regions_of "$scene") --json "$out/$tag.json" \
     | tee -a "$out/log.txt"
   python3 -c "import json,sys; r=json.load(open(sys.argv[1])); r.update(scene=sys.argv[2], method=sys.argv[3], workers=int(sys.argv[4]), passes_per_worker=int(sys.argv[5]), seed=int(sys.argv[6])); print(json.dumps(r))" \
     "$out/$tag.json" "$scene" "$method" "$n" "$p" "$seed" >> "$out/results.jsonl"
