@@ -18,6 +18,7 @@ use ppm_vk_engine::{
 mod bench;
 mod check;
 mod compare;
+mod distributed;
 mod plot;
 mod view;
 
@@ -44,6 +45,8 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Read scene files as `render` would and say what each holds and approximated (no device needed).
     Check(check::CheckArgs),
+    /// Merge the parts `render --worker K --of N` wrote into one image (docs/distributed.md).
+    Merge(distributed::MergeArgs),
 }
 
 #[derive(Args, Clone)]
@@ -285,6 +288,20 @@ struct RenderArgs {
     /// refuses others, saying which); --passes counts its passes too.
     #[arg(long, value_name = "FILE")]
     resume: Option<PathBuf>,
+    /// Render only worker K's share (K from 0) of a render split between --of N workers that never talk
+    /// to each other, and write it as a part (--out, default `<scene name>.worker-K-of-N.part`) for
+    /// `ppm-vk merge`; --passes counts this worker's passes (docs/distributed.md).
+    #[arg(long, value_name = "K", requires = "of",
+          conflicts_with_all = ["time", "checkpoint", "resume", "report", "trace", "reference"])]
+    worker: Option<u32>,
+    /// The number of workers the render is split between (with --worker).
+    #[arg(long, value_name = "N", requires = "worker")]
+    of: Option<u32>,
+    /// With --worker: `probabilistic` (the default) renders passes K, K+N, ... of probabilistic PPM, which
+    /// merge into one machine's image bit for bit; `independent` renders the mode's progressive render
+    /// with the worker's own seed, and the merge averages the images.
+    #[arg(long, value_enum, requires = "worker")]
+    method: Option<distributed::MethodArg>,
     #[command(flatten)]
     device: DeviceArgs,
 }
@@ -487,6 +504,7 @@ fn main() {
         Command::Bench(args) => bench::run(args),
         Command::Compare(args) => compare::run(args),
         Command::Check(args) => check::run(args),
+        Command::Merge(args) => distributed::run(args),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
@@ -616,6 +634,9 @@ fn save_all(image: &ppm_vk_engine::RgbImage, paths: &[PathBuf]) -> Result<()> {
 }
 
 fn render(args: RenderArgs) -> Result<Ended> {
+    if let (Some(worker), Some(of)) = (args.worker, args.of) {
+        return distributed::render_worker(args, worker, of);
+    }
     // The renderer's token: a signal ends the pass in flight between its submissions, not after it.
     let cancel = CancelToken::new();
     let signal = watch_signals(Some(cancel.clone()))?;

@@ -308,25 +308,30 @@ impl Header {
             );
         }
         if &h.settings != settings {
-            let (a, b) = (serde_json::to_value(&h.settings)?, serde_json::to_value(settings)?);
-            let diff: Vec<String> = match (a, b) {
-                (serde_json::Value::Object(a), serde_json::Value::Object(b)) => a
-                    .iter()
-                    .filter(|(k, v)| b.get(*k) != Some(v))
-                    .map(|(k, v)| {
-                        format!(
-                            "{k}: {} in the checkpoint, {} now",
-                            show(v),
-                            b.get(k).map_or("none".into(), show)
-                        )
-                    })
-                    .collect(),
-                _ => vec![],
-            };
+            let diff = settings_diff(&h.settings, settings, "in the checkpoint", "now")?;
             bail!("it was rendered with other settings ({})", diff.join("; "));
         }
         Ok(())
     }
+}
+
+/// The settings that differ between `a` and `b`, each as `name: value <a_is>, value <b_is>`.
+pub(crate) fn settings_diff(a: &Settings, b: &Settings, a_is: &str, b_is: &str) -> Result<Vec<String>> {
+    let (a, b) = (serde_json::to_value(a)?, serde_json::to_value(b)?);
+    Ok(match (a, b) {
+        (serde_json::Value::Object(a), serde_json::Value::Object(b)) => a
+            .iter()
+            .filter(|(k, v)| b.get(*k) != Some(v))
+            .map(|(k, v)| {
+                format!(
+                    "{k}: {} {a_is}, {} {b_is}",
+                    show(v),
+                    b.get(k).map_or("none".into(), show)
+                )
+            })
+            .collect(),
+        _ => vec![],
+    })
 }
 
 /// A setting's value as the user wrote it: the settings' floats are f32, which JSON values widen.
@@ -338,7 +343,7 @@ fn show(v: &serde_json::Value) -> String {
 }
 
 /// One buffer of the file as `T`s; its size must be a whole number of them.
-fn section<T: bytemuck::Pod>(bytes: &[u8], what: &str) -> Result<Vec<T>> {
+pub(crate) fn section<T: bytemuck::Pod>(bytes: &[u8], what: &str) -> Result<Vec<T>> {
     let size = std::mem::size_of::<T>();
     // is_multiple_of is Rust 1.87, newer than the workspace's rust-version
     ensure!(

@@ -25,6 +25,7 @@
 //! device state.
 
 pub mod checkpoint;
+pub mod distributed;
 mod error;
 mod image_io;
 pub mod metrics;

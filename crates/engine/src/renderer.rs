@@ -51,6 +51,14 @@ impl CancelToken {
     }
 }
 
+/// What one probabilistic pass gives each pixel on its own ([`Renderer::probabilistic_pass`]).
+pub(crate) struct PassEstimate {
+    /// The photons' radiance estimate.
+    pub photons: Vec<[f64; 3]>,
+    /// The emission samples' radiance sum (rgb) and count (w).
+    pub direct: Vec<[f64; 4]>,
+}
+
 struct Kernels {
     ray: ComputePipeline,
     probe: GridReader,
@@ -1024,6 +1032,97 @@ impl Renderer {
             wall_ms: start.elapsed().as_secs_f64() * 1e3,
             stages,
         })
+    }
+
+    /// The per-slot statistics and per-pixel emission sums as [`Renderer::new`] left them: every
+    /// probabilistic pass starts from those radii (the probe's, if on), and the sums are the pilot eye
+    /// pass's samples, which belong to pass 0 (`crate::distributed`).
+    pub(crate) fn start_state(&self) -> Result<(Vec<HitStats>, Vec<[f64; 4]>)> {
+        let stats = self.download(&self.stats, self.gpu.slots(), "reading the starting radii")?;
+        let direct = self.download(&self.direct, self.gpu.pixels(), "reading the pilot's emission samples")?;
+        Ok((stats, direct))
+    }
+
+    /// Photon pass `index` of probabilistic PPM (Knaus and Zwicker 2011) on its own: every slot starts
+    /// from `start` (see [`Renderer::start_state`]) with its R^2 times `r2_scale` and nothing gathered, the
+    /// pass's eye and photon streams are those of pass `index` of a render, and the pass's estimate is
+    /// read back: per pixel the photons' radiance (eq. 1-2 with this pass's photons only) and the
+    /// emission samples' sum and count. A pass depends only on `index` and `r2_scale`, never on the
+    /// passes run before it, so workers that split the passes between them compute the same numbers.
+    /// SPPM's pass 0 uses the hit points of the pilot eye pass: it must be the renderer's first.
+    pub(crate) fn probabilistic_pass(
+        &mut self,
+        index: u64,
+        start: &[HitStats],
+        r2_scale: f64,
+    ) -> Result<(PassStats, PassEstimate)> {
+        let what = "a probabilistic pass";
+        if self.settings.mode == Mode::Sppm && index == 0 && self.passes != 0 {
+            let message = "SPPM's pass 0 must be the renderer's first (it uses the pilot's hit points)".into();
+            return Err(Error::Settings {
+                field: "passes",
+                message,
+            });
+        }
+        let per_pass = self.settings.photons_per_pass as u64;
+        let emitted = index.checked_mul(per_pass).filter(|_| index < checkpoint::MAX_PASSES);
+        let Some(emitted) = emitted else {
+            let message = format!(
+                "pass {index} is past the last a render may have ({})",
+                checkpoint::MAX_PASSES
+            );
+            return Err(Error::Settings {
+                field: "passes",
+                message,
+            });
+        };
+        let stats: Vec<HitStats> = start
+            .iter()
+            .map(|s| HitStats {
+                n: 0.0,
+                r2: s.r2 * r2_scale,
+                tau_r: 0.0,
+                tau_g: 0.0,
+                tau_b: 0.0,
+                probe: s.probe,
+            })
+            .collect();
+        self.ctx
+            .upload(&self.stats, bytemuck::cast_slice(&stats))
+            .device(what)?;
+        self.ctx
+            .run(|cmd| {
+                self.direct.cmd_fill(cmd, 0);
+                Ok(())
+            })
+            .device(what)?;
+        // Cells for this pass's radii (the update shrank the last pass's below them).
+        let largest = stats.iter().map(|s| s.r2 as f32).fold(0.0, f32::max);
+        self.fit_grid(RadiusMax {
+            live: largest,
+            all: largest,
+        })?;
+        (self.passes, self.emitted) = (index, emitted);
+        let pass = self.pass()?;
+        // The update scaled tau and R^2 by the same ratio: tau / R^2 is this pass's flux over its radius.
+        let stats: Vec<HitStats> = self.download(&self.stats, self.gpu.slots(), what)?;
+        let direct: Vec<[f64; 4]> = self.download(&self.direct, self.gpu.pixels(), what)?;
+        let slots = self.settings.slots() as usize;
+        let norm = self.settings.cone_norm() as f64 * std::f64::consts::PI * per_pass as f64;
+        let photons = stats
+            .chunks_exact(slots)
+            .map(|pixel| {
+                pixel.iter().fold([0.0; 3], |sum, s| {
+                    let area = norm * s.r2;
+                    [
+                        sum[0] + s.tau_r / area,
+                        sum[1] + s.tau_g / area,
+                        sum[2] + s.tau_b / area,
+                    ]
+                })
+            })
+            .collect();
+        Ok((pass, PassEstimate { photons, direct }))
     }
 
     /// Undoes a cancelled pass: the photon batches' sums wait in the pass accumulators for the update, and
