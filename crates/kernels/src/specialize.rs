@@ -12,6 +12,7 @@ use crate::layout::{
     SURFACE_ROUGH_GLASS, SURFACE_THIN,
 };
 use crate::reflected::{KernelInfo, SOURCES};
+use crate::spirv_cache;
 
 /// Scenes with more spheres and quads than this keep the buffer-reading kernels.
 pub const MAX_INLINE_PRIMITIVES: usize = 64;
@@ -254,6 +255,56 @@ pub fn scene_constants(c: &SceneConstants) -> String {
         &format!("Emitter(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0u, {NO_MORE})"),
     );
     s
+}
+
+/// SPIR-V compiled at run time, and what it cost.
+pub struct Compiled {
+    pub spirv: Vec<u32>,
+    /// Seconds spent: shaderc's compile, or reading the cache file.
+    pub seconds: f64,
+    /// Whether the SPIR-V came from the on-disk cache.
+    pub cached: bool,
+    /// Why a cache file was not used or not written (damaged, unwritable), in one line.
+    pub note: Option<String>,
+}
+
+/// [`compile_with`] through the SPIR-V cache in `cache_dir` (spirv_cache.rs): a compile done by an earlier
+/// run is read back instead of compiled; a damaged file is compiled again and replaced. `None`: no cache.
+pub fn compile_cached(
+    kernel: &KernelInfo,
+    defines: &[(&str, &str)],
+    constants: &str,
+    cache_dir: Option<&std::path::Path>,
+) -> Result<Compiled> {
+    let start = std::time::Instant::now();
+    let key = spirv_cache::key(kernel, defines, constants);
+    let mut note = None;
+    if let Some(dir) = cache_dir {
+        match spirv_cache::read(dir, &key) {
+            Ok(Some(spirv)) => {
+                return Ok(Compiled {
+                    spirv,
+                    seconds: start.elapsed().as_secs_f64(),
+                    cached: true,
+                    note,
+                })
+            }
+            Ok(None) => {}
+            Err(why) => note = Some(format!("cached kernel {} compiled again: {why}", kernel.name)),
+        }
+    }
+    let spirv = compile_with(kernel, defines, constants)?;
+    if let Some(dir) = cache_dir {
+        if let Err(e) = spirv_cache::write(dir, &key, &spirv) {
+            note = Some(format!("kernel {} not cached: {e:#}", kernel.name));
+        }
+    }
+    Ok(Compiled {
+        spirv,
+        seconds: start.elapsed().as_secs_f64(),
+        cached: false,
+        note,
+    })
 }
 
 /// Compiles `kernel` again with `defines` (name, value) added, and `constants` as scene_constants.glsl
