@@ -253,7 +253,22 @@ fn bench_writes_cases_with_stages_and_memory() {
                 "host RSS grew from {before} to {after} over 3 passes"
             );
         }
+        // The set-up split by stage and kernel, and the first warm-up pass.
+        let setup = &c["setup"];
+        let kernels = setup["kernels"].as_array().unwrap();
+        assert!(
+            kernels.len() >= 8 && setup["kernels_s"].as_f64().unwrap() > 0.0,
+            "{setup}"
+        );
+        assert!(c["first_pass_wall_ms"].as_f64().unwrap() > 0.0, "{c}");
     }
+    // The second case compiles nothing: the first left every kernel compiled for the scene in the cache.
+    let second = cases[1]["setup"]["kernels"].as_array().unwrap();
+    let compiled: Vec<_> = second.iter().filter(|k| !k["spirv_cached"].is_null()).collect();
+    assert!(
+        !compiled.is_empty() && compiled.iter().all(|k| k["spirv_cached"] == true),
+        "{second:?}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
