@@ -12,11 +12,11 @@ use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PathLimits, PhotonPush, SALT_EYE, SALT_PHOTON, SALT_PROBE};
 use ppm_vk_kernels::probe::{self, ProbePush, MODE_PAPER, MODE_SCALE_FREE};
 use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers, JITTER_RANDOM};
+use ppm_vk_kernels::reflected;
 use ppm_vk_kernels::resolve::{self, ResolvePush};
-use ppm_vk_kernels::specialize::{self, SceneConstants, MAX_INLINE_PRIMITIVES};
+use ppm_vk_kernels::specialize::{self, KernelTiming, SceneConstants, MAX_INLINE_PRIMITIVES};
 use ppm_vk_kernels::update::RadiusMax;
 use ppm_vk_kernels::update::{self, UpdatePush};
-use ppm_vk_kernels::{reflected, KernelTiming};
 
 use crate::checkpoint::{self, Checkpoint};
 use crate::error::{DeviceContext as _, Error, Result};
@@ -437,7 +437,7 @@ impl Renderer {
                 let gather = s.spawn(|| gather::with_variant(ctx, &reflected::GATHER, group, glossy, smooth));
                 let mut timings = Vec::new();
                 let mut built = |k: &reflected::KernelInfo| -> anyhow::Result<ComputePipeline> {
-                    let (pipeline, timing) = ppm_vk_kernels::build(ctx, k, &[], "")?;
+                    let (pipeline, timing) = specialize::build(ctx, k, &[], "")?;
                     timings.push(timing);
                     Ok(pipeline)
                 };
@@ -1533,9 +1533,9 @@ fn tracing_pipeline(
     match constants {
         Some(constants) => {
             let defines = [&[("SCENE_CONSTANTS", "1")][..], defines].concat();
-            ppm_vk_kernels::build(ctx, k, &defines, constants)
+            specialize::build(ctx, k, &defines, constants)
         }
-        None => ppm_vk_kernels::build(ctx, k, defines, ""),
+        None => specialize::build(ctx, k, defines, ""),
     }
 }
 

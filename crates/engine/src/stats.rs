@@ -144,7 +144,7 @@ impl SetupTimes {
     }
 }
 
-/// What making one kernel's pipeline took (`ppm_vk_kernels::KernelTiming`).
+/// What making one kernel's pipeline took (`ppm_vk_kernels::specialize::KernelTiming`).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct KernelSetup {
     pub name: String,
@@ -158,8 +158,8 @@ pub struct KernelSetup {
     pub note: Option<String>,
 }
 
-impl From<ppm_vk_kernels::KernelTiming> for KernelSetup {
-    fn from(t: ppm_vk_kernels::KernelTiming) -> KernelSetup {
+impl From<ppm_vk_kernels::specialize::KernelTiming> for KernelSetup {
+    fn from(t: ppm_vk_kernels::specialize::KernelTiming) -> KernelSetup {
         KernelSetup {
             name: t.name.to_string(),
             compile_s: t.compile_s,

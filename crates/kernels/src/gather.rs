@@ -51,7 +51,7 @@ pub fn with_group(
     ctx: &ppm_vk_device::Context,
     k: &crate::reflected::KernelInfo,
     group: u32,
-) -> Result<(GridReader, crate::KernelTiming)> {
+) -> Result<(GridReader, crate::specialize::KernelTiming)> {
     with_variant(ctx, k, group, true, true)
 }
 
@@ -64,7 +64,7 @@ pub fn with_variant(
     group: u32,
     glossy: bool,
     wide: bool,
-) -> Result<(GridReader, crate::KernelTiming)> {
+) -> Result<(GridReader, crate::specialize::KernelTiming)> {
     let flag = |on: bool| if on { "1" } else { "0" };
     let group_text = group.to_string();
     let defines = match (group, glossy, wide) {
@@ -75,7 +75,7 @@ pub fn with_variant(
             ("WIDE_FLUX", flag(wide)),
         ],
     };
-    let (pipeline, timing) = crate::build(ctx, k, &defines, "")?;
+    let (pipeline, timing) = crate::specialize::build(ctx, k, &defines, "")?;
     Ok((GridReader { pipeline, group }, timing))
 }
 

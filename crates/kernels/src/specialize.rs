@@ -257,6 +257,50 @@ pub fn scene_constants(c: &SceneConstants) -> String {
     s
 }
 
+/// What making one kernel's pipeline cost, for the set-up's breakdown (`Renderer::setup_times`).
+#[derive(Clone, Debug, Default)]
+pub struct KernelTiming {
+    pub name: &'static str,
+    /// Seconds to compile its GLSL with shaderc, or to read that SPIR-V from the cache (0: the build-time
+    /// SPIR-V was used).
+    pub compile_s: f64,
+    /// `Some(true)`: the compiled SPIR-V came from the on-disk cache; `None`: the build-time SPIR-V.
+    pub spirv_cached: Option<bool>,
+    /// Seconds in vkCreateComputePipelines (and the layouts and module around it).
+    pub pipeline_s: f64,
+    /// Why the SPIR-V cache was not used or written, when it was not.
+    pub note: Option<String>,
+}
+
+/// Creates `k`'s pipeline: from its build-time SPIR-V when `defines` and `constants` are empty, else
+/// compiled with them (see [`compile_cached`]) through the SPIR-V cache in the context's cache
+/// directory. Says what each step cost.
+pub fn build(
+    ctx: &ppm_vk_device::Context,
+    k: &KernelInfo,
+    defines: &[(&str, &str)],
+    constants: &str,
+) -> Result<(ppm_vk_device::ComputePipeline, KernelTiming)> {
+    let mut timing = KernelTiming {
+        name: k.name,
+        ..KernelTiming::default()
+    };
+    let compiled = match defines.is_empty() && constants.is_empty() {
+        true => None,
+        false => Some(compile_cached(k, defines, constants, ctx.cache_dir())?),
+    };
+    let start = std::time::Instant::now();
+    let pipeline = match &compiled {
+        None => crate::pipeline(ctx, k)?,
+        Some(c) => crate::pipeline_from(ctx, k, &c.spirv)?,
+    };
+    timing.pipeline_s = start.elapsed().as_secs_f64();
+    if let Some(c) = compiled {
+        (timing.compile_s, timing.spirv_cached, timing.note) = (c.seconds, Some(c.cached), c.note);
+    }
+    Ok((pipeline, timing))
+}
+
 /// SPIR-V compiled at run time, and what it cost.
 pub struct Compiled {
     pub spirv: Vec<u32>,

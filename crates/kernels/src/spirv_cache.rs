@@ -92,7 +92,7 @@ pub fn unwrap(bytes: &[u8], key: &Key) -> Result<Vec<u32>, String> {
     if Sha256::digest(data)[..] != bytes[48..80] {
         return Err("damaged (checksum mismatch)".into());
     }
-    if data.len() < 20 || data.len() % 4 != 0 {
+    if data.len() < 20 || !data.len().is_multiple_of(4) {
         return Err(format!("{} bytes is not a SPIR-V module", data.len()));
     }
     let words: Vec<u32> = data
