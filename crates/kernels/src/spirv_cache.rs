@@ -15,9 +15,10 @@
 //! | 32    | SHA-256 of that SPIR-V                            |
 //! | ...   | the SPIR-V words, little-endian                   |
 //!
-//! A file that fails any check (short, padded, damaged, another compile's, not SPIR-V) is never used: the kernel is compiled
-//! again and the file replaced. Writes go through a temporary file and a rename, so concurrent runs leave
-//! whole files.
+//! A file that fails any check (short, padded, damaged, another compile's, not SPIR-V) is never used: the
+//! kernel is compiled again and the file replaced. Writes go through a temporary file and a rename, so
+//! concurrent runs leave whole files. Past [`MAX_FILES`] files the least recently used are deleted (a read
+//! marks a file used).
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -28,6 +29,9 @@ use sha2::{Digest, Sha256};
 use crate::reflected::{KernelInfo, ALL, SOURCES};
 
 const MAGIC: &[u8; 8] = b"PPMVKSPV";
+/// Compiled kernels kept: past this many files, the least recently used are deleted (a file is 15-60 KB,
+/// so the folder stays under about 15 MB; a scene has at most four, so this is 64 scenes or more).
+pub const MAX_FILES: usize = 256;
 /// Bumped when the compile options in specialize.rs change (they are not in the key otherwise).
 const OPTIONS_VERSION: &str = "ppm-vk spirv cache 1: vulkan1.2, performance";
 const HEADER_LEN: usize = 8 + 32 + 8 + 32;
@@ -129,9 +133,40 @@ pub fn read(dir: &Path, key: &Key) -> Result<Option<Vec<u32>>, String> {
         Ok(_) => {}
     }
     let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    unwrap(&bytes, key)
-        .map(Some)
-        .map_err(|why| format!("{}: {why}", path.display()))
+    let words = unwrap(&bytes, key).map_err(|why| format!("{}: {why}", path.display()))?;
+    // Used now: the pruning keeps the recently used. Best effort (a read-only cache still serves).
+    let _ = std::fs::File::options()
+        .write(true)
+        .open(path)
+        .and_then(|f| f.set_modified(std::time::SystemTime::now()));
+    Ok(Some(words))
+}
+
+/// Deletes the least recently used `.spv` files of `dir`'s cache beyond the newest `keep`; returns how many
+/// it deleted. Files that vanish meanwhile (another run pruning) are no error.
+pub fn prune(dir: &Path, keep: usize) -> Result<usize> {
+    let folder = dir.join("spirv");
+    let listing = std::fs::read_dir(&folder).with_context(|| format!("listing {}", folder.display()))?;
+    let mut files: Vec<(std::time::SystemTime, PathBuf)> = listing
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "spv"))
+        .filter_map(|p| Some((std::fs::metadata(&p).ok()?.modified().ok()?, p)))
+        .collect();
+    if files.len() <= keep {
+        return Ok(0);
+    }
+    files.sort(); // oldest first
+    let excess = files.len() - keep;
+    for (_, path) in &files[..excess] {
+        match std::fs::remove_file(path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(e).with_context(|| format!("deleting {}", path.display()))
+            }
+            _ => {}
+        }
+    }
+    Ok(excess)
 }
 
 /// Writes `words`, the compile `key`, to its file in `dir` through a temporary file (named by this process
@@ -150,7 +185,8 @@ pub fn write(dir: &Path, key: &Key, words: &[u32]) -> Result<()> {
     if written.is_err() {
         let _ = std::fs::remove_file(&tmp); // best effort: the write's error is the one to report
     }
-    written.with_context(|| format!("writing {} and renaming it into place", tmp.display()))
+    written.with_context(|| format!("writing {} and renaming it into place", tmp.display()))?;
+    prune(dir, MAX_FILES).map(|_| ())
 }
 
 #[cfg(test)]
@@ -203,6 +239,40 @@ mod tests {
         assert_ne!(base, key(k, &[("A", "1")], "const uint N = 2u;"));
         // A define's name and value run together differently.
         assert_ne!(key(k, &[("AB", "1")], ""), key(k, &[("A", "B1")], ""));
+    }
+
+    /// At MAX_FILES files nothing is deleted; one more deletes exactly the least recently used, and a
+    /// file read is used (kept over older unread ones).
+    #[test]
+    fn the_folder_keeps_the_most_recently_used_max_files() {
+        let dir = std::env::temp_dir().join(format!("ppm-vk-spirv-cache-prune-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let key = |i: usize| {
+            let mut k = [0u8; 32];
+            k[..8].copy_from_slice(&(i as u64).to_le_bytes());
+            Key(k)
+        };
+        let base = std::time::SystemTime::UNIX_EPOCH + std::time::Duration::from_secs(1_700_000_000);
+        let age = |i: usize, secs: u64| {
+            let f = std::fs::File::options()
+                .write(true)
+                .open(file_in(&dir, &key(i)))
+                .unwrap();
+            f.set_modified(base + std::time::Duration::from_secs(secs)).unwrap();
+        };
+        for i in 0..MAX_FILES {
+            write(&dir, &key(i), &words()).unwrap();
+            age(i, i as u64); // file 0 the oldest
+        }
+        assert_eq!(prune(&dir, MAX_FILES).unwrap(), 0, "at the bound");
+        assert_eq!(read(&dir, &key(0)), Ok(Some(words())), "reading marks file 0 used now");
+        write(&dir, &key(MAX_FILES), &words()).unwrap(); // one over: prunes
+        let count = std::fs::read_dir(dir.join("spirv")).unwrap().count();
+        assert_eq!(count, MAX_FILES);
+        assert_eq!(read(&dir, &key(1)), Ok(None), "the least recently used was kept");
+        assert!(read(&dir, &key(0)).unwrap().is_some(), "the file just read was deleted");
+        assert!(read(&dir, &key(MAX_FILES)).unwrap().is_some());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
