@@ -104,7 +104,8 @@ fn default_cache_dir() -> Option<PathBuf> {
     xdg.or_else(home).map(|d| d.join("ppm-vk"))
 }
 
-/// The set-up's stages, one line, then each kernel's compile and pipeline (`render --profile`).
+/// The set-up's stages, one line, then each kernel's compile and pipeline (`render --profile`, and `bench`
+/// for each scene's first case).
 fn print_setup(load_s: f64, t: &ppm_vk_engine::SetupTimes) {
     eprintln!(
         "set-up {:.2} s: scene read {load_s:.2}, lowered {:.2} (BVH {:.2}), GLSL {:.3}, kernels {:.2}, \

@@ -1166,13 +1166,13 @@ impl Renderer {
         &self.settings
     }
 
-    /// What the BVH build over the scene's triangles made (all zero without triangles).
     /// Where this renderer's set-up went: the scene lowered, the kernels compiled, the buffers, the
     /// pilot eye pass and the probe pass.
     pub fn setup_times(&self) -> &SetupTimes {
         &self.setup
     }
 
+    /// What the BVH build over the scene's triangles made (all zero without triangles).
     pub fn bvh_stats(&self) -> &crate::BvhStats {
         &self.gpu.bvh_stats
     }
