@@ -141,6 +141,12 @@ struct CaseResult {
     records_per_pass: f64,
     batches_per_pass: u32,
     ray_ms: f64,
+    /// Where the renderer's set-up went, in seconds (the first case of a scene pays the kernels'
+    /// compiles; later cases find most of them cached).
+    setup: ppm_vk_engine::SetupTimes,
+    /// The first warm-up pass's wall time: with the set-up, what the first image of a new scene costs
+    /// (on lavapipe it compiles the photon-stage kernels at their first dispatch).
+    first_pass_wall_ms: Option<f64>,
     stage_ms_median: BTreeMap<&'static str, f64>,
     pass_wall_ms_median: f64,
     pass_wall_ms_all: Vec<f64>,
@@ -327,8 +333,10 @@ fn measure(args: &BenchArgs, ctx: &Context, scene_path: &Path, scene: &Scene, ph
     ctx.reset_memory_peak();
     reset_peak_rss();
     let mut renderer = Renderer::new(ctx, scene, settings)?;
+    let mut first_pass_wall_ms = None;
     for _ in 0..args.warmup {
-        renderer.pass()?;
+        let pass = renderer.pass()?;
+        first_pass_wall_ms.get_or_insert(pass.wall_ms);
     }
     // Memory after the warm-up and after the measured passes: nothing should grow with passes.
     let (dev_before, rss_before) = (ctx.memory_usage(), host_rss());
@@ -356,6 +364,8 @@ fn measure(args: &BenchArgs, ctx: &Context, scene_path: &Path, scene: &Scene, ph
         records_per_pass: median(measured.iter().map(|p| p.records as f64).collect()),
         batches_per_pass: measured.last().map_or(0, |p| p.batches),
         ray_ms: renderer.ray_ms(),
+        setup: renderer.setup_times().clone(),
+        first_pass_wall_ms,
         pass_wall_ms_median: wall,
         pass_wall_ms_all: measured.iter().map(|p| p.wall_ms).collect(),
         resolve_ms_median: resolve_ms,
@@ -419,6 +429,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
             let (width, height) = case.resolution.unwrap_or((base.camera.width, base.camera.height));
             let mut r = measure(&args, &ctx, path, &base.with_resolution(width, height), case.photons)?;
             if index == 0 {
+                // The scene's first case pays its kernels' compiles (the later ones find them cached).
+                crate::print_setup(load_s, &r.setup);
                 if r.bvh.triangles > 0 {
                     println!(
                         "{} triangles loaded in {:.2} s; BVH built in {:.2} s ({:.2} M triangles/s), {} nodes, depth {}, {:.1} MiB",

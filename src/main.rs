@@ -58,11 +58,13 @@ pub struct DeviceArgs {
     /// Enable the Vulkan validation layer and fail on any message it reports.
     #[arg(long)]
     pub validate: bool,
-    /// Directory of the pipeline cache, which spares a run compiling again the kernels an earlier run
-    /// compiled [default: $XDG_CACHE_HOME/ppm-vk, else ~/.cache/ppm-vk].
+    /// Directory of the pipeline cache and of the SPIR-V of the kernels compiled for each scene, which
+    /// spare a run compiling again the kernels an earlier run compiled [default: $XDG_CACHE_HOME/ppm-vk,
+    /// else ~/.cache/ppm-vk].
     #[arg(long, value_name = "DIR", env = "PPM_VK_CACHE_DIR")]
     pub pipeline_cache: Option<PathBuf>,
-    /// Keep no pipeline cache: compile every kernel afresh (wins over --pipeline-cache).
+    /// Keep no pipeline cache and no compiled SPIR-V: compile every kernel afresh (wins over
+    /// --pipeline-cache).
     #[arg(long)]
     pub no_pipeline_cache: bool,
 }
@@ -92,6 +94,34 @@ impl DeviceArgs {
             eprintln!("note: {note}; it will be rewritten");
         }
         Ok(ctx)
+    }
+}
+
+/// The set-up's stages, one line, then each kernel's compile and pipeline (`render --profile`, and `bench`
+/// for each scene's first case).
+fn print_setup(load_s: f64, t: &ppm_vk_engine::SetupTimes) {
+    eprintln!(
+        "set-up {:.2} s: scene read {load_s:.2}, lowered {:.2} (BVH {:.2}), GLSL {:.3}, kernels {:.2}, \
+         buffers {:.2}, pilot eye pass {:.2}, probe {:.2}",
+        load_s + t.total_s(),
+        t.lower_s,
+        t.bvh_s,
+        t.glsl_s,
+        t.kernels_s,
+        t.buffers_s,
+        t.start_s,
+        t.probe_s
+    );
+    for k in &t.kernels {
+        let source = match k.spirv_cached {
+            None => "built in",
+            Some(true) => "SPIR-V cached",
+            Some(false) => "compiled",
+        };
+        eprintln!(
+            "  kernel {:<20} {source:<13} compile {:.2} s, pipeline {:.2} s",
+            k.name, k.compile_s, k.pipeline_s
+        );
     }
 }
 
@@ -656,7 +686,9 @@ fn render(args: RenderArgs) -> Result<Ended> {
             bail!("--report {}: the extension must be .json or .csv", report.display());
         }
     }
+    let loading = Instant::now();
     let scene = args.settings.load_scene(&args.scene, &args.defines)?;
+    let load_s = loading.elapsed().as_secs_f64();
     // A resumed render continues the image it wrote before: it may overwrite it.
     let out = outputs(&args.out, &scene.name, args.force || args.resume.is_some())?;
     let reference = match &args.reference {
@@ -689,6 +721,12 @@ fn render(args: RenderArgs) -> Result<Ended> {
     let setup_s = started.elapsed().as_secs_f64();
     // Every kernel is compiled by now: keep them for the next run even if this one is killed.
     save_pipeline_cache(&ctx);
+    for note in renderer.setup_times().notes() {
+        eprintln!("note: {note}");
+    }
+    if args.profile {
+        print_setup(load_s, renderer.setup_times());
+    }
     eprintln!(
         "scene {}: {}x{}, {} hit-point slots, initial radius {:.5}, {} photons/pass; ray pass {:.1} ms GPU",
         scene.name,

@@ -3,7 +3,7 @@
 
 mod common;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use common::{bin, CORNELL, CORNELL_REFERENCE};
 use ppm_vk_engine::report::{RunReport, SCHEMA};
@@ -253,7 +253,22 @@ fn bench_writes_cases_with_stages_and_memory() {
                 "host RSS grew from {before} to {after} over 3 passes"
             );
         }
+        // The set-up split by stage and kernel, and the first warm-up pass.
+        let setup = &c["setup"];
+        let kernels = setup["kernels"].as_array().unwrap();
+        assert!(
+            kernels.len() >= 8 && setup["kernels_s"].as_f64().unwrap() > 0.0,
+            "{setup}"
+        );
+        assert!(c["first_pass_wall_ms"].as_f64().unwrap() > 0.0, "{c}");
     }
+    // The second case compiles nothing: the first left every kernel compiled for the scene in the cache.
+    let second = cases[1]["setup"]["kernels"].as_array().unwrap();
+    let compiled: Vec<_> = second.iter().filter(|k| !k["spirv_cached"].is_null()).collect();
+    assert!(
+        !compiled.is_empty() && compiled.iter().all(|k| k["spirv_cached"] == true),
+        "{second:?}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -619,8 +634,9 @@ fn render_names_its_output_after_the_scene_and_never_overwrites_silently() {
     assert!(third.status.success(), "{}", String::from_utf8_lossy(&third.stderr));
 }
 
-/// `render` saves the pipeline cache where PPM_VK_CACHE_DIR says (the next run reads it without a note),
-/// `--no-pipeline-cache` keeps none, and a damaged cache file is a note, never an error.
+/// `render` saves the pipeline cache, and the SPIR-V of the kernels it compiled for the scene, where
+/// PPM_VK_CACHE_DIR says (the next run reads it without a note), `--no-pipeline-cache` keeps none, and a
+/// damaged cache file is a note, never an error.
 #[test]
 fn render_keeps_the_pipeline_cache_where_asked() {
     let dir = scratch("pipeline-cache");
@@ -648,16 +664,25 @@ fn render_keeps_the_pipeline_cache_where_asked() {
         assert!(run.status.success(), "render {extra:?} failed:\n{stderr}");
         stderr
     };
-    let files = || {
-        std::fs::read_dir(&cache)
+    let entries = |dir: &Path| {
+        std::fs::read_dir(dir)
             .map(|d| d.map(|e| e.unwrap().path()).collect::<Vec<_>>())
             .unwrap_or_default()
     };
+    let files = || entries(&cache).into_iter().filter(|p| p.is_file()).collect::<Vec<_>>();
 
     render(&["--no-pipeline-cache"]);
-    assert!(files().is_empty(), "--no-pipeline-cache wrote {:?}", files());
+    assert!(
+        entries(&cache).is_empty(),
+        "--no-pipeline-cache wrote {:?}",
+        entries(&cache)
+    );
     let first = render(&["--validate"]);
     assert!(!first.contains("pipeline cache"), "{first}");
+    assert!(
+        !entries(&cache.join("spirv")).is_empty(),
+        "no compiled kernel was cached"
+    );
     let written = files();
     assert_eq!(written.len(), 1, "{written:?}");
     assert!(

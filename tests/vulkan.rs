@@ -1,5 +1,6 @@
 //! Vulkan niceties: every object carries a debug name the validation layer sees, and the pipeline cache is
-//! saved to disk, read back by the next context, and a damaged or foreign cache file is ignored with a note.
+//! saved to disk, read back by the next context, and a damaged or foreign cache file is ignored with a note;
+//! so is the SPIR-V of the kernels compiled for a scene.
 
 mod common;
 
@@ -39,9 +40,12 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-/// The one cache file in `dir`.
+/// The one pipeline cache file in `dir` (beside the folder of compiled SPIR-V).
 fn cache_file(dir: &Path) -> PathBuf {
-    let files: Vec<PathBuf> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    let files: Vec<PathBuf> = (std::fs::read_dir(dir).unwrap())
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .collect();
     assert_eq!(
         files.len(),
         1,
@@ -212,4 +216,81 @@ fn pipeline_cache_off_saves_nothing() {
         (0, None)
     );
     assert_clean(&ctx);
+}
+
+/// The kernels compiled for a scene: each one's SPIR-V is cached beside the pipeline cache, a second
+/// renderer reads it back instead of compiling, and a file truncated, damaged (its payload flipped) or
+/// copied over another kernel's is compiled again, said in a note, and replaced. The image is the same
+/// bit for bit every time: a cached or recompiled kernel is the kernel.
+#[test]
+fn compiled_kernels_are_cached_and_damaged_entries_compiled_again() {
+    let dir = scratch("spirv");
+    let settings = || Settings {
+        photons_per_pass: 2000,
+        ..Settings::default()
+    };
+    // The image after two passes, and each compiled kernel: (name, from the cache, note).
+    let render = || {
+        let ctx = cached_ctx(&dir);
+        let mut r = Renderer::new(&ctx, &cornell(16, 16), settings()).unwrap();
+        r.pass().unwrap();
+        r.pass().unwrap();
+        let image = pixels_sha256(&r.image().unwrap());
+        let kernels: Vec<(String, bool, Option<String>)> = (r.setup_times().kernels.iter())
+            .filter_map(|k| k.spirv_cached.map(|c| (k.name.clone(), c, k.note.clone())))
+            .collect();
+        drop(r);
+        assert_clean(&ctx);
+        (image, kernels)
+    };
+    let files = || -> Vec<PathBuf> {
+        let mut f: Vec<PathBuf> = std::fs::read_dir(dir.join("spirv"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        f.sort();
+        f
+    };
+    let (image, first) = render();
+    // cornell-spheres: ray and photon with the scene inlined, probe and gather of one hit point a thread.
+    assert!(first.len() >= 4, "{first:?}");
+    assert!(
+        first.iter().all(|(_, cached, note)| !cached && note.is_none()),
+        "{first:?}"
+    );
+    assert_eq!(files().len(), first.len(), "one file per compiled kernel");
+
+    let (again, second) = render();
+    assert_eq!(again, image, "the cached kernels render another image");
+    assert!(
+        second.iter().all(|(_, cached, note)| *cached && note.is_none()),
+        "{second:?}"
+    );
+
+    let f = files();
+    let whole = std::fs::read(&f[0]).unwrap();
+    std::fs::write(&f[0], &whole[..whole.len() / 2]).unwrap();
+    let mut flipped = std::fs::read(&f[1]).unwrap();
+    *flipped.last_mut().unwrap() ^= 0x10;
+    std::fs::write(&f[1], &flipped).unwrap();
+    std::fs::copy(&f[3], &f[2]).unwrap();
+    let (third_image, third) = render();
+    assert_eq!(third_image, image, "a damaged cache gave another image");
+    let notes: Vec<&str> = third.iter().filter_map(|(_, _, n)| n.as_deref()).collect();
+    assert_eq!(notes.len(), 3, "{third:?}");
+    assert_eq!(third.iter().filter(|(_, cached, _)| *cached).count(), third.len() - 3);
+    for (why, file) in [("truncated", &f[0]), ("checksum", &f[1]), ("another compile", &f[2])] {
+        let name = file.display().to_string();
+        assert!(
+            notes.iter().any(|n| n.contains(why) && n.contains(&name)),
+            "no note says {name} is {why}: {notes:?}"
+        );
+    }
+    let (fourth_image, fourth) = render();
+    assert_eq!(fourth_image, image);
+    assert!(
+        fourth.iter().all(|(_, cached, note)| *cached && note.is_none()),
+        "the damaged files were not replaced: {fourth:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -103,6 +103,8 @@ struct Inner {
     /// Present when VK_EXT_debug_utils is (always with validation; without it when the driver offers it).
     debug_names: Option<ash::ext::debug_utils::Device>,
     pipeline_cache: Option<DiskCache>,
+    /// The directory of the pipeline cache ([`ContextOptions::pipeline_cache`]).
+    cache_dir: Option<PathBuf>,
     debug: Option<Messenger>,
     instance: ash::Instance,
     _entry: ash::Entry,
@@ -511,6 +513,7 @@ impl Context {
                 timestamp_valid_bits: qprops.timestamp_valid_bits,
                 debug_names,
                 pipeline_cache,
+                cache_dir: options.pipeline_cache.clone(),
                 debug,
                 instance,
                 _entry: entry,
@@ -553,6 +556,12 @@ impl Context {
     /// when it was used, was absent, or the cache is off.
     pub fn pipeline_cache_note(&self) -> Option<&str> {
         self.inner.pipeline_cache.as_ref().and_then(|c| c.note.as_deref())
+    }
+
+    /// The directory this context keeps its pipeline cache in (`None`: the cache is off). Other caches of
+    /// compiled kernels (the run-time specialised SPIR-V) live beside it and are off with it.
+    pub fn cache_dir(&self) -> Option<&Path> {
+        self.inner.cache_dir.as_deref()
     }
 
     /// Bytes of pipeline data the cache file gave this context (0 when the cache is off, the file absent or

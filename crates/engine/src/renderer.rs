@@ -12,11 +12,11 @@ use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PathLimits, PhotonPush, SALT_EYE, SALT_PHOTON, SALT_PROBE};
 use ppm_vk_kernels::probe::{self, ProbePush, MODE_NEAREST, MODE_PAPER, MODE_SCALE_FREE};
 use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers, JITTER_RANDOM};
+use ppm_vk_kernels::reflected;
 use ppm_vk_kernels::resolve::{self, ResolvePush};
-use ppm_vk_kernels::specialize::{self, SceneConstants, MAX_INLINE_PRIMITIVES};
+use ppm_vk_kernels::specialize::{self, KernelTiming, SceneConstants, MAX_INLINE_PRIMITIVES};
 use ppm_vk_kernels::update::RadiusMax;
 use ppm_vk_kernels::update::{self, UpdatePush};
-use ppm_vk_kernels::{pipeline, pipeline_from, reflected};
 
 use crate::checkpoint::{self, Checkpoint};
 use crate::error::{DeviceContext as _, Error, Result};
@@ -24,7 +24,7 @@ use crate::image_io::RgbImage;
 use crate::lower::{GpuScene, CELL_PER_RADIUS};
 use crate::scene::{Camera, Scene};
 use crate::settings::{Mode, ProbeMode, Settings};
-use crate::stats::{PassStats, PhotonVariant, ProbeReport};
+use crate::stats::{KernelSetup, PassStats, PhotonVariant, ProbeReport, SetupTimes};
 
 /// Cancels [`Renderer::pass`] from another thread: clone it, give one clone to the renderer
 /// ([`Renderer::set_cancel`]) and call [`CancelToken::cancel`] on the other. The pass stops at its next
@@ -144,6 +144,13 @@ pub struct Renderer {
     /// The parameters a render starts from (the grid's cells adapt as it goes): `set_camera` restarts
     /// from them.
     start_params: RenderParams,
+    /// Where the set-up's time went.
+    setup: SetupTimes,
+}
+
+/// A scoped thread's result; its panic goes on in the caller.
+fn joined<T>(h: std::thread::ScopedJoinHandle<'_, T>) -> T {
+    h.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))
 }
 
 /// The stages of a photon batch, in order; one submission records all of them, or one
@@ -178,7 +185,9 @@ impl Renderer {
     pub fn new(ctx: &Context, scene: &Scene, settings: Settings) -> Result<Renderer> {
         let mut r = Renderer::prepare(ctx, scene, settings)?;
         if r.settings.probe != ProbeMode::Off {
+            let start = Instant::now();
             r.probe_pass()?;
+            r.setup.probe_s = start.elapsed().as_secs_f64();
         }
         Ok(r)
     }
@@ -270,7 +279,11 @@ impl Renderer {
         let wanted = settings.photons_per_pass as u64 * 4;
         let capacity = wanted.min(max_range / record_size).min(u32::MAX as u64 / 2) as u32;
         let capacity = capacity.max(1024);
+        let mut setup = SetupTimes::default();
+        let lower_start = Instant::now();
         let mut gpu = GpuScene::new(scene, &settings, capacity)?;
+        setup.lower_s = lower_start.elapsed().as_secs_f64();
+        setup.bvh_s = gpu.bvh_stats.build_seconds;
         // Depth backstops and photons per thread that keep every loop inside the device's budget. The
         // intersection loops are counted as loops even where the specialised kernels unroll them.
         let limits = if gpu.traverses_bvh() {
@@ -406,7 +419,10 @@ impl Renderer {
             }
         }
 
-        let traced = |k: &reflected::KernelInfo| tracing_pipeline(ctx, &gpu, &settings, k, &[]);
+        let glsl_start = Instant::now();
+        let constants = trace_constants(&gpu, &settings);
+        setup.glsl_s = glsl_start.elapsed().as_secs_f64();
+        let traced = |k: &reflected::KernelInfo| tracing_pipeline(ctx, constants.as_deref(), k, &[]);
         // Hit points per gather thread (measured, shaders/common/neighbours.glsl): two share their photon
         // reads where the probe enlarged the radii; without it, each gathers fastest on its own.
         let group = match settings.probe {
@@ -417,19 +433,53 @@ impl Renderer {
         let glossy = gpu.materials.iter().any(|m| {
             m.surface == ppm_vk_kernels::layout::SURFACE_ROUGH_CONDUCTOR && m.alpha_u >= gpu.params.glossy_alpha
         });
-        let pipelines = || -> anyhow::Result<Kernels> {
-            Ok(Kernels {
-                ray: traced(&reflected::RAY)?,
-                probe: gather::with_group(ctx, &reflected::PROBE, group)?,
-                photon: traced(&reflected::PHOTON)?,
-                photon_resume: pipeline(ctx, &reflected::PHOTON_RESUME)?,
-                lookup: Lookup::new(ctx)?,
-                gather: gather::with_variant(ctx, &reflected::GATHER, group, glossy, gpu.smooth_shading())?,
-                update: pipeline(ctx, &reflected::UPDATE)?,
-                resolve: pipeline(ctx, &reflected::RESOLVE)?,
+        let smooth = gpu.smooth_shading();
+        let kernels_start = Instant::now();
+        // The kernels compiled for this scene each on a thread of their own (shaderc and the driver's
+        // compile of one kernel are serial, and they are seconds on a CPU); the build-time ones here.
+        let pipelines = || -> anyhow::Result<(Kernels, Vec<KernelTiming>)> {
+            std::thread::scope(|s| {
+                let ray = s.spawn(|| traced(&reflected::RAY));
+                let photon = s.spawn(|| traced(&reflected::PHOTON));
+                let probe = s.spawn(|| gather::with_group(ctx, &reflected::PROBE, group));
+                let gather = s.spawn(|| gather::with_variant(ctx, &reflected::GATHER, group, glossy, smooth));
+                let mut timings = Vec::new();
+                let mut built = |k: &reflected::KernelInfo| -> anyhow::Result<ComputePipeline> {
+                    let (pipeline, timing) = specialize::build(ctx, k, &[], "")?;
+                    timings.push(timing);
+                    Ok(pipeline)
+                };
+                let photon_resume = built(&reflected::PHOTON_RESUME);
+                let update = built(&reflected::UPDATE);
+                let resolve = built(&reflected::RESOLVE);
+                let lookup_start = Instant::now();
+                let lookup = Lookup::new(ctx);
+                timings.push(KernelTiming {
+                    name: "lookup (5 kernels)",
+                    pipeline_s: lookup_start.elapsed().as_secs_f64(),
+                    ..KernelTiming::default()
+                });
+                let (ray, t_ray) = joined(ray)?;
+                let (photon, t_photon) = joined(photon)?;
+                let (probe, t_probe) = joined(probe)?;
+                let (gather, t_gather) = joined(gather)?;
+                let kernels = Kernels {
+                    ray,
+                    probe,
+                    photon,
+                    photon_resume: photon_resume?,
+                    lookup: lookup?,
+                    gather,
+                    update: update?,
+                    resolve: resolve?,
+                };
+                Ok((kernels, [vec![t_ray, t_photon, t_probe, t_gather], timings].concat()))
             })
         };
-        let kernels = pipelines().device("creating the compute pipelines")?;
+        let (kernels, timings) = pipelines().device("creating the compute pipelines")?;
+        setup.kernels_s = kernels_start.elapsed().as_secs_f64();
+        setup.kernels = timings.into_iter().map(KernelSetup::from).collect();
+        let buffers_start = Instant::now();
         let storage = |name: &str, bytes: u64| Buffer::new(ctx, name, bytes, BufferKind::Storage);
         let buffers = || -> anyhow::Result<Renderer> {
             Ok(Renderer {
@@ -483,10 +533,15 @@ impl Renderer {
                 settings,
                 gpu,
                 kernels,
+                setup: SetupTimes::default(),
             })
         };
         let mut r = buffers().device("allocating the render's buffers")?;
+        setup.buffers_s = buffers_start.elapsed().as_secs_f64();
+        let start = Instant::now();
         r.start()?;
+        setup.start_s = start.elapsed().as_secs_f64();
+        r.setup = setup;
         Ok(r)
     }
 
@@ -1211,6 +1266,12 @@ impl Renderer {
         &self.settings
     }
 
+    /// Where this renderer's set-up went: the scene lowered, the kernels compiled, the buffers, the
+    /// pilot eye pass and the probe pass.
+    pub fn setup_times(&self) -> &SetupTimes {
+        &self.setup
+    }
+
     /// What the BVH build over the scene's triangles made (all zero without triangles).
     pub fn bvh_stats(&self) -> &crate::BvhStats {
         &self.gpu.bvh_stats
@@ -1302,8 +1363,9 @@ impl Renderer {
     fn photon_variants(&mut self, photons: u32) -> anyhow::Result<Vec<PhotonVariant>> {
         let saved: Vec<PathCounters> = self.ctx.download_prefix(&self.cut, 1)?;
         let photons = photons.min(self.batch); // one batch: the records must fit
+        let constants = trace_constants(&self.gpu, &self.settings);
         let variant = |r: &Self, defines: &[(&str, &str)]| {
-            tracing_pipeline(&r.ctx, &r.gpu, &r.settings, &reflected::PHOTON, defines)
+            tracing_pipeline(&r.ctx, constants.as_deref(), &reflected::PHOTON, defines).map(|(k, _)| k)
         };
         // One dispatch over the counters cleared; its GPU milliseconds.
         let dispatch = |r: &Self, k: &ComputePipeline| -> anyhow::Result<f64> {
@@ -1534,18 +1596,12 @@ pub fn spread_marks(marks: &mut [u32], width: u32, height: u32) {
     }
 }
 
-/// A tracing kernel (ray or photon) for this scene, with `defines` added to its source: compiled with the
-/// scene as constants where it is small enough (see specialize.rs), else with the scene in buffers.
-fn tracing_pipeline(
-    ctx: &Context,
-    gpu: &GpuScene,
-    settings: &Settings,
-    k: &reflected::KernelInfo,
-    defines: &[(&str, &str)],
-) -> anyhow::Result<ComputePipeline> {
+/// The scene as GLSL constants for the tracing kernels (see specialize.rs), or `None` where it is too big
+/// to inline (or specialising is off): then they read it from buffers.
+fn trace_constants(gpu: &GpuScene, settings: &Settings) -> Option<String> {
     let inline = settings.specialize && gpu.spheres.len() + gpu.quads.len() <= MAX_INLINE_PRIMITIVES;
-    if inline {
-        let constants = specialize::scene_constants(&SceneConstants {
+    inline.then(|| {
+        specialize::scene_constants(&SceneConstants {
             spheres: &gpu.spheres,
             quads: &gpu.quads,
             triangles: &gpu.bvh_triangles,
@@ -1562,13 +1618,24 @@ fn tracing_pipeline(
             normal_maps: gpu.materials.iter().any(|m| m.normal_map != 0),
             masks: gpu.materials.iter().any(|m| m.opacity != 0),
             light_kinds: gpu.light_kinds,
-        });
-        let defines = [&[("SCENE_CONSTANTS", "1")][..], defines].concat();
-        pipeline_from(ctx, k, &specialize::compile_with(k, &defines, &constants)?)
-    } else if defines.is_empty() {
-        pipeline(ctx, k)
-    } else {
-        pipeline_from(ctx, k, &specialize::compile_with(k, defines, "")?)
+        })
+    })
+}
+
+/// A tracing kernel (ray or photon) with `defines` added to its source: compiled with `constants`
+/// ([`trace_constants`]) where there are some, else with the scene in buffers.
+fn tracing_pipeline(
+    ctx: &Context,
+    constants: Option<&str>,
+    k: &reflected::KernelInfo,
+    defines: &[(&str, &str)],
+) -> anyhow::Result<(ComputePipeline, KernelTiming)> {
+    match constants {
+        Some(constants) => {
+            let defines = [&[("SCENE_CONSTANTS", "1")][..], defines].concat();
+            specialize::build(ctx, k, &defines, constants)
+        }
+        None => specialize::build(ctx, k, defines, ""),
     }
 }
 

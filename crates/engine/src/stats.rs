@@ -109,3 +109,63 @@ impl ProbeReport {
         }
     }
 }
+
+/// Where a renderer's set-up went (`Renderer::setup_times`), in seconds of wall time.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct SetupTimes {
+    /// Lowering the scene for the device (`GpuScene::new`), the BVH build included.
+    pub lower_s: f64,
+    /// The BVH build alone.
+    pub bvh_s: f64,
+    /// Writing the scene's GLSL constants for the specialised kernels.
+    pub glsl_s: f64,
+    /// Every kernel's pipeline, made in parallel: the wall time of all of them.
+    pub kernels_s: f64,
+    /// Each kernel (or group of them) on its own.
+    pub kernels: Vec<KernelSetup>,
+    /// Allocating and filling the buffers (the scene's upload).
+    pub buffers_s: f64,
+    /// The pilot eye pass and the hit-point order (on lavapipe with the ray kernel's first-dispatch
+    /// compile).
+    pub start_s: f64,
+    /// The probe pass (0 without probing).
+    pub probe_s: f64,
+}
+
+impl SetupTimes {
+    /// Why the cache of compiled kernels was not used or written, one line each.
+    pub fn notes(&self) -> impl Iterator<Item = &str> {
+        self.kernels.iter().filter_map(|k| k.note.as_deref())
+    }
+
+    /// The sum of the stages: what the renderer's constructor took.
+    pub fn total_s(&self) -> f64 {
+        self.lower_s + self.glsl_s + self.kernels_s + self.buffers_s + self.start_s + self.probe_s
+    }
+}
+
+/// What making one kernel's pipeline took (`ppm_vk_kernels::specialize::KernelTiming`).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct KernelSetup {
+    pub name: String,
+    /// shaderc's compile, or reading its SPIR-V from the cache (0: the build-time SPIR-V).
+    pub compile_s: f64,
+    /// Whether the compiled SPIR-V came from the on-disk cache (`None`: the build-time SPIR-V).
+    pub spirv_cached: Option<bool>,
+    /// vkCreateComputePipelines.
+    pub pipeline_s: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+}
+
+impl From<ppm_vk_kernels::specialize::KernelTiming> for KernelSetup {
+    fn from(t: ppm_vk_kernels::specialize::KernelTiming) -> KernelSetup {
+        KernelSetup {
+            name: t.name.to_string(),
+            compile_s: t.compile_s,
+            spirv_cached: t.spirv_cached,
+            pipeline_s: t.pipeline_s,
+            note: t.note,
+        }
+    }
+}

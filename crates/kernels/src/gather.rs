@@ -45,8 +45,13 @@ pub fn grid_reader_bindings<'a>(params: &'a Buffer, hits: &HitBuffers<'a>, grid:
 /// shaders/common/neighbours.glsl); [`with_group`] compiles a variant with another count.
 pub const GROUP: u32 = 2;
 
-/// A kernel that reads the photon grid (gather or probe) compiled to take `group` hit points per thread.
-pub fn with_group(ctx: &ppm_vk_device::Context, k: &crate::reflected::KernelInfo, group: u32) -> Result<GridReader> {
+/// A kernel that reads the photon grid (gather or probe) compiled to take `group` hit points per thread,
+/// and what making it cost.
+pub fn with_group(
+    ctx: &ppm_vk_device::Context,
+    k: &crate::reflected::KernelInfo,
+    group: u32,
+) -> Result<(GridReader, crate::specialize::KernelTiming)> {
     with_variant(ctx, k, group, true, true)
 }
 
@@ -59,25 +64,19 @@ pub fn with_variant(
     group: u32,
     glossy: bool,
     wide: bool,
-) -> Result<GridReader> {
+) -> Result<(GridReader, crate::specialize::KernelTiming)> {
     let flag = |on: bool| if on { "1" } else { "0" };
-    let pipeline = match (group, glossy, wide) {
-        (GROUP, true, true) => crate::pipeline(ctx, k)?,
-        _ => crate::pipeline_from(
-            ctx,
-            k,
-            &crate::specialize::compile_with(
-                k,
-                &[
-                    ("GROUP_SIZE", &group.to_string()),
-                    ("GLOSSY_HITS", flag(glossy)),
-                    ("WIDE_FLUX", flag(wide)),
-                ],
-                "",
-            )?,
-        )?,
+    let group_text = group.to_string();
+    let defines = match (group, glossy, wide) {
+        (GROUP, true, true) => vec![],
+        _ => vec![
+            ("GROUP_SIZE", group_text.as_str()),
+            ("GLOSSY_HITS", flag(glossy)),
+            ("WIDE_FLUX", flag(wide)),
+        ],
     };
-    Ok(GridReader { pipeline, group })
+    let (pipeline, timing) = crate::specialize::build(ctx, k, &defines, "")?;
+    Ok((GridReader { pipeline, group }, timing))
 }
 
 /// A gather or probe pipeline and the hit points each of its threads takes.

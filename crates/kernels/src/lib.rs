@@ -58,6 +58,7 @@ pub mod probe;
 pub mod ray;
 pub mod resolve;
 pub mod specialize;
+pub mod spirv_cache;
 pub mod tonemap;
 pub mod update;
 

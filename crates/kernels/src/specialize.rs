@@ -12,6 +12,7 @@ use crate::layout::{
     SURFACE_ROUGH_GLASS, SURFACE_THIN,
 };
 use crate::reflected::{KernelInfo, SOURCES};
+use crate::spirv_cache;
 
 /// Scenes with more spheres and quads than this keep the buffer-reading kernels.
 pub const MAX_INLINE_PRIMITIVES: usize = 64;
@@ -258,6 +259,100 @@ pub fn scene_constants(c: &SceneConstants) -> String {
         &format!("Emitter(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0u, {NO_MORE})"),
     );
     s
+}
+
+/// What making one kernel's pipeline cost, for the set-up's breakdown (`Renderer::setup_times`).
+#[derive(Clone, Debug, Default)]
+pub struct KernelTiming {
+    pub name: &'static str,
+    /// Seconds to compile its GLSL with shaderc, or to read that SPIR-V from the cache (0: the build-time
+    /// SPIR-V was used).
+    pub compile_s: f64,
+    /// `Some(true)`: the compiled SPIR-V came from the on-disk cache; `None`: the build-time SPIR-V.
+    pub spirv_cached: Option<bool>,
+    /// Seconds in vkCreateComputePipelines (and the layouts and module around it).
+    pub pipeline_s: f64,
+    /// Why the SPIR-V cache was not used or written, when it was not.
+    pub note: Option<String>,
+}
+
+/// Creates `k`'s pipeline: from its build-time SPIR-V when `defines` and `constants` are empty, else
+/// compiled with them (see [`compile_cached`]) through the SPIR-V cache in the context's cache
+/// directory. Says what each step cost.
+pub fn build(
+    ctx: &ppm_vk_device::Context,
+    k: &KernelInfo,
+    defines: &[(&str, &str)],
+    constants: &str,
+) -> Result<(ppm_vk_device::ComputePipeline, KernelTiming)> {
+    let mut timing = KernelTiming {
+        name: k.name,
+        ..KernelTiming::default()
+    };
+    let compiled = match defines.is_empty() && constants.is_empty() {
+        true => None,
+        false => Some(compile_cached(k, defines, constants, ctx.cache_dir())?),
+    };
+    let start = std::time::Instant::now();
+    let pipeline = match &compiled {
+        None => crate::pipeline(ctx, k)?,
+        Some(c) => crate::pipeline_from(ctx, k, &c.spirv)?,
+    };
+    timing.pipeline_s = start.elapsed().as_secs_f64();
+    if let Some(c) = compiled {
+        (timing.compile_s, timing.spirv_cached, timing.note) = (c.seconds, Some(c.cached), c.note);
+    }
+    Ok((pipeline, timing))
+}
+
+/// SPIR-V compiled at run time, and what it cost.
+pub struct Compiled {
+    pub spirv: Vec<u32>,
+    /// Seconds spent: shaderc's compile, or reading the cache file.
+    pub seconds: f64,
+    /// Whether the SPIR-V came from the on-disk cache.
+    pub cached: bool,
+    /// Why a cache file was not used or not written (damaged, unwritable), in one line.
+    pub note: Option<String>,
+}
+
+/// [`compile_with`] through the SPIR-V cache in `cache_dir` (spirv_cache.rs): a compile done by an earlier
+/// run is read back instead of compiled; a damaged file is compiled again and replaced. `None`: no cache.
+pub fn compile_cached(
+    kernel: &KernelInfo,
+    defines: &[(&str, &str)],
+    constants: &str,
+    cache_dir: Option<&std::path::Path>,
+) -> Result<Compiled> {
+    let start = std::time::Instant::now();
+    let key = spirv_cache::key(kernel, defines, constants);
+    let mut note = None;
+    if let Some(dir) = cache_dir {
+        match spirv_cache::read(dir, &key) {
+            Ok(Some(spirv)) => {
+                return Ok(Compiled {
+                    spirv,
+                    seconds: start.elapsed().as_secs_f64(),
+                    cached: true,
+                    note,
+                })
+            }
+            Ok(None) => {}
+            Err(why) => note = Some(format!("cached kernel {} compiled again: {why}", kernel.name)),
+        }
+    }
+    let spirv = compile_with(kernel, defines, constants)?;
+    if let Some(dir) = cache_dir {
+        if let Err(e) = spirv_cache::write(dir, &key, &spirv) {
+            note = Some(format!("kernel {} not cached: {e:#}", kernel.name));
+        }
+    }
+    Ok(Compiled {
+        spirv,
+        seconds: start.elapsed().as_secs_f64(),
+        cached: false,
+        note,
+    })
 }
 
 /// Compiles `kernel` again with `defines` (name, value) added, and `constants` as scene_constants.glsl
