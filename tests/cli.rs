@@ -806,7 +806,8 @@ fn every_option_has_help_and_sizes_are_checked() {
         let mut options = 0;
         for (i, line) in lines.iter().enumerate() {
             let trimmed = line.trim_start();
-            if !trimmed.starts_with('-') {
+            // An option starts with - or --; "- name: ..." is an item of clap's "Possible values" list.
+            if !trimmed.starts_with('-') || trimmed.starts_with("- ") {
                 continue;
             }
             options += 1;
