@@ -24,10 +24,17 @@
 #define GLOSSY_LIGHT_GLSL
 
 // Whether eye paths sample through material m here and take its light by this file: a rough conductor
-// that holds no hit point, rough glass.
+// that holds no hit point, rough glass. (A rough plastic's coat too, where ray.comp follows it:
+// rough_coat.)
 bool rough_vertex(Material m, uint i) {
     if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR) return !glossy_hit(i);
     return HAS_ROUGH_GLASS && m.surface == SURFACE_ROUGH_GLASS;
+}
+
+// Whether material m (table: material_table(i)) is a plastic with a rough coat, whose reflection eye
+// paths follow and whose light this file takes as a rough vertex's.
+bool rough_coat(Material m, uint table) {
+    return HAS_ROUGH_PLASTICS && m.surface == SURFACE_PLASTIC && table != 0u;
 }
 
 // The lobe of rough material i (`m` as apply_texture left it) at hit h, seen from wo (unit, towards the
@@ -42,6 +49,14 @@ float rough_lobe(uint i, Material m, Hit h, vec3 nf, bool front, vec3 wo, vec3 l
     vec3 li = to_local(l, t, b, nf);
     if (!(lo.z > 0.0)) return 0.0;
     Microfacet mf = hit_microfacet(i, m);
+    if (HAS_ROUGH_PLASTICS && m.surface == SURFACE_PLASTIC) {
+        // A rough coat (plastic_lobes): weight ks F(wo.h) G1(l, h) with the coat's dielectric Fresnel term,
+        // density D_wo(h) / (4 l.h), as a rough conductor's.
+        if (!(li.z > 0.0)) return 0.0;
+        vec3 hv = normalize(lo + li);
+        weight = material_term_a(i) * (coat_fresnel(dot(lo, hv), m.ior) * mf_g1(mf, li, hv));
+        return mf_visible_pdf(mf, lo, hv) / (4.0 * dot(li, hv));
+    }
     if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR) {
         if (!(li.z > 0.0)) return 0.0;
         vec3 hv = normalize(lo + li);

@@ -310,9 +310,19 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
                 if (max3(l) > 0.0) lit = true;
                 sum += thr * l;
             }
+            vec3 wo = -d;
+            if (rough_coat(m, table)) {
+                // A rough coat is a rough vertex (glossy_light.glsl): its shadow ray, then the lobe's.
+                sum += thr * rough_light(h.material, m, h, nf, ng, front, wo, rng, lit);
+                if (bvh_spent || bvh_cut) break; // counted by shadowed; the sample is dropped
+            }
             thr *= spec;
             d = coat_d;
             o = offset_ray(h.pos, nf);
+            if (rough_coat(m, table)) {
+                lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, d);
+                lobe_from = h.pos;
+            }
             continue;
         }
         if (HAS_THIN && m.surface == SURFACE_THIN) {
@@ -410,6 +420,7 @@ void main() {
                     bool base = true, coat = false;
                     uint table = 0u;
                     vec3 coat_d = r.d;
+                    float coat_scale = 1.0; // 1 / the probability of the coat where one lobe is chosen
                     if (diffuse) {
                         // Emitters are one-sided; after a rough vertex weighed against its shadow ray.
                         if (front) hit_emitted += r.thr * m.emission * lobe_weight(lobe_in, lobe_from, h, m.emission);
@@ -423,6 +434,7 @@ void main() {
                             coat = rng_float(rng) < ps;
                             base = !coat;
                             if (coat) spec /= ps; else diff /= 1.0 - ps;
+                            if (coat) coat_scale = 1.0 / ps;
                         }
                     }
                     if (base) {
@@ -437,10 +449,23 @@ void main() {
                         }
                         if (!coat || bvh_spent) break;
                     }
+                    // A rough coat followed is a rough vertex (glossy_light.glsl): its shadow ray where this
+                    // path is a sample, weighed as the coat's lobe is, then the lobe's direction.
+                    vec3 wo = -r.d;
+                    bool rough = !diffuse && rough_coat(m, table) && hit_is_sample;
+                    if (rough) {
+                        bool unused = false;
+                        hit_emitted += r.thr * coat_scale * rough_light(h.material, m, h, nf, ng, front, wo, rng, unused);
+                        if (bvh_spent) { sp = 0u; break; } // counted there; no budget for the rest
+                    }
                     r.depth++;
                     r.thr *= spec;
                     r.d = coat_d;
                     r.o = offset_ray(h.pos, nf);
+                    if (rough) {
+                        lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, r.d);
+                        lobe_from = h.pos;
+                    }
                     continue;
                 }
                 if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR && glossy_hit(h.material)) {

@@ -4,11 +4,12 @@
 
 use glam::Vec3;
 use ppm_vk_kernels::layout::{
-    Material, GLOSSY_LIGHT_BSDF, GLOSSY_LIGHT_LIGHTS, GLOSSY_LIGHT_MIS, LIGHT_SPHERE, SURFACE_ROUGH_CONDUCTOR,
-    SURFACE_ROUGH_GLASS,
+    Material, GLOSSY_LIGHT_BSDF, GLOSSY_LIGHT_LIGHTS, GLOSSY_LIGHT_MIS, LIGHT_SPHERE, SURFACE_PLASTIC,
+    SURFACE_ROUGH_CONDUCTOR, SURFACE_ROUGH_GLASS,
 };
 use ppm_vk_materials::conductor::fresnel_conductor;
 use ppm_vk_materials::math::{frame, fresnel_dielectric, to_local, v3, PI};
+use ppm_vk_materials::plastic::coat_fresnel;
 
 use crate::lights::{
     choose_emitter, emitter_point, emitter_radiance, environment_pdf, first_emitter, is_area, light_sample, LightSample,
@@ -30,6 +31,11 @@ pub fn rough_vertex(g: &GpuScene, m: &Material) -> bool {
     }
 }
 
+/// `rough_coat`: a plastic with a rough coat, whose reflection eye paths follow.
+pub fn rough_coat(m: &Material) -> bool {
+    m.surface == SURFACE_PLASTIC && m.table != 0
+}
+
 /// `rough_lobe`: the density with which the rough bounce at `h` (seen from `wo`) samples unit direction
 /// `l`, and the bounce's weight f |cos_l| / pdf there.
 pub fn rough_lobe(m: &Material, h: &Hit, nf: Vec3, front: bool, wo: Vec3, l: Vec3) -> (f32, Vec3) {
@@ -40,6 +46,14 @@ pub fn rough_lobe(m: &Material, h: &Hit, nf: Vec3, front: bool, wo: Vec3, l: Vec
         return (0.0, Vec3::ZERO);
     }
     let mf = microfacet::of(m);
+    if m.surface == SURFACE_PLASTIC {
+        if !(li.z > 0.0) {
+            return (0.0, Vec3::ZERO);
+        }
+        let hv = (lo + li).normalize();
+        let weight = v3(m.lobe_a) * (coat_fresnel(lo.dot(hv), m.ior) * mf.g1(li, hv));
+        return (mf.visible_pdf(lo, hv) / (4.0 * li.dot(hv)), weight);
+    }
     if m.surface == SURFACE_ROUGH_CONDUCTOR {
         if !(li.z > 0.0) {
             return (0.0, Vec3::ZERO);

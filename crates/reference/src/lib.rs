@@ -383,9 +383,19 @@ fn emission_sample(
                 *lit |= l.max_element() > 0.0;
                 sum += thr * l;
             }
+            // A rough coat is a rough vertex: its shadow ray, then the lobe's (glossy_light.glsl).
+            let wo = -d;
+            let rough = glossy_light::rough_coat(m);
+            if rough {
+                sum += thr * glossy_light::rough_light(g, m, &h, nf, ng, front, wo, &bump, rng, lit);
+            }
             thr *= spec;
             d = coat_d;
             o = offset_ray(g, h.pos, nf);
+            if rough {
+                lobe_pdf = glossy_light::lobe_density(g, m, &h, nf, front, wo, d);
+                lobe_from = h.pos;
+            }
             continue;
         }
         if m.surface == SURFACE_THIN {
@@ -537,6 +547,8 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         let (mut diff, mut spec) = (v3(m.color), Vec3::ZERO);
                         let (mut on_base, mut coat) = (true, false);
                         let mut coat_d = d;
+                        // 1 / the coat's probability where one lobe is chosen.
+                        let mut coat_scale = 1.0;
                         if diffuse {
                             if front {
                                 let le = v3(m.emission);
@@ -553,6 +565,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                                 on_base = !coat;
                                 if coat {
                                     spec /= ps;
+                                    coat_scale = 1.0 / ps;
                                 } else {
                                     diff /= 1.0 - ps;
                                 }
@@ -577,10 +590,24 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                                 break;
                             }
                         }
+                        // A rough coat followed is a rough vertex: its shadow ray where this path is a
+                        // sample, weighed as the coat's lobe is, then the lobe's direction.
+                        let wo = -d;
+                        let rough = !diffuse && glossy_light::rough_coat(m) && hit_is_sample;
+                        if rough {
+                            let mut unused = false;
+                            hit_emitted += thr
+                                * coat_scale
+                                * glossy_light::rough_light(g, m, &h, nf, ng, front, wo, &bump, &mut rng, &mut unused);
+                        }
                         depth += 1;
                         thr *= spec;
                         d = coat_d;
                         o = offset_ray(g, h.pos, nf);
+                        if rough {
+                            lobe_pdf = glossy_light::lobe_density(g, m, &h, nf, front, wo, d);
+                        }
+                        lobe_from = h.pos;
                         continue;
                     }
                     if glossy_hit(g, m) {
