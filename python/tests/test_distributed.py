@@ -3,6 +3,7 @@ one machine's render bit for bit, in any order, through objects, files, bytes or
 are a MergeError; and a local Ray cluster of two workers renders and merges the same image end to end."""
 
 import pickle
+import sys
 
 import numpy as np
 import pytest
@@ -96,6 +97,12 @@ def test_bad_shares_are_settings_errors_before_any_device_opens(cache_dir):
     with pytest.raises(ppm_vk.SettingsError) as e:
         ppm_vk.distributed.render(CORNELL, workers=0, passes=1)
     assert e.value.field == "workers"
+
+
+def test_without_ray_distributed_render_says_how_to_install_it(monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)  # as if Ray were not installed
+    with pytest.raises(ImportError, match=r"needs Ray: pip install 'ppm-vk\[ray\]'"):
+        ppm_vk.distributed.render(CORNELL, workers=1, passes=1)
 
 
 def test_a_local_ray_cluster_of_two_workers_renders_one_machines_image(tmp_path, cache_dir, single):
