@@ -16,7 +16,11 @@ it), ``pipeline_cache`` (a directory; the ``render`` command's by default).
 Errors are :class:`Error` subclasses, one per case of the engine's error: :class:`SceneError` (with
 ``file``, ``line``, ``column``, ``field``), :class:`SettingsError`, :class:`LimitError`,
 :class:`DeviceError`, :class:`IoError` (an ``OSError``), :class:`CheckpointError`,
-:class:`CancelledError`.
+:class:`CancelledError`, :class:`MergeError`.
+
+One image from many machines: :func:`render_part` renders one worker's share of a render, :func:`merge`
+combines the parts (those of the probabilistic method into one machine's image bit for bit), and
+:func:`ppm_vk.distributed.render` runs the workers as Ray tasks (docs/distributed.md).
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ import dataclasses
 import json
 import os
 import time as _time
-from typing import Any, Callable, Dict, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -37,6 +41,7 @@ from ._errors import (
     Error,
     IoError,
     LimitError,
+    MergeError,
     SceneError,
     SettingsError,
     UnknownSettingError,
@@ -49,6 +54,11 @@ __all__ = [
     "PassStats",
     "read_exr",
     "default_settings",
+    "render_part",
+    "load_part",
+    "merge",
+    "Part",
+    "MergeInfo",
     "Error",
     "SceneError",
     "SettingsError",
@@ -58,6 +68,7 @@ __all__ = [
     "IoError",
     "CheckpointError",
     "CancelledError",
+    "MergeError",
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -171,11 +182,7 @@ class Renderer:
             _defines(params),
             _settings_json(settings),
             resolution,
-            (
-                None if device is None else str(device),
-                bool(validation),
-                None if pipeline_cache is None else os.fspath(pipeline_cache),
-            ),
+            _device(device, validation, pipeline_cache),
             None if resume is None else os.fspath(resume),
         )
         self.progress = progress
@@ -327,3 +334,101 @@ def render(
     _check_length(passes, time)  # before the device opens
     renderer = Renderer(scene, params, progress=progress, **settings)
     return renderer.render(passes=passes, time=time)
+
+
+#: One worker's share of a render (:func:`render_part`, :func:`load_part`): ``worker``, ``of``, ``passes``,
+#: ``method``, ``scene_name``, ``build``; :meth:`Part.save` writes its file, :meth:`Part.to_bytes` gives the
+#: file's bytes. It pickles as those bytes, so it can be returned from another process (a Ray task).
+Part = _native.Part
+
+#: The ways a render is split between workers (docs/distributed.md).
+METHODS = ("probabilistic", "independent")
+
+
+@dataclasses.dataclass(frozen=True)
+class MergeInfo:
+    """What :func:`merge` combined."""
+
+    scene_name: str
+    #: "probabilistic" or "independent".
+    method: str
+    #: Workers the render was split between.
+    of: int
+    #: The workers merged, in order, and those not given (a merge of some of them is an image of fewer
+    #: passes).
+    workers: List[int]
+    missing: List[int]
+    #: Photon passes in the merged image, and the photons they emitted.
+    passes: int
+    photons: int
+
+
+def render_part(
+    scene: PathLike,
+    worker: int,
+    of: int,
+    passes: int,
+    out: Optional[PathLike] = None,
+    method: str = "probabilistic",
+    params: Optional[Mapping[str, Any]] = None,
+    *,
+    resolution: Optional[Tuple[int, int]] = None,
+    device: Optional[Union[int, str]] = None,
+    validation: bool = False,
+    pipeline_cache: Optional[PathLike] = None,
+    **settings: Any,
+) -> "Part":
+    """Renders worker ``worker``'s share (from 0) of a render of ``scene`` split between ``of`` workers,
+    ``passes`` photon passes of its own, as ``ppm-vk render --worker K --of N`` does, and returns it as a
+    :class:`Part` (also written to ``out`` when given: a file ``ppm-vk merge`` reads). ``method``:
+    ``"probabilistic"`` renders passes K, K+N, ... of probabilistic PPM, which merge into one machine's
+    image of N x passes bit for bit; ``"independent"`` renders the mode's progressive render with the
+    worker's own seed, and the merge averages the images. The other arguments are :func:`render`'s
+    (every worker of a render must be given the same). The device works with the GIL released."""
+    if method not in METHODS:
+        raise SettingsError(f"settings: method: {method!r}: expected one of {METHODS}", field="method")
+    part = _native.render_part(
+        os.fspath(scene),
+        _defines(params),
+        _settings_json(settings),
+        None if resolution is None else _resolution(resolution),
+        _device(device, validation, pipeline_cache),
+        (method, _count("worker", worker), _count("of", of), _count("passes", passes)),
+    )
+    if out is not None:
+        part.save(os.fspath(out))
+    return part
+
+
+def load_part(path: PathLike) -> "Part":
+    """Reads a part file (``render --worker``'s, :meth:`Part.save`'s): an :class:`IoError` if it cannot be
+    read, a :class:`MergeError` if it is damaged or no part."""
+    return _native.load_part(os.fspath(path))
+
+
+def merge(parts: Iterable[Union["Part", PathLike]], *, return_info: bool = False) -> Any:
+    """Merges parts of one render (:class:`Part` objects or part files, in any order: the image is the same
+    bit for bit) into its image, as ``ppm-vk merge`` does. Parts of other scenes, settings, builds,
+    methods or shares, and a worker given twice, are refused with a :class:`MergeError` saying which;
+    missing workers are allowed (the image then has fewer passes). Returns the :class:`Image`, or with
+    ``return_info=True`` the pair (image, :class:`MergeInfo`)."""
+    loaded = [p if isinstance(p, Part) else load_part(p) for p in parts]
+    image, info = _native.merge(loaded)
+    image = Image(image)
+    return (image, MergeInfo(**info)) if return_info else image
+
+
+def _count(name: str, value: Any) -> int:
+    """A whole number >= 0 for the native call (its range is the engine's to check, naming the field)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise SettingsError(f"settings: {name}: expected a whole number >= 0, got {value!r}", field=name)
+    return int(value)
+
+
+def _device(device: Optional[Union[int, str]], validation: bool, pipeline_cache: Optional[PathLike]) -> tuple:
+    """The device arguments the extension takes: name or index, validation, pipeline cache directory."""
+    return (
+        None if device is None else str(device),
+        bool(validation),
+        None if pipeline_cache is None else os.fspath(pipeline_cache),
+    )

@@ -1,7 +1,7 @@
 """Type stubs of ppm_vk (python/ppm_vk/__init__.py has the docstrings)."""
 
 import os
-from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, Iterable, List, Literal, Mapping, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 
@@ -12,6 +12,7 @@ from ._errors import (
     Error as Error,
     IoError as IoError,
     LimitError as LimitError,
+    MergeError as MergeError,
     SceneError as SceneError,
     SettingsError as SettingsError,
     UnknownSettingError as UnknownSettingError,
@@ -148,3 +149,69 @@ def render(
 ) -> Image:
     """Renders a scene and returns its image: float32, shape (height, width, 3), linear RGB."""
     ...
+
+METHODS: Tuple[str, str]
+
+class Part:
+    """One worker's share of a render; pickles as its file's bytes."""
+    @property
+    def worker(self) -> int: ...
+    @property
+    def of(self) -> int: ...
+    @property
+    def passes(self) -> int: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def scene_name(self) -> str: ...
+    @property
+    def build(self) -> str: ...
+    def to_bytes(self) -> bytes: ...
+    def save(self, path: PathLike) -> None: ...
+
+class MergeInfo:
+    """What merge combined."""
+    scene_name: str
+    method: str
+    of: int
+    workers: List[int]
+    missing: List[int]
+    passes: int
+    photons: int
+    def __init__(
+        self,
+        scene_name: str,
+        method: str,
+        of: int,
+        workers: List[int],
+        missing: List[int],
+        passes: int,
+        photons: int,
+    ) -> None: ...
+
+def render_part(
+    scene: PathLike,
+    worker: int,
+    of: int,
+    passes: int,
+    out: Optional[PathLike] = None,
+    method: Literal["probabilistic", "independent"] = "probabilistic",
+    params: Optional[Mapping[str, Any]] = None,
+    *,
+    resolution: Optional[Tuple[int, int]] = None,
+    device: Optional[Union[int, str]] = None,
+    validation: bool = False,
+    pipeline_cache: Optional[PathLike] = None,
+    **settings: Any,
+) -> Part:
+    """Renders worker `worker`'s share of a render split between `of` workers; also writes it to `out`."""
+    ...
+
+def load_part(path: PathLike) -> Part:
+    """Reads a part file."""
+    ...
+
+@overload
+def merge(parts: Iterable[Union[Part, PathLike]], *, return_info: Literal[False] = False) -> Image: ...
+@overload
+def merge(parts: Iterable[Union[Part, PathLike]], *, return_info: Literal[True]) -> Tuple[Image, MergeInfo]: ...

@@ -77,12 +77,18 @@ class CheckpointError(Error):
     """A checkpoint that cannot be resumed: damaged, or of another scene, setting or build."""
 
 
+class MergeError(Error):
+    """Parts that cannot be merged: of other scenes, settings, builds, methods or shares of the render, a
+    worker given twice, or a part file that is damaged or no part; ``str(e)`` is the engine's message,
+    naming which."""
+
+
 class CancelledError(Error):
     """``Renderer.cancel()`` ended the pass in flight; the render keeps the passes before it."""
 
 
 # Shown (in tracebacks, reprs) as the package's, where they are meant to be caught.
 for _cls in (Error, SceneError, SettingsError, UnknownSettingError, LimitError, DeviceError, IoError,
-             CheckpointError, CancelledError):
+             CheckpointError, MergeError, CancelledError):
     _cls.__module__ = "ppm_vk"
 del _cls

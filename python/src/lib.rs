@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray3, PyUntypedArrayMethods};
+use ppm_vk_engine::distributed::{self, Job, Method};
 use ppm_vk_engine::{
     open_device, CancelToken, Checkpoint, ContextOptions, Error, PassStats, RgbImage, Scene, Settings,
 };
@@ -420,9 +421,173 @@ fn default_settings_json() -> PyResult<String> {
     serde_json::to_string(&Settings::default()).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
+/// A part that cannot be merged (refused, or damaged): `ppm_vk.MergeError` with the engine's message.
+fn merge_error(py: Python<'_>, e: anyhow::Error) -> PyErr {
+    raise(py, "MergeError", format!("{e:#}"), |_| Ok(()))
+}
+
+/// A part's load or save failure: `IoError` where the file could not be read or written, else (damaged,
+/// not a part) `MergeError`.
+fn part_file_error(py: Python<'_>, path: &Path, e: anyhow::Error) -> PyErr {
+    match checkpoint_error(path, e, |message| Error::Checkpoint { message }) {
+        Error::Checkpoint { message } => raise(py, "MergeError", message, |_| Ok(())),
+        other => to_py(py, other),
+    }
+}
+
+/// One worker's share of a render (`ppm_vk.render_part`): per pixel sums that `merge` combines. Pickles
+/// as its file's bytes, so it travels between processes (Ray tasks) as it would in a file.
+#[pyclass(module = "ppm_vk._native", frozen)]
+struct Part {
+    inner: distributed::Part,
+}
+
+#[pymethods]
+impl Part {
+    /// The part as the bytes of its file (`ppm-vk merge` reads them as a `.part`).
+    fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
+        let bytes = py.detach(|| self.inner.to_bytes()).map_err(|e| merge_error(py, e))?;
+        Ok(PyBytes::new(py, &bytes))
+    }
+
+    /// Writes the part atomically to `path`.
+    fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        py.detach(|| self.inner.save(&path))
+            .map_err(|e| part_file_error(py, &path, e))
+    }
+
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let parse = py.import("ppm_vk._native")?.getattr("part_from_bytes")?;
+        Ok((parse, (self.to_bytes(py)?,)))
+    }
+
+    /// Worker (from 0), workers, this worker's passes, method, scene name, build.
+    #[getter]
+    fn worker(&self) -> u32 {
+        self.inner.header.job.worker
+    }
+    #[getter]
+    fn of(&self) -> u32 {
+        self.inner.header.job.of
+    }
+    #[getter]
+    fn passes(&self) -> u64 {
+        self.inner.header.job.passes
+    }
+    #[getter]
+    fn method(&self) -> &'static str {
+        method_name(self.inner.header.job.method)
+    }
+    #[getter]
+    fn scene_name(&self) -> &str {
+        &self.inner.header.scene_name
+    }
+    #[getter]
+    fn build(&self) -> &str {
+        &self.inner.header.build
+    }
+}
+
+fn method_name(method: Method) -> &'static str {
+    match method {
+        Method::Probabilistic => "probabilistic",
+        Method::Independent => "independent",
+    }
+}
+
+/// A part from its file's bytes, refusing damaged ones (`MergeError`).
+#[pyfunction]
+fn part_from_bytes(py: Python<'_>, bytes: &[u8]) -> PyResult<Part> {
+    let inner = py
+        .detach(|| distributed::Part::parse(bytes))
+        .map_err(|e| merge_error(py, e))?;
+    Ok(Part { inner })
+}
+
+/// A part from its file (`render --worker K --of N` writes them); `IoError` if unreadable, `MergeError`
+/// if damaged.
+#[pyfunction]
+fn load_part(py: Python<'_>, path: PathBuf) -> PyResult<Part> {
+    let inner = py
+        .detach(|| distributed::Part::load(&path))
+        .map_err(|e| part_file_error(py, &path, e))?;
+    Ok(Part { inner })
+}
+
+/// Renders a worker's share of the scene (`job`: method, worker, workers, passes of its own), on the
+/// device `device` opens, with the GIL released.
+#[pyfunction]
+#[pyo3(signature = (scene, defines, settings_json, resolution, device, job))]
+fn render_part(
+    py: Python<'_>,
+    scene: PathBuf,
+    defines: Vec<(String, String)>,
+    settings_json: &str,
+    resolution: Option<(u32, u32)>,
+    device: (Option<String>, bool, Option<PathBuf>),
+    job: (String, u32, u32, u64),
+) -> PyResult<Part> {
+    let (method, worker, of, passes) = job;
+    let settings = settings_from_json(py, settings_json)?;
+    let method = match method.as_str() {
+        "probabilistic" => Method::Probabilistic,
+        "independent" => Method::Independent,
+        _ => {
+            let message = format!("{method:?}: expected \"probabilistic\" or \"independent\"");
+            return Err(settings_error(py, "method", message));
+        }
+    };
+    let job = Job {
+        method,
+        worker,
+        of,
+        passes,
+    };
+    // Refused before the scene loads and the device opens.
+    job.validate().or_raise(py)?;
+    let inner = py
+        .detach(|| -> Result<_, Error> {
+            let scene = Scene::load_with(&scene, &defines)?;
+            let scene = match resolution {
+                Some((w, h)) => scene.with_resolution(w, h),
+                None => scene,
+            };
+            let (device, validation, pipeline_cache) = device;
+            let ctx = open_device(&device_options(device, validation, pipeline_cache))?;
+            distributed::render_part(&ctx, &scene, &settings, &job, BUILD, None, |_| {})
+        })
+        .or_raise(py)?;
+    Ok(Part { inner })
+}
+
+/// Merges parts of one render (in any order) into its image; also what was merged, as a dict. Refused
+/// parts (of other scenes, settings, builds, shares; a worker twice) are a `MergeError`.
+#[pyfunction]
+fn merge<'py>(py: Python<'py>, parts: Vec<PyRef<'py, Part>>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
+    // The sums are cloned once so that the merge runs without the GIL (a part may be large).
+    let owned: Vec<distributed::Part> = parts.iter().map(|p| p.inner.clone()).collect();
+    let (image, info) = py
+        .detach(|| distributed::merge(&owned))
+        .map_err(|e| merge_error(py, e))?;
+    let d = PyDict::new(py);
+    d.set_item("scene_name", info.scene_name)?;
+    d.set_item("method", method_name(info.method))?;
+    d.set_item("of", info.of)?;
+    d.set_item("workers", info.workers)?;
+    d.set_item("missing", info.missing)?;
+    d.set_item("passes", info.passes)?;
+    d.set_item("photons", info.photons)?;
+    Ok((to_array(py, image)?, d))
+}
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Renderer>()?;
+    m.add_class::<Part>()?;
+    m.add_function(wrap_pyfunction!(part_from_bytes, m)?)?;
+    m.add_function(wrap_pyfunction!(load_part, m)?)?;
+    m.add_function(wrap_pyfunction!(render_part, m)?)?;
+    m.add_function(wrap_pyfunction!(merge, m)?)?;
     m.add_function(wrap_pyfunction!(read_exr, m)?)?;
     m.add_function(wrap_pyfunction!(encode_png, m)?)?;
     m.add_function(wrap_pyfunction!(default_settings_json, m)?)?;

@@ -325,23 +325,32 @@ impl Part {
 
     /// Writes the part atomically (a temporary file in the same directory, then a rename).
     pub fn save(&self, path: &Path) -> anyhow::Result<()> {
+        crate::image_io::write_atomically(path, "part", |w| self.write_to(w))
+    }
+
+    /// The part as the bytes of its file (what [`Part::parse`] reads): for a part sent over a network
+    /// rather than through a file.
+    pub fn to_bytes(&self) -> anyhow::Result<Vec<u8>> {
+        let mut bytes = Vec::new();
+        self.write_to(&mut bytes)?;
+        Ok(bytes)
+    }
+
+    fn write_to(&self, w: &mut impl std::io::Write) -> anyhow::Result<()> {
         let header = serde_json::to_vec(&self.header).context("encoding the part's header")?;
-        crate::image_io::write_atomically(path, "part", |w| {
-            use std::io::Write as _;
-            let mut sha = sha2::Sha256::new();
-            let prefix = [
-                &MAGIC[..],
-                &FORMAT.to_le_bytes(),
-                &(header.len() as u32).to_le_bytes(),
-                &header,
-            ];
-            for p in prefix.into_iter().chain(self.payload()) {
-                w.write_all(p)?;
-                sha.update(p);
-            }
-            w.write_all(&sha.finalize())?;
-            Ok(())
-        })
+        let mut sha = sha2::Sha256::new();
+        let prefix = [
+            &MAGIC[..],
+            &FORMAT.to_le_bytes(),
+            &(header.len() as u32).to_le_bytes(),
+            &header,
+        ];
+        for p in prefix.into_iter().chain(self.payload()) {
+            w.write_all(p)?;
+            sha.update(p);
+        }
+        w.write_all(&sha.finalize())?;
+        Ok(())
     }
 
     /// Reads a part, refusing another format version, a damaged or truncated file, or a header whose
@@ -627,6 +636,9 @@ mod tests {
         let path = scratch("round-trip.part");
         p.save(&path).unwrap();
         assert_eq!(Part::load(&path).unwrap(), p);
+        let bytes = p.to_bytes().unwrap();
+        assert_eq!(bytes, std::fs::read(&path).unwrap());
+        assert_eq!(Part::parse(&bytes).unwrap(), p);
     }
 
     /// The merge divides the radiance sums by the passes and the emission sums by their samples, in any
