@@ -1,5 +1,6 @@
 // The light a rough vertex reflects straight from an emitter: next-event estimation at every rough
-// vertex an eye path samples through (rough conductors below params.glossy_alpha, rough glass), combined
+// vertex an eye path samples through (rough conductors below params.glossy_alpha, rough glass, a rough
+// plastic's coat where the path follows it), combined
 // with the lobe's own sampled direction by multiple importance sampling (Veach 1997, the power heuristic),
 // as a path tracer does. In ray.comp's path notation these paths are E S* S_rough L, part of term (a):
 // before, only the direction the lobe sampled could meet the light, one per vertex and eye path, which
