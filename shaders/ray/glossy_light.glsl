@@ -133,9 +133,10 @@ vec3 rough_light(uint i, Material m, Hit h, vec3 nf, vec3 ng, bool front, vec3 w
         w /= d;
         float cos_y = -dot(e.normal, w);
         if (!(cos_y > 0.0) || !(d2 > 0.0)) return vec3(0.0); // emitters are one-sided
-        vec3 le = e.value * emitter_radiance(e, a, b);
+        vec3 tex = emitter_radiance(e, a, b); // a radiance texture there, else 1
+        vec3 le = e.value * tex;
         // Le / p_l: the flux e.flux (Le A pi / prob) times cos_y / (pi d^2).
-        li = e.flux * emitter_radiance(e, a, b) * (cos_y / (PI * d2));
+        li = e.flux * tex * (cos_y / (PI * d2));
         if (params.glossy_light == GLOSSY_LIGHT_MIS) pl = area_light_density(h.pos, point, e.normal, le);
     } else {
         // Points, spots, the sun and the environment (light_sample: li is Le / p_l). A light below the

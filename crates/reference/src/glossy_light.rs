@@ -148,8 +148,9 @@ pub fn rough_light(
         if !(cos_y > 0.0) || !(d2 > 0.0) {
             return Vec3::ZERO;
         }
-        let le = e.value * emitter_radiance(g, &e, a, b);
-        li = e.flux * emitter_radiance(g, &e, a, b) * (cos_y / (PI * d2));
+        let tex = emitter_radiance(g, &e, a, b);
+        let le = e.value * tex;
+        li = e.flux * tex * (cos_y / (PI * d2));
         if mode == GLOSSY_LIGHT_MIS {
             pl = area_light_density(g, h.pos, point, e.normal, le);
         }
