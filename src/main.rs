@@ -209,7 +209,8 @@ pub(crate) struct SettingsArgs {
     #[arg(long, value_enum, default_value_t = GlossyLightArg::Mis)]
     glossy_light: GlossyLightArg,
     /// Photon probing (eq. 7-9): `paper` is eq. 9 as printed, `scale-free` is r' = r (1 + lambda / r^2),
-    /// `nearest` the radius that holds --probe-k probe photons (r' = r sqrt(k / N), at most 2 r).
+    /// `nearest` the radius that holds --probe-k probe photons (r' = r sqrt(k / N), at most 2 r),
+    /// `curvature` the radius of least bias^2 + variance from the density and its curvature (r / 8 to 2 r).
     #[arg(long, value_enum, default_value_t = ProbeArg::Off)]
     probe: ProbeArg,
     /// beta of eq. 9 as a fraction of r in (0, 1) (the paper's best: 0.2 = r/5).
@@ -395,6 +396,7 @@ pub(crate) enum ProbeArg {
     Paper,
     ScaleFree,
     Nearest,
+    Curvature,
 }
 
 impl From<ProbeArg> for ProbeMode {
@@ -404,6 +406,7 @@ impl From<ProbeArg> for ProbeMode {
             ProbeArg::Paper => ProbeMode::Paper,
             ProbeArg::ScaleFree => ProbeMode::ScaleFree,
             ProbeArg::Nearest => ProbeMode::Nearest,
+            ProbeArg::Curvature => ProbeMode::Curvature,
         }
     }
 }

@@ -155,6 +155,7 @@ fn probe_kernel_matches_reference_on_identical_photons() {
     probe_identical_photons(ProbeMode::Paper);
     probe_identical_photons(ProbeMode::ScaleFree);
     probe_identical_photons(ProbeMode::Nearest);
+    probe_identical_photons(ProbeMode::Curvature);
 }
 
 /// The nearest rule (r' = r min(sqrt(k / N), 2)) on the GPU against the CPU probe (which counts each
@@ -188,6 +189,48 @@ fn nearest_probe_matches_reference_and_follows_the_photons() {
     assert!(shrunk > 0 && grown > 0, "{shrunk} shrunk, {grown} grown");
     drop(r);
     assert_clean(&ctx);
+}
+
+/// The curvature rule on the GPU against the CPU probe, and what it does: in cornell-spheres at 32 pixels
+/// wide (eq. 8's r a tenth of the box) the glass sphere's caustic and the light's falloff on the walls curve
+/// the density enough to shrink radii, the flat rest grows them.
+#[test]
+fn curvature_probe_matches_reference_and_follows_the_photons() {
+    let ctx = ctx();
+    let r = Renderer::new(&ctx, &cornell(RES, RES), settings(ProbeMode::Curvature)).unwrap();
+    let (hits, gpu, cpu, r0) = gpu_and_cpu_probe(&r);
+    let (mut live, mut agree, mut shrunk, mut grown) = (0usize, 0usize, 0usize, 0usize);
+    for (i, h) in hits.iter().enumerate() {
+        if h.is_empty() {
+            continue;
+        }
+        live += 1;
+        let (g, c) = (gpu[i].r2, cpu[i].1);
+        // As probe_case: paths that diverged at a threshold move a few hit points' counts.
+        agree += ((g - c).abs() <= 2e-4 * c) as usize;
+        assert!(g <= 4.0 * r0 * r0 * (1.0 + 1e-9), "slot {i}: r'^2 {g} beyond (2 r)^2");
+        assert!(g >= r0 * r0 / 64.0 * (1.0 - 1e-6), "slot {i}: r'^2 {g} below (r / 8)^2");
+        shrunk += (g < r0 * r0 * (1.0 - 1e-9)) as usize;
+        grown += (g > r0 * r0 * (1.0 + 1e-9)) as usize;
+    }
+    println!("curvature: {agree} of {live} agree with the CPU probe; {shrunk} shrunk, {grown} grown");
+    assert!(agree * 100 >= live * 90, "only {agree} of {live} hit points agree");
+    assert!(shrunk > 0 && grown > 0, "{shrunk} shrunk, {grown} grown");
+    drop(r);
+    assert_clean(&ctx);
+}
+
+#[test]
+fn curvature_probe_renders_the_same_at_any_scale() {
+    // Counts within r and r / 2: the same radii, relative to the scene, at every scale.
+    let (base, g1) = render_scaled(1.0, ProbeMode::Curvature, 4);
+    for s in [1e-3f32, 1e3] {
+        let (m, g) = render_scaled(s, ProbeMode::Curvature, 4);
+        for c in 0..3 {
+            assert!((m[c] / base[c] - 1.0).abs() < 0.01, "scale {s}: mean {m:?} vs {base:?}");
+        }
+        assert!((g / g1 - 1.0).abs() < 0.01, "scale {s}: radius change {g} vs {g1}");
+    }
 }
 
 #[test]

@@ -10,7 +10,7 @@ use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers};
 use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, PhotonWork, RenderParams, Triangle};
 use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PathLimits, PhotonPush, SALT_EYE, SALT_PHOTON, SALT_PROBE};
-use ppm_vk_kernels::probe::{self, ProbePush, MODE_NEAREST, MODE_PAPER, MODE_SCALE_FREE};
+use ppm_vk_kernels::probe::{self, ProbePush, MODE_CURVATURE, MODE_NEAREST, MODE_PAPER, MODE_SCALE_FREE};
 use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers, JITTER_RANDOM};
 use ppm_vk_kernels::reflected;
 use ppm_vk_kernels::resolve::{self, ResolvePush};
@@ -838,6 +838,7 @@ impl Renderer {
         let (mode, param) = match self.settings.probe {
             ProbeMode::Paper => (MODE_PAPER, self.settings.probe_beta),
             ProbeMode::Nearest => (MODE_NEAREST, self.settings.probe_k),
+            ProbeMode::Curvature => (MODE_CURVATURE, 0.0),
             _ => (MODE_SCALE_FREE, self.settings.probe_beta),
         };
         ProbePush {

@@ -37,6 +37,12 @@ pub enum ProbeMode {
     /// holds k of them, as classic photon mapping's k nearest; smaller where photons crowd (caustics),
     /// larger where they are few. Free of units.
     Nearest,
+    /// The radius of least error (bias^2 + variance) of the density estimate, after Kaplanyan and
+    /// Dachsbacher's adaptive PPM: from the probe photons within r and within r / 2, which give the
+    /// density and its Laplacian, (r' / r)^6 = 9 N1 / (32 (N1 - 4 N2)^2), counting only a curvature
+    /// beyond twice its noise; r / 8 <= r' <= 2 r. Shrinks radii only where the density curves (a
+    /// caustic), grows them where it is flat. Free of units.
+    Curvature,
 }
 
 /// How the light that reaches the eye paths' first diffuse points straight from an emitter is estimated.

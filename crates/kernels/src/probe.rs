@@ -14,6 +14,8 @@ pub const MODE_PAPER: u32 = 1;
 pub const MODE_SCALE_FREE: u32 = 2;
 /// r' = r sqrt(k / N): the radius that holds k probe photons where they are N within r.
 pub const MODE_NEAREST: u32 = 3;
+/// r' from the count within r and within r / 2: the radius of least bias^2 + variance (probe.comp).
+pub const MODE_CURVATURE: u32 = 4;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -23,7 +25,7 @@ pub struct ProbePush {
     /// 0: accumulate a batch of probe photons; 1: set the radii.
     pub phase: u32,
     pub mode: u32,
-    /// The mode's constant: beta as a fraction of r (paper, scale-free), k (nearest).
+    /// The mode's constant: beta as a fraction of r (paper, scale-free), k (nearest); unused (curvature).
     pub param: f32,
 }
 push_struct!(ProbePush, PROBE);

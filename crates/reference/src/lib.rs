@@ -987,7 +987,12 @@ pub fn lambda_ratio(d2: &[f64], r2: f64) -> f64 {
 /// beta is lambda / r^2 <= beta_frac in both modes; above it the paper enlarges to r (1 + lambda / r), the
 /// scale-free variant to r (1 + lambda / r^2).
 /// Nearest (`count` probe photons within r, `param` k): r min(sqrt(k / count), 2), 2 r without one.
-pub fn probe_radius(r: f64, ratio: f64, count: usize, mode: ProbeMode, param: f64) -> f64 {
+/// Curvature (`counts` within r / 2, r and 2 r): [`curvature_growth`].
+pub fn probe_radius(r: f64, ratio: f64, counts: [usize; 3], mode: ProbeMode, param: f64) -> f64 {
+    let count = counts[1];
+    if mode == ProbeMode::Curvature {
+        return r * curvature_growth(counts.map(|c| c as f64));
+    }
     if mode == ProbeMode::Nearest {
         return r * if count > 0 {
             (param / count as f64).sqrt().min(2.0)
@@ -1003,6 +1008,33 @@ pub fn probe_radius(r: f64, ratio: f64, count: usize, mode: ProbeMode, param: f6
         ProbeMode::Paper => r * (1.0 + ratio * r), // lambda / r = ratio * r
         _ => r * (1.0 + ratio),
     }
+}
+
+/// The radius p / R of least error of a density estimate from Na photons within R and Nb within R / 2,
+/// written from the closed forms rather than probe.comp's text: N(p) = pi p^2 f + pi p^4 L / 8 over a disc
+/// (f the density, L its Laplacian) gives f and L from the two counts; the estimate at radius p has bias
+/// p^2 L / 8 and variance f / (pi p^2), least in sum at p^6 = 32 f / (pi L^2). |Na - 4 Nb| counts only
+/// beyond `CURVATURE_Z` standard deviations of its noise (sqrt(Na + 8 Nb)). At most 2 (2 where flat).
+pub fn curvature_fit(na: f64, nb: f64) -> f64 {
+    const CURVATURE_Z: f64 = 2.0;
+    let big_r = 1.0; // a unit radius: the result is a ratio
+    let area = std::f64::consts::PI * big_r * big_r;
+    let laplacian_abs =
+        ((na - 4.0 * nb).abs() - CURVATURE_Z * (na + 8.0 * nb).sqrt()).max(0.0) * 32.0 / (3.0 * area * big_r * big_r);
+    if laplacian_abs == 0.0 {
+        return 2.0;
+    }
+    let density = na / area;
+    let p6 = 32.0 * density / (std::f64::consts::PI * laplacian_abs * laplacian_abs);
+    p6.powf(1.0 / 6.0).min(2.0)
+}
+
+/// The curvature probe's r' / r from the probe photons within r / 2, r and 2 r: the smaller of the fits at
+/// R = r and at R = 2 r, so that a radius grows only where the density is flat out to 2 r; r / 8 to 2 r.
+pub fn curvature_growth([half, n1, two]: [f64; 3]) -> f64 {
+    curvature_fit(n1, half)
+        .min(2.0 * curvature_fit(two, n1))
+        .clamp(0.125, 2.0)
 }
 
 /// The probe pass over `photons` for every slot, as probe.comp computes it: (lambda / r^2, new r^2).
@@ -1022,16 +1054,21 @@ pub fn probe(
             let r2f = st.r2 as f32;
             let pos = v3(hp.pos);
             let n = v3(hp.normal);
-            let d2: Vec<f64> = photons
+            // The curvature rule looks up to 2 r; within r / 2 by probe.comp's test in f32 (d^2 / r^2).
+            let reach = if mode == ProbeMode::Curvature { 4.0 * r2f } else { r2f };
+            let near: Vec<f32> = photons
                 .iter()
                 .filter_map(|p| {
                     let dv = v3(p.pos) - pos;
                     let d2 = dv.dot(dv);
-                    (d2 <= r2f && oct_decode(p.dir).dot(n) < 0.0).then_some(d2 as f64)
+                    (d2 <= reach && oct_decode(p.dir).dot(n) < 0.0).then_some(d2)
                 })
                 .collect();
+            let d2: Vec<f64> = near.iter().filter(|&&d| d <= r2f).map(|&d| d as f64).collect();
+            let half = near.iter().filter(|&&d| d <= r2f && d * (1.0 / r2f) <= 0.25).count();
             let ratio = lambda_ratio(&d2, st.r2);
-            let r = probe_radius(st.r2.sqrt(), ratio, d2.len(), mode, param as f64);
+            let counts = [half, d2.len(), near.len()];
+            let r = probe_radius(st.r2.sqrt(), ratio, counts, mode, param as f64);
             (ratio, r * r)
         })
         .collect()
@@ -1044,6 +1081,49 @@ mod tests {
     /// Deterministic points uniform on a disc of radius r (a Fibonacci spiral: equal area per point).
     fn disc(r: f64, n: usize) -> Vec<f64> {
         (0..n).map(|i| r * r * (i as f64 + 0.5) / n as f64).collect() // squared radii, uniform in area
+    }
+
+    /// Exact counts of the density f(y) = a + b |y|^2 (Laplacian 4 b) within p: pi p^2 a + pi b p^4 / 2.
+    fn quadratic_counts(a: f64, b: f64) -> (f64, f64) {
+        let n = |p: f64| std::f64::consts::PI * (a * p * p + b * p.powi(4) / 2.0);
+        (n(1.0), n(0.5))
+    }
+
+    /// Counts within r / 2, r and 2 r of a disc of light of radius `spot` (as a fraction of r) holding
+    /// `inside` photons over a flat floor of `per_r` photons per disc of radius r.
+    fn spot_counts(spot: f64, inside: f64, per_r: f64) -> [f64; 3] {
+        [0.5, 1.0, 2.0].map(|p: f64| inside * (p / spot).min(1.0).powi(2) + per_r * p * p)
+    }
+
+    #[test]
+    fn curvature_probe_finds_the_radius_of_least_error() {
+        // Counts so large that the noise margin is negligible: r'^6 = 32 f / (pi L^2), with f the
+        // density the disc holds on average (N1 / pi) and L = 4 b, as computed here from the density.
+        for (a, b) in [(1e12, 1e11), (1e12, -3e11), (5e12, 4e12)] {
+            let (n1, n2) = quadratic_counts(a, b);
+            let want = (32.0 * (n1 / std::f64::consts::PI) / (std::f64::consts::PI * 16.0 * b * b)).powf(1.0 / 6.0);
+            let got = curvature_fit(n1, n2);
+            assert!((got / want.min(2.0) - 1.0).abs() < 1e-3, "a {a} b {b}: {got} vs {want}");
+        }
+        // A flat density (doubling the radius takes in 4 times the photons), or none, reads as flat: the
+        // largest radius.
+        assert_eq!(curvature_growth([100.0, 400.0, 1600.0]), 2.0);
+        assert_eq!(curvature_growth([0.0; 3]), 2.0);
+        // A difference within twice its noise does not count: 40 photons, 12 of them within r / 2
+        // (D = -8, noise sqrt(136) ~ 11.7).
+        assert_eq!(curvature_growth([12.0, 40.0, 160.0]), 2.0);
+        // A spot much narrower than r shrinks r, the more the more photons it holds.
+        let few = curvature_growth(spot_counts(0.2, 100.0, 20.0));
+        let many = curvature_growth(spot_counts(0.2, 10_000.0, 20.0));
+        assert!(many < few && few < 1.0, "{few} {many}");
+        assert_eq!(curvature_growth([1e12, 1e12, 1e12]), 0.125);
+        // A caustic 100 times brighter than the floor just past r (a ring from 1.2 r out): flat within r,
+        // so the fit at r alone would grow r to 2 r, into it; the fit at 2 r keeps r' below 1.2 r.
+        let ring = |p: f64| 100.0 * 20.0 * (p * p - 1.44).max(0.0);
+        let counts = [0.5, 1.0, 2.0].map(|p: f64| 20.0 * p * p + ring(p));
+        assert_eq!(curvature_fit(counts[1], counts[0]), 2.0);
+        let g = curvature_growth(counts);
+        assert!(g < 1.2, "grew into the caustic: {g}");
     }
 
     #[test]
@@ -1064,25 +1144,25 @@ mod tests {
         let r = 0.5;
         for mode in [ProbeMode::Paper, ProbeMode::ScaleFree] {
             // lambda / r <= beta keeps r, exactly at the boundary too.
-            assert_eq!(probe_radius(r, 0.2, 0, mode, 0.2), r);
-            assert_eq!(probe_radius(r, 0.0, 0, mode, 0.2), r);
+            assert_eq!(probe_radius(r, 0.2, [0; 3], mode, 0.2), r);
+            assert_eq!(probe_radius(r, 0.0, [0; 3], mode, 0.2), r);
         }
         // Just above: the paper adds lambda (an area) to r: r (1 + lambda / r) = r + lambda.
         let ratio = 0.2 + 1e-12;
-        assert!((probe_radius(r, ratio, 0, ProbeMode::Paper, 0.2) - (r + ratio * r * r)).abs() < 1e-15);
-        assert!((probe_radius(r, ratio, 0, ProbeMode::ScaleFree, 0.2) - r * (1.0 + ratio)).abs() < 1e-15);
+        assert!((probe_radius(r, ratio, [0; 3], ProbeMode::Paper, 0.2) - (r + ratio * r * r)).abs() < 1e-15);
+        assert!((probe_radius(r, ratio, [0; 3], ProbeMode::ScaleFree, 0.2) - r * (1.0 + ratio)).abs() < 1e-15);
         // The scale-free rule does not depend on units; the paper's does.
         let (a, b) = (
-            probe_radius(1.0, 0.5, 0, ProbeMode::ScaleFree, 0.2),
-            probe_radius(1000.0, 0.5, 0, ProbeMode::ScaleFree, 0.2),
+            probe_radius(1.0, 0.5, [0; 3], ProbeMode::ScaleFree, 0.2),
+            probe_radius(1000.0, 0.5, [0; 3], ProbeMode::ScaleFree, 0.2),
         );
         assert!((b / a - 1000.0).abs() < 1e-9);
         let (a, b) = (
-            probe_radius(1.0, 0.5, 0, ProbeMode::Paper, 0.2),
-            probe_radius(1000.0, 0.5, 0, ProbeMode::Paper, 0.2),
+            probe_radius(1.0, 0.5, [0; 3], ProbeMode::Paper, 0.2),
+            probe_radius(1000.0, 0.5, [0; 3], ProbeMode::Paper, 0.2),
         );
         assert!((b / a - 1000.0).abs() > 100.0, "paper rule: {a} vs {b}");
-        assert_eq!(probe_radius(r, 0.9, 0, ProbeMode::Off, 0.2), r);
+        assert_eq!(probe_radius(r, 0.9, [0; 3], ProbeMode::Off, 0.2), r);
     }
 
     #[test]
