@@ -37,7 +37,7 @@ pub struct CompareArgs {
     #[arg(long, default_value_t = 10.0, value_parser = crate::parse_seconds)]
     time: f64,
     /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone". Words joined by
-    /// `+`: ppm, sppm, probe, probe-sf, probe-nn[=K] (the k-nearest probe), probe-curv (the curvature probe), cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass),
+    /// `+`: ppm, sppm, probe, probe-sf, probe-nn[=K] (the k-nearest probe), probe-curv[=G] (the curvature probe, growing radii at most G times), cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass),
     /// gh=A (glossy hit points on rough conductors of alpha >= A), nogh (none), photons (direct light by the photons) or
     /// sample (by light sampling, the default), ls=N (light samples), gl=mis|bsdf|lights (the light rough
     /// vertices reflect straight from a light: both strategies, the default, or one of them).
@@ -102,7 +102,12 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
                     s.probe_k = number("probe-nn")?;
                 }
             }
-            "probe-curv" => s.probe = ProbeMode::Curvature,
+            "probe-curv" => {
+                s.probe = ProbeMode::Curvature;
+                if value.is_some() {
+                    s.probe_grow = number("probe-curv")?;
+                }
+            }
             "cone" => s.cone_k = Some(if value.is_some() { number("cone")? } else { 1.1 }),
             "beta" => s.probe_beta = number("beta")?,
             "alpha" => s.alpha = number("alpha")?,
@@ -129,7 +134,7 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
                 }
             }
             other => bail!(
-                "variant {name:?}: unknown word {other:?} (ppm, sppm, probe, probe-sf, probe-nn[=K], probe-curv, cone[=K], beta=F, alpha=A, es=N, \
+                "variant {name:?}: unknown word {other:?} (ppm, sppm, probe, probe-sf, probe-nn[=K], probe-curv[=G], cone[=K], beta=F, alpha=A, es=N, \
                  ls=N, gh=A, nogh, photons, sample, gl=mis|bsdf|lights)"
             ),
         }

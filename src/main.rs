@@ -223,6 +223,9 @@ pub(crate) struct SettingsArgs {
     /// at most 2 r), at least 1.
     #[arg(long, default_value_t = ppm_vk_engine::settings::DEFAULT_PROBE_K)]
     probe_k: f32,
+    /// With `--probe curvature`: the most a starting radius may grow, r' / r in [1, 2] (1: only shrink).
+    #[arg(long, default_value_t = ppm_vk_engine::settings::DEFAULT_PROBE_GROW)]
+    probe_grow: f32,
     /// Cone filter (eq. 10-14): its constant k >= 1, or `off`.
     #[arg(long, default_value = "off", value_parser = parse_cone)]
     cone: Cone,
@@ -242,6 +245,7 @@ impl SettingsArgs {
             probe_beta: self.beta,
             probe_photons: self.probe_photons,
             probe_k: self.probe_k,
+            probe_grow: self.probe_grow,
             cone_k: self.cone.0,
             emission_samples: self.emission_samples,
             direct: self.direct.into(),

@@ -72,6 +72,18 @@ fn settings_out_of_range_and_device_limits_are_told_apart() {
         Err(Error::Settings { field: "alpha", .. }) => {}
         other => panic!("expected Error::Settings for alpha, got {:?}", other.err()),
     }
+    for grow in [0.5, 2.5, f32::NAN] {
+        let settings = Settings {
+            probe_grow: grow,
+            ..Settings::default()
+        };
+        match Renderer::new(&ctx, &cornell(8, 8), settings) {
+            Err(Error::Settings {
+                field: "probe_grow", ..
+            }) => {}
+            other => panic!("expected Error::Settings for probe_grow {grow}, got {:?}", other.err()),
+        }
+    }
     // 4096 x 4096 pixels with 8 hit points each: 2^27 hit points, far past any device's largest storage
     // buffer (lavapipe: 128 MiB; the Vulkan maximum range is 4 GiB).
     let settings = Settings {

@@ -94,6 +94,7 @@ class Renderer:
         beta: float = ...,
         probe_photons: Optional[int] = ...,
         probe_k: float = ...,
+        probe_grow: float = ...,
         hit_slots: int = ...,
         max_eye_depth: int = ...,
         max_photon_depth: int = ...,

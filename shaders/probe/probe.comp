@@ -25,6 +25,7 @@
 //      2 r and r), and takes the smaller radius: a radius grows (to at most 2 r) only where the density is
 //      flat out to 2 r, so it never reaches over a caustic's edge it could not see from r, and shrinks (to
 //      at least r / 8) where either scale finds a significant curvature (a caustic, a light's falloff).
+//      pc.param (Settings::probe_grow, 1 to 2) caps the growth: 1 only ever shrinks.
 //      The counts within r / 2 and 2 r go in the accumulator's flux_g and flux_b.
 //      Stores r'^2 and lambda / r^2 (HitStats.probe), and clears the accumulator.
 #version 460
@@ -44,7 +45,7 @@ layout(push_constant) uniform ProbePush {
     uint count;      // entries of `order`
     uint phase;
     uint mode;       // 1 paper, 2 scale-free, 3 nearest, 4 curvature
-    float param;     // modes 1, 2: beta as a fraction of r (the paper's best: 1/5); mode 3: k; mode 4: unused
+    float param;     // modes 1, 2: beta as a fraction of r (the paper's best: 1/5); mode 3: k; mode 4: the largest r' / r
 } pc;
 #include "neighbours.glsl"
 #include "invocation.glsl"
@@ -95,7 +96,7 @@ void set_radius(uint i) {
         grow = a.m > 0u ? min(sqrt(double(pc.param) / double(a.m)), 2.0) : 2.0;
     } else if (pc.mode == 4u) {
         double n_half = double(a.flux_g), n1 = double(a.m), n_two = double(a.flux_b);
-        grow = clamp(min(curvature_fit(n1, n_half), 2.0 * curvature_fit(n_two, n1)), CURVATURE_MIN, 2.0);
+        grow = clamp(min(curvature_fit(n1, n_half), 2.0 * curvature_fit(n_two, n1)), CURVATURE_MIN, double(pc.param));
     } else if (ratio > double(pc.param)) {
         double lambda = ratio * s.r2;
         grow = pc.mode == 1u ? 1.0 + lambda / r   // eq. 9 as printed: adds an area to a length

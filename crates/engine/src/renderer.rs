@@ -838,7 +838,7 @@ impl Renderer {
         let (mode, param) = match self.settings.probe {
             ProbeMode::Paper => (MODE_PAPER, self.settings.probe_beta),
             ProbeMode::Nearest => (MODE_NEAREST, self.settings.probe_k),
-            ProbeMode::Curvature => (MODE_CURVATURE, 0.0),
+            ProbeMode::Curvature => (MODE_CURVATURE, self.settings.probe_grow),
             _ => (MODE_SCALE_FREE, self.settings.probe_beta),
         };
         ProbePush {

@@ -98,6 +98,10 @@ pub struct Settings {
     /// With `probe: Nearest`, the probe photons each starting radius is to hold.
     #[serde(default = "default_probe_k")]
     pub probe_k: f32,
+    /// With `probe: Curvature`, the most a starting radius may grow, as r' / r in [1, 2] (1: it only
+    /// shrinks, and no lookup reads more photons than eq. 8's radius would).
+    #[serde(default = "default_probe_grow")]
+    pub probe_grow: f32,
     /// Hit points per pixel: glass splits an eye path into both Fresnel branches up to this many leaves
     /// (PPM; SPPM always has one).
     pub hit_slots: u32,
@@ -168,6 +172,7 @@ impl Default for Settings {
             probe_beta: 0.2,
             probe_photons: None,
             probe_k: DEFAULT_PROBE_K,
+            probe_grow: DEFAULT_PROBE_GROW,
             hit_slots: 4,
             max_eye_depth: 1024,
             max_photon_depth: 4096,
@@ -183,6 +188,13 @@ impl Default for Settings {
             split_submissions: false,
         }
     }
+}
+
+/// `Settings::probe_grow`'s default: as far as the other probe rules grow a radius.
+pub const DEFAULT_PROBE_GROW: f32 = 2.0;
+
+fn default_probe_grow() -> f32 {
+    DEFAULT_PROBE_GROW
 }
 
 /// `Settings::probe_k`'s default.
@@ -269,6 +281,12 @@ impl Settings {
                     format!("must be positive and finite, got {r}"),
                 ));
             }
+        }
+        if !(1.0..=2.0).contains(&self.probe_grow) {
+            return Err(invalid(
+                "probe_grow",
+                format!("must be in [1, 2] (r' / r at most), got {}", self.probe_grow),
+            ));
         }
         if !(self.probe_k.is_finite() && self.probe_k >= 1.0) {
             return Err(invalid(

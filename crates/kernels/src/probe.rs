@@ -25,7 +25,7 @@ pub struct ProbePush {
     /// 0: accumulate a batch of probe photons; 1: set the radii.
     pub phase: u32,
     pub mode: u32,
-    /// The mode's constant: beta as a fraction of r (paper, scale-free), k (nearest); unused (curvature).
+    /// The mode's constant: beta as a fraction of r (paper, scale-free), k (nearest); the largest r' / r (curvature).
     pub param: f32,
 }
 push_struct!(ProbePush, PROBE);

@@ -987,11 +987,11 @@ pub fn lambda_ratio(d2: &[f64], r2: f64) -> f64 {
 /// beta is lambda / r^2 <= beta_frac in both modes; above it the paper enlarges to r (1 + lambda / r), the
 /// scale-free variant to r (1 + lambda / r^2).
 /// Nearest (`count` probe photons within r, `param` k): r min(sqrt(k / count), 2), 2 r without one.
-/// Curvature (`counts` within r / 2, r and 2 r): [`curvature_growth`].
+/// Curvature (`counts` within r / 2, r and 2 r, `param` the largest r' / r): [`curvature_growth`].
 pub fn probe_radius(r: f64, ratio: f64, counts: [usize; 3], mode: ProbeMode, param: f64) -> f64 {
     let count = counts[1];
     if mode == ProbeMode::Curvature {
-        return r * curvature_growth(counts.map(|c| c as f64));
+        return r * curvature_growth(counts.map(|c| c as f64)).min(param);
     }
     if mode == ProbeMode::Nearest {
         return r * if count > 0 {
