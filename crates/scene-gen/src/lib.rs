@@ -34,6 +34,10 @@ pub fn contents(f: &DemoFile) -> String {
         "glass-on-table.obj" => glass_on_table_obj,
         "glass-on-table.mtl" => glass_on_table_mtl,
         "gold-ring.obj" => gold_ring_obj,
+        "interior-shell.obj" => interior::shell_obj,
+        "interior-wood.obj" => interior::wood_obj,
+        "interior-glass.obj" => interior::glass_obj,
+        "interior-metal.obj" => interior::metal_obj,
         name => panic!("no generator writes {name} (listed in the engine's scene/generated.rs)"),
     };
     make()
@@ -79,14 +83,16 @@ fn first_line(path: &Path) -> Option<String> {
 struct Model {
     v: Vec<DVec3>,
     vn: Vec<DVec3>,
+    /// Texture coordinates (`vt`), for the textured surfaces of the interior.
+    vt: Vec<[f64; 2]>,
     groups: Vec<Group>,
 }
 
 struct Group {
     name: String,
     material: Option<String>,
-    /// `[v, vn]` (0-based) per corner; `vn` is `u32::MAX` for none.
-    faces: Vec<[[u32; 2]; 3]>,
+    /// `[v, vn, vt]` (0-based) per corner; `vn` and `vt` are `u32::MAX` for none.
+    faces: Vec<[[u32; 3]; 3]>,
 }
 
 const NO_NORMAL: u32 = u32::MAX;
@@ -112,15 +118,16 @@ impl Model {
 
     /// Adds triangle `t`, flipped if needed so that its front faces along `outward`.
     fn face(&mut self, t: [u32; 3], n: [u32; 3], outward: DVec3) {
+        self.face_uv(t, n, [NO_NORMAL; 3], outward);
+    }
+
+    /// [`Model::face`] with a texture coordinate index per corner.
+    fn face_uv(&mut self, t: [u32; 3], n: [u32; 3], uv: [u32; 3], outward: DVec3) {
         let p = t.map(|i| self.v[i as usize]);
         let flip = (p[1] - p[0]).cross(p[2] - p[0]).dot(outward) < 0.0;
-        let (t, n) = if flip {
-            ([t[0], t[2], t[1]], [n[0], n[2], n[1]])
-        } else {
-            (t, n)
-        };
+        let order = if flip { [0, 2, 1] } else { [0, 1, 2] };
         if let Some(g) = self.groups.last_mut() {
-            g.faces.push([[t[0], n[0]], [t[1], n[1]], [t[2], n[2]]]);
+            g.faces.push(order.map(|k| [t[k], n[k], uv[k]]));
         }
     }
 
@@ -144,6 +151,9 @@ impl Model {
         for n in &self.vn {
             let _ = writeln!(s, "vn {} {} {}", n.x as f32, n.y as f32, n.z as f32);
         }
+        for [u, v] in &self.vt {
+            let _ = writeln!(s, "vt {} {}", *u as f32, *v as f32);
+        }
         for g in &self.groups {
             let _ = writeln!(s, "o {}", g.name);
             if let Some(m) = &g.material {
@@ -151,12 +161,13 @@ impl Model {
             }
             for f in &g.faces {
                 s.push('f');
-                for [v, n] in f {
-                    if *n == NO_NORMAL {
-                        let _ = write!(s, " {}", v + 1);
-                    } else {
-                        let _ = write!(s, " {}//{}", v + 1, n + 1);
-                    }
+                for &[v, n, t] in f {
+                    let _ = match (n == NO_NORMAL, t == NO_NORMAL) {
+                        (true, true) => write!(s, " {}", v + 1),
+                        (false, true) => write!(s, " {}//{}", v + 1, n + 1),
+                        (true, false) => write!(s, " {}/{}", v + 1, t + 1),
+                        (false, false) => write!(s, " {}/{}/{}", v + 1, t + 1, n + 1),
+                    };
                 }
                 s.push('\n');
             }
@@ -523,6 +534,8 @@ fn gold_ring_obj() -> String {
     }
     m.write(None)
 }
+
+mod interior;
 
 #[cfg(test)]
 mod tests {
