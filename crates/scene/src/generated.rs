@@ -64,6 +64,23 @@ pub const FILES: &[DemoFile] = &[
         name: "gold-ring.obj",
         committed: false,
     },
+    // scenes/interior.xml: a staircase hall, one file per material.
+    DemoFile {
+        name: "interior-shell.obj",
+        committed: false,
+    },
+    DemoFile {
+        name: "interior-wood.obj",
+        committed: false,
+    },
+    DemoFile {
+        name: "interior-glass.obj",
+        committed: false,
+    },
+    DemoFile {
+        name: "interior-metal.obj",
+        committed: false,
+    },
 ];
 
 /// True when `path` names a file the generator writes but git does not hold (for a hint in the
