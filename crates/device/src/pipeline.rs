@@ -282,7 +282,8 @@ impl ComputePipeline {
             }
             return Ok(());
         }
-        if b.offset % self.offset_alignment != 0 {
+        // `checked_rem`: `is_multiple_of` is newer than the workspace's rust-version.
+        if b.offset.checked_rem(self.offset_alignment) != Some(0) {
             bail!(
                 "{}: offset {} is not a multiple of the device's storage offset alignment {}",
                 what(),
