@@ -86,6 +86,8 @@ layout(push_constant) uniform RayPush {
     uint pilot;      // 1: eye pass 0, whose emission samples only set `busy`
     uint light_samples; // the same paths per pixel the pilot did not mark
     uint per_dispatch;  // paths per pixel one dispatch takes: dispatch k takes samples k * this onwards
+    uint first_pixel;   // this dispatch's tile, pixels first_pixel.. (the renderer's tiles): HitPoints,
+    uint tile_pixels;   // Direct and Busy are bound from its first pixel on, so index them by `local`
 } pc;
 
 #include "rng.glsl"
@@ -348,8 +350,9 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
 
 void main() {
     load_params();
-    uint pixel = invocation_index();
-    if (pixel >= params.width * params.height) return;
+    uint local = invocation_index();
+    if (local >= pc.tile_pixels) return;
+    uint pixel = pc.first_pixel + local;
     uint px = pixel % params.width;
     uint py = pixel / params.width;
     uint64_t pixels = uint64_t(params.width * params.height);
@@ -373,7 +376,7 @@ void main() {
         // A sample at a fixed point of the pixel (PPM's centre) would bias the box-filtered terms (a) and
         // (d): it counts only when no random sample does.
         bool hit_is_sample = pc.jitter.x < 0.0 || pc.emission_samples == 0u;
-        uint base_slot = pixel * params.hit_slots;
+        uint base_slot = local * params.hit_slots;
 
         while (sp > 0u) {
             Pending r = stack[--sp];
@@ -561,7 +564,7 @@ void main() {
     // emission; with direct light sampled, light_samples where one of its shadow rays reached a light and
     // one where none did (in the umbra, or where no light is in direct view: the shadow rays there would
     // add nothing); else light_samples.
-    uint mark = busy[pixel];
+    uint mark = busy[local];
     uint total = pc.light_samples;
     if (pc.pilot != 0u || (mark & MARK_EMISSION) != 0u) total = pc.emission_samples;
     else if (params.direct_light != 0u && pc.emission_samples > 0u && (mark & MARK_LIT) == 0u) total = min(total, 1u);
@@ -577,6 +580,6 @@ void main() {
         emitted += dvec3(e);
         samples++;
     }
-    if (pc.pilot != 0u) busy[pixel] |= (seen ? MARK_EMISSION : 0u) | (lit ? MARK_LIT : 0u);
-    if (samples > 0u) direct[pixel] += dvec4(emitted, double(samples));
+    if (pc.pilot != 0u) busy[local] |= (seen ? MARK_EMISSION : 0u) | (lit ? MARK_LIT : 0u);
+    if (samples > 0u) direct[local] += dvec4(emitted, double(samples));
 }

@@ -13,15 +13,16 @@ layout(std430, binding = 3) writeonly buffer Image { vec4 image[]; };
 layout(push_constant) uniform ResolvePush {
     double emitted;  // photons emitted by all photon passes so far (exact in double up to 2^53)
     float norm;      // 1, or 1 - 2/(3k) with the cone filter (eq. 11)
-    float pad0;
+    uint tile_pixels; // pixels of this dispatch's tile (the renderer's): Stats, Direct and Image are
+                      // bound from its first pixel on
 } pc;
 #include "sampling.glsl"
 #include "invocation.glsl"
 
 void main() {
     load_params();
-    uint pixel = invocation_index();
-    if (pixel >= params.width * params.height) return;
+    uint pixel = invocation_index(); // within the tile
+    if (pixel >= pc.tile_pixels) return;
     dvec3 sum = dvec3(0.0);
     if (pc.emitted > 0.0) {
         for (uint s = 0u; s < params.hit_slots; s++) {

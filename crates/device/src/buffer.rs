@@ -37,17 +37,11 @@ pub const TEXEL_BYTES: u64 = 16;
 
 impl Buffer {
     /// A buffer of `size` bytes (at least 4: Vulkan forbids empty buffers, and an empty scene list is legal).
+    /// A storage buffer may be larger than the device's largest storage binding
+    /// (`maxStorageBufferRange`): a kernel then binds it in [`BufferSlice`]s of at most that range, which
+    /// [`ComputePipeline`](crate::ComputePipeline) checks at every dispatch.
     pub fn new(ctx: &Context, name: &str, size: u64, kind: BufferKind) -> Result<Buffer> {
         let size = size.max(4).next_multiple_of(4);
-        let max = ctx.limits().max_storage_buffer_range as u64;
-        if kind == BufferKind::Storage && size > max {
-            bail!(
-                "buffer {name:?} needs {} MiB, more than this device's largest storage buffer ({} MiB): \
-                 lower what fills it",
-                size >> 20,
-                max >> 20
-            );
-        }
         let (usage, location) = match kind {
             BufferKind::Storage => (
                 vk::BufferUsageFlags::STORAGE_BUFFER
@@ -132,6 +126,25 @@ impl Buffer {
         Ok(buffer)
     }
 
+    /// The whole buffer as one binding.
+    pub fn whole(&self) -> BufferSlice<'_> {
+        BufferSlice {
+            buffer: self,
+            offset: 0,
+            range: self.size,
+        }
+    }
+
+    /// `range` bytes from byte `offset` as one binding (checked against the buffer and the device when
+    /// a kernel binds it).
+    pub fn slice(&self, offset: u64, range: u64) -> BufferSlice<'_> {
+        BufferSlice {
+            buffer: self,
+            offset,
+            range,
+        }
+    }
+
     /// The buffer as 16-byte texels, for a kernel's uniform texel buffer binding.
     pub fn texel_view(&self) -> Result<vk::BufferView> {
         self.texels.ok_or_else(|| {
@@ -200,6 +213,20 @@ impl Buffer {
             size,
         }];
         unsafe { self.shared.device.cmd_copy_buffer(cmd, self.raw, dst.raw, &region) };
+    }
+}
+
+/// Part of a [`Buffer`] bound as one storage descriptor: a kernel sees its first byte as element 0.
+#[derive(Clone, Copy)]
+pub struct BufferSlice<'a> {
+    pub buffer: &'a Buffer,
+    pub offset: u64,
+    pub range: u64,
+}
+
+impl<'a> From<&'a Buffer> for BufferSlice<'a> {
+    fn from(buffer: &'a Buffer) -> BufferSlice<'a> {
+        buffer.whole()
     }
 }
 

@@ -14,7 +14,7 @@ mod pipeline_cache;
 mod profiler;
 mod swapchain;
 
-pub use buffer::{Buffer, BufferKind};
+pub use buffer::{Buffer, BufferKind, BufferSlice};
 pub use context::{barrier, Context, ContextOptions, DeviceInfo, MemoryUsage};
 pub use pipeline::{ComputePipeline, PipelineDesc};
 pub use profiler::{Profiler, ScopeTiming};

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use anyhow::{bail, Context as _, Result};
 use ash::vk;
 
-use crate::buffer::Buffer;
+use crate::buffer::{Buffer, BufferSlice};
 use crate::context::{Context, Shared};
 
 /// What a pipeline is made from; the kernel crate fills this from SPIR-V reflection.
@@ -34,6 +34,9 @@ pub struct ComputePipeline {
     texel_bindings: u32,
     push_size: u32,
     local_size: u32,
+    /// The device's largest storage binding and the alignment of a binding's offset, checked per dispatch.
+    max_range: u64,
+    offset_alignment: u64,
 }
 
 impl ComputePipeline {
@@ -72,6 +75,8 @@ impl ComputePipeline {
             texel_bindings: desc.texel_bindings,
             push_size: desc.push_size,
             local_size: desc.local_size,
+            max_range: ctx.limits().max_storage_buffer_range as u64,
+            offset_alignment: ctx.limits().min_storage_buffer_offset_alignment.max(1),
         };
         let ranges = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::COMPUTE)
@@ -115,6 +120,19 @@ impl ComputePipeline {
     /// Records one dispatch covering `invocations` threads (rounded up to whole workgroups; the kernel
     /// bounds-checks), with `buffers` at bindings 0.. and `push` as its push constants.
     pub fn dispatch(&self, cmd: vk::CommandBuffer, buffers: &[&Buffer], push: &[u8], invocations: u64) -> Result<()> {
+        let slices: Vec<BufferSlice> = buffers.iter().map(|b| b.whole()).collect();
+        self.dispatch_slices(cmd, &slices, push, invocations)
+    }
+
+    /// [`ComputePipeline::dispatch`] with parts of buffers at the bindings: each kernel's element 0 is
+    /// its slice's first byte.
+    pub fn dispatch_slices(
+        &self,
+        cmd: vk::CommandBuffer,
+        buffers: &[BufferSlice],
+        push: &[u8],
+        invocations: u64,
+    ) -> Result<()> {
         let groups = invocations.div_ceil(self.local_size as u64);
         // Spread over y when x would exceed the 65535 limit many devices (lavapipe included) have; kernels
         // linearise gl_WorkGroupID with gl_NumWorkGroups.
@@ -129,7 +147,12 @@ impl ComputePipeline {
                 self.name
             );
         }
-        self.dispatch_groups(cmd, buffers, push, [gx as u32, gy as u32, 1])
+        if groups == 0 {
+            return Ok(());
+        }
+        self.bind(cmd, buffers, push)?;
+        unsafe { self.shared.device.cmd_dispatch(cmd, gx as u32, gy as u32, 1) };
+        Ok(())
     }
 
     /// Records a dispatch of exactly `groups` workgroups.
@@ -143,7 +166,7 @@ impl ComputePipeline {
         if groups.contains(&0) {
             return Ok(());
         }
-        self.bind(cmd, buffers, push)?;
+        self.bind(cmd, &whole(buffers), push)?;
         unsafe { self.shared.device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]) };
         Ok(())
     }
@@ -158,13 +181,13 @@ impl ComputePipeline {
         args: &Buffer,
         offset: u64,
     ) -> Result<()> {
-        self.bind(cmd, buffers, push)?;
+        self.bind(cmd, &whole(buffers), push)?;
         unsafe { self.shared.device.cmd_dispatch_indirect(cmd, args.raw(), offset) };
         Ok(())
     }
 
     /// Binds the pipeline, `buffers` at bindings 0.. and `push` as its push constants.
-    fn bind(&self, cmd: vk::CommandBuffer, buffers: &[&Buffer], push: &[u8]) -> Result<()> {
+    fn bind(&self, cmd: vk::CommandBuffer, buffers: &[BufferSlice], push: &[u8]) -> Result<()> {
         if buffers.len() != self.bindings as usize {
             bail!(
                 "kernel {} takes {} buffers, got {}",
@@ -181,14 +204,17 @@ impl ComputePipeline {
                 push.len()
             );
         }
+        for (i, b) in buffers.iter().enumerate() {
+            self.check_slice(i, b)?;
+        }
         let device = &self.shared.device;
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
             .iter()
             .map(|b| {
                 [vk::DescriptorBufferInfo {
-                    buffer: b.raw(),
-                    offset: 0,
-                    range: vk::WHOLE_SIZE,
+                    buffer: b.buffer.raw(),
+                    offset: b.offset,
+                    range: b.range,
                 }]
             })
             .collect();
@@ -198,6 +224,7 @@ impl ComputePipeline {
             .map(|(i, b)| match self.texel_bindings >> i & 1 {
                 0 => Ok([vk::BufferView::null()]),
                 _ => b
+                    .buffer
                     .texel_view()
                     .map(|v| [v])
                     .with_context(|| format!("kernel {}, binding {i}", self.name)),
@@ -232,6 +259,53 @@ impl ComputePipeline {
         }
         Ok(())
     }
+}
+
+impl ComputePipeline {
+    /// Fails, naming the kernel, binding and buffer, unless `b` lies inside its buffer, starts at an
+    /// offset the device can bind and spans at most its largest storage binding (a texel binding: the
+    /// whole buffer, its texel view).
+    fn check_slice(&self, binding: usize, b: &BufferSlice) -> Result<()> {
+        let (name, size) = (b.buffer.name(), b.buffer.size());
+        let what = || format!("kernel {}, binding {binding} (buffer {name:?})", self.name);
+        if b.offset.checked_add(b.range).is_none_or(|end| end > size) || b.range == 0 {
+            bail!(
+                "{}: slice of {} bytes at {} outside the buffer's {size} bytes",
+                what(),
+                b.range,
+                b.offset
+            );
+        }
+        if self.texel_bindings >> binding & 1 != 0 {
+            if (b.offset, b.range) != (0, size) {
+                bail!("{}: a texel binding takes the whole buffer", what());
+            }
+            return Ok(());
+        }
+        // `checked_rem`: `is_multiple_of` is newer than the workspace's rust-version.
+        if b.offset.checked_rem(self.offset_alignment) != Some(0) {
+            bail!(
+                "{}: offset {} is not a multiple of the device's storage offset alignment {}",
+                what(),
+                b.offset,
+                self.offset_alignment
+            );
+        }
+        if b.range > self.max_range {
+            bail!(
+                "{}: {} MiB in one binding, more than this device's largest storage binding ({} MiB)",
+                what(),
+                b.range >> 20,
+                self.max_range >> 20
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Every buffer as one whole binding.
+fn whole<'a>(buffers: &[&'a Buffer]) -> Vec<BufferSlice<'a>> {
+    buffers.iter().map(|b| b.whole()).collect()
 }
 
 impl Drop for ComputePipeline {

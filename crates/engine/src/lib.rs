@@ -51,7 +51,7 @@ pub use image_io::RgbImage;
 pub use ppm_vk_device::{raw_window_handle, Context, ContextOptions, DeviceInfo, ScopeTiming};
 pub use ppm_vk_kernels::layout::PathCounters;
 pub use ppm_vk_kernels::photon::PathLimits;
-pub use renderer::{spread_marks, CancelToken, Renderer};
+pub use renderer::{spread_marks, CancelToken, Renderer, TILE_ALIGN_PIXELS};
 pub use scene::Scene;
 pub use settings::{DirectLight, GlossyLight, Mode, ProbeMode, Settings};
 pub use stats::{KernelSetup, PassStats, PhotonVariant, ProbeReport, SetupTimes};

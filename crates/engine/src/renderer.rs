@@ -5,7 +5,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
-use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler, ScopeTiming};
+use ppm_vk_device::{barrier, vk, Buffer, BufferKind, BufferSlice, ComputePipeline, Context, Profiler, ScopeTiming};
 use ppm_vk_kernels::gather::{self, GatherPush, GridReader, HitBuffers};
 use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon, PhotonWork, RenderParams, Triangle};
 use ppm_vk_kernels::lookup::{Grid, Lookup};
@@ -107,9 +107,11 @@ pub struct Renderer {
     hit_points: Buffer,
     stats: Buffer,
     accum: Buffer,
-    /// Non-empty hit-point slots in Morton order of their position (built after the ray pass).
+    /// Non-empty hit-point slots in Morton order of their position (built after the ray pass), per tile:
+    /// tile k's entries from its first slot on, relative to it.
     order: Buffer,
-    active: u32,
+    /// The image's pixels in runs that the kernels bind one at a time ([`Tile`]).
+    tiles: Vec<Tile>,
     direct: Buffer,
     /// `direct` and `cut` as the pass in flight found them: its eye pass adds to both, and a cancelled
     /// pass puts them back.
@@ -169,6 +171,47 @@ const ALL_STAGES: &[BatchStage] = &[BatchStage::Trace, BatchStage::Lookup, Batch
 enum GridUse {
     Gather,
     Probe,
+}
+
+/// Consecutive pixels whose per-pixel and per-slot data the kernels bind as one slice each, within the
+/// device's largest storage binding (`maxStorageBufferRange`: 128 MiB on lavapipe, whose 2048x2048 SPPM
+/// hit points alone are 192 MiB). The photons do not depend on the hit points: each batch is traced once
+/// and gathered tile after tile. Pixel and slot indices stay global (random streams, camera rays), so
+/// the image does not depend on the tiles, bit for bit.
+#[derive(Clone, Copy, Debug)]
+struct Tile {
+    first_pixel: u32,
+    pixels: u32,
+    /// Entries of the tile's hit-point order (its non-empty slots).
+    active: u32,
+}
+
+/// Every tile but the last has a multiple of this many pixels, so each slice starts at a multiple of
+/// 64 x 4 = 256 bytes (the smallest element, a u32 of the order or the marks): the largest storage
+/// offset alignment Vulkan allows a device to ask.
+pub const TILE_ALIGN_PIXELS: u32 = 64;
+
+/// Pixels per tile: the most, in multiples of [`TILE_ALIGN_PIXELS`], whose data in every per-pixel
+/// buffer is at most `cap` bytes (`per_pixel`: the largest buffer's bytes per pixel). The bound: a
+/// tile's slice of each buffer is at most `cap`, the device's `maxStorageBufferRange` (or
+/// `Settings::max_tile_bytes`, below it). `None` where not even one aligned run fits.
+fn tile_pixels(pixels: u32, per_pixel: u64, cap: u64) -> Option<u32> {
+    let fit = (cap / per_pixel.max(1)).min(u32::MAX as u64) as u32 / TILE_ALIGN_PIXELS * TILE_ALIGN_PIXELS;
+    match fit {
+        0 => None,
+        _ => Some(fit.min(pixels).max(1)),
+    }
+}
+
+/// The image's `pixels` in runs of `per_tile` (the last may be shorter).
+fn make_tiles(pixels: u32, per_tile: u32) -> Vec<Tile> {
+    (0..pixels.div_ceil(per_tile).max(1))
+        .map(|k| Tile {
+            first_pixel: k * per_tile,
+            pixels: per_tile.min(pixels - k * per_tile),
+            active: 0,
+        })
+        .collect()
 }
 
 /// Largest batch log (batches per pass).
@@ -345,9 +388,11 @@ impl Renderer {
                 slots * std::mem::size_of::<HitStats>() as u64,
             ),
             ("the pass accumulators", slots * std::mem::size_of::<PassAccum>() as u64),
+            ("the hit-point order", slots * 4),
             ("the direct emission", pixels * 32),
             ("the direct emission's copy (a cancelled pass restores it)", pixels * 32),
             ("the image", pixels * 16),
+            ("the emission-sampled pixels' marks", pixels * 4),
         ];
         let advice = format!(
             "the resolution ({}x{}) or the hit points per pixel ({})",
@@ -399,7 +444,29 @@ impl Renderer {
                 lower,
             ));
         }
-        fits_device(&per_pixel, &others, max_range, ctx.info().memory_bytes, &advice)?;
+        fits_device(&per_pixel, &others, ctx.info().memory_bytes, &advice)?;
+        // The largest per-pixel buffer sets the tiles: hit points or statistics (slots of 48 bytes), or
+        // the emission sums (32 bytes a pixel).
+        let slot_bytes = [
+            std::mem::size_of::<HitPoint>(),
+            std::mem::size_of::<HitStats>(),
+            std::mem::size_of::<PassAccum>(),
+        ]
+        .into_iter()
+        .max()
+        .unwrap_or(0) as u64;
+        let per_pixel_bytes = (settings.slots() as u64 * slot_bytes).max(32);
+        let cap = settings.max_tile_bytes.unwrap_or(max_range).min(max_range);
+        let Some(per_tile) = tile_pixels(pixels as u32, per_pixel_bytes, cap) else {
+            let message = format!(
+                "{cap} bytes hold fewer than {TILE_ALIGN_PIXELS} pixels of {per_pixel_bytes} bytes (at least {})",
+                TILE_ALIGN_PIXELS as u64 * per_pixel_bytes
+            );
+            return Err(Error::Settings {
+                field: "max_tile_bytes",
+                message,
+            });
+        };
         // The kernels read the textures as texels: each buffer within the device's texel buffer.
         let max_texels = ctx.limits().max_texel_buffer_elements as u64;
         for (what, texels) in [
@@ -509,7 +576,7 @@ impl Renderer {
                 stats: storage("hit stats", slots * std::mem::size_of::<HitStats>() as u64)?,
                 accum: storage("pass accumulators", slots * std::mem::size_of::<PassAccum>() as u64)?,
                 order: storage("hit-point order", slots * 4)?,
-                active: 0,
+                tiles: make_tiles(pixels as u32, per_tile),
                 direct: storage("direct emission", pixels * 32)?,
                 direct_saved: storage("direct emission before the pass", pixels * 32)?,
                 cut_saved: storage(
@@ -629,10 +696,23 @@ impl Renderer {
     }
 
     /// The hit-point slots the gather and the update visit, in this order.
+    /// Each tile's entries go from its first slot on, relative to it, in the order given.
     fn set_order(&mut self, order: Vec<u32>) -> Result<()> {
-        self.active = order.len() as u32;
+        let slots = self.settings.slots();
+        let per_tile = (self.tiles[0].pixels * slots) as usize;
+        let mut tiled = vec![0u32; self.gpu.slots() as usize];
+        // Where tile k's next entry goes.
+        let mut next: Vec<usize> = (0..self.tiles.len()).map(|k| k * per_tile).collect();
+        for slot in order {
+            let k = slot as usize / per_tile;
+            tiled[next[k]] = slot - (k * per_tile) as u32;
+            next[k] += 1;
+        }
+        for (k, tile) in self.tiles.iter_mut().enumerate() {
+            tile.active = (next[k] - k * per_tile) as u32;
+        }
         self.ctx
-            .upload(&self.order, bytemuck::cast_slice(&order))
+            .upload(&self.order, bytemuck::cast_slice(&tiled))
             .device("uploading the hit-point order")
     }
 
@@ -660,6 +740,9 @@ impl Renderer {
             pilot: pilot as u32,
             light_samples: unmarked,
             per_dispatch: per,
+            // The whole image; `ray_pass` sets each tile's.
+            first_pixel: 0,
+            tile_pixels: self.gpu.pixels(),
         };
         (0..total.div_ceil(per).max(1)).map(push).collect()
     }
@@ -677,12 +760,18 @@ impl Renderer {
         }
     }
 
-    fn hit_buffers(&self) -> HitBuffers<'_> {
+    /// `tile`'s slots of the per-slot buffers.
+    fn hit_buffers(&self, tile: &Tile) -> HitBuffers<'_> {
+        let slots = self.settings.slots() as u64;
+        let (first, count) = (tile.first_pixel as u64 * slots, tile.pixels as u64 * slots);
+        fn part(b: &Buffer, first: u64, count: u64, size: usize) -> BufferSlice<'_> {
+            b.slice(first * size as u64, count * size as u64)
+        }
         HitBuffers {
-            hit_points: &self.hit_points,
-            stats: &self.stats,
-            accum: &self.accum,
-            order: &self.order,
+            hit_points: part(&self.hit_points, first, count, std::mem::size_of::<HitPoint>()),
+            stats: part(&self.stats, first, count, std::mem::size_of::<HitStats>()),
+            accum: part(&self.accum, first, count, std::mem::size_of::<PassAccum>()),
+            order: part(&self.order, first, count, 4),
         }
     }
 
@@ -693,7 +782,8 @@ impl Renderer {
     fn ray_pass(&mut self, eye_pass: u32, trace_hits: bool, save: bool) -> Result<Vec<ScopeTiming>> {
         self.profiler.reset();
         let pushes = self.eye_pushes(eye_pass, trace_hits);
-        let pixels = self.gpu.pixels();
+        let tiles = &self.tiles;
+        let slots = self.settings.slots() as u64;
         let scene = self.scene_buffers();
         let (profiler, k) = (&self.profiler, &self.kernels);
         let (hit_points, direct, cut, busy, lights) =
@@ -707,7 +797,17 @@ impl Renderer {
                 }
                 profiler.scope(cmd, "ray", || {
                     for push in &pushes {
-                        ray::record(&k.ray, cmd, &scene, hit_points, direct, cut, busy, lights, pixels, push)?;
+                        for t in tiles {
+                            let push = RayPush {
+                                first_pixel: t.first_pixel,
+                                tile_pixels: t.pixels,
+                                ..*push
+                            };
+                            let size = std::mem::size_of::<HitPoint>() as u64 * slots;
+                            let hits = pixel_slice(hit_points, t, size);
+                            let (direct, busy) = (pixel_slice(direct, t, 32), pixel_slice(busy, t, 4));
+                            ray::record(&k.ray, cmd, &scene, hits, direct, cut, busy, lights, &push)?;
+                        }
                         barrier(&self.ctx, cmd); // the next dispatch adds to the same `direct`
                     }
                     Ok(())
@@ -775,7 +875,6 @@ impl Renderer {
         stages: &[BatchStage],
     ) -> anyhow::Result<()> {
         let ctx = &self.ctx;
-        let hits = self.hit_buffers();
         let k = &self.kernels;
         let capacity = self.gpu.params.photon_capacity;
         let salt = match use_ {
@@ -806,35 +905,52 @@ impl Renderer {
         }
         match use_ {
             GridUse::Gather => {
-                let push = GatherPush {
-                    count: self.active,
-                    cone_k: self.settings.cone_k.unwrap_or(0.0),
-                };
                 self.profiler.scope(cmd, "gather", || {
-                    gather::record_gather(&k.gather, cmd, &self.params, &hits, &self.grid, &self.materials, &push)
+                    for t in &self.tiles {
+                        let push = GatherPush {
+                            count: t.active,
+                            cone_k: self.settings.cone_k.unwrap_or(0.0),
+                        };
+                        let hits = self.hit_buffers(t);
+                        gather::record_gather(&k.gather, cmd, &self.params, &hits, &self.grid, &self.materials, &push)?;
+                    }
+                    Ok(())
                 })?;
             }
             GridUse::Probe => {
-                let push = self.probe_push(0);
-                self.profiler.scope(cmd, "probe", || {
-                    probe::record(&k.probe, cmd, &self.params, &hits, &self.grid, &push)
-                })?;
+                self.profiler.scope(cmd, "probe", || self.record_probe(cmd, 0))?;
             }
         }
         barrier(ctx, cmd);
         Ok(())
     }
 
-    fn update_push(&self) -> UpdatePush {
+    /// The probe kernel's phase `phase` over every tile.
+    fn record_probe(&self, cmd: vk::CommandBuffer, phase: u32) -> anyhow::Result<()> {
+        for t in &self.tiles {
+            let push = self.probe_push(phase, t.active);
+            probe::record(
+                &self.kernels.probe,
+                cmd,
+                &self.params,
+                &self.hit_buffers(t),
+                &self.grid,
+                &push,
+            )?;
+        }
+        Ok(())
+    }
+
+    fn update_push(&self, count: u32) -> UpdatePush {
         UpdatePush {
-            count: self.active,
+            count,
             alpha: self.settings.alpha,
             flux_fixed: self.gpu.params.flux_fixed,
             pad0: 0,
         }
     }
 
-    fn probe_push(&self, phase: u32) -> ProbePush {
+    fn probe_push(&self, phase: u32, count: u32) -> ProbePush {
         let (mode, param) = match self.settings.probe {
             ProbeMode::Paper => (MODE_PAPER, self.settings.probe_beta),
             ProbeMode::Nearest => (MODE_NEAREST, self.settings.probe_k),
@@ -842,7 +958,7 @@ impl Renderer {
             _ => (MODE_SCALE_FREE, self.settings.probe_beta),
         };
         ProbePush {
-            count: self.active,
+            count,
             phase,
             mode,
             param,
@@ -960,15 +1076,8 @@ impl Renderer {
         let photons = self.settings.probe_photons.unwrap_or(self.settings.photons_per_pass);
         let (mut stages, _, _) = self.run_batches(0, photons, GridUse::Probe)?;
         self.profiler.reset();
-        let push = self.probe_push(1);
-        let hits = self.hit_buffers();
-        let (profiler, k, params, grid) = (&self.profiler, &self.kernels, &self.params, &self.grid);
         self.ctx
-            .run(|cmd| {
-                profiler.scope(cmd, "probe", || {
-                    probe::record(&k.probe, cmd, params, &hits, grid, &push)
-                })
-            })
+            .run(|cmd| self.profiler.scope(cmd, "probe", || self.record_probe(cmd, 1)))
             .device("the probe pass")?;
         stages.extend(self.profiler.read().device("the probe pass")?);
         let gpu_ms = stages.iter().map(|s| s.duration_ms).sum();
@@ -1220,18 +1329,23 @@ impl Renderer {
     /// Resolves the current estimate into an image buffer on the device (eq. 1-2) and returns its GPU time.
     pub fn resolve(&mut self) -> Result<f64> {
         self.profiler.reset();
-        let push = ResolvePush {
-            emitted: self.emitted as f64,
-            norm: self.settings.cone_norm(),
-            pad0: 0.0,
-        };
-        let pixels = self.gpu.pixels();
         let (profiler, k) = (&self.profiler, &self.kernels);
         let (params, stats, direct, image) = (&self.params, &self.stats, &self.direct, &self.image);
+        let stats_size = std::mem::size_of::<HitStats>() as u64 * self.settings.slots() as u64;
         self.ctx
             .run(|cmd| {
                 profiler.scope(cmd, "resolve", || {
-                    resolve::record(&k.resolve, cmd, params, stats, direct, image, pixels, &push)
+                    for t in &self.tiles {
+                        let push = ResolvePush {
+                            emitted: self.emitted as f64,
+                            norm: self.settings.cone_norm(),
+                            tile_pixels: t.pixels,
+                        };
+                        let (stats, direct) = (pixel_slice(stats, t, stats_size), pixel_slice(direct, t, 32));
+                        let image = pixel_slice(image, t, 16);
+                        resolve::record(&k.resolve, cmd, params, stats, direct, image, &push)?;
+                    }
+                    Ok(())
                 })?;
                 barrier(&self.ctx, cmd);
                 Ok(())
@@ -1319,7 +1433,13 @@ impl Renderer {
 
     /// Non-empty hit-point slots (the hit points the gather visits).
     pub fn active_hit_points(&self) -> u32 {
-        self.active
+        self.tiles.iter().map(|t| t.active).sum()
+    }
+
+    /// The tiles the kernels bind the per-pixel buffers in ([`Tile`]): 1 wherever every per-pixel buffer
+    /// fits one binding.
+    pub fn tile_count(&self) -> usize {
+        self.tiles.len()
     }
 
     /// The depth backstops and photons per thread this render uses.
@@ -1428,13 +1548,10 @@ impl Renderer {
     fn record_update(&self, cmd: vk::CommandBuffer) -> anyhow::Result<()> {
         self.r2_max.cmd_fill(cmd, 0);
         barrier(&self.ctx, cmd);
-        update::record_update(
-            &self.kernels.update,
-            cmd,
-            &self.hit_buffers(),
-            &self.r2_max,
-            &self.update_push(),
-        )?;
+        for t in &self.tiles {
+            let push = self.update_push(t.active);
+            update::record_update(&self.kernels.update, cmd, &self.hit_buffers(t), &self.r2_max, &push)?;
+        }
         barrier(&self.ctx, cmd);
         Ok(())
     }
@@ -1525,11 +1642,7 @@ impl Renderer {
 
     /// The probe's second phase: lambda (eq. 7) and the starting radii (eq. 9) from the accumulators.
     pub fn finish_probe(&mut self) -> anyhow::Result<()> {
-        let push = self.probe_push(1);
-        let hits = self.hit_buffers();
-        let (k, params, grid) = (&self.kernels, &self.params, &self.grid);
-        self.ctx
-            .run(|cmd| probe::record(&k.probe, cmd, params, &hits, grid, &push))
+        self.ctx.run(|cmd| self.record_probe(cmd, 1))
     }
 
     fn trace_batch(&mut self, first: u64, count: u32, use_: GridUse) -> anyhow::Result<Vec<Photon>> {
@@ -1640,24 +1753,10 @@ fn tracing_pipeline(
     }
 }
 
-/// Fails, saying what to lower, unless every buffer fits the device's largest storage binding
-/// (`max_range` bytes) and all of them its memory (`memory` bytes; 0: unknown, not checked).
-/// `per_pixel` grow with the image (`advice` says how to shrink them); `others` are checked for the total.
-fn fits_device(
-    per_pixel: &[(&str, u64)],
-    others: &[(&str, u64)],
-    max_range: u64,
-    memory: u64,
-    advice: &str,
-) -> Result<()> {
-    if let Some((what, bytes)) = per_pixel.iter().find(|(_, b)| *b > max_range) {
-        return Err(Error::limit(
-            format!("{what} ({} MiB in one buffer)", bytes >> 20),
-            Some(*bytes),
-            max_range,
-            advice,
-        ));
-    }
+/// Fails, saying what to lower, unless all the buffers fit the device's memory (`memory` bytes; 0:
+/// unknown, not checked). `per_pixel` grow with the image (`advice` says how to shrink them), and are
+/// bound in tiles ([`Tile`]), so none is limited to one binding.
+fn fits_device(per_pixel: &[(&str, u64)], others: &[(&str, u64)], memory: u64, advice: &str) -> Result<()> {
     let total: u64 = per_pixel.iter().chain(others).map(|(_, b)| b).sum();
     if memory > 0 && total > memory {
         let list: Vec<String> = per_pixel
@@ -1675,6 +1774,11 @@ fn fits_device(
     }
     Ok(())
 }
+/// `tile`'s part of a per-pixel buffer of `size` bytes a pixel.
+fn pixel_slice<'a>(buffer: &'a Buffer, tile: &Tile, size: u64) -> BufferSlice<'a> {
+    buffer.slice(tile.first_pixel as u64 * size, tile.pixels as u64 * size)
+}
+
 /// Every pixel, in Morton order of its (x, y).
 fn pixel_order(width: u32, height: u32) -> Vec<u32> {
     fn spread(v: u32) -> u64 {
@@ -1726,7 +1830,7 @@ fn morton_order(hits: &[HitPoint]) -> Vec<u32> {
 
 #[cfg(test)]
 mod tests {
-    use super::{fits_device, spread_marks};
+    use super::{fits_device, make_tiles, spread_marks, tile_pixels, TILE_ALIGN_PIXELS};
 
     #[test]
     fn marks_spread_to_the_eight_neighbours_only() {
@@ -1749,29 +1853,22 @@ mod tests {
         assert!(none.iter().all(|&x| x == 0));
     }
 
-    /// Each limit at its bound: a buffer of exactly the largest binding and a total of exactly the
-    /// device's memory fit; a byte more is an error naming the buffer and what to lower.
+    /// The memory limit at its bound: a total of exactly the device's memory fits; a byte more is an
+    /// error naming the buffers and what to lower. A per-pixel buffer past one binding (128 MiB here) is
+    /// no error: the tiles bind it in parts.
     #[test]
-    fn buffers_are_checked_against_the_device_limits() {
-        let (range, memory) = (128 << 20, 512 << 20);
+    fn buffers_are_checked_against_the_device_memory() {
+        let memory = 512 << 20;
         let others = [("records", 256 << 20)];
-        assert!(fits_device(&[("hits", range)], &others, range, memory, "it").is_ok());
-        let e = fits_device(&[("hits", range + 1)], &others, range, memory, "it").unwrap_err();
+        let full = [("hits", 192 << 20), ("stats", 64 << 20)];
+        assert!(fits_device(&full, &others, memory, "it").is_ok());
+        let over = [("hits", 192 << 20), ("stats", 64 << 20), ("order", 1)];
+        let e = fits_device(&over, &others, memory, "it").unwrap_err();
         assert!(
-            matches!(e, crate::Error::Limit { value: Some(v), limit, .. } if v == range + 1 && limit == range),
+            matches!(e, crate::Error::Limit { value: Some(v), limit, .. } if v == memory + 1 && limit == memory),
             "{e:?}"
         );
         let e = e.to_string();
-        assert!(
-            e.contains("hits (128 MiB in one buffer)") && e.contains("limit of 134217728; lower it"),
-            "{e}"
-        );
-        let full = [("hits", 128 << 20), ("stats", 128 << 20)];
-        assert!(fits_device(&full, &others, range, memory, "it").is_ok());
-        let over = [("hits", 128 << 20), ("stats", 128 << 20), ("order", 1)];
-        let e = fits_device(&over, &others, range, memory, "it")
-            .unwrap_err()
-            .to_string();
         assert!(
             e.contains("device memory (512 MiB: ")
                 && e.contains("records 256 MiB")
@@ -1779,6 +1876,33 @@ mod tests {
             "{e}"
         );
         // Unknown memory (0) is not checked.
-        assert!(fits_device(&over, &others, range, 0, "it").is_ok());
+        assert!(fits_device(&over, &others, 0, "it").is_ok());
+    }
+
+    /// The tile bound: a tile's data in the largest per-pixel buffer is at most the cap, in whole runs of
+    /// `TILE_ALIGN_PIXELS`, and every pixel is in exactly one tile.
+    #[test]
+    fn tiles_fit_the_cap_and_cover_the_image() {
+        let (range, hits) = (128u64 << 20, 48u64);
+        // lavapipe's 128 MiB at 2048x2048 SPPM: 48-byte slots, so a tile of 2^27 / 48 rounded down to 64.
+        let per = tile_pixels(2048 * 2048, hits, range).unwrap();
+        assert_eq!(per as u64, range / hits / 64 * 64);
+        assert!(per as u64 * hits <= range && (per as u64 + 64) * hits > range);
+        // Exactly one run fits at its bound, none a byte below it.
+        assert_eq!(tile_pixels(4096, hits, 64 * hits), Some(64));
+        assert_eq!(tile_pixels(4096, hits, 64 * hits - 1), None);
+        // An image under the cap is one tile, whatever its size.
+        assert_eq!(tile_pixels(37 * 11, hits, range), Some(37 * 11));
+        for (pixels, per_tile) in [(4096u32, 1536u32), (2048 * 2048, per), (100, 64), (64, 64)] {
+            let tiles = make_tiles(pixels, per_tile);
+            let mut next = 0;
+            for t in &tiles {
+                assert_eq!(t.first_pixel, next);
+                assert!(t.pixels >= 1 && t.pixels <= per_tile && t.first_pixel % TILE_ALIGN_PIXELS == 0);
+                next += t.pixels;
+            }
+            assert_eq!(next, pixels);
+        }
+        assert_eq!(make_tiles(4096, 1536).len(), 3);
     }
 }

@@ -157,6 +157,12 @@ pub struct Settings {
     /// host-device round trip per pass.
     #[serde(default)]
     pub split_submissions: bool,
+    /// Most bytes of any per-pixel buffer (hit points, their statistics, emission sums) one kernel binds
+    /// at a time: the image is split into tiles of consecutive pixels that fit (the renderer's `Tile`).
+    /// `None`: the device's largest storage binding (`maxStorageBufferRange`), above which it is also
+    /// capped. The image does not depend on it, bit for bit; tests set it small to split small images.
+    #[serde(default)]
+    pub max_tile_bytes: Option<u64>,
 }
 
 impl Default for Settings {
@@ -186,6 +192,7 @@ impl Default for Settings {
             grid_buckets: None,
             grid_cell: None,
             split_submissions: false,
+            max_tile_bytes: None,
         }
     }
 }

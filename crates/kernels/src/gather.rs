@@ -3,7 +3,7 @@
 
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
-use ppm_vk_device::{vk, Buffer, ComputePipeline};
+use ppm_vk_device::{vk, Buffer, BufferSlice, ComputePipeline};
 
 use crate::lookup::Grid;
 use crate::push_struct;
@@ -18,26 +18,28 @@ pub struct GatherPush {
 }
 push_struct!(GatherPush, GATHER);
 
-/// Per-hit-point state the gather and update read and write.
+/// Per-hit-point state the gather and update read and write: one tile's slots (the renderer binds the
+/// per-slot buffers in slices of consecutive slots, each within the device's largest storage binding).
 pub struct HitBuffers<'a> {
-    pub hit_points: &'a Buffer,
-    pub stats: &'a Buffer,
-    pub accum: &'a Buffer,
-    /// Indices of the non-empty slots, in the order threads take them (spatially coherent).
-    pub order: &'a Buffer,
+    pub hit_points: BufferSlice<'a>,
+    pub stats: BufferSlice<'a>,
+    pub accum: BufferSlice<'a>,
+    /// Indices of the non-empty slots, in the order threads take them (spatially coherent); relative to
+    /// the first slot of the slices above.
+    pub order: BufferSlice<'a>,
 }
 
 /// The bindings of the kernels that read the photon grid per hit point (gather.comp and probe.comp).
-pub fn grid_reader_bindings<'a>(params: &'a Buffer, hits: &HitBuffers<'a>, grid: &'a Grid) -> [&'a Buffer; 8] {
+pub fn grid_reader_bindings<'a>(params: &'a Buffer, hits: &HitBuffers<'a>, grid: &'a Grid) -> [BufferSlice<'a>; 8] {
     [
-        params,
+        params.whole(),
         hits.hit_points,
         hits.stats,
         hits.accum,
-        &grid.records,
-        &grid.cell_start,
+        grid.records.whole(),
+        grid.cell_start.whole(),
         hits.order,
-        &grid.status,
+        grid.status.whole(),
     ]
 }
 
@@ -97,9 +99,9 @@ pub fn record_gather(
 ) -> Result<()> {
     let threads = push.count.div_ceil(k.group) as u64;
     let [a, b, c, d, e, f, g, h] = grid_reader_bindings(params, hits, grid);
-    k.pipeline.dispatch(
+    k.pipeline.dispatch_slices(
         cmd,
-        &[a, b, c, d, e, f, g, h, materials],
+        &[a, b, c, d, e, f, g, h, materials.whole()],
         bytemuck::bytes_of(push),
         threads,
     )

@@ -44,7 +44,7 @@ pub fn record(
     } else {
         push.count
     };
-    k.pipeline.dispatch(
+    k.pipeline.dispatch_slices(
         cmd,
         &crate::gather::grid_reader_bindings(params, hits, grid),
         bytemuck::bytes_of(push),

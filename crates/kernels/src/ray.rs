@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
-use ppm_vk_device::{vk, Buffer, ComputePipeline};
+use ppm_vk_device::{vk, Buffer, BufferSlice, ComputePipeline};
 
 use crate::push_struct;
 
@@ -30,6 +30,10 @@ pub struct RayPush {
     pub light_samples: u32,
     /// Samples per pixel one dispatch takes: dispatch `chunk` takes samples `chunk * per_dispatch` on.
     pub per_dispatch: u32,
+    /// The dispatch's first pixel and its pixel count: the bound per-pixel slices start there (the
+    /// renderer's tiles), while streams and camera rays keep the pixel's index in the image.
+    pub first_pixel: u32,
+    pub tile_pixels: u32,
 }
 
 /// `RayPush::jitter` for a random position in every pixel (SPPM's box filter).
@@ -76,18 +80,19 @@ pub fn record(
     k: &ComputePipeline,
     cmd: vk::CommandBuffer,
     scene: &SceneBuffers,
-    hit_points: &Buffer,
-    direct: &Buffer,
+    hit_points: BufferSlice,
+    direct: BufferSlice,
     cut: &Buffer,
-    busy: &Buffer,
+    busy: BufferSlice,
     lights: &Buffer,
-    pixels: u32,
     push: &RayPush,
 ) -> Result<()> {
-    k.dispatch(
+    let scene = scene.bindings().map(Buffer::whole);
+    let own = [hit_points, direct, cut.whole(), busy, lights.whole()];
+    k.dispatch_slices(
         cmd,
-        &[&scene.bindings()[..], &[hit_points, direct, cut, busy, lights]].concat(),
+        &[&scene[..], &own[..]].concat(),
         bytemuck::bytes_of(push),
-        pixels as u64,
+        push.tile_pixels as u64,
     )
 }

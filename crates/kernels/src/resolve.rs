@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
-use ppm_vk_device::{vk, Buffer, ComputePipeline};
+use ppm_vk_device::{vk, Buffer, BufferSlice, ComputePipeline};
 
 use crate::push_struct;
 
@@ -13,7 +13,8 @@ pub struct ResolvePush {
     pub emitted: f64,
     /// 1, or the cone filter's 1 - 2/(3k) (eq. 11).
     pub norm: f32,
-    pub pad0: f32,
+    /// Pixels of the dispatch's tile (the renderer's): the bound slices start at its first pixel.
+    pub tile_pixels: u32,
 }
 push_struct!(ResolvePush, RESOLVE);
 
@@ -23,16 +24,15 @@ pub fn record(
     k: &ComputePipeline,
     cmd: vk::CommandBuffer,
     params: &Buffer,
-    stats: &Buffer,
-    direct: &Buffer,
-    image: &Buffer,
-    pixels: u32,
+    stats: BufferSlice,
+    direct: BufferSlice,
+    image: BufferSlice,
     push: &ResolvePush,
 ) -> Result<()> {
-    k.dispatch(
+    k.dispatch_slices(
         cmd,
-        &[params, stats, direct, image],
+        &[params.whole(), stats, direct, image],
         bytemuck::bytes_of(push),
-        pixels as u64,
+        push.tile_pixels as u64,
     )
 }

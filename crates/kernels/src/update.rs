@@ -28,8 +28,8 @@ pub fn record_update(
     r2_max: &Buffer,
     push: &UpdatePush,
 ) -> Result<()> {
-    let buffers = [hits.stats, hits.accum, hits.order, hits.hit_points, r2_max];
-    k.dispatch(cmd, &buffers, bytemuck::bytes_of(push), push.count as u64)
+    let buffers = [hits.stats, hits.accum, hits.order, hits.hit_points, r2_max.whole()];
+    k.dispatch_slices(cmd, &buffers, bytemuck::bytes_of(push), push.count as u64)
 }
 
 /// The largest R^2 the update saw, from the two words it wrote.
