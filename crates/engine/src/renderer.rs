@@ -1774,6 +1774,7 @@ fn fits_device(per_pixel: &[(&str, u64)], others: &[(&str, u64)], memory: u64, a
     }
     Ok(())
 }
+
 /// `tile`'s part of a per-pixel buffer of `size` bytes a pixel.
 fn pixel_slice<'a>(buffer: &'a Buffer, tile: &Tile, size: u64) -> BufferSlice<'a> {
     buffer.slice(tile.first_pixel as u64 * size, tile.pixels as u64 * size)
