@@ -670,6 +670,30 @@ fn photon_records_match_reference_unspecialized() {
     photon_records_match_reference_case(false);
 }
 
+/// cornell-spheres with its ceiling light a disk (the ellipse inscribed in its quad, a circle: Mitsuba's
+/// `disk`): rays pass by the quad's corners, shadow rays and photons start uniformly on the disk.
+fn cornell_disk_light() -> ppm_vk_engine::Scene {
+    let mut scene = cornell(RES, RES);
+    let lights = scene.lights();
+    assert_eq!(lights.len(), 1);
+    scene.quads[lights[0] as usize].disk = true;
+    scene.validate().unwrap();
+    scene
+}
+
+/// The disk light, compiled into the kernels and read from buffers.
+#[test]
+fn photon_records_match_reference_with_a_disk_light() {
+    photon_records_match_reference_on(cornell_disk_light(), true, 1e-5);
+    photon_records_match_reference_on(cornell_disk_light(), false, 1e-5);
+}
+
+#[test]
+fn ray_pass_matches_reference_with_a_disk_light() {
+    ray_pass_matches_reference_on(cornell_disk_light(), true, DirectLight::Sample);
+    ray_pass_matches_reference_on(cornell_disk_light(), false, DirectLight::Sample);
+}
+
 /// A gold sphere where the mirror was: the conductor's Fresnel term on the photons' specular bounces. The
 /// flux now depends on the angle of incidence, and where that is grazing the Fresnel term changes fast: the
 /// f32 rounding of a hit on the sphere (which moves the twin's direction by up to the 4 code units the match
@@ -1732,12 +1756,14 @@ fn cornell_masked() -> ppm_vk_engine::Scene {
         edge_u: Vec3::new(0.6, 0.0, -0.3),
         edge_v: Vec3::new(0.0, 0.8, 0.0),
         material: pane,
+        disk: false,
     });
     scene.quads.push(Quad {
         origin: Vec3::new(-0.5, 0.2, -0.9),
         edge_u: Vec3::new(1.0, 0.0, 0.0),
         edge_v: Vec3::new(0.0, 1.2, 0.0),
         material: null,
+        disk: false,
     });
     let diffuse = scene
         .spheres

@@ -104,7 +104,8 @@ fn block_expected(scene: &Scene, b: u32, bx: u32, by: u32, f: &dyn Fn(Vec3) -> f
 
 /// Compares every b x b block of the image with the closed form: relative error within `rel` where the
 /// expected value is at least a tenth of the largest, absolute within rel * largest elsewhere (and
-/// everywhere with `of_peak`: the photons' kernel blurs an edge by its radius).
+/// everywhere with `of_peak`: the photons' kernel blurs an edge by its radius). A block where `f` is NaN
+/// anywhere is not checked.
 fn check_blocks(name: &str, image: &RgbImage, scene: &Scene, b: u32, rel: f64, of_peak: bool, f: &dyn Fn(Vec3) -> f64) {
     let n = scene.camera.width / b;
     let mut worst = 0f64;
@@ -117,6 +118,9 @@ fn check_blocks(name: &str, image: &RgbImage, scene: &Scene, b: u32, rel: f64, o
     for by in 0..n {
         for bx in 0..n {
             let (got, want) = (block(image, b, bx, by), block_expected(scene, b, bx, by, f));
+            if want.is_nan() {
+                continue;
+            }
             let err = if want > 0.1 * most && !of_peak {
                 (got / want - 1.0).abs()
             } else {
@@ -421,6 +425,105 @@ fn a_glowing_sphere_matches_a_tessellated_one() {
             (mb / ma - 1.0).abs() < tol + deficit as f64,
             "{direct:?}: analytic {ma} against the mesh's {mb}"
         );
+    }
+    assert_clean(&ctx);
+}
+
+/// A disk light (an emitting quad with `disk`: the ellipse inscribed in it, Mitsuba's `disk`), sampled
+/// as one light uniformly in its area: a horizontal disk of radius R at height h lights the floor by the
+/// closed form of a parallel disk's form factor, L = rho Le F with
+/// F = 1/2 [1 - (a^2 + h^2 - R^2) / sqrt((a^2 + h^2 + R^2)^2 - 4 R^2 a^2)] at distance a from its axis;
+/// a tilted ellipse (unequal edges) by quadrature over its area. Both by shadow rays and by photons alone.
+#[test]
+fn a_disk_light_gives_its_form_factor_and_an_ellipse_its_quadrature() {
+    let ctx = ctx();
+    let le = 4.0f64;
+    let (c, r, h) = (Vec3::new(0.2, 0.0, -0.1), 0.3f32, 0.8f32);
+    let quad = |origin: Vec3, u: Vec3, v: Vec3| {
+        format!(
+            "[materials.glow]\nemission = [{le}, {le}, {le}]\n[[quad]]\norigin = {:?}\nedge_u = {:?}\n\
+             edge_v = {:?}\nmaterial = \"glow\"\ndisk = true\n",
+            origin.to_array(),
+            u.to_array(),
+            v.to_array()
+        )
+    };
+    // Facing down: x cross z = -y.
+    let circle = floor_scene(
+        32,
+        vec![],
+        &quad(
+            c + Vec3::new(-r, h, -r),
+            Vec3::new(2.0 * r, 0.0, 0.0),
+            Vec3::new(0.0, 0.0, 2.0 * r),
+        ),
+    );
+    circle.validate().unwrap();
+    assert!(circle.quads[1].disk);
+    let form_factor = |x: Vec3| {
+        let a2 = ((x.x - c.x).powi(2) + (x.z - c.z).powi(2)) as f64;
+        let (h2, r2) = ((h * h) as f64, (r * r) as f64);
+        0.5 * (1.0 - (a2 + h2 - r2) / ((a2 + h2 + r2).powi(2) - 4.0 * r2 * a2).sqrt())
+    };
+    let f = |x: Vec3| RHO as f64 * le * form_factor(x);
+    // A tilted ellipse (semi-axes 0.4 and 0.14, its normal 20 degrees from straight down, its plane's
+    // horizon off the image, where the photons' blur of the kink would bias them), lighting the
+    // floor by the integral of Le cos_x cos_y / (pi d^2) over its area: 48 x 96 polar midpoints.
+    let (o, u, v) = (
+        Vec3::new(-0.6, 1.0, 0.3),
+        Vec3::new(0.8, 0.0, 0.0),
+        Vec3::new(0.0, 0.1, 0.27),
+    );
+    let ellipse = floor_scene(32, vec![], &quad(o, u, v));
+    ellipse.validate().unwrap();
+    let n = u.cross(v).normalize();
+    assert!(n.y < 0.0, "facing down");
+    let quadrature = |x: Vec3| {
+        let (nr, nphi) = (48, 96);
+        let area = f64::from(u.cross(v).length()) * std::f64::consts::FRAC_PI_4;
+        let mut sum = 0f64;
+        for i in 0..nr {
+            let rr = ((i as f32 + 0.5) / nr as f32).sqrt() * 0.5;
+            for j in 0..nphi {
+                let phi = std::f32::consts::TAU * (j as f32 + 0.5) / nphi as f32;
+                let y = o + (0.5 + rr * phi.cos()) * u + (0.5 + rr * phi.sin()) * v;
+                let d = y - x;
+                let d2 = d.length_squared();
+                let (cos_x, cos_y) = (d.y / d2.sqrt(), -n.dot(d) / d2.sqrt());
+                sum += f64::from(cos_x.max(0.0) * cos_y.max(0.0) / d2);
+            }
+        }
+        RHO as f64 / std::f64::consts::PI * le * sum * area / (nr * nphi) as f64
+    };
+    // The camera above sees the disk's back where it hides the floor: NaN there, and check_blocks skips
+    // the blocks it touches (their pixels' box filter mixes the back and the floor).
+    let hidden = |x: Vec3, o: Vec3, u: Vec3, v: Vec3| {
+        let eye = Vec3::new(0.0, 4.0, 0.0);
+        let (d, n) = (x - eye, u.cross(v));
+        let t = n.dot(o - eye) / n.dot(d);
+        let rel = eye + t * d - o;
+        let w = n / n.dot(n);
+        let (a, b) = (w.dot(rel.cross(v)), w.dot(u.cross(rel)));
+        (0.0..1.0).contains(&t) && (2.0 * a - 1.0).powi(2) + (2.0 * b - 1.0).powi(2) <= 1.0
+    };
+    let (co, cu, cv) = (
+        c + Vec3::new(-r, h, -r),
+        Vec3::new(2.0 * r, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, 2.0 * r),
+    );
+    let seen_disk = |x: Vec3| if hidden(x, co, cu, cv) { f64::NAN } else { f(x) };
+    let seen_ellipse = |x: Vec3| if hidden(x, o, u, v) { f64::NAN } else { quadrature(x) };
+    for (name, scene, closed) in [
+        ("disk", &circle, &seen_disk as &dyn Fn(Vec3) -> f64),
+        ("ellipse", &ellipse, &seen_ellipse),
+    ] {
+        // A point on an area light per shadow ray is noisier than a point light's: 4 x 4 blocks after 32
+        // passes (measured: 2 x 2 blocks after 16 passes spread by up to 6%, with no trend); the photons'
+        // blur over 4 x 4 as the point light's.
+        let sampled = render(&ctx, scene, settings(DirectLight::Sample, 20_000), 32);
+        check_blocks(&format!("{name}, shadow rays"), &sampled, scene, 4, 0.03, false, closed);
+        let photons = render(&ctx, scene, settings(DirectLight::Photons, 200_000), 16);
+        check_blocks(&format!("{name}, photons"), &photons, scene, 4, 0.05, false, closed);
     }
     assert_clean(&ctx);
 }

@@ -104,6 +104,7 @@ fn opacity_zero_is_the_surface_removed_bit_for_bit() {
         edge_u: Vec3::new(1.6, 0.0, 0.0),
         edge_v: Vec3::new(0.0, 1.7, 0.0),
         material: null,
+        disk: false,
     });
     with.spheres.push(ppm_vk_engine::scene::Sphere {
         center: Vec3::new(0.0, 1.5, 0.5),
@@ -178,6 +179,7 @@ fn a_half_transparent_pane_lets_through_one_minus_its_opacity() {
                 edge_u: u,
                 edge_v: v,
                 material: m,
+                disk: false,
             });
         }
         s.validate().unwrap_or_else(|e| panic!("{e:#}"));

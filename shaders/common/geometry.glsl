@@ -158,6 +158,7 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, uint key,
         float a = dot(q.w, cross(rel, q.edge_v));
         float b = dot(q.w, cross(q.edge_u, rel));
         if (a < 0.0 || a > 1.0 || b < 0.0 || b > 1.0) continue;
+        if (q.shape == QUAD_DISK && (2.0 * a - 1.0) * (2.0 * a - 1.0) + (2.0 * b - 1.0) * (2.0 * b - 1.0) > 1.0) continue;
         if (HAS_MASKS) {
             Hit h;
             h.kind = HIT_QUAD;

@@ -20,7 +20,8 @@ Emitter emitter_of(Light light) {
     }
     if (light.kind == LIGHT_QUAD) {
         Quad q = quads[light.index];
-        return Emitter(q.origin, q.edge_u, q.edge_v, q.normal, flux, light.cdf, LIGHT_QUAD, light.value, 0.0, 0.0,
+        float disk = q.shape == QUAD_DISK ? 1.0 : 0.0; // Emitter::radius
+        return Emitter(q.origin, q.edge_u, q.edge_v, q.normal, flux, light.cdf, LIGHT_QUAD, light.value, disk, 0.0,
                        0.0, 0.0, 0.0, light.texture);
     }
     vec3 value = light.kind == LIGHT_ENVIRONMENT ? light.value : light.value / light.prob;
@@ -61,24 +62,37 @@ Emitter choose_emitter(float u) {
 Emitter first_emitter() { return emitter_of(lights[0]); }
 #endif
 
+// A disk's (a quad with radius 1: the ellipse inscribed in it) planar coordinates for uniform (a, b): the
+// polar map (sqrt(a), 2 pi b) of the unit disk, uniform in area (and an affine map keeps it so).
+vec2 disk_point(float a, float b) {
+    float r = 0.5 * sqrt(a);
+    float phi = 2.0 * PI * b;
+    return vec2(0.5 + r * cos(phi), 0.5 + r * sin(phi));
+}
+
 // The point of emitter e at uniform numbers (a, b), uniform in its area: a triangle folds the unit square
-// onto the half below its diagonal.
+// onto the half below its diagonal, a disk takes disk_point.
 vec3 emitter_point(Emitter e, float a, float b) {
     if (e.kind == LIGHT_TRIANGLE && a + b > 1.0) {
         a = 1.0 - a;
         b = 1.0 - b;
     }
+    if (e.kind == LIGHT_QUAD && e.radius != 0.0) {
+        vec2 p = disk_point(a, b);
+        a = p.x;
+        b = p.y;
+    }
     return e.origin + a * e.edge_u + b * e.edge_v;
 }
 
-// What multiplies e.flux at emitter_point(e, a, b): a quad's radiance texture there (its uv is (a, b), as
-// a hit's planar coordinates), a textured triangle's (e.table - 1 is the triangle: its material's texture
+// What multiplies e.flux at emitter_point(e, a, b): a quad's radiance texture there (its uv is the point's
+// planar coordinates, as a hit's: (a, b), a disk's disk_point), a textured triangle's (e.table - 1 is the triangle: its material's texture
 // at its interpolated uv, as surface_uv), else 1 (e.flux is then the whole flux). As Mitsuba 3's area
 // emitter with a textured radiance, sampled uniformly in area: the flux Le(uv) A pi / prob is unbiased for
 // any prob.
 vec3 emitter_radiance(Emitter e, float a, float b) {
     if (!HAS_TEXTURES || e.table == 0u || e.kind > LIGHT_TRIANGLE) return vec3(1.0);
-    if (e.kind == LIGHT_QUAD) return texture_value(e.table - 1u, vec2(a, b));
+    if (e.kind == LIGHT_QUAD) return texture_value(e.table - 1u, e.radius != 0.0 ? disk_point(a, b) : vec2(a, b));
     if (a + b > 1.0) { // emitter_point's fold
         a = 1.0 - a;
         b = 1.0 - b;

@@ -75,10 +75,13 @@ struct Quad {
     vec3 edge_v;
     float plane_d;   // dot(normal, origin)
     vec3 normal;
-    float pad0;
+    uint shape;      // QUAD_PARALLELOGRAM, or QUAD_DISK: only the ellipse inscribed in it (Mitsuba's disk)
     vec3 w;          // cross(u, v) / |cross(u, v)|^2: planar coordinates of a hit (Shirley's trick)
     float pad1;
 };
+
+const uint QUAD_PARALLELOGRAM = 0u;
+const uint QUAD_DISK = 1u;
 
 // A light as the kernels sample it (lights.glsl), made from its Light (and its quad, triangle or sphere).
 // Never stored in a buffer: the scene-specialised kernels hold their lights as constants of this type.

@@ -123,7 +123,8 @@ pub struct Quad {
     pub edge_v: [f32; 3],
     pub plane_d: f32,
     pub normal: [f32; 3],
-    pub pad0: f32,
+    /// [`QUAD_PARALLELOGRAM`], or [`QUAD_DISK`]: only the ellipse inscribed in it.
+    pub shape: u32,
     pub w: [f32; 3],
     pub pad1: f32,
 }
@@ -135,7 +136,7 @@ gpu_struct!(Quad {
     edge_v,
     plane_d,
     normal,
-    pad0,
+    shape,
     w,
     pad1
 });
@@ -195,6 +196,8 @@ gpu_struct!(Light {
 pub use crate::reflected::constants::{
     LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_QUAD, LIGHT_SPHERE, LIGHT_SPOT, LIGHT_TRIANGLE,
 };
+/// `Quad::shape` (types.glsl).
+pub use crate::reflected::constants::{QUAD_DISK, QUAD_PARALLELOGRAM};
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -8,7 +8,7 @@ use anyhow::{anyhow, Context as _, Result};
 
 use crate::layout::{
     Light, Quad, Sphere, Triangle, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_QUAD, LIGHT_SPHERE,
-    LIGHT_SPOT, LIGHT_TRIANGLE, SURFACE_BLEND, SURFACE_CONDUCTOR, SURFACE_PLASTIC, SURFACE_ROUGH_CONDUCTOR,
+    LIGHT_SPOT, LIGHT_TRIANGLE, QUAD_DISK, SURFACE_BLEND, SURFACE_CONDUCTOR, SURFACE_PLASTIC, SURFACE_ROUGH_CONDUCTOR,
     SURFACE_ROUGH_GLASS, SURFACE_THIN,
 };
 use crate::reflected::{KernelInfo, SOURCES};
@@ -154,7 +154,7 @@ pub fn scene_constants(c: &SceneConstants) -> String {
             .iter()
             .map(|q| {
                 format!(
-                    "Quad({}, {}u, {}, {}, {}, {}, {}, 0.0, {}, 0.0)",
+                    "Quad({}, {}u, {}, {}, {}, {}, {}, {}u, {}, 0.0)",
                     v(q.origin),
                     q.material,
                     v(q.edge_u),
@@ -162,11 +162,12 @@ pub fn scene_constants(c: &SceneConstants) -> String {
                     v(q.edge_v),
                     f(q.plane_d),
                     v(q.normal),
+                    q.shape,
                     v(q.w)
                 )
             })
             .collect(),
-        "Quad(vec3(0.0), 0u, vec3(0.0), 0.0, vec3(0.0), 0.0, vec3(0.0), 0.0, vec3(0.0), 0.0)",
+        "Quad(vec3(0.0), 0u, vec3(0.0), 0.0, vec3(0.0), 0.0, vec3(0.0), 0u, vec3(0.0), 0.0)",
     );
     if lights.len() > MAX_INLINE_LIGHTS {
         return s;
@@ -186,9 +187,10 @@ pub fn scene_constants(c: &SceneConstants) -> String {
     // The fields after the kind, zero for quads and triangles (lights.glsl's emitter_of fills them alike).
     const NO_MORE: &str = "vec3(0.0), 0.0, 0.0, 0.0, 0.0, 0.0, 0u";
     // A quad's or triangle's value is its radiance, not divided (lights.glsl's emitter_of); the fields
-    // after it are zero but the last, its radiance texture, a textured triangle's 1 + its index
-    // (Emitter::table).
+    // after it are zero but a disk's radius (1) and the last, its radiance texture, a textured
+    // triangle's 1 + its index (Emitter::table).
     const QUAD_NO_MORE: &str = "0.0, 0.0, 0.0, 0.0, 0.0, ";
+    const DISK_NO_MORE: &str = "1.0, 0.0, 0.0, 0.0, 0.0, ";
     s += &array(
         "Emitter",
         "SCENE_EMITTERS",
@@ -220,7 +222,7 @@ pub fn scene_constants(c: &SceneConstants) -> String {
                 if l.kind == LIGHT_QUAD {
                     let q = &quads[l.index as usize];
                     return format!(
-                        "Emitter({}, {}, {}, {}, {}, {}, {LIGHT_QUAD}u, {}, {QUAD_NO_MORE}{}u)",
+                        "Emitter({}, {}, {}, {}, {}, {}, {LIGHT_QUAD}u, {}, {}{}u)",
                         v(q.origin),
                         v(q.edge_u),
                         v(q.edge_v),
@@ -228,6 +230,11 @@ pub fn scene_constants(c: &SceneConstants) -> String {
                         v(flux),
                         f(l.cdf),
                         v(l.value),
+                        if q.shape == QUAD_DISK {
+                            DISK_NO_MORE
+                        } else {
+                            QUAD_NO_MORE
+                        },
                         l.texture
                     );
                 }

@@ -4,6 +4,7 @@
 use glam::Vec3;
 use ppm_vk_kernels::layout::{
     Light, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_QUAD, LIGHT_SPHERE, LIGHT_SPOT, LIGHT_TRIANGLE,
+    QUAD_DISK,
 };
 use ppm_vk_materials::math::{onb, v3, PI};
 
@@ -63,6 +64,7 @@ pub fn emitter_of(g: &GpuScene, light: &Light) -> Emitter {
     if light.kind == LIGHT_QUAD {
         let q = &g.quads[light.index as usize];
         (e.origin, e.edge_u, e.edge_v, e.normal) = (v3(q.origin), v3(q.edge_u), v3(q.edge_v), v3(q.normal));
+        e.radius = if q.shape == QUAD_DISK { 1.0 } else { 0.0 };
         e.value = v3(light.value);
         e.table = light.texture;
         return e;
@@ -100,13 +102,19 @@ pub fn first_emitter(g: &GpuScene) -> Emitter {
 }
 
 /// lights.glsl's `emitter_radiance`: what multiplies `e.flux` at `emitter_point(e, a, b)` (a quad's
-/// radiance texture at uv (a, b), a textured triangle's at its interpolated uv, else 1).
+/// radiance texture at the point's planar coordinates, a textured triangle's at its interpolated uv,
+/// else 1).
 pub fn emitter_radiance(g: &GpuScene, e: &Emitter, mut a: f32, mut b: f32) -> Vec3 {
     if e.table == 0 || e.kind > LIGHT_TRIANGLE {
         return Vec3::ONE;
     }
     if e.kind == LIGHT_QUAD {
-        return crate::texture::value(&g.textures, e.table - 1, glam::Vec2::new(a, b));
+        let uv = if e.radius != 0.0 {
+            disk_point(a, b)
+        } else {
+            glam::Vec2::new(a, b)
+        };
+        return crate::texture::value(&g.textures, e.table - 1, uv);
     }
     if a + b > 1.0 {
         (a, b) = (1.0 - a, 1.0 - b);
@@ -126,10 +134,22 @@ pub fn is_area(e: &Emitter) -> bool {
     e.kind <= LIGHT_TRIANGLE
 }
 
+/// lights.glsl's `disk_point`: a disk's planar coordinates for uniform (a, b), by the polar map
+/// (sqrt(a), 2 pi b) of the unit disk onto the ellipse inscribed in the unit square.
+pub fn disk_point(a: f32, b: f32) -> glam::Vec2 {
+    let r = 0.5 * a.sqrt();
+    let phi = 2.0 * PI * b;
+    glam::Vec2::new(0.5 + r * phi.cos(), 0.5 + r * phi.sin())
+}
+
 /// lights.glsl's `emitter_point`: uniform in the emitter's area for uniform (a, b).
 pub fn emitter_point(e: &Emitter, mut a: f32, mut b: f32) -> Vec3 {
     if e.kind == LIGHT_TRIANGLE && a + b > 1.0 {
         (a, b) = (1.0 - a, 1.0 - b);
+    }
+    if e.kind == LIGHT_QUAD && e.radius != 0.0 {
+        let p = disk_point(a, b);
+        (a, b) = (p.x, p.y);
     }
     e.origin + a * e.edge_u + b * e.edge_v
 }

@@ -3,6 +3,7 @@
 //! ppm_vk_materials::math.
 
 use glam::{Vec2, Vec3};
+use ppm_vk_kernels::layout::QUAD_DISK;
 use ppm_vk_materials::mask;
 use ppm_vk_materials::math::{fresnel_dielectric, oct_decode, reflect, PI};
 
@@ -88,6 +89,10 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32, key
         let a = v3(q.w).dot(rel.cross(v3(q.edge_v)));
         let b = v3(q.w).dot(v3(q.edge_u).cross(rel));
         if !(0.0..=1.0).contains(&a) || !(0.0..=1.0).contains(&b) {
+            continue;
+        }
+        // A disk: only the ellipse inscribed in the parallelogram.
+        if q.shape == QUAD_DISK && (2.0 * a - 1.0) * (2.0 * a - 1.0) + (2.0 * b - 1.0) * (2.0 * b - 1.0) > 1.0 {
             continue;
         }
         if !super::mask::keeps(g, q.material, key, mask::PRIM_QUAD | i as u32, || Vec2::new(a, b)) {

@@ -62,7 +62,10 @@ pub fn ensure(dir: &Path) -> Result<Vec<PathBuf>> {
         if first_line(&path).as_deref() == Some(STAMP) {
             continue;
         }
-        let tmp = dir.join(format!("{}.tmp.{}", f.name, std::process::id()));
+        // The process and a count: two threads of one process (tests) must not share a temporary name.
+        static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let tmp = dir.join(format!("{}.tmp.{}.{n}", f.name, std::process::id()));
         std::fs::write(&tmp, contents(f)).with_context(|| format!("writing {}", tmp.display()))?;
         std::fs::rename(&tmp, &path).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
         written.push(path);

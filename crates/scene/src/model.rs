@@ -217,7 +217,9 @@ pub struct Sphere {
     pub material: u32,
 }
 
-/// Parallelogram `origin + s*edge_u + t*edge_v`, `s, t` in [0, 1].
+/// Parallelogram `origin + s*edge_u + t*edge_v`, `s, t` in [0, 1], or with `disk` the ellipse inscribed
+/// in it, `(2s - 1)^2 + (2t - 1)^2 <= 1` (Mitsuba's `disk` under any affine `to_world`: one analytic
+/// shape and one light, not a fan of triangles).
 /// Front normal is `normalize(edge_u x edge_v)`; emission leaves the front side only.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Quad {
@@ -226,6 +228,8 @@ pub struct Quad {
     pub edge_v: Vec3,
     /// Index into `Scene::materials`.
     pub material: u32,
+    /// Only the inscribed ellipse (a disk), not the whole parallelogram.
+    pub disk: bool,
 }
 
 impl Quad {
@@ -233,8 +237,14 @@ impl Quad {
         self.edge_u.cross(self.edge_v).normalize()
     }
 
+    /// The parallelogram's area, or pi / 4 of it for the ellipse inscribed in it.
     pub fn area(&self) -> f32 {
-        self.edge_u.cross(self.edge_v).length()
+        let a = self.edge_u.cross(self.edge_v).length();
+        if self.disk {
+            a * std::f32::consts::FRAC_PI_4
+        } else {
+            a
+        }
     }
 }
 
@@ -1449,6 +1459,7 @@ mod tests {
                 edge_u: Vec3::new(0.0, 0.0, 2.0),
                 edge_v: Vec3::new(2.0, 0.0, 0.0),
                 material: 0,
+                disk: false,
             }],
             meshes: vec![Mesh::with_material(
                 "lamp",

@@ -260,6 +260,9 @@ struct RawQuad {
     edge_u: Spanned<[f32; 3]>,
     edge_v: Spanned<[f32; 3]>,
     material: Spanned<String>,
+    /// Only the ellipse inscribed in the parallelogram (a disk where the edges are equal and square).
+    #[serde(default)]
+    disk: bool,
 }
 
 #[derive(Deserialize)]
@@ -505,6 +508,7 @@ fn build(src: &Source, raw: RawScene, base: &Path) -> Result<Scene> {
             edge_u: vec3(&r.edge_u),
             edge_v: vec3(&r.edge_v),
             material: lookup(src, &materials, &r.material, &format!("{p}.material"))?,
+            disk: r.disk,
         });
     }
 
@@ -1487,6 +1491,7 @@ material = "light"
             edge_u: Vec3::new(2.0, 0.0, 0.0),
             edge_v: Vec3::new(1.0, 3.0, 0.0),
             material: 0,
+            disk: false,
         };
         assert_eq!(q.normal(), Vec3::Z);
         assert!((q.area() - 6.0).abs() < 1e-6);
@@ -1496,6 +1501,9 @@ material = "light"
             ..q
         };
         assert_eq!(flipped.normal(), Vec3::NEG_Z);
+        // The ellipse inscribed in it: pi / 4 of the parallelogram.
+        let ellipse = Quad { disk: true, ..q };
+        assert!((ellipse.area() - 1.5 * std::f32::consts::PI).abs() < 1e-6);
     }
 
     #[test]

@@ -7,7 +7,7 @@
 use glam::Vec3;
 use ppm_vk_kernels::layout::{
     self, BvhNode, Light, Material, Quad, RenderParams, Sphere, Triangle, GLOSSY_LIGHT_BSDF, GLOSSY_LIGHT_LIGHTS,
-    GLOSSY_LIGHT_MIS,
+    GLOSSY_LIGHT_MIS, QUAD_DISK, QUAD_PARALLELOGRAM,
 };
 use ppm_vk_kernels::specialize::MAX_INLINE_PRIMITIVES;
 
@@ -227,7 +227,8 @@ fn quads(scene: &Scene) -> Vec<Quad> {
                 origin: q.origin.to_array(),
                 material: q.material,
                 edge_u: q.edge_u.to_array(),
-                area: c.length(),
+                area: q.area(),
+                shape: if q.disk { QUAD_DISK } else { QUAD_PARALLELOGRAM },
                 edge_v: q.edge_v.to_array(),
                 plane_d: n.dot(q.origin),
                 normal: n.to_array(),

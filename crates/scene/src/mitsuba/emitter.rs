@@ -631,7 +631,7 @@ mod tests {
             )
             .unwrap_or_else(|e| panic!("{shape}: {e:#}"));
             let material = match shape {
-                "rectangle" | "cube" => s.quads.last().unwrap().material,
+                "rectangle" | "cube" | "disk" => s.quads.last().unwrap().material,
                 "sphere" => s.spheres[0].material,
                 _ => s.meshes[0].materials[0],
             };

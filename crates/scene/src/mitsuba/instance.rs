@@ -184,6 +184,7 @@ fn place(e: &Elem, group: &Group, m: &DAffine3, materials: &[crate::Material]) -
             edge_u: finite(u, "a quad's edge")?,
             edge_v: finite(v, "a quad's edge")?,
             material: q.material,
+            disk: q.disk,
         });
     }
     // A sphere stays one under a similarity only: m^T m = s^2 I.
