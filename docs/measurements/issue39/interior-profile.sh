@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The interior's set-up (cold: empty ppm-vk and Mesa caches; then warm: the same caches again) and where its
 # eye pass goes (the same render with one kind of eye-pass work reduced at a time), issue 39, before any
-# change. 320x180 (the issue's size), 200k photons a pass; writes interior-profile.txt beside this script.
+# change. 320x180 (the issue's size), 200k photons a pass; writes NAME.txt beside this script (NAME: the
+# first argument, default interior-profile).
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
-out=docs/measurements/issue39/interior-profile.txt
+out=docs/measurements/issue39/${1:-interior-profile}.txt
 bin=target/release/ppm-vk
 cache=$(mktemp -d)
 mesa=$(mktemp -d)
