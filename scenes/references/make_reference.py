@@ -44,30 +44,45 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def split_obj(src, out_dir):
-    """Writes each object ('o name') of an OBJ of positions and faces as its own OBJ (flat faces)."""
+    """Writes each object ('o name') of an OBJ of positions, normals and faces as its own OBJ, with the
+    vertex normals the faces name (smooth shading, as ppm-vk renders the demo mesh)."""
     os.makedirs(out_dir, exist_ok=True)
-    positions, objects, current = [], {}, None
+    positions, normals, objects, current = [], [], {}, None
     for line in open(src):
         parts = line.split()
         if not parts:
             continue
         if parts[0] == "v":
             positions.append(line)
+        elif parts[0] == "vn":
+            normals.append(line)
         elif parts[0] == "o":
             current = parts[1]
             objects[current] = []
         elif parts[0] == "f":
-            # keep the vertex indices only (v/vt/vn -> v): flat shading
-            objects[current].append([int(p.split("/")[0]) for p in parts[1:]])
+            # v//vn or v/vt/vn -> (v, vn); v alone -> (v, None)
+            corners = []
+            for c in parts[1:]:
+                fields = c.split("/")
+                corners.append((int(fields[0]), int(fields[2]) if len(fields) > 2 and fields[2] else None))
+            objects[current].append(corners)
     for name, faces in objects.items():
-        used = sorted({i for f in faces for i in f})
-        remap = {old: new + 1 for new, old in enumerate(used)}
+        used_v = sorted({v for f in faces for v, _ in f})
+        used_n = sorted({n for f in faces for _, n in f if n is not None})
+        remap_v = {old: new + 1 for new, old in enumerate(used_v)}
+        remap_n = {old: new + 1 for new, old in enumerate(used_n)}
         with open(os.path.join(out_dir, name + ".obj"), "w") as f:
             f.write(f"# {name}, split from {os.path.basename(src)} by make_reference.py\n")
-            for i in used:
+            for i in used_v:
                 f.write(positions[i - 1])
+            for i in used_n:
+                f.write(normals[i - 1])
             for face in faces:
-                f.write("f " + " ".join(str(remap[i]) for i in face) + "\n")
+                f.write(
+                    "f "
+                    + " ".join(f"{remap_v[v]}//{remap_n[n]}" if n is not None else str(remap_v[v]) for v, n in face)
+                    + "\n"
+                )
 
 
 class FirstHitDelta(mi.SamplingIntegrator):
