@@ -208,10 +208,11 @@ pub(crate) struct SettingsArgs {
     /// (glowing spheres still by the lobe).
     #[arg(long, value_enum, default_value_t = GlossyLightArg::Mis)]
     glossy_light: GlossyLightArg,
-    /// Photon probing (eq. 7-9): `paper` is eq. 9 as printed, `scale-free` is r' = r (1 + lambda / r^2),
-    /// `nearest` the radius that holds --probe-k probe photons (r' = r sqrt(k / N), at most 2 r),
-    /// `curvature` the radius of least bias^2 + variance from the density and its curvature (r / 8 to 2 r).
-    #[arg(long, value_enum, default_value_t = ProbeArg::Off)]
+    /// Photon probing (eq. 7-9): `off` starts every radius at eq. 8's r, `paper` is eq. 9 as printed,
+    /// `scale-free` is r' = r (1 + lambda / r^2), `nearest` the radius that holds --probe-k probe photons
+    /// (r' = r sqrt(k / N), at most 2 r), `curvature` (the default) the radius of least bias^2 + variance
+    /// from the density and its curvature (r / 8 to --probe-grow times r; by default it only shrinks).
+    #[arg(long, value_enum, default_value_t = ProbeArg::Curvature)]
     probe: ProbeArg,
     /// beta of eq. 9 as a fraction of r in (0, 1) (the paper's best: 0.2 = r/5).
     #[arg(long, default_value_t = 0.2, value_parser = parse_fraction)]
@@ -223,7 +224,8 @@ pub(crate) struct SettingsArgs {
     /// at most 2 r), at least 1.
     #[arg(long, default_value_t = ppm_vk_engine::settings::DEFAULT_PROBE_K)]
     probe_k: f32,
-    /// With `--probe curvature`: the most a starting radius may grow, r' / r in [1, 2] (1: only shrink).
+    /// With `--probe curvature`: the most a starting radius may grow, r' / r in [1, 2] (1, the default: only
+    /// shrink).
     #[arg(long, default_value_t = ppm_vk_engine::settings::DEFAULT_PROBE_GROW)]
     probe_grow: f32,
     /// Cone filter (eq. 10-14): its constant k >= 1, or `off`.

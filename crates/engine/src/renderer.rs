@@ -491,11 +491,15 @@ impl Renderer {
         setup.glsl_s = glsl_start.elapsed().as_secs_f64();
         let traced = |k: &reflected::KernelInfo| tracing_pipeline(ctx, constants.as_deref(), k, &[]);
         // Hit points per gather thread (measured, shaders/common/neighbours.glsl): two share their photon
-        // reads where the probe enlarged the radii; without it, each gathers fastest on its own.
-        let group = match settings.probe {
-            ProbeMode::Off => 1,
-            _ => gather::GROUP,
+        // reads where the probe enlarged the radii; where no radius can exceed eq. 8's (no probe, or the
+        // curvature rule capped to shrink), each gathers fastest on its own (the shrinking curvature
+        // probe's gather took 1.2-1.3x as long in pairs on cornell-box; docs/accuracy.md).
+        let enlarged = match settings.probe {
+            ProbeMode::Off => false,
+            ProbeMode::Curvature => settings.probe_grow > 1.0,
+            _ => true,
         };
+        let group = if enlarged { gather::GROUP } else { 1 };
         // Whether any hit point can be glossy (a rough conductor of roughness glossy_alpha or more).
         let glossy = gpu.materials.iter().any(|m| {
             m.surface == ppm_vk_kernels::layout::SURFACE_ROUGH_CONDUCTOR && m.alpha_u >= gpu.params.glossy_alpha
@@ -1074,7 +1078,13 @@ impl Renderer {
     /// Pass 2, once: photon probing sets each hit point's starting radius (eq. 7-9).
     fn probe_pass(&mut self) -> Result<()> {
         let photons = self.settings.probe_photons.unwrap_or(self.settings.photons_per_pass);
-        let (mut stages, _, _) = self.run_batches(0, photons, GridUse::Probe)?;
+        // The probe's lookups may read far more photons than the gather's (out to 2 r for the curvature
+        // rule): where they halve the batches to stay within the loop budget, the passes after it start
+        // again from the batch size before it (they halve it themselves if they need to).
+        let gather_batch = self.batch;
+        let probed = self.run_batches(0, photons, GridUse::Probe);
+        self.batch = gather_batch;
+        let (mut stages, _, _) = probed?;
         self.profiler.reset();
         self.ctx
             .run(|cmd| self.profiler.scope(cmd, "probe", || self.record_probe(cmd, 1)))
