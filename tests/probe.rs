@@ -198,7 +198,12 @@ fn nearest_probe_matches_reference_and_follows_the_photons() {
 #[test]
 fn curvature_probe_matches_reference_and_follows_the_photons() {
     let ctx = ctx();
-    let r = Renderer::new(&ctx, &cornell(RES, RES), settings(ProbeMode::Curvature)).unwrap();
+    // Growth up to 2 r (the default only shrinks).
+    let s = Settings {
+        probe_grow: 2.0,
+        ..settings(ProbeMode::Curvature)
+    };
+    let r = Renderer::new(&ctx, &cornell(RES, RES), s).unwrap();
     let shrunk = curvature_case(&r, 2.0);
     drop(r);
     // Growth capped at 1 (`probe_grow`): the same radii where they shrank, none grown.

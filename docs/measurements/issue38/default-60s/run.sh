@@ -3,9 +3,11 @@
 # probe capped to only shrink (probe-curv=1) and the nearest probe holding 16 photons (probe-nn=16), 60 s
 # of passes each, then Mitsuba 3's path tracer given the same 60 s on the same machine right after, scene
 # by scene (so both renderers see the same hour). The ppm-vk variants rotate which goes first from scene
-# to scene.
+# to scene. (The recorded run, build 6314133, predates the `noprobe` word: there eq. 8 was the default
+# and its variant is named `sppm`.)
 # Usage: docs/measurements/issue38/default-60s/run.sh [SECONDS] [scene ...]  (from the repository root;
-# needs target/release/ppm-vk and `pip install mitsuba numpy` with libllvm19, ../shared/notes/TOOLCHAIN.md)
+# needs target/release/ppm-vk and `pip install mitsuba numpy` with libllvm19, ../shared/notes/TOOLCHAIN.md;
+# PYTHON=path names the Python that has them, default python3)
 set -euo pipefail
 cd "$(dirname "$0")/../../../.."
 export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
@@ -31,9 +33,9 @@ for entry in "${SCENES[@]}"; do
   IFS='|' read -r name scene ref xml res cregions mregions <<<"$entry"
   if [ $# -gt 0 ] && [[ " $* " != *" $name "* ]]; then continue; fi
   case $((i % 3)) in
-    0) v="sppm; sppm+probe-curv=1; sppm+probe-nn=16" ;;
-    1) v="sppm+probe-curv=1; sppm+probe-nn=16; sppm" ;;
-    *) v="sppm+probe-nn=16; sppm; sppm+probe-curv=1" ;;
+    0) v="sppm+noprobe; sppm+probe-curv=1; sppm+probe-nn=16" ;;
+    1) v="sppm+probe-curv=1; sppm+probe-nn=16; sppm+noprobe" ;;
+    *) v="sppm+probe-nn=16; sppm+noprobe; sppm+probe-curv=1" ;;
   esac
   i=$((i + 1))
   cr=(); for r in $cregions; do cr+=(--region "$r"); done
