@@ -705,7 +705,7 @@ fn eq8_radius_of_the_test_scene() {
     let want = 2.0 * (2.0 + 2.0 + 4.0) / (3.0 * 512.0);
     let got = ppm_vk_engine::lower::default_radius(&cornell(512, 512));
     assert!((got as f64 / want - 1.0).abs() < 1e-6, "eq. 8 radius {got} vs {want}");
-    // At another width r scales with 1 / s; without a probe pass (the default's shrinks some) the
+    // At another width r scales with 1 / s; without a probe pass (set here, whatever the default) the
     // renderer starts every hit point at r^2.
     let ctx = ctx();
     let eq8 = Settings {
