@@ -42,7 +42,7 @@ pub struct BenchArgs {
     #[arg(long, value_enum, default_value_t = ModeArg::Sppm)]
     mode: ModeArg,
     /// Photon probing (eq. 7-9), as for `render`.
-    #[arg(long, value_enum, default_value_t = ProbeArg::Off)]
+    #[arg(long, value_enum, default_value_t = ProbeArg::Curvature)]
     probe: ProbeArg,
     /// Cone filter constant k >= 1, or `off`, as for `render`.
     #[arg(long, default_value = "off", value_parser = crate::parse_cone)]

@@ -2,7 +2,7 @@
 //! same device, and scores each against a reference image. Writes a Markdown table, JSON, every image and
 //! side-by-side crops of the regions that tell the variants apart.
 //!
-//! A variant is `+`-joined words over the default settings (no probe: eq. 8's radius):
+//! A variant is `+`-joined words over the default settings (whose probe is the curvature rule):
 //! `ppm` or `sppm` (stochastic), `noprobe` (eq. 8's radius), `probe` (eq. 9 as printed), `probe-sf` (scale-free),
 //! `cone` (k = 1.1) or `cone=K`, `beta=F` (fraction of r), `alpha=A`. `--time` means what it means for
 //! `render`: the passes' wall time, set-up excluded (kernel compilation, the BVH and the probe pass,
@@ -38,7 +38,7 @@ pub struct CompareArgs {
     #[arg(long, default_value_t = 10.0, value_parser = crate::parse_seconds)]
     time: f64,
     /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone". Words joined by
-    /// `+`: ppm, sppm, noprobe (every radius eq. 8's, the default), probe, probe-sf, probe-nn[=K] (the k-nearest probe), probe-curv[=G] (the curvature probe, growing radii at most G times), cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass),
+    /// `+`: ppm, sppm, noprobe (every radius eq. 8's; the default is the curvature probe, probe-curv=1), probe, probe-sf, probe-nn[=K] (the k-nearest probe), probe-curv[=G] (the curvature probe, growing radii at most G times), cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass),
     /// gh=A (glossy hit points on rough conductors of alpha >= A), nogh (none), photons (direct light by the photons) or
     /// sample (by light sampling, the default), ls=N (light samples), gl=mis|bsdf|lights (the light rough
     /// vertices reflect straight from a light: both strategies, the default, or one of them).

@@ -208,11 +208,11 @@ pub(crate) struct SettingsArgs {
     /// (glowing spheres still by the lobe).
     #[arg(long, value_enum, default_value_t = GlossyLightArg::Mis)]
     glossy_light: GlossyLightArg,
-    /// Photon probing (eq. 7-9): `off` (the default) starts every radius at eq. 8's r, `paper` is eq. 9 as
-    /// printed, `scale-free` is r' = r (1 + lambda / r^2), `nearest` the radius that holds --probe-k probe
-    /// photons (r' = r sqrt(k / N), at most 2 r), `curvature` the radius of least bias^2 + variance from
-    /// the density and its curvature (r / 8 to --probe-grow times r; by default it only shrinks).
-    #[arg(long, value_enum, default_value_t = ProbeArg::Off)]
+    /// Photon probing (eq. 7-9): `off` starts every radius at eq. 8's r, `paper` is eq. 9 as printed,
+    /// `scale-free` is r' = r (1 + lambda / r^2), `nearest` the radius that holds --probe-k probe photons
+    /// (r' = r sqrt(k / N), at most 2 r), `curvature` (the default) the radius of least bias^2 + variance
+    /// from the density and its curvature (r / 8 to --probe-grow times r; by default it only shrinks).
+    #[arg(long, value_enum, default_value_t = ProbeArg::Curvature)]
     probe: ProbeArg,
     /// beta of eq. 9 as a fraction of r in (0, 1) (the paper's best: 0.2 = r/5).
     #[arg(long, default_value_t = 0.2, value_parser = parse_fraction)]

@@ -42,8 +42,9 @@ pub enum ProbeMode {
     /// density and its Laplacian, (r' / r)^6 = 9 N1 / (32 (N1 - 4 N2)^2), counting only a curvature
     /// beyond twice its noise; r / 8 <= r' <= 2 r. Shrinks radii only where the density curves (a
     /// caustic), grows them where it is flat (at most `Settings::probe_grow`: by default not at all).
-    /// Free of units. Not the default: at 60 s it took 4.9x off glass-on-table's error against eq. 8 alone
-    /// but ran 7-11% fewer passes on cornell-spheres and cornell-box (docs/accuracy.md).
+    /// Free of units. The default: at equal passes 4.7x less error than eq. 8 alone on glass-on-table's
+    /// narrow caustic, within -5% to +2% of it on the Cornell boxes, at the same cost a pass within the
+    /// machine's noise (docs/accuracy.md).
     Curvature,
 }
 
@@ -91,7 +92,8 @@ pub struct Settings {
     pub initial_radius: Option<f32>,
     /// Cone filter constant k >= 1 (eq. 10-14); `None`: no filter.
     pub cone_k: Option<f32>,
-    /// The probe pass (eq. 7-9 and the rules that follow the photons); none by default.
+    /// The probe pass (eq. 7-9 and the rules that follow the photons); the curvature rule, capped to only
+    /// shrink, by default.
     pub probe: ProbeMode,
     /// beta of eq. 9 as a fraction of r (the paper's best: 1/5).
     pub probe_beta: f32,
@@ -176,7 +178,7 @@ impl Default for Settings {
             seed: 0,
             initial_radius: None,
             cone_k: None,
-            probe: ProbeMode::Off,
+            probe: ProbeMode::Curvature,
             probe_beta: 0.2,
             probe_photons: None,
             probe_k: DEFAULT_PROBE_K,
