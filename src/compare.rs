@@ -38,7 +38,7 @@ pub struct CompareArgs {
     #[arg(long, default_value_t = 10.0, value_parser = crate::parse_seconds)]
     time: f64,
     /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone". Words joined by
-    /// `+`: ppm, sppm, noprobe (every radius eq. 8's; the default is the curvature probe, probe-curv=1), probe, probe-sf, probe-nn[=K] (the k-nearest probe), probe-curv[=G] (the curvature probe, growing radii at most G times), cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass),
+    /// `+`: ppm, sppm, noprobe (every radius eq. 8's; the default is the curvature probe, probe-curv=1), probe, probe-sf, probe-nn[=K] (the k-nearest probe), probe-curv[=G] (the curvature probe, growing radii at most G times), pp=N (photons of the probe pass), cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass),
     /// gh=A (glossy hit points on rough conductors of alpha >= A), nogh (none), photons (direct light by the photons) or
     /// sample (by light sampling, the default), ls=N (light samples), gl=mis|bsdf|lights (the light rough
     /// vertices reflect straight from a light: both strategies, the default, or one of them).
@@ -110,6 +110,13 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
                     s.probe_grow = number("probe-curv")?;
                 }
             }
+            "pp" => {
+                let text = value.ok_or_else(|| anyhow::anyhow!("variant {name:?}: pp needs a value (pp=...)"))?;
+                let n = text
+                    .parse::<u32>()
+                    .with_context(|| format!("variant {name:?}: {word} (probe photons, a whole number)"))?;
+                s.probe_photons = Some(n);
+            }
             "cone" => s.cone_k = Some(if value.is_some() { number("cone")? } else { 1.1 }),
             "beta" => s.probe_beta = number("beta")?,
             "alpha" => s.alpha = number("alpha")?,
@@ -136,8 +143,8 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
                 }
             }
             other => bail!(
-                "variant {name:?}: unknown word {other:?} (ppm, sppm, noprobe, probe, probe-sf, probe-nn[=K], probe-curv[=G], cone[=K], beta=F, alpha=A, es=N, \
-                 ls=N, gh=A, nogh, photons, sample, gl=mis|bsdf|lights)"
+                "variant {name:?}: unknown word {other:?} (ppm, sppm, noprobe, probe, probe-sf, probe-nn[=K], probe-curv[=G], pp=N, cone[=K], beta=F, alpha=A, \
+                 es=N, ls=N, gh=A, nogh, photons, sample, gl=mis|bsdf|lights)"
             ),
         }
     }
@@ -368,4 +375,37 @@ pub fn run(args: CompareArgs) -> Result<()> {
         args.out.display()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn variant_words_set_their_fields() {
+        let base = Settings::default();
+        let v = parse_variant("sppm+noprobe+es=2", &base).unwrap();
+        assert_eq!((v.settings.mode, v.settings.probe), (Mode::Sppm, ProbeMode::Off));
+        assert_eq!(v.settings.emission_samples, 2);
+        let v = parse_variant("probe-curv=1.5+pp=4000000", &base).unwrap();
+        assert_eq!(v.settings.probe, ProbeMode::Curvature);
+        assert_eq!(
+            (v.settings.probe_grow, v.settings.probe_photons),
+            (1.5, Some(4_000_000))
+        );
+    }
+
+    #[test]
+    fn bad_variant_words_say_which() {
+        let base = Settings::default();
+        for (text, says) in [
+            ("sppm+pp", "pp needs a value"),
+            ("sppm+pp=2.5", "probe photons, a whole number"),
+            ("sppm+pp=0", "probe_photons"),
+            ("sppm+nope", "unknown word \"nope\""),
+        ] {
+            let e = format!("{:#}", parse_variant(text, &base).err().unwrap());
+            assert!(e.contains(says), "{text}: {e}");
+        }
+    }
 }
