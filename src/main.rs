@@ -177,9 +177,14 @@ pub(crate) struct SettingsArgs {
     /// Override the scene's resolution, e.g. 256x256 (each side 1..=16384).
     #[arg(long, value_parser = parse_resolution)]
     resolution: Option<(u32, u32)>,
-    /// Hit points per pixel (glass splits an eye path into both Fresnel branches up to this many).
+    /// Hit points per pixel in PPM (glass splits an eye path into both Fresnel branches up to this many).
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=8))]
     hit_slots: u32,
+    /// SPPM: the lobe directions (hit points) an eye path's first rough vertex splits it into, on rough
+    /// glass and rough metal below --glossy-hits: the light seen through a glossy lobe gets this many
+    /// samples a pass (1: one direction).
+    #[arg(long, default_value_t = Settings::default().rough_splits, value_parser = clap::value_parser!(u32).range(1..=8))]
+    rough_splits: u32,
     /// Eye paths per pixel and pass that only collect the emission seen directly or through mirrors and
     /// glass: the light's edges and its images converge this many times faster (0: the hit-point path's
     /// own sample only).
@@ -243,6 +248,7 @@ impl SettingsArgs {
             seed: self.seed,
             initial_radius: self.radius,
             hit_slots: self.hit_slots,
+            rough_splits: self.rough_splits,
             probe: self.probe.into(),
             probe_beta: self.beta,
             probe_photons: self.probe_photons,
@@ -907,7 +913,7 @@ fn render(args: RenderArgs) -> Result<Ended> {
     if let Some(last) = history.last() {
         let pixels = scene.camera.width as f64 * scene.camera.height as f64;
         let eye_paths = pixels
-            * (renderer.settings().slots() + renderer.settings().emission_samples).max(1) as f64
+            * (renderer.settings().slots(&scene) + renderer.settings().emission_samples).max(1) as f64
             * (renderer.passes() as f64 + 1.0);
         let photon_share = last.photon_paths_cut as f64 / last.emitted_total.max(1) as f64;
         let eye_share = last.eye_paths_cut as f64 / eye_paths;

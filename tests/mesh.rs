@@ -19,8 +19,9 @@ fn scene(name: &str) -> Scene {
 
 fn render(scene: &Scene, settings: Settings, passes: u32) -> RgbImage {
     let ctx = ctx();
-    let eye_paths_per_pass =
-        scene.camera.width as u64 * scene.camera.height as u64 * (settings.slots() + settings.emission_samples) as u64;
+    let eye_paths_per_pass = scene.camera.width as u64
+        * scene.camera.height as u64
+        * (settings.slots(scene) + settings.emission_samples) as u64;
     let mut r = Renderer::new(&ctx, scene, settings).unwrap();
     let mut last = None;
     for _ in 0..passes {

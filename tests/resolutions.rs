@@ -117,7 +117,7 @@ fn small_tiles_render_the_same_bits_as_one() {
         ),
     ];
     for (what, settings) in cases {
-        let per_pixel = 48 * settings.slots() as u64;
+        let per_pixel = 48 * settings.slots(&scene) as u64;
         let small = Settings {
             max_tile_bytes: Some(1536 * per_pixel + 63 * per_pixel),
             ..settings.clone()

@@ -22,12 +22,13 @@ fn sppm(photons: u32) -> Settings {
 
 /// GPU hit points of eye pass `pass` against the CPU's: the same slots filled, positions and weights
 /// within f32 rounding (1e-4 of the scene's size; relative 1e-4) for all but paths that diverged at a
-/// Fresnel choice (a few per thousand; measured in tests/kernels.rs for PPM).
-fn check_eye_pass(r: &Renderer, pass: u32) {
+/// Fresnel choice (a few per thousand; measured in tests/kernels.rs for PPM). `slots`: hit points per
+/// pixel, one but where rough vertices split the eye paths.
+fn check_eye_pass(r: &Renderer, pass: u32, slots: u32) {
     let g = r.gpu_scene();
     let gpu = r.read_hit_points().unwrap();
     let cpu = reference::eye_pass(g, &r.ray_pushes(pass, true), &mut vec![0; g.pixels() as usize]).hits;
-    assert_eq!(gpu.len(), (RES * RES) as usize, "SPPM keeps one hit point per pixel");
+    assert_eq!(gpu.len(), (RES * RES * slots) as usize, "{slots} hit points per pixel");
     let tol = 1e-4 * 4.0;
     let agree = gpu
         .iter()
@@ -52,9 +53,59 @@ fn check_eye_pass(r: &Renderer, pass: u32) {
 fn eye_passes_and_statistics_match_reference() {
     let ctx = ctx();
     let mut r = Renderer::new(&ctx, &cornell(RES, RES), sppm(20_000)).unwrap();
-    check_eye_pass(&r, 0);
-    // Pass 1 uses eye pass 0; the statistics after it, from the GPU's own records, must be the CPU's
-    // gather and update of them.
+    check_eye_pass(&r, 0, 1);
+    check_statistics(&mut r);
+    // trace_and_gather and update_only do not count as a pass: the renderer's first pass() still uses eye
+    // pass 0, and its second traces eye pass 1.
+    r.pass().unwrap();
+    check_eye_pass(&r, 0, 1);
+    r.pass().unwrap();
+    check_eye_pass(&r, 1, 1);
+    assert_clean(&ctx);
+}
+
+/// Rough vertices split SPPM's eye paths (ray.comp, `Settings::rough_splits`): on cornell-aniso (an
+/// anisotropic rough gold sphere and rough glass, both sampled through) every pixel has 4 slots, the pixels
+/// that see a sphere fill several of them, and the hit points, the gather and the update are the CPU
+/// twin's. With one split, or in a scene without rough surfaces, one slot.
+#[test]
+fn rough_splits_match_reference() {
+    let ctx = ctx();
+    let xml = format!("{}/scenes/references/cornell-aniso.xml", env!("CARGO_MANIFEST_DIR"));
+    let scene = ppm_vk_engine::Scene::load_with(&xml, &[("res".to_string(), RES.to_string())]).unwrap();
+    let one = Renderer::new(
+        &ctx,
+        &scene,
+        Settings {
+            rough_splits: 1,
+            ..sppm(1_000)
+        },
+    )
+    .unwrap();
+    assert_eq!(one.gpu_scene().params.hit_slots, 1);
+    drop(one);
+    let mut r = Renderer::new(&ctx, &scene, sppm(20_000)).unwrap();
+    let p = r.gpu_scene().params;
+    assert_eq!((p.hit_slots, p.rough_split), (4, 1), "the default splits in four");
+    check_eye_pass(&r, 0, 4);
+    let hits = r.read_hit_points().unwrap();
+    let split = hits
+        .chunks(4)
+        .filter(|h| h.iter().filter(|h| !h.is_empty()).count() > 1)
+        .count();
+    println!("{split} of {} pixels hold more than one hit point", RES * RES);
+    // The two spheres cover about 12% of the image (measured: 123 pixels of 1024).
+    assert!(split > 60, "only {split} pixels split");
+    check_statistics(&mut r);
+    r.pass().unwrap();
+    r.pass().unwrap();
+    check_eye_pass(&r, 1, 4);
+    assert_clean(&ctx);
+}
+
+/// The statistics after a photon pass on the renderer's current hit points, from the GPU's own records,
+/// must be the CPU's gather and update of them.
+fn check_statistics(r: &mut Renderer) {
     let before = r.read_stats().unwrap();
     let hits = r.read_hit_points().unwrap();
     let records = r.trace_and_gather(0, 20_000).unwrap();
@@ -81,14 +132,11 @@ fn eye_passes_and_statistics_match_reference() {
         }
         updated += (accum[i].m > 0) as usize;
     }
-    assert!(updated > hits.len() / 2, "only {updated} pixels gathered photons");
-    // trace_and_gather and update_only do not count as a pass: the renderer's first pass() still uses eye
-    // pass 0, and its second traces eye pass 1.
-    r.pass().unwrap();
-    check_eye_pass(&r, 0);
-    r.pass().unwrap();
-    check_eye_pass(&r, 1);
-    assert_clean(&ctx);
+    let live = hits.iter().filter(|h| !h.is_empty()).count();
+    assert!(
+        updated > live / 2,
+        "only {updated} of {live} hit points gathered photons"
+    );
 }
 
 #[test]

@@ -96,6 +96,7 @@ class Renderer:
         probe_k: float = ...,
         probe_grow: float = ...,
         hit_slots: int = ...,
+        rough_splits: int = ...,
         max_eye_depth: int = ...,
         max_photon_depth: int = ...,
         emission_samples: int = ...,

@@ -165,7 +165,8 @@ struct RenderParams {
     float eps;       // ray offset floor, relative to the scene's size (see offset_ray)
     uint max_photon_depth;
     uint max_eye_depth;
-    uint hit_slots;  // hit points per pixel (glass splits the eye path into both Fresnel branches)
+    uint hit_slots;  // hit points per pixel (glass splits the eye path into both Fresnel branches, or with
+                     // rough_split the first rough vertex into lobe directions)
     uint photon_capacity; // photon records one batch can hold
     uint seed;
     float flux_fixed; // fixed-point units per unit of flux in PassAccum: a power of two, 2^30 / (largest
@@ -184,6 +185,8 @@ struct RenderParams {
     float light_power;      // the lights' power, channels summed (the light table's total): the density
                             // ray/glossy_light.glsl weighs an area light's samples by
     uint glossy_light;      // GLOSSY_LIGHT_*: how eye paths take the light their rough vertices reflect
+    uint rough_split;       // 1 (SPPM): the hit slots are for the first rough vertex's lobe directions, and
+                            // glass, panes and plastics take one branch; 0 (PPM): those split while slots last
 };
 
 // RenderParams.glossy_light (ray/glossy_light.glsl): the light a rough vertex reflects straight from an

@@ -2,7 +2,8 @@
 // diffuse surface, where it leaves a hit point. Glass splits the path into both Fresnel branches while the
 // pixel has hit-point slots left; beyond that one branch is chosen at random (../shared/paper/ALGORITHM.md, "Glass in the
 // ray pass"). PPM runs the hit-point path once, at pixel centres; SPPM once per pass, at a random point of
-// each pixel, with one slot (one branch at glass).
+// each pixel, one branch at glass, and where the scene has rough vertices (params.rough_split) one slot for
+// each direction its first rough vertex draws from the lobe.
 //
 // Emission seen directly or through mirrors and glass is estimated apart from the hit points, and gets
 // more samples: a pixel's value is the integral over the pixel of (a) the emission met along the specular
@@ -18,7 +19,9 @@
 // is a pilot: its emission samples only mark (in `busy`) the pixels where one met the front of an emitter,
 // and are not added; the renderer then marks their neighbours too (spread_marks), which catches the pixels
 // an edge of the light or of its image only clips. Later passes take all their samples in marked pixels and
-// one in the others. (Marking every pixel that sees a mirror or glass, as before, took the samples in the
+// one in the others. The pilot marks the pixels whose paths sampled through a rough lobe the same way: the
+// light a rough vertex reflects (its shadow ray and its lobe's direction, glossy_light.glsl) is the
+// noisiest term there. (Marking every pixel that sees a mirror or glass, as before, took the samples in the
 // mirror and glass spheres too, mostly where they show the walls: the eye pass cost 80-95 ms per pass at
 // 512^2 against 40-49 ms marking only the light, docs/performance.md.)
 // The pooled mean stays unbiased because every count is fixed before the samples it counts are drawn:
@@ -70,10 +73,11 @@ layout(std430, binding = 8) writeonly buffer HitPoints { HitPoint hit_points[]; 
 layout(std430, binding = 9) buffer Direct { dvec4 direct[]; };
 layout(std430, binding = 10) buffer Cut { PathCounters cut; };
 // Per pixel, what the pilot saw here or beside: MARK_EMISSION, the front of an emitter; MARK_LIT, a light
-// through one of its shadow rays.
+// through one of its shadow rays; MARK_ROUGH, a rough conductor or rough glass its paths sampled through.
 layout(std430, binding = 11) buffer Busy { uint busy[]; };
 const uint MARK_EMISSION = 1u;
 const uint MARK_LIT = 2u;
+const uint MARK_ROUGH = 4u;
 layout(std430, binding = 12) readonly buffer Lights { Light lights[]; };
 layout(push_constant) uniform RayPush {
     vec2 jitter;     // sample position inside the pixel, in [0,1)^2 (0.5, 0.5: the centre); negative:
@@ -106,7 +110,9 @@ layout(push_constant) uniform RayPush {
 const uint MAX_SLOTS = 8u;
 const uint SALT_EMISSION = 4u;
 
-struct Pending { vec3 o; vec3 d; vec3 thr; uint depth; };
+// A branch waiting for its turn: the ray, its weight, its depth, and where it left a rough vertex the
+// lobe's density of d and the vertex (glossy_light.glsl; 0 after glass, a delta vertex).
+struct Pending { vec3 o; vec3 d; vec3 thr; uint depth; float lobe_pdf; vec3 lobe_from; };
 
 vec3 camera_ray(uint px, uint py, vec2 jitter) {
     float sx = (2.0 * (float(px) + jitter.x) / float(params.width) - 1.0) * params.aspect * params.tan_half_fov;
@@ -232,8 +238,9 @@ vec3 escaped(vec3 d) {
 
 // One emission sample: the emission met along the specular chain from the eye through `jitter`, and with
 // direct light sampled, term (d) at the chain's diffuse end. `seen`: set if the path met the front of an
-// emitter; `lit`: set if its shadow ray reached a light.
-vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout bool lit) {
+// emitter; `lit`: set if its shadow ray reached a light; `rough`: set if it sampled through a rough
+// conductor or rough glass (rough_vertex).
+vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout bool lit, inout bool rough) {
     vec2 jitter = vec2(rng_float(rng), rng_float(rng));
     vec3 o = params.eye;
     vec3 d = camera_ray(px, py, jitter);
@@ -335,6 +342,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             // The light this vertex reflects straight from an emitter, by a shadow ray (glossy_light.glsl),
             // then the lobe's direction, whose emission met next is weighed against it.
             vec3 wo = -d;
+            rough = true;
             sum += thr * rough_light(h.material, m, h, nf, ng, front, wo, rng, lit);
             if (bvh_spent || bvh_cut) break; // counted by shadowed; the sample is dropped
             rough_bounce(h.material, m, h, nf, front, rng, o, d, thr);
@@ -370,7 +378,7 @@ void main() {
         }
         Pending stack[MAX_SLOTS];
         uint sp = 0u;
-        stack[sp++] = Pending(params.eye, camera_ray(px, py, jitter), vec3(1.0), 0u);
+        stack[sp++] = Pending(params.eye, camera_ray(px, py, jitter), vec3(1.0), 0u, 0.0, vec3(0.0));
         uint slot = 0u;
         vec3 hit_emitted = vec3(0.0);
         // A sample at a fixed point of the pixel (PPM's centre) would bias the box-filtered terms (a) and
@@ -384,10 +392,9 @@ void main() {
             // is stacked only where it does.
             vec3 vng = r.d, vns = r.d;
             bump_alpha2 = 0.0; // a stacked branch took its vertex's term when stacked
-            // Where r.d left a rough vertex: its lobe's density of r.d and the vertex (glossy_light.glsl);
-            // a stacked branch leaves glass, a delta vertex.
-            float lobe_pdf = 0.0;
-            vec3 lobe_from = vec3(0.0);
+            // Where r.d left a rough vertex: its lobe's density of r.d and the vertex (glossy_light.glsl).
+            float lobe_pdf = r.lobe_pdf;
+            vec3 lobe_from = r.lobe_from;
             for (;;) {
                 bvh_sync();
                 if (HAS_SHADING_NORMALS && !shading_valid(r.d, vng, vns)) break;
@@ -431,7 +438,7 @@ void main() {
                         table = HAS_ROUGH_PLASTICS ? material_table(h.material) : 0u;
                         plastic_lobes(h.material, m, table, nf, rng, coat_d, spec, diff);
                         coat = true;
-                        if (slot + sp + 1u >= params.hit_slots) {
+                        if (params.rough_split != 0u || slot + sp + 1u >= params.hit_slots) {
                             if (!(max3(spec) + max3(diff) > 0.0)) break;
                             float ps = max3(spec) / (max3(spec) + max3(diff));
                             coat = rng_float(rng) < ps;
@@ -497,6 +504,21 @@ void main() {
                         hit_emitted += r.thr * rough_light(h.material, m, h, nf, ng, front, wo, rng, unused);
                         if (bvh_spent) { sp = 0u; break; } // counted there; no budget for the rest
                     }
+                    // SPPM's split (params.rough_split): the first rough vertex draws a direction of its lobe
+                    // for every slot left, each branch weighted 1 / k, so the light seen through the lobe
+                    // gets k hit points a pass; their sum is one sample of it (each branch's terms (a)
+                    // and (d) too). The k - 1 stacked first, in order; this path takes the last.
+                    uint k = params.rough_split != 0u && slot + sp + 1u < params.hit_slots ? params.hit_slots - slot - sp : 1u;
+                    r.thr /= float(k);
+                    for (uint j = 1u; j < k; j++) {
+                        Pending b = Pending(r.o, r.d, r.thr, r.depth, 0.0, h.pos);
+                        rough_bounce(h.material, m, h, nf, front, rng, b.o, b.d, b.thr);
+                        if (!(max3(b.thr) > 0.0)) continue;
+                        if (HAS_SHADING_NORMALS && !shading_valid(b.d, ng, nf)) continue;
+                        if (HAS_NORMAL_MAPS) b.thr *= bump_shadowing(b.d);
+                        if (hit_is_sample) b.lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, b.d);
+                        stack[sp++] = b;
+                    }
                     rough_bounce(h.material, m, h, nf, front, rng, r.o, r.d, r.thr);
                     if (max3(r.thr) <= 0.0) break;
                     if (hit_is_sample) lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, r.d);
@@ -506,10 +528,10 @@ void main() {
                 if (HAS_THIN && m.surface == SURFACE_THIN) {
                     // As glass: both branches while the pixel has slots, else one.
                     float rr = thin_reflectance(-dot(r.d, nf), m.ior);
-                    if (rr < 1.0 && slot + sp + 1u < params.hit_slots) {
+                    if (rr < 1.0 && params.rough_split == 0u && slot + sp + 1u < params.hit_slots) {
                         vec3 refl = reflect(r.d, nf);
                         if (!HAS_SHADING_NORMALS || shading_valid(refl, ng, nf))
-                            stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * (rr * m.color) * bump_shadowing(refl), r.depth);
+                            stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * (rr * m.color) * bump_shadowing(refl), r.depth, 0.0, vec3(0.0));
                         r.thr *= (1.0 - rr) * material_term_a(h.material);
                         r.o = offset_ray(h.pos, -nf);
                     } else {
@@ -533,9 +555,9 @@ void main() {
                 if (f >= 1.0) {
                     r.d = refl;
                     r.o = offset_ray(h.pos, nf);
-                } else if (slot + sp + 1u < params.hit_slots) {
+                } else if (params.rough_split == 0u && slot + sp + 1u < params.hit_slots) {
                     if (!HAS_SHADING_NORMALS || shading_valid(refl, ng, nf))
-                        stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * f * bump_shadowing(refl), r.depth);
+                        stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * f * bump_shadowing(refl), r.depth, 0.0, vec3(0.0));
                     r.thr *= 1.0 - f;
                     r.d = refr;
                     r.o = offset_ray(h.pos, -nf);
@@ -561,25 +583,27 @@ void main() {
     // Only whole samples count: once long paths have spent the thread's BVH budget (bvh_spent, counted),
     // the remaining samples are not taken rather than taken as black.
     // How many (reference::samples_for_mark, the CPU twin's rule): all of them where the pilot saw
-    // emission; with direct light sampled, light_samples where one of its shadow rays reached a light and
-    // one where none did (in the umbra, or where no light is in direct view: the shadow rays there would
-    // add nothing); else light_samples.
+    // emission or sampled through a rough lobe (whose light, by shadow rays and the lobe, is the noisiest
+    // term there, docs/accuracy.md); with direct light sampled, light_samples where one of its shadow rays reached a
+    // light and one where none did (in the umbra, or where no light is in direct view: the shadow rays
+    // there would add nothing); else light_samples.
     uint mark = busy[local];
     uint total = pc.light_samples;
-    if (pc.pilot != 0u || (mark & MARK_EMISSION) != 0u) total = pc.emission_samples;
+    if (pc.pilot != 0u || (mark & (MARK_EMISSION | MARK_ROUGH)) != 0u) total = pc.emission_samples;
     else if (params.direct_light != 0u && pc.emission_samples > 0u && (mark & MARK_LIT) == 0u) total = min(total, 1u);
     uint first = pc.chunk * pc.per_dispatch;
     uint want = total > first ? min(total - first, pc.per_dispatch) : 0u;
     bool seen = false;
     bool lit = false;
+    bool rough = false;
     for (uint s = 0u; s < want; s++) {
         if (bvh_spent || bvh_cut) break;
-        vec3 e = emission_sample(px, py, erng, seen, lit);
+        vec3 e = emission_sample(px, py, erng, seen, lit, rough);
         if (bvh_spent || bvh_cut) break;
         if (pc.pilot != 0u) continue;
         emitted += dvec3(e);
         samples++;
     }
-    if (pc.pilot != 0u) busy[local] |= (seen ? MARK_EMISSION : 0u) | (lit ? MARK_LIT : 0u);
+    if (pc.pilot != 0u) busy[local] |= (seen ? MARK_EMISSION : 0u) | (lit ? MARK_LIT : 0u) | (rough ? MARK_ROUGH : 0u);
     if (samples > 0u) direct[local] += dvec4(emitted, double(samples));
 }

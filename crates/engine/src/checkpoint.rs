@@ -264,7 +264,7 @@ impl Header {
     /// The buffers' sizes are those a render of `scene` with these settings has.
     fn check_sections(&self, scene: &Scene) -> Result<()> {
         let pixels = scene.camera.width as u64 * scene.camera.height as u64;
-        let slots = pixels * self.settings.slots() as u64;
+        let slots = pixels * self.settings.slots(scene) as u64;
         let ppm_hits = match self.settings.mode {
             crate::settings::Mode::Ppm => slots,
             crate::settings::Mode::Sppm => 0,

@@ -345,7 +345,7 @@ impl Renderer {
             gpu.params.num_spheres + gpu.params.num_quads + inline_triangles,
             // choose_emitter's binary search, and an environment map's two (photon.comp's LIGHT_LOOPS)
             u32::BITS - gpu.params.num_lights.leading_zeros() + 1 + if gpu.has_environment { 48 } else { 0 },
-            settings.slots(),
+            gpu.params.hit_slots,
             settings.emission_samples.max(settings.unmarked_samples()),
             settings.max_photon_depth,
             settings.max_eye_depth,
@@ -396,9 +396,7 @@ impl Renderer {
         ];
         let advice = format!(
             "the resolution ({}x{}) or the hit points per pixel ({})",
-            gpu.params.width,
-            gpu.params.height,
-            settings.slots()
+            gpu.params.width, gpu.params.height, gpu.params.hit_slots
         );
         // Only a BVH scene suspends photons (photon.comp); the others bind one entry's worth.
         let suspended_bytes = match gpu.traverses_bvh() {
@@ -455,7 +453,7 @@ impl Renderer {
         .into_iter()
         .max()
         .unwrap_or(0) as u64;
-        let per_pixel_bytes = (settings.slots() as u64 * slot_bytes).max(32);
+        let per_pixel_bytes = (gpu.params.hit_slots as u64 * slot_bytes).max(32);
         let cap = settings.max_tile_bytes.unwrap_or(max_range).min(max_range);
         let Some(per_tile) = tile_pixels(pixels as u32, per_pixel_bytes, cap) else {
             let message = format!(
@@ -661,10 +659,19 @@ impl Renderer {
             .device("writing the pilot's marks")?;
         // The gather walks the hit points in Morton order, so neighbouring threads read the same buckets.
         // PPM's hit points never move: order them by position once, on the host. SPPM's move every pass:
-        // order the pixels by their screen position, which is nearly as coherent and never changes.
+        // order the pixels by their screen position, which is nearly as coherent and never changes; where
+        // rough vertices split the eye paths, each slot's pixels in turn (the pixels' first slots, then
+        // their second, ...), so that the slots most pixels leave empty fill whole subgroups, which cost
+        // next to nothing, rather than idling lanes beside the live ones.
         let order = match self.settings.mode {
             Mode::Ppm => morton_order(&self.download(&self.hit_points, self.gpu.slots(), "reading the hit points")?),
-            Mode::Sppm => pixel_order(self.gpu.params.width, self.gpu.params.height),
+            Mode::Sppm => {
+                let pixels = pixel_order(self.gpu.params.width, self.gpu.params.height);
+                let slots = self.gpu.params.hit_slots;
+                (0..slots)
+                    .flat_map(|s| pixels.iter().map(move |&p| p * slots + s))
+                    .collect()
+            }
         };
         self.set_order(order)
     }
@@ -702,7 +709,7 @@ impl Renderer {
     /// The hit-point slots the gather and the update visit, in this order.
     /// Each tile's entries go from its first slot on, relative to it, in the order given.
     fn set_order(&mut self, order: Vec<u32>) -> Result<()> {
-        let slots = self.settings.slots();
+        let slots = self.gpu.params.hit_slots;
         let per_tile = (self.tiles[0].pixels * slots) as usize;
         let mut tiled = vec![0u32; self.gpu.slots() as usize];
         // Where tile k's next entry goes.
@@ -766,7 +773,7 @@ impl Renderer {
 
     /// `tile`'s slots of the per-slot buffers.
     fn hit_buffers(&self, tile: &Tile) -> HitBuffers<'_> {
-        let slots = self.settings.slots() as u64;
+        let slots = self.gpu.params.hit_slots as u64;
         let (first, count) = (tile.first_pixel as u64 * slots, tile.pixels as u64 * slots);
         fn part(b: &Buffer, first: u64, count: u64, size: usize) -> BufferSlice<'_> {
             b.slice(first * size as u64, count * size as u64)
@@ -787,7 +794,7 @@ impl Renderer {
         self.profiler.reset();
         let pushes = self.eye_pushes(eye_pass, trace_hits);
         let tiles = &self.tiles;
-        let slots = self.settings.slots() as u64;
+        let slots = self.gpu.params.hit_slots as u64;
         let scene = self.scene_buffers();
         let (profiler, k) = (&self.profiler, &self.kernels);
         let (hit_points, direct, cut, busy, lights) =
@@ -1282,7 +1289,7 @@ impl Renderer {
         // The update scaled tau and R^2 by the same ratio: tau / R^2 is this pass's flux over its radius.
         let stats: Vec<HitStats> = self.download(&self.stats, self.gpu.slots(), what)?;
         let direct: Vec<[f64; 4]> = self.download(&self.direct, self.gpu.pixels(), what)?;
-        let slots = self.settings.slots() as usize;
+        let slots = self.gpu.params.hit_slots as usize;
         let norm = self.settings.cone_norm() as f64 * std::f64::consts::PI * per_pass as f64;
         let photons = stats
             .chunks_exact(slots)
@@ -1341,7 +1348,7 @@ impl Renderer {
         self.profiler.reset();
         let (profiler, k) = (&self.profiler, &self.kernels);
         let (params, stats, direct, image) = (&self.params, &self.stats, &self.direct, &self.image);
-        let stats_size = std::mem::size_of::<HitStats>() as u64 * self.settings.slots() as u64;
+        let stats_size = std::mem::size_of::<HitStats>() as u64 * self.gpu.params.hit_slots as u64;
         self.ctx
             .run(|cmd| {
                 profiler.scope(cmd, "resolve", || {
@@ -1705,7 +1712,7 @@ impl Renderer {
 pub fn spread_marks(marks: &mut [u32], width: u32, height: u32) {
     let (w, h) = (width as usize, height as usize);
     // The pilot's own marks, taken before any is added: the spread does not chain. Each kind of mark
-    // (reference::MARK_EMISSION, MARK_LIT) spreads on its own.
+    // (reference::MARK_EMISSION, MARK_LIT, MARK_ROUGH) spreads on its own.
     let seeds: Vec<(usize, u32)> = (0..marks.len())
         .filter(|&i| marks[i] != 0)
         .map(|i| (i, marks[i]))

@@ -19,7 +19,8 @@ pub enum Mode {
     /// split into both Fresnel branches.
     Ppm,
     /// Stochastic PPM (Hachisuka and Jensen 2009): an eye pass before every photon pass, at a random point
-    /// of each pixel, one hit point per pixel, one branch at glass chosen by Fresnel.
+    /// of each pixel, one hit point per pixel (`rough_splits` where a rough lobe splits the path), one
+    /// branch at glass chosen by Fresnel.
     Sppm,
 }
 
@@ -106,9 +107,15 @@ pub struct Settings {
     /// shrinks, and no lookup reads more photons than eq. 8's radius would).
     #[serde(default = "default_probe_grow")]
     pub probe_grow: f32,
-    /// Hit points per pixel: glass splits an eye path into both Fresnel branches up to this many leaves
-    /// (PPM; SPPM always has one).
+    /// Hit points per pixel in PPM: glass splits an eye path into both Fresnel branches up to this many
+    /// leaves.
     pub hit_slots: u32,
+    /// Hit points per pixel in SPPM where the scene has a rough surface that eye paths sample through
+    /// (rough glass, a rough conductor that is no glossy hit point): an eye path's first such vertex splits
+    /// it into this many directions of its lobe, each a hit point with statistics of its own, so the light
+    /// seen through a glossy lobe gets this many samples a pass (ray.comp). Elsewhere SPPM has one.
+    #[serde(default = "default_rough_splits")]
+    pub rough_splits: u32,
     /// Most specular bounces of an eye path. Eye paths end at diffuse surfaces or by escaping; this is a
     /// backstop (for a camera between parallel mirrors), lowered where the device's loop budget needs it
     /// (`PathLimits`). Paths cut there are counted in `PassStats::eye_paths_cut`.
@@ -184,6 +191,7 @@ impl Default for Settings {
             probe_k: DEFAULT_PROBE_K,
             probe_grow: DEFAULT_PROBE_GROW,
             hit_slots: 4,
+            rough_splits: default_rough_splits(),
             max_eye_depth: 1024,
             max_photon_depth: 4096,
             emission_samples: 16,
@@ -228,6 +236,13 @@ pub const DEFAULT_GLOSSY_ALPHA: f32 = 0.15;
 
 fn default_glossy_hits() -> Option<f32> {
     Some(DEFAULT_GLOSSY_ALPHA)
+}
+
+/// `Settings::rough_splits`'s default (docs/accuracy.md measures it at equal time).
+pub const DEFAULT_ROUGH_SPLITS: u32 = 4;
+
+fn default_rough_splits() -> u32 {
+    DEFAULT_ROUGH_SPLITS
 }
 
 fn default_light_samples() -> u32 {
@@ -319,6 +334,12 @@ impl Settings {
                 format!("hit slots per pixel must be in 1..=8, got {}", self.hit_slots),
             ));
         }
+        if !(1..=8).contains(&self.rough_splits) {
+            return Err(invalid(
+                "rough_splits",
+                format!("rough splits per pixel must be in 1..=8, got {}", self.rough_splits),
+            ));
+        }
         if let Some(b) = self.grid_buckets {
             if !b.is_power_of_two() || !(SCAN_BLOCK..=SCAN_BLOCK * 65536).contains(&b) {
                 return Err(invalid(
@@ -369,12 +390,31 @@ impl Settings {
         Ok(())
     }
 
-    /// Hit points per pixel as the renderer uses them.
-    pub fn slots(&self) -> u32 {
+    /// Hit points per pixel as the renderer uses them for `scene`: PPM's glass leaves; in SPPM the lobe
+    /// directions of the first rough vertex where eye paths sample through one in `scene`, else one.
+    pub fn slots(&self, scene: &crate::scene::Scene) -> u32 {
         match self.mode {
             Mode::Ppm => self.hit_slots,
+            Mode::Sppm if self.splits_rough(scene) => self.rough_splits,
             Mode::Sppm => 1,
         }
+    }
+
+    /// Whether SPPM's eye paths split at rough vertices in `scene` (ray.comp): it has a material the eye
+    /// paths sample through by a lobe, rough glass or a rough conductor that holds no glossy hit point
+    /// (rough_conductor.glsl's `glossy_hit`), and more than one split is asked for.
+    pub fn splits_rough(&self, scene: &crate::scene::Scene) -> bool {
+        use crate::scene::Surface;
+        let glossy = self.glossy_hits.unwrap_or(f32::INFINITY);
+        self.mode == Mode::Sppm
+            && self.rough_splits > 1
+            && scene.materials.iter().any(|m| match &m.surface {
+                Surface::RoughGlass { .. } => true,
+                Surface::RoughConductor { rough, .. } => {
+                    !(rough.alpha >= glossy && rough.alpha == rough.alpha_v && m.alpha_texture.is_none())
+                }
+                _ => false,
+            })
     }
 
     /// The cone filter's normalisation 1 - 2/(3k) (eq. 11), or 1 without it.

@@ -248,6 +248,9 @@ pub struct RenderParams {
     pub light_power: f32,
     /// `GLOSSY_LIGHT_*`: how eye paths take the light their rough vertices reflect straight from an emitter.
     pub glossy_light: u32,
+    /// 1 (SPPM): the hit slots are for the lobe directions an eye path's first rough vertex splits it into,
+    /// and glass, panes and plastics take one branch (ray.comp); 0 (PPM): those split while slots last.
+    pub rough_split: u32,
 }
 gpu_struct!(RenderParams {
     eye,
@@ -280,7 +283,8 @@ gpu_struct!(RenderParams {
     glossy_alpha,
     masks,
     light_power,
-    glossy_light
+    glossy_light,
+    rough_split
 });
 
 #[repr(C)]

@@ -302,7 +302,8 @@ fn eye_vertex(
 /// through a random point of the pixel, one Fresnel branch chosen with probability f, and with direct light
 /// sampled (`RenderParams::direct_light`) term (d) at its diffuse end. `cut` counts a path ended at the
 /// depth backstop; `seen` is set if the path met an emitter's front, `lit` if its shadow ray reached a
-/// light.
+/// light, `rough` if it sampled through a rough conductor or rough glass.
+#[allow(clippy::too_many_arguments)]
 fn emission_sample(
     g: &GpuScene,
     px: u32,
@@ -311,6 +312,7 @@ fn emission_sample(
     cut: &mut u32,
     seen: &mut bool,
     lit: &mut bool,
+    rough: &mut bool,
 ) -> Vec3 {
     let j = [rng.float(), rng.float()];
     let mut o = v3(g.params.eye);
@@ -407,6 +409,7 @@ fn emission_sample(
         if glossy_light::rough_vertex(g, m) {
             // The light this vertex reflects straight from an emitter by a shadow ray, then the lobe.
             let wo = -d;
+            *rough = true;
             sum += thr * glossy_light::rough_light(g, m, &h, nf, ng, front, wo, &bump, rng, lit);
             let (o2, d2, w) = rough_bounce(g, m, &h, nf, front, rng, d).expect("a rough surface");
             (o, d) = (o2, d2);
@@ -439,13 +442,16 @@ pub struct EyePass {
 pub const MARK_EMISSION: u32 = 1;
 /// A pilot mark: one of the pilot's shadow rays reached a light, in the pixel or beside it.
 pub const MARK_LIT: u32 = 2;
+/// A pilot mark: one of the pilot's paths sampled through a rough conductor or rough glass, in the pixel or
+/// beside it.
+pub const MARK_ROUGH: u32 = 4;
 
 /// ray.comp's count of emission-sample paths a pixel takes per eye pass after the pilot, from its marks:
-/// `emission` where the pilot saw emission; with direct light sampled, `light` where a pilot shadow ray
+/// `emission` where the pilot saw emission or sampled through a rough lobe; with direct light sampled, `light` where a pilot shadow ray
 /// reached a light and one where none did (if the pilot took samples at all); else `light` (the renderer
 /// passes `Settings::unmarked_samples` there).
 pub fn samples_for_mark(direct_light: bool, emission: u32, light: u32, mark: u32) -> u32 {
-    if mark & MARK_EMISSION != 0 {
+    if mark & (MARK_EMISSION | MARK_ROUGH) != 0 {
         emission
     } else if direct_light && emission > 0 && mark & MARK_LIT == 0 {
         light.min(1)
@@ -504,20 +510,22 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                 j[0] = rng.float();
                 j[1] = rng.float();
             }
-            // (origin, direction, throughput, depth)
-            let mut stack: Vec<(Vec3, Vec3, Vec3, u32)> = vec![(v3(p.eye), camera_ray(g, px, py, j), Vec3::ONE, 0)];
+            // (origin, direction, throughput, depth, and where it left a rough vertex its lobe's density
+            // and the vertex: ray.comp's Pending)
+            type Pending = (Vec3, Vec3, Vec3, u32, f32, Vec3);
+            let first: Pending = (v3(p.eye), camera_ray(g, px, py, j), Vec3::ONE, 0, 0.0, Vec3::ZERO);
+            let mut stack: Vec<Pending> = vec![first];
             let mut slot = 0usize;
             let mut hit_emitted = Vec3::ZERO;
             let base = pixel as usize * slots;
             // A fixed point of the pixel counts only when no random sample does (ray.comp).
             let hit_is_sample = push.jitter[0] < 0.0 || push.emission_samples == 0;
-            while let Some((mut o, mut d, mut thr, mut depth)) = stack.pop() {
+            while let Some((mut o, mut d, mut thr, mut depth, mut lobe_pdf, mut lobe_from)) = stack.pop() {
                 // The last vertex's normals (shading.glsl); a branch is stacked only where d suits them.
                 let (mut vng, mut vns) = (d, d);
                 let mut out_of_scene = false;
-                // A stacked branch took its vertex's term when stacked, and leaves glass (a delta vertex).
+                // A stacked branch took its vertex's term when stacked.
                 let mut last = Bump::default();
-                let (mut lobe_pdf, mut lobe_from) = (0f32, Vec3::ZERO);
                 while let Some(EyeVertex {
                     h,
                     m,
@@ -557,7 +565,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         } else {
                             (coat_d, spec, diff) = plastic::plastic_lobes(g, m, nf, &mut rng, d);
                             coat = true;
-                            if slot + stack.len() + 1 >= slots {
+                            if p.rough_split != 0 || slot + stack.len() + 1 >= slots {
                                 let Some(ps) = coat_probability(spec, diff) else {
                                     break;
                                 };
@@ -643,6 +651,25 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                             hit_emitted += thr
                                 * glossy_light::rough_light(g, m, &h, nf, ng, front, wo, &bump, &mut rng, &mut unused);
                         }
+                        // SPPM's split (ray.comp): a lobe direction for every slot left, each weighted 1 / k.
+                        let k = if p.rough_split != 0 && slot + stack.len() + 1 < slots {
+                            slots - slot - stack.len()
+                        } else {
+                            1
+                        };
+                        thr /= k as f32;
+                        for _ in 1..k {
+                            let (bo, bd, w) = rough_bounce(g, m, &h, nf, front, &mut rng, d).expect("a rough surface");
+                            let bt = thr * w;
+                            if !(bt.max_element() > 0.0) || !shading::valid(bd, ng, nf) {
+                                continue;
+                            }
+                            let pdf = match hit_is_sample {
+                                true => glossy_light::lobe_density(g, m, &h, nf, front, wo, bd),
+                                false => 0.0,
+                            };
+                            stack.push((bo, bd, bt * bump.shadowing(bd), depth, pdf, h.pos));
+                        }
                         let (o2, d2, w) = rough_bounce(g, m, &h, nf, front, &mut rng, d).expect("a rough surface");
                         (o, d) = (o2, d2);
                         thr *= w;
@@ -657,11 +684,11 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                     }
                     if m.surface == SURFACE_THIN {
                         let rr = thin_dielectric::reflectance(-d.dot(nf), m.ior);
-                        if rr < 1.0 && slot + stack.len() + 1 < slots {
+                        if rr < 1.0 && p.rough_split == 0 && slot + stack.len() + 1 < slots {
                             let refl = reflect(d, nf);
                             if shading::valid(refl, ng, nf) {
                                 let w = thr * (rr * v3(m.color)) * bump.shadowing(refl);
-                                stack.push((offset_ray(g, h.pos, nf), refl, w, depth));
+                                stack.push((offset_ray(g, h.pos, nf), refl, w, depth, 0.0, Vec3::ZERO));
                             }
                             thr *= (1.0 - rr) * v3(m.lobe_a);
                             o = offset_ray(g, h.pos, -nf);
@@ -686,9 +713,10 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                     if f >= 1.0 {
                         d = refl;
                         o = offset_ray(g, h.pos, nf);
-                    } else if slot + stack.len() + 1 < slots {
+                    } else if p.rough_split == 0 && slot + stack.len() + 1 < slots {
                         if shading::valid(refl, ng, nf) {
-                            stack.push((offset_ray(g, h.pos, nf), refl, thr * f * bump.shadowing(refl), depth));
+                            let w = thr * f * bump.shadowing(refl);
+                            stack.push((offset_ray(g, h.pos, nf), refl, w, depth, 0.0, Vec3::ZERO));
                         }
                         thr *= 1.0 - f;
                         d = refr;
@@ -734,16 +762,17 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
         };
         let first = push.chunk * push.per_dispatch;
         let want = total.saturating_sub(first).min(push.per_dispatch);
-        let (mut seen, mut lit) = (false, false);
+        let (mut seen, mut lit, mut rough) = (false, false, false);
         for _ in 0..want {
-            let e = emission_sample(g, px, py, &mut rng, &mut out.cut, &mut seen, &mut lit);
+            let e = emission_sample(g, px, py, &mut rng, &mut out.cut, &mut seen, &mut lit, &mut rough);
             if !pilot {
                 emitted += e.as_dvec3();
                 samples += 1;
             }
         }
         if pilot {
-            busy[pixel as usize] |= (seen as u32 * MARK_EMISSION) | (lit as u32 * MARK_LIT);
+            busy[pixel as usize] |=
+                (seen as u32 * MARK_EMISSION) | (lit as u32 * MARK_LIT) | (rough as u32 * MARK_ROUGH);
         }
         if samples > 0 {
             out.direct[pixel as usize] = [emitted.x, emitted.y, emitted.z, samples as f64];
