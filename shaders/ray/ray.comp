@@ -385,6 +385,10 @@ void main() {
         // (d): it counts only when no random sample does.
         bool hit_is_sample = pc.jitter.x < 0.0 || pc.emission_samples == 0u;
         uint base_slot = local * params.hit_slots;
+        // SPPM's split happens once, at the camera path's first rough vertex: a branch that ends without
+        // a hit point (escaping, or at the depth backstop in a closed rough-metal furnace) must not let the
+        // next one split again, or the branches would multiply along the path.
+        bool may_split = params.rough_split != 0u;
 
         while (sp > 0u) {
             Pending r = stack[--sp];
@@ -505,10 +509,12 @@ void main() {
                         if (bvh_spent) { sp = 0u; break; } // counted there; no budget for the rest
                     }
                     // SPPM's split (params.rough_split): the first rough vertex draws a direction of its lobe
-                    // for every slot left, each branch weighted 1 / k, so the light seen through the lobe
+                    // for every slot (glass and plastics take one branch there, so the stack is empty and
+                    // no slot is taken yet), each branch weighted 1 / k, so the light seen through the lobe
                     // gets k hit points a pass; their sum is one sample of it (each branch's terms (a)
                     // and (d) too). The k - 1 stacked first, in order; this path takes the last.
-                    uint k = params.rough_split != 0u && slot + sp + 1u < params.hit_slots ? params.hit_slots - slot - sp : 1u;
+                    uint k = may_split ? params.hit_slots : 1u;
+                    may_split = false;
                     r.thr /= float(k);
                     for (uint j = 1u; j < k; j++) {
                         Pending b = Pending(r.o, r.d, r.thr, r.depth, 0.0, h.pos);

@@ -518,6 +518,8 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
             let mut slot = 0usize;
             let mut hit_emitted = Vec3::ZERO;
             let base = pixel as usize * slots;
+            // SPPM's split happens once, at the first rough vertex (ray.comp).
+            let mut may_split = p.rough_split != 0;
             // A fixed point of the pixel counts only when no random sample does (ray.comp).
             let hit_is_sample = push.jitter[0] < 0.0 || push.emission_samples == 0;
             while let Some((mut o, mut d, mut thr, mut depth, mut lobe_pdf, mut lobe_from)) = stack.pop() {
@@ -651,12 +653,8 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                             hit_emitted += thr
                                 * glossy_light::rough_light(g, m, &h, nf, ng, front, wo, &bump, &mut rng, &mut unused);
                         }
-                        // SPPM's split (ray.comp): a lobe direction for every slot left, each weighted 1 / k.
-                        let k = if p.rough_split != 0 && slot + stack.len() + 1 < slots {
-                            slots - slot - stack.len()
-                        } else {
-                            1
-                        };
+                        // SPPM's split (ray.comp): a lobe direction for every slot, each weighted 1 / k.
+                        let k = if std::mem::take(&mut may_split) { slots } else { 1 };
                         thr /= k as f32;
                         for _ in 1..k {
                             let (bo, bd, w) = rough_bounce(g, m, &h, nf, front, &mut rng, d).expect("a rough surface");
