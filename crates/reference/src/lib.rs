@@ -447,9 +447,9 @@ pub const MARK_LIT: u32 = 2;
 pub const MARK_ROUGH: u32 = 4;
 
 /// ray.comp's count of emission-sample paths a pixel takes per eye pass after the pilot, from its marks:
-/// `emission` where the pilot saw emission or sampled through a rough lobe; with direct light sampled, `light` where a pilot shadow ray
-/// reached a light and one where none did (if the pilot took samples at all); else `light` (the renderer
-/// passes `Settings::unmarked_samples` there).
+/// `emission` where the pilot saw emission or sampled through a rough lobe; with direct light sampled,
+/// `light` where a pilot shadow ray reached a light and one where none did (if the pilot took samples at
+/// all); else `light` (the renderer passes `Settings::unmarked_samples` there).
 pub fn samples_for_mark(direct_light: bool, emission: u32, light: u32, mark: u32) -> u32 {
     if mark & (MARK_EMISSION | MARK_ROUGH) != 0 {
         emission
