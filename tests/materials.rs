@@ -354,6 +354,14 @@ fn plastic_under_a_square_light_matches_its_closed_form() {
     assert_clean(&ctx);
 }
 
+/// cornell-aniso's two rough spheres, in its reference's 256 x 256 pixels.
+fn cornell_aniso_regions() -> [Region; 2] {
+    [
+        Region::new("gold", 40, 120, 90, 90),
+        Region::new("glass", 100, 140, 90, 90),
+    ]
+}
+
 /// scenes/references/cornell-aniso.xml: an anisotropic gold sphere (GGX, alpha 0.05 along its longitude and
 /// 0.4 across) and an anisotropic rough glass mesh (Beckmann 0.05 / 0.3 along each triangle's first edge,
 /// smooth-shaded) against Mitsuba's path tracer on the same XML (8192 spp). 128 x 128, SPPM, 32 passes of
@@ -363,11 +371,7 @@ fn plastic_under_a_square_light_matches_its_closed_form() {
 #[test]
 fn anisotropic_roughness_matches_its_mitsuba_reference() {
     let (scene, reference) = reference_scene("cornell-aniso");
-    // In the reference's 256 x 256 pixels.
-    let regions = [
-        Region::new("gold", 40, 120, 90, 90),
-        Region::new("glass", 100, 140, 90, 90),
-    ];
+    let regions = cornell_aniso_regions();
     let mut turned = scene.clone();
     for m in &mut turned.materials {
         if let Surface::RoughConductor { ref mut rough, .. } | Surface::RoughGlass { ref mut rough, .. } = m.surface {
@@ -400,11 +404,7 @@ fn anisotropic_roughness_matches_its_mitsuba_reference() {
 #[test]
 fn rough_splits_keep_the_mean_and_lower_the_spheres_error() {
     let (scene, reference) = reference_scene("cornell-aniso");
-    // In the reference's 256 x 256 pixels.
-    let regions = [
-        Region::new("gold", 40, 120, 90, 90),
-        Region::new("glass", 100, 140, 90, 90),
-    ];
+    let regions = cornell_aniso_regions();
     let ctx = ctx();
     let four = render(&ctx, &scene, r_settings(), 16);
     let one = Settings {
@@ -441,6 +441,7 @@ fn rough_splits_keep_the_mean_and_lower_the_spheres_error() {
     }
     assert_clean(&ctx);
 }
+
 /// scenes/references/cornell-smooth.xml: cornell-spheres with its glass and blue spheres coarse icospheres
 /// (320 triangles) smooth-shaded by their vertex normals, against Mitsuba's path tracer on the same XML
 /// (8192 spp). 128 x 128, SPPM, 32 passes of 100k photons. The mean per channel within 1%, and the relMSE

@@ -389,6 +389,9 @@ void main() {
         // a hit point (escaping, or at the depth backstop in a closed rough-metal furnace) must not let the
         // next one split again, or the branches would multiply along the path.
         bool may_split = params.rough_split != 0u;
+        // The slots glass, panes and plastics may split into both branches: all of them in PPM, none where
+        // they are the rough vertex's (one branch each there).
+        uint branch_slots = params.rough_split != 0u ? 1u : params.hit_slots;
 
         while (sp > 0u) {
             Pending r = stack[--sp];
@@ -442,7 +445,7 @@ void main() {
                         table = HAS_ROUGH_PLASTICS ? material_table(h.material) : 0u;
                         plastic_lobes(h.material, m, table, nf, rng, coat_d, spec, diff);
                         coat = true;
-                        if (params.rough_split != 0u || slot + sp + 1u >= params.hit_slots) {
+                        if (slot + sp + 1u >= branch_slots) {
                             if (!(max3(spec) + max3(diff) > 0.0)) break;
                             float ps = max3(spec) / (max3(spec) + max3(diff));
                             coat = rng_float(rng) < ps;
@@ -534,7 +537,7 @@ void main() {
                 if (HAS_THIN && m.surface == SURFACE_THIN) {
                     // As glass: both branches while the pixel has slots, else one.
                     float rr = thin_reflectance(-dot(r.d, nf), m.ior);
-                    if (rr < 1.0 && params.rough_split == 0u && slot + sp + 1u < params.hit_slots) {
+                    if (rr < 1.0 && slot + sp + 1u < branch_slots) {
                         vec3 refl = reflect(r.d, nf);
                         if (!HAS_SHADING_NORMALS || shading_valid(refl, ng, nf))
                             stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * (rr * m.color) * bump_shadowing(refl), r.depth, 0.0, vec3(0.0));
@@ -561,7 +564,7 @@ void main() {
                 if (f >= 1.0) {
                     r.d = refl;
                     r.o = offset_ray(h.pos, nf);
-                } else if (params.rough_split == 0u && slot + sp + 1u < params.hit_slots) {
+                } else if (slot + sp + 1u < branch_slots) {
                     if (!HAS_SHADING_NORMALS || shading_valid(refl, ng, nf))
                         stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * f * bump_shadowing(refl), r.depth, 0.0, vec3(0.0));
                     r.thr *= 1.0 - f;
@@ -590,9 +593,9 @@ void main() {
     // the remaining samples are not taken rather than taken as black.
     // How many (reference::samples_for_mark, the CPU twin's rule): all of them where the pilot saw
     // emission or sampled through a rough lobe (whose light, by shadow rays and the lobe, is the noisiest
-    // term there, docs/accuracy.md); with direct light sampled, light_samples where one of its shadow rays reached a
-    // light and one where none did (in the umbra, or where no light is in direct view: the shadow rays
-    // there would add nothing); else light_samples.
+    // term there, docs/accuracy.md); with direct light sampled, light_samples where one of its shadow rays
+    // reached a light and one where none did (in the umbra, or where no light is in direct view: the
+    // shadow rays there would add nothing); else light_samples.
     uint mark = busy[local];
     uint total = pc.light_samples;
     if (pc.pilot != 0u || (mark & (MARK_EMISSION | MARK_ROUGH)) != 0u) total = pc.emission_samples;

@@ -520,6 +520,8 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
             let base = pixel as usize * slots;
             // SPPM's split happens once, at the first rough vertex (ray.comp).
             let mut may_split = p.rough_split != 0;
+            // The slots glass, panes and plastics may split into both branches (ray.comp).
+            let branch_slots = if may_split { 1 } else { slots };
             // A fixed point of the pixel counts only when no random sample does (ray.comp).
             let hit_is_sample = push.jitter[0] < 0.0 || push.emission_samples == 0;
             while let Some((mut o, mut d, mut thr, mut depth, mut lobe_pdf, mut lobe_from)) = stack.pop() {
@@ -567,7 +569,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                         } else {
                             (coat_d, spec, diff) = plastic::plastic_lobes(g, m, nf, &mut rng, d);
                             coat = true;
-                            if p.rough_split != 0 || slot + stack.len() + 1 >= slots {
+                            if slot + stack.len() + 1 >= branch_slots {
                                 let Some(ps) = coat_probability(spec, diff) else {
                                     break;
                                 };
@@ -682,7 +684,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                     }
                     if m.surface == SURFACE_THIN {
                         let rr = thin_dielectric::reflectance(-d.dot(nf), m.ior);
-                        if rr < 1.0 && p.rough_split == 0 && slot + stack.len() + 1 < slots {
+                        if rr < 1.0 && slot + stack.len() + 1 < branch_slots {
                             let refl = reflect(d, nf);
                             if shading::valid(refl, ng, nf) {
                                 let w = thr * (rr * v3(m.color)) * bump.shadowing(refl);
@@ -711,7 +713,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                     if f >= 1.0 {
                         d = refl;
                         o = offset_ray(g, h.pos, nf);
-                    } else if p.rough_split == 0 && slot + stack.len() + 1 < slots {
+                    } else if slot + stack.len() + 1 < branch_slots {
                         if shading::valid(refl, ng, nf) {
                             let w = thr * f * bump.shadowing(refl);
                             stack.push((offset_ray(g, h.pos, nf), refl, w, depth, 0.0, Vec3::ZERO));
