@@ -760,6 +760,18 @@ fn render(args: RenderArgs) -> Result<Ended> {
         );
     }
 
+    if args.profile {
+        let m = renderer.pilot_marks()?;
+        let pct = |n: u32| 100.0 * n as f64 / m.pixels.max(1) as f64;
+        eprintln!(
+            "pilot marks: emission {:.1}%, rough {:.1}%, lit {:.1}% of {} pixels; all emission samples in {:.1}%",
+            pct(m.emission),
+            pct(m.rough),
+            pct(m.lit),
+            m.pixels,
+            pct(m.all_samples)
+        );
+    }
     if let Some(p) = renderer.probe_report() {
         let q = p.lambda_ratio_quantiles;
         eprintln!(

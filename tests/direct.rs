@@ -147,3 +147,55 @@ fn pixels_no_pilot_shadow_ray_lit_take_one_path() {
     }
     assert_clean(&ctx);
 }
+
+/// The pilot's emission mark is for emission that only the eye paths' own directions can meet, which then
+/// takes all `emission_samples` paths: not for emission met straight after a rough vertex, whose shadow ray
+/// takes the same light by multiple importance sampling. The penumbra's floor made a rough plastic (its
+/// light out of view, its coat's glossy reflection of the light in view): no pixel is marked for emission,
+/// as with the diffuse floor; with `--glossy-light bsdf` (no shadow ray at the coat, the lobe alone meets the
+/// light) the reflection is marked, so the test sees the marks where they belong.
+#[test]
+fn emission_after_a_rough_coat_marks_no_pixel() {
+    use ppm_vk_engine::scene::{Microfacet, Surface};
+    use ppm_vk_engine::GlossyLight;
+    let ctx = ctx();
+    let scene = load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/penumbra.toml")).with_resolution(64, 64);
+    let mut coated = scene.clone();
+    let floor = coated.materials.iter_mut().find(|m| m.name == "floor").unwrap();
+    floor.surface = Surface::Plastic {
+        diffuse: glam::Vec3::splat(0.5),
+        specular: glam::Vec3::ONE,
+        ior: 1.5,
+        nonlinear: false,
+        rough: Some(Microfacet::isotropic(true, 0.5)),
+    };
+    coated.validate().unwrap();
+    let marked = |scene: &ppm_vk_engine::Scene, glossy_light| {
+        let settings = Settings {
+            mode: Mode::Sppm,
+            photons_per_pass: 20_000,
+            glossy_light,
+            ..Settings::default()
+        };
+        let r = Renderer::new(&ctx, scene, settings).unwrap();
+        let marks = r.read_busy().unwrap();
+        let count = |bit: u32| marks.iter().filter(|&&m| m & bit != 0).count();
+        (
+            count(ppm_vk_reference::MARK_EMISSION),
+            count(ppm_vk_reference::MARK_LIT),
+            marks.len(),
+        )
+    };
+    let diffuse = marked(&scene, GlossyLight::Mis);
+    let mis = marked(&coated, GlossyLight::Mis);
+    let bsdf = marked(&coated, GlossyLight::Bsdf);
+    println!("emission marks, lit marks, pixels: diffuse floor {diffuse:?}, rough coat {mis:?}, rough coat by its lobe alone {bsdf:?}");
+    assert_eq!(diffuse.0, 0, "the light is out of view");
+    assert_eq!(mis.0, 0, "emission after a rough coat marked pixels");
+    assert!(mis.1 * 2 > mis.2, "the coated floor is lit: {mis:?}");
+    assert!(
+        bsdf.0 * 20 > bsdf.2,
+        "the coat's reflection of the light, by its lobe alone: {bsdf:?}"
+    );
+    assert_clean(&ctx);
+}

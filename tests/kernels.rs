@@ -227,7 +227,10 @@ fn emission_passes_match_reference(r: &mut Renderer, direct_rel: f64) {
     ppm_vk_engine::spread_marks(&mut busy, g.params.width, g.params.height);
     let gpu_busy = r.read_busy().unwrap();
     let same = busy.iter().zip(&gpu_busy).filter(|(a, b)| a == b).count();
-    let marked = busy.iter().filter(|&&b| b & reference::MARK_EMISSION != 0).count();
+    // Marked for all the emission samples: emission seen (not straight after a rough vertex, whose shadow
+    // ray takes it too) or a rough lobe sampled through.
+    let all = reference::MARK_EMISSION | reference::MARK_ROUGH;
+    let marked = busy.iter().filter(|&&b| b & all != 0).count();
     let lit = busy.iter().filter(|&&b| b & reference::MARK_LIT != 0).count();
     let sampled = r.settings().direct == DirectLight::Sample;
     if sampled {

@@ -16,8 +16,10 @@
 // more such sample when its position is random (SPPM), or the only one when there are no others.
 //
 // Most pixels see no emitter through any point of them, where (a) is 0 and samples are wasted. Eye pass 0
-// is a pilot: its emission samples only mark (in `busy`) the pixels where one met the front of an emitter,
-// and are not added; the renderer then marks their neighbours too (spread_marks), which catches the pixels
+// is a pilot: its emission samples only mark (in `busy`) the pixels where one met the front of an emitter
+// that no shadow ray takes (not straight after a rough vertex, whose shadow ray takes the same light by
+// MIS, blurred by the lobe: marking that took a tenth of the interior's pixels, the floor's rough coat
+// reflecting the lamps, docs/performance.md), and are not added; the renderer then marks their neighbours too (spread_marks), which catches the pixels
 // an edge of the light or of its image only clips. Later passes take all their samples in marked pixels and
 // one in the others. The pilot marks the pixels whose paths sampled through a rough lobe the same way: the
 // light a rough vertex reflects (its shadow ray and its lobe's direction, glossy_light.glsl) is the
@@ -238,8 +240,9 @@ vec3 escaped(vec3 d) {
 
 // One emission sample: the emission met along the specular chain from the eye through `jitter`, and with
 // direct light sampled, term (d) at the chain's diffuse end. `seen`: set if the path met the front of an
-// emitter; `lit`: set if its shadow ray reached a light; `rough`: set if it sampled through a rough
-// conductor or rough glass (rough_vertex).
+// emitter (or the environment) that no shadow ray also takes, i.e. not straight after a rough vertex;
+// `lit`: set if its shadow ray reached a light; `rough`: set if it sampled through a rough conductor or
+// rough glass (rough_vertex).
 vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout bool lit, inout bool rough) {
     vec2 jitter = vec2(rng_float(rng), rng_float(rng));
     vec3 o = params.eye;
@@ -263,7 +266,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             if (bvh_spent) atomicAdd(cut.eye_paths, 1u);
             if (HAS_ENVIRONMENT && !bvh_cut && !bvh_spent) {
                 vec3 e = thr * escaped(d) * escape_weight(lobe_pdf, d);
-                if (max3(e) > 0.0) seen = true;
+                if (max3(e) > 0.0 && !(lobe_pdf > 0.0)) seen = true;
                 sum += e;
             }
             break;
@@ -280,9 +283,10 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
         float lobe_in = lobe_pdf;
         lobe_pdf = 0.0;
         if (m.surface == SURFACE_DIFFUSE) {
-            // Emitters are one-sided; after a rough vertex the emission is weighed against its shadow ray.
+            // Emitters are one-sided; after a rough vertex the emission is weighed against its shadow ray,
+            // and marks nothing: `seen` is for the emission no shadow ray takes (lobe_in 0).
             vec3 e = front ? thr * m.emission * lobe_weight(lobe_in, lobe_from, h, m.emission) : vec3(0.0);
-            if (max(e.r, max(e.g, e.b)) > 0.0) seen = true;
+            if (max(e.r, max(e.g, e.b)) > 0.0 && !(lobe_in > 0.0)) seen = true;
             if (params.direct_light != 0u) {
                 vec3 l = direct_diffuse(h.pos, nf, ng, m.color, 0.0, 0u, rng);
                 if (max(l.r, max(l.g, l.b)) > 0.0) lit = true;

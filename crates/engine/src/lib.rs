@@ -54,7 +54,7 @@ pub use ppm_vk_kernels::photon::PathLimits;
 pub use renderer::{spread_marks, CancelToken, Renderer, TILE_ALIGN_PIXELS};
 pub use scene::Scene;
 pub use settings::{DirectLight, GlossyLight, Mode, ProbeMode, Settings};
-pub use stats::{KernelSetup, PassStats, PhotonVariant, ProbeReport, SetupTimes};
+pub use stats::{KernelSetup, PassStats, PhotonVariant, PilotMarks, ProbeReport, SetupTimes};
 
 /// Opens a Vulkan device (see [`ContextOptions`]); a failure is [`Error::Device`].
 pub fn open_device(options: &ContextOptions) -> Result<Context> {

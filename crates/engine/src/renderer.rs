@@ -24,7 +24,7 @@ use crate::image_io::RgbImage;
 use crate::lower::{GpuScene, CELL_PER_RADIUS};
 use crate::scene::{Camera, Scene};
 use crate::settings::{Mode, ProbeMode, Settings};
-use crate::stats::{KernelSetup, PassStats, PhotonVariant, ProbeReport, SetupTimes};
+use crate::stats::{KernelSetup, PassStats, PhotonVariant, PilotMarks, ProbeReport, SetupTimes};
 
 /// Cancels [`Renderer::pass`] from another thread: clone it, give one clone to the renderer
 /// ([`Renderer::set_cancel`]) and call [`CancelToken::cancel`] on the other. The pass stops at its next
@@ -1441,6 +1441,12 @@ impl Renderer {
     /// What the probe pass did, if it ran.
     pub fn probe_report(&self) -> Option<&ProbeReport> {
         self.probe_report.as_ref()
+    }
+
+    /// What the pilot eye pass marked (read back from the device).
+    pub fn pilot_marks(&self) -> anyhow::Result<PilotMarks> {
+        let busy: Vec<u32> = self.download(&self.busy, self.gpu.pixels(), "reading the pilot's marks")?;
+        Ok(PilotMarks::new(&busy))
     }
 
     /// GPU time of the ray pass, in milliseconds.

@@ -110,6 +110,32 @@ impl ProbeReport {
     }
 }
 
+/// What the pilot eye pass marked (ray.comp): pixels of the image with each mark, after the marks spread to
+/// the neighbours. A pixel marked for emission or rough takes all the emission samples each pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PilotMarks {
+    pub pixels: u32,
+    pub emission: u32,
+    pub lit: u32,
+    pub rough: u32,
+    /// Pixels with MARK_EMISSION or MARK_ROUGH: those that take all the emission samples.
+    pub all_samples: u32,
+}
+
+impl PilotMarks {
+    pub fn new(busy: &[u32]) -> PilotMarks {
+        use ppm_vk_kernels::ray::{MARK_EMISSION, MARK_LIT, MARK_ROUGH};
+        let count = |bits: u32| busy.iter().filter(|&&m| m & bits != 0).count() as u32;
+        PilotMarks {
+            pixels: busy.len() as u32,
+            emission: count(MARK_EMISSION),
+            lit: count(MARK_LIT),
+            rough: count(MARK_ROUGH),
+            all_samples: count(MARK_EMISSION | MARK_ROUGH),
+        }
+    }
+}
+
 /// Where a renderer's set-up went (`Renderer::setup_times`), in seconds of wall time.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct SetupTimes {

@@ -36,6 +36,13 @@ pub struct RayPush {
     pub tile_pixels: u32,
 }
 
+/// The pilot's marks in ray.comp's `busy`, per pixel: the front of an emitter seen (MARK_EMISSION), a light
+/// reached by a shadow ray (MARK_LIT), a rough conductor or rough glass sampled through (MARK_ROUGH), in
+/// the pixel or beside it.
+pub const MARK_EMISSION: u32 = 1;
+pub const MARK_LIT: u32 = 2;
+pub const MARK_ROUGH: u32 = 4;
+
 /// `RayPush::jitter` for a random position in every pixel (SPPM's box filter).
 pub const JITTER_RANDOM: [f32; 2] = [-1.0, -1.0];
 push_struct!(RayPush, RAY);

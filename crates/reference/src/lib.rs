@@ -340,7 +340,7 @@ fn emission_sample(
         else {
             if out {
                 let e = thr * escaped(g, d) * glossy_light::escape_weight(g, lobe_pdf, d);
-                *seen |= e.max_element() > 0.0;
+                *seen |= e.max_element() > 0.0 && !(lobe_pdf > 0.0);
                 sum += e;
             }
             break;
@@ -353,7 +353,7 @@ fn emission_sample(
             } else {
                 Vec3::ZERO
             };
-            *seen |= e.max_element() > 0.0;
+            *seen |= e.max_element() > 0.0 && !(lobe_in > 0.0);
             if g.params.direct_light != 0 {
                 let l = direct_diffuse(g, h.pos, nf, ng, v3(m.color), None, &bump, rng);
                 *lit |= l.max_element() > 0.0;
