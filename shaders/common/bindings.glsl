@@ -28,7 +28,7 @@ layout(binding = 6) uniform usamplerBuffer texture_texels;
 layout(binding = 7) uniform usamplerBuffer triangle_texels;
 
 // A kernel compiled for one scene knows whether any material has a texture (without one, the texture
-// index is not even read), whether any mesh is smooth-shaded (shading.glsl) and whether any rough
+// index is not even read), on its specular reflectance or roughness, or on its emission, whether any mesh is smooth-shaded (shading.glsl) and whether any rough
 // surface is anisotropic (geometry.glsl's surface_tangent), whether any has a bump or normal map
 // (normal_map.glsl), whether any is masked (materials/mask.glsl: the intersection loops test opacity),
 // and which kinds of light it has beyond quads
@@ -36,6 +36,8 @@ layout(binding = 7) uniform usamplerBuffer triangle_texels;
 #ifdef SCENE_CONSTANTS
 #include "scene_constants.glsl"
 #define HAS_TEXTURES SCENE_TEXTURES
+#define HAS_PARAMETER_TEXTURES SCENE_PARAMETER_TEXTURES
+#define HAS_EMISSION_TEXTURES SCENE_EMISSION_TEXTURES
 #define HAS_VERTEX_NORMALS SCENE_SHADING_NORMALS
 #define HAS_NORMAL_MAPS SCENE_NORMAL_MAPS
 #define HAS_MASKS SCENE_MASKS
@@ -47,6 +49,8 @@ layout(binding = 7) uniform usamplerBuffer triangle_texels;
 #define HAS_ENVIRONMENT SCENE_ENVIRONMENT
 #else
 #define HAS_TEXTURES true
+#define HAS_PARAMETER_TEXTURES true
+#define HAS_EMISSION_TEXTURES true
 #define HAS_VERTEX_NORMALS true
 #define HAS_NORMAL_MAPS true
 #define HAS_MASKS true

@@ -23,7 +23,9 @@ float luminance(vec3 c) {
 // local x, y from [-1, 1] to [0, 1]), a sphere's longitude and colatitude about the world's axes, a
 // triangle's interpolated from its vertices'.
 vec2 surface_uv(Hit h) {
-    if (h.kind == HIT_SPHERE) {
+    // (No sphere, no sphere code: lavapipe would run its atan and acos at every call, a branch's both
+    // sides being run.)
+    if (NUM_SPHERES > 0u && h.kind == HIT_SPHERE) {
         float phi = atan(h.normal.y, h.normal.x);
         if (phi < 0.0) phi += 2.0 * PI;
         return vec2(phi * (0.5 / PI), acos(clamp(h.normal.z, -1.0, 1.0)) * (1.0 / PI));
@@ -45,10 +47,9 @@ int wrap_pixel(int i, int n, uint wrap) {
     return m;
 }
 
-vec3 texture_pixel(uint first, ivec2 size, ivec2 p, uint wrap) {
-    int x = wrap_pixel(p.x, size.x, wrap);
-    int y = wrap_pixel(p.y, size.y, wrap);
-    return uintBitsToFloat(texelFetch(texture_texels, int(first) + y * size.x + x).xyz);
+// The pixel at wrapped coordinates (x, y) of the bitmap whose first pixel is texel `first`.
+vec3 texture_pixel(uint first, int width, int x, int y) {
+    return uintBitsToFloat(texelFetch(texture_texels, int(first) + y * width + x).xyz);
 }
 
 // The value of the texture whose header is at texel `at`, at texture coordinates uv.
@@ -67,15 +68,20 @@ vec3 texture_value(uint at, vec2 uv) {
     uint wrap = (head.x >> 8) & 15u;
     ivec2 size = ivec2(head.yz);
     vec2 p = st * vec2(size);
-    if (filter_type == FILTER_NEAREST) return texture_pixel(head.w, size, ivec2(floor(p)), wrap);
-    // Bilinear between the four pixel centres around p.
-    p -= 0.5;
+    // Bilinear between the four pixel centres around p; nearest: the pixel p lies in, which is the
+    // bilinear's first fetch (i = floor(p) without the half-pixel shift), so that lavapipe, which runs both
+    // sides of every branch, pays for no fetch of its own. Each coordinate is wrapped once.
+    bool nearest = filter_type == FILTER_NEAREST;
+    if (!nearest) p -= 0.5;
     ivec2 i = ivec2(floor(p));
+    int x0 = wrap_pixel(i.x, size.x, wrap), y0 = wrap_pixel(i.y, size.y, wrap);
+    vec3 c00 = texture_pixel(head.w, size.x, x0, y0);
+    if (nearest) return c00;
     vec2 w = p - vec2(i);
-    vec3 c00 = texture_pixel(head.w, size, i, wrap);
-    vec3 c10 = texture_pixel(head.w, size, i + ivec2(1, 0), wrap);
-    vec3 c01 = texture_pixel(head.w, size, i + ivec2(0, 1), wrap);
-    vec3 c11 = texture_pixel(head.w, size, i + ivec2(1, 1), wrap);
+    int x1 = wrap_pixel(i.x + 1, size.x, wrap), y1 = wrap_pixel(i.y + 1, size.y, wrap);
+    vec3 c10 = texture_pixel(head.w, size.x, x1, y0);
+    vec3 c01 = texture_pixel(head.w, size.x, x0, y1);
+    vec3 c11 = texture_pixel(head.w, size.x, x1, y1);
     return (1.0 - w.y) * ((1.0 - w.x) * c00 + w.x * c10) + w.y * ((1.0 - w.x) * c01 + w.x * c11);
 }
 
@@ -83,12 +89,12 @@ vec3 texture_value(uint at, vec2 uv) {
 // specular_reflectance becomes m.color ((rough) conductors, mirrors, thin dielectrics: their constant
 // there); alpha, the luminance of its texture's value (Mitsuba's eval_1 of an RGB texture, its
 // src/textures/bitmap.cpp) floored at 1e-4 (its MicrofacetDistribution), becomes m.alpha_u and
-// m.alpha_v, which hit_microfacet (microfacet.glsl) reads in place of the material's. `t`: that texel.
-void apply_parameter_textures(inout Material m, Hit h, uvec4 t) {
+// m.alpha_v, which hit_microfacet (microfacet.glsl) reads in place of the material's. `t`: that texel;
+// uv: the hit's texture coordinates.
+void apply_parameter_textures(inout Material m, vec2 uv, uvec4 t) {
     m.specular_texture = t.y;
     m.alpha_texture = t.z;
-    if (t.y == 0u && t.z == 0u) return;
-    vec2 uv = surface_uv(h);
+    if (!HAS_PARAMETER_TEXTURES || (t.y == 0u && t.z == 0u)) return;
     if (t.y != 0u) m.color = texture_value(t.y - 1u, uv);
     if (t.z != 0u) {
         const vec3 Y = vec3(0.212671, 0.715160, 0.072169); // Mitsuba's luminance
@@ -101,16 +107,19 @@ void apply_parameter_textures(inout Material m, Hit h, uvec4 t) {
 // plastic's diffuse factor from the texture's diffuse_reflectance (as the host makes Material.color for
 // a constant one: crates/materials/src/plastic.rs), and apply_parameter_textures'.
 // An emitter's radiance texture (the sixth texel's w, read only where it emits) gives its emission there.
+// The texture coordinates are taken once, and a kind of texture no material has is left out
+// (HAS_PARAMETER_TEXTURES, HAS_EMISSION_TEXTURES): lavapipe runs every branch's code, taken or not.
 void apply_texture(inout Material m, Hit h) {
     if (!HAS_TEXTURES) return;
     // The sixth texel, read once: opacity, specular_reflectance, alpha, radiance (types.glsl).
     uvec4 slots = texelFetch(material_texels, int(MATERIAL_TEXELS * h.material + 5u));
-    apply_parameter_textures(m, h, slots);
-    if (slots.w != 0u && max(m.emission.r, max(m.emission.g, m.emission.b)) > 0.0) {
-        m.emission = texture_value(slots.w - 1u, surface_uv(h));
+    vec2 uv = surface_uv(h);
+    apply_parameter_textures(m, uv, slots);
+    if (HAS_EMISSION_TEXTURES && slots.w != 0u && max(m.emission.r, max(m.emission.g, m.emission.b)) > 0.0) {
+        m.emission = texture_value(slots.w - 1u, uv);
     }
     if (m.texture == 0u) return;
-    vec3 value = texture_value(m.texture - 1u, surface_uv(h));
+    vec3 value = texture_value(m.texture - 1u, uv);
     if (m.surface == SURFACE_PLASTIC) {
         vec3 terms, bound;
         material_terms(h.material, terms, bound);

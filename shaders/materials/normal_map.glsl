@@ -49,10 +49,12 @@ vec2 texture_gradient(uint at, vec2 uv) {
     vec2 w1 = p - vec2(i);
     vec2 w0 = 1.0 - w1;
     const vec3 Y = vec3(0.212671, 0.715160, 0.072169); // Mitsuba's luminance
-    float f00 = dot(Y, texture_pixel(head.w, size, i, wrap));
-    float f10 = dot(Y, texture_pixel(head.w, size, i + ivec2(1, 0), wrap));
-    float f01 = dot(Y, texture_pixel(head.w, size, i + ivec2(0, 1), wrap));
-    float f11 = dot(Y, texture_pixel(head.w, size, i + ivec2(1, 1), wrap));
+    int x0 = wrap_pixel(i.x, size.x, wrap), x1 = wrap_pixel(i.x + 1, size.x, wrap);
+    int y0 = wrap_pixel(i.y, size.y, wrap), y1 = wrap_pixel(i.y + 1, size.y, wrap);
+    float f00 = dot(Y, texture_pixel(head.w, size.x, x0, y0));
+    float f10 = dot(Y, texture_pixel(head.w, size.x, x1, y0));
+    float f01 = dot(Y, texture_pixel(head.w, size.x, x0, y1));
+    float f11 = dot(Y, texture_pixel(head.w, size.x, x1, y1));
     vec2 df = vec2(w0.y * (f10 - f00) + w1.y * (f11 - f01), w0.x * (f01 - f00) + w1.x * (f11 - f10));
     return vec2(size) * vec2(r0.x * df.x + r1.x * df.y, r0.y * df.x + r1.y * df.y);
 }

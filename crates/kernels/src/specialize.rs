@@ -38,6 +38,10 @@ pub struct SceneConstants<'a> {
     pub surfaces: u32,
     /// Whether any material has a texture: without one the kernels do not read the texture index.
     pub textures: bool,
+    /// Whether any material has a texture on its specular reflectance or roughness, and on its emission:
+    /// without one texture.glsl leaves that lookup out.
+    pub parameter_textures: bool,
+    pub emission_textures: bool,
     /// Whether any plastic is rough (Material::table): without one the plastics' code leaves it out.
     pub rough_plastics: bool,
     /// Whether any mesh has vertex normals (shading.glsl): without one no shading normal is read.
@@ -103,6 +107,8 @@ pub fn scene_constants(c: &SceneConstants) -> String {
     // Without blends, blend.glsl's resolve_blend reads nothing.
     s += &format!("const bool SCENE_BLENDS = {};\n", has(SURFACE_BLEND));
     s += &format!("const bool SCENE_TEXTURES = {};\n", c.textures);
+    s += &format!("const bool SCENE_PARAMETER_TEXTURES = {};\n", c.parameter_textures);
+    s += &format!("const bool SCENE_EMISSION_TEXTURES = {};\n", c.emission_textures);
     s += &format!("const bool SCENE_ROUGH_PLASTICS = {};\n", c.rough_plastics);
     s += &format!("const bool SCENE_SHADING_NORMALS = {};\n", c.shading_normals);
     s += &format!("const bool SCENE_ANISOTROPIC = {};\n", c.anisotropic);
