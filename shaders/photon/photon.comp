@@ -248,12 +248,18 @@ void main() {
             vns = nf;
             leave = true;
         }
+        // The record this vertex leaves, if any (at most one per vertex), appended once after the branches
+        // below: lavapipe runs every branch's code, so one append is cheaper than one in each.
+        bool record = false;
+        vec3 record_flux = flux;
         if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR && (params.direct_light == 0u || depth > 1u)
             && glossy_hit(h.material)) {
             // A glossy hit point's surface (rough_conductor.glsl): a record, as on a diffuse surface (the first
             // landing skipped with direct light sampled), then the lobe sampled below.
-            emit(Photon(h.pos, grid_key(grid_cell(h.pos)), flux, oct_encode(d)));
+            record = true;
         }
+        vec3 arrived = d; // the direction the photon arrived along, which the record keeps
+        vec3 at = h.pos;
         if (m.surface == SURFACE_DIFFUSE) {
             float p = max(m.color.r, max(m.color.g, m.color.b));
             if (p <= 0.0) { alive = false; continue; } // a black emitter absorbs
@@ -261,15 +267,18 @@ void main() {
             // emitter to this first surface (paths L D ...) is the shadow rays' term (ray.comp): the photon
             // leaves no record here. Its later records (L D D..., L S D... : everything after a bounce)
             // are the photon estimate's, in both modes.
-            if (params.direct_light == 0u || depth > 1u) emit(Photon(h.pos, grid_key(grid_cell(h.pos)), flux, oct_encode(d)));
+            record = params.direct_light == 0u || depth > 1u;
             // Russian roulette: survive with the largest albedo; flux *= albedo / p keeps every channel
             // unbiased (its expectation is flux * albedo), and never grows (albedo <= p per channel).
-            if (rng_float(rng) >= p) { alive = false; continue; }
-            flux *= m.color / p;
-            lobe = ng; // about the true normal: the pdf cancels shading_out (shading.glsl)
-            leave = false;
-            pending = true;
-            o = offset_ray(h.pos, ng);
+            if (rng_float(rng) >= p) {
+                alive = false; // its record still goes below
+            } else {
+                flux *= m.color / p;
+                lobe = ng; // about the true normal: the pdf cancels shading_out (shading.glsl)
+                leave = false;
+                pending = true;
+                o = offset_ray(h.pos, ng);
+            }
         } else if (is_reflector(m.surface)) {
             flux *= reflector_weight(h.material, m, -dot(d, nf));
             d = reflect(d, nf);
@@ -280,16 +289,13 @@ void main() {
             // diffuse surface (its shadow rays evaluate the plastic too).
             uint table = HAS_ROUGH_PLASTICS ? material_table(h.material) : 0u;
             if ((params.direct_light == 0u || depth > 1u) && max3(m.color) > 0.0) {
-                float t = coat_transmittance(table, -dot(d, nf), m.ior);
-                emit(Photon(h.pos, grid_key(grid_cell(h.pos)), flux * t, oct_encode(d)));
+                record = true;
+                record_flux = flux * coat_transmittance(table, -dot(d, nf), m.ior);
             }
             float u = rng_float(rng);
             float u1 = rng_float(rng);
             float u2 = rng_float(rng);
-            if (!plastic_scatter(h.material, m, table, h.pos, nf, u, u1, u2, rng, o, d, flux)) {
-                alive = false;
-                continue;
-            }
+            if (!plastic_scatter(h.material, m, table, h.pos, nf, u, u1, u2, rng, o, d, flux)) alive = false;
         } else if (HAS_THIN && m.surface == SURFACE_THIN) {
             flux *= thin_branch(h.material, m, h.pos, nf, rng_float(rng), o, d);
         } else if (rough_bounce(h.material, m, h, nf, front, rng, o, d, flux)) {
@@ -298,5 +304,6 @@ void main() {
         } else {
             glass_branch(h.pos, nf, front, m.ior, rng_float(rng), o, d);
         }
+        if (record) emit(Photon(at, grid_key(grid_cell(at)), record_flux, oct_encode(arrived)));
     }
 }
