@@ -1749,7 +1749,10 @@ fn trace_constants(gpu: &GpuScene, settings: &Settings) -> Option<String> {
                 .materials
                 .iter()
                 .any(|m| m.texture != 0 || m.specular_texture != 0 || m.alpha_texture != 0 || m.emission_texture != 0),
-            parameter_textures: gpu.materials.iter().any(|m| m.specular_texture != 0 || m.alpha_texture != 0),
+            parameter_textures: gpu
+                .materials
+                .iter()
+                .any(|m| m.specular_texture != 0 || m.alpha_texture != 0),
             emission_textures: gpu.materials.iter().any(|m| m.emission_texture != 0),
             rough_plastics: gpu.materials.iter().any(|m| m.table != 0),
             shading_normals: gpu.smooth_shading(),
