@@ -27,11 +27,11 @@ layout(binding = 5) uniform usamplerBuffer bvh_triangle_texels;
 layout(binding = 6) uniform usamplerBuffer texture_texels;
 layout(binding = 7) uniform usamplerBuffer triangle_texels;
 
-// A kernel compiled for one scene knows whether any material has a texture (without one, the texture
-// index is not even read), on its specular reflectance or roughness, or on its emission, whether any mesh is smooth-shaded (shading.glsl) and whether any rough
-// surface is anisotropic (geometry.glsl's surface_tangent), whether any has a bump or normal map
-// (normal_map.glsl), whether any is masked (materials/mask.glsl: the intersection loops test opacity),
-// and which kinds of light it has beyond quads
+// A kernel compiled for one scene knows whether any material has a texture (without one, the texture index is
+// not even read), on its specular reflectance or roughness, or on its emission, whether any mesh is
+// smooth-shaded (shading.glsl) and whether any rough surface is anisotropic (geometry.glsl's
+// surface_tangent), whether any has a bump or normal map (normal_map.glsl), whether any is masked
+// (materials/mask.glsl: the intersection loops test opacity), and which kinds of light it has beyond quads
 // and triangles (lights.glsl): glowing spheres, delta lights (point, spot, directional), an environment.
 #ifdef SCENE_CONSTANTS
 #include "scene_constants.glsl"

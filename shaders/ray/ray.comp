@@ -15,17 +15,17 @@
 // eye passes (rgb) with their count (w); the resolve divides. The hit-point path's own emission is one
 // more such sample when its position is random (SPPM), or the only one when there are no others.
 //
-// Most pixels see no emitter through any point of them, where (a) is 0 and samples are wasted. Eye pass 0
-// is a pilot: its emission samples only mark (in `busy`) the pixels where one met the front of an emitter
-// that no shadow ray takes (not straight after a rough vertex, whose shadow ray takes the same light by
-// MIS, blurred by the lobe: marking that took a tenth of the interior's pixels, the floor's rough coat
-// reflecting the lamps, docs/performance.md), and are not added; the renderer then marks their neighbours too (spread_marks), which catches the pixels
-// an edge of the light or of its image only clips. Later passes take all their samples in marked pixels and
-// one in the others. The pilot marks the pixels whose paths sampled through a rough lobe the same way: the
-// light a rough vertex reflects (its shadow ray and its lobe's direction, glossy_light.glsl) is the
-// noisiest term there. (Marking every pixel that sees a mirror or glass, as before, took the samples in the
-// mirror and glass spheres too, mostly where they show the walls: the eye pass cost 80-95 ms per pass at
-// 512^2 against 40-49 ms marking only the light, docs/performance.md.)
+// Most pixels see no emitter through any point of them, where (a) is 0 and samples are wasted. Eye pass 0 is
+// a pilot: its emission samples only mark (in `busy`) the pixels where one met the front of an emitter that
+// no shadow ray takes (not straight after a rough vertex, whose shadow ray takes the same light by MIS,
+// blurred by the lobe: marking that took a tenth of the interior's pixels, the floor's rough coat reflecting
+// the lamps, docs/performance.md), and are not added; the renderer then marks their neighbours too
+// (spread_marks), which catches the pixels an edge of the light or of its image only clips. Later passes take
+// all their samples in marked pixels and one in the others. The pilot marks the pixels whose paths sampled
+// through a rough lobe the same way: the light a rough vertex reflects (its shadow ray and its lobe's
+// direction, glossy_light.glsl) is the noisiest term there. (Marking every pixel that sees a mirror or glass,
+// as before, took the samples in the mirror and glass spheres too, mostly where they show the walls: the eye
+// pass cost 80-95 ms per pass at 512^2 against 40-49 ms marking only the light, docs/performance.md.)
 // The pooled mean stays unbiased because every count is fixed before the samples it counts are drawn:
 // the marks depend on the pilot's samples only, which are not in the sum (pooling samples that had
 // chosen their own count would bias it).
