@@ -3,7 +3,8 @@
 # material at a time made diffuse (or the wood's texture a constant colour), generated from
 # scenes/interior.xml by make.py beside this script; one bench run, 1M photons at 320x180, the photon
 # kernel's breakdown (as rendered, without record stores, without the append, tracing alone) for each.
-# Writes run.txt and run.json beside this script.
+# Writes run.txt and run.json beside this script. The hall's meshes are generated, not in git: `cargo run
+# --release -p ppm-vk-scene-gen --bin gen_scenes` first (scripts/test does).
 set -euo pipefail
 cd "$(dirname "$0")/../../../.."
 o=docs/measurements/issue39/materials
