@@ -177,14 +177,8 @@ fn emission_after_a_rough_coat_marks_no_pixel() {
             glossy_light,
             ..Settings::default()
         };
-        let r = Renderer::new(&ctx, scene, settings).unwrap();
-        let marks = r.read_busy().unwrap();
-        let count = |bit: u32| marks.iter().filter(|&&m| m & bit != 0).count();
-        (
-            count(ppm_vk_reference::MARK_EMISSION),
-            count(ppm_vk_reference::MARK_LIT),
-            marks.len(),
-        )
+        let m = Renderer::new(&ctx, scene, settings).unwrap().pilot_marks().unwrap();
+        (m.emission, m.lit, m.pixels)
     };
     let diffuse = marked(&scene, GlossyLight::Mis);
     let mis = marked(&coated, GlossyLight::Mis);

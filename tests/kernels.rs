@@ -229,9 +229,8 @@ fn emission_passes_match_reference(r: &mut Renderer, direct_rel: f64) {
     let same = busy.iter().zip(&gpu_busy).filter(|(a, b)| a == b).count();
     // Marked for all the emission samples: emission seen (not straight after a rough vertex, whose shadow
     // ray takes it too) or a rough lobe sampled through.
-    let all = reference::MARK_EMISSION | reference::MARK_ROUGH;
-    let marked = busy.iter().filter(|&&b| b & all != 0).count();
-    let lit = busy.iter().filter(|&&b| b & reference::MARK_LIT != 0).count();
+    let marks = ppm_vk_engine::PilotMarks::new(&busy);
+    let (marked, lit) = (marks.all_samples as usize, marks.lit as usize);
     let sampled = r.settings().direct == DirectLight::Sample;
     if sampled {
         // Most of the box sees the light (the floor under the spheres is in their shadow; under a sky and a

@@ -259,7 +259,6 @@ void main() {
             record = true;
         }
         vec3 arrived = d; // the direction the photon arrived along, which the record keeps
-        vec3 at = h.pos;
         if (m.surface == SURFACE_DIFFUSE) {
             float p = max(m.color.r, max(m.color.g, m.color.b));
             if (p <= 0.0) { alive = false; continue; } // a black emitter absorbs
@@ -304,6 +303,6 @@ void main() {
         } else {
             glass_branch(h.pos, nf, front, m.ior, rng_float(rng), o, d);
         }
-        if (record) emit(Photon(at, grid_key(grid_cell(at)), record_flux, oct_encode(arrived)));
+        if (record) emit(Photon(h.pos, grid_key(grid_cell(h.pos)), record_flux, oct_encode(arrived)));
     }
 }

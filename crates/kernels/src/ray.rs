@@ -36,11 +36,13 @@ pub struct RayPush {
     pub tile_pixels: u32,
 }
 
-/// The pilot's marks in ray.comp's `busy`, per pixel: the front of an emitter seen (MARK_EMISSION), a light
-/// reached by a shadow ray (MARK_LIT), a rough conductor or rough glass sampled through (MARK_ROUGH), in
-/// the pixel or beside it.
+/// A pilot mark (ray.comp's `busy`): the pilot saw the front of an emitter that no shadow ray takes, in the
+/// pixel or beside it.
 pub const MARK_EMISSION: u32 = 1;
+/// A pilot mark: one of the pilot's shadow rays reached a light, in the pixel or beside it.
 pub const MARK_LIT: u32 = 2;
+/// A pilot mark: one of the pilot's paths sampled through a rough conductor or rough glass, in the pixel or
+/// beside it.
 pub const MARK_ROUGH: u32 = 4;
 
 /// `RayPush::jitter` for a random position in every pixel (SPPM's box filter).

@@ -436,15 +436,8 @@ pub struct EyePass {
     pub cut: u32,
 }
 
-/// A whole eye pass: the ray kernel's dispatches `pushes` (`Renderer::ray_pushes`), hit points from the
-/// one that traces them, emission samples summed over all.
-/// A pilot mark (ray.comp's `busy`): the pilot saw the front of an emitter in the pixel or beside it.
-pub const MARK_EMISSION: u32 = 1;
-/// A pilot mark: one of the pilot's shadow rays reached a light, in the pixel or beside it.
-pub const MARK_LIT: u32 = 2;
-/// A pilot mark: one of the pilot's paths sampled through a rough conductor or rough glass, in the pixel or
-/// beside it.
-pub const MARK_ROUGH: u32 = 4;
+/// The pilot's marks (ray.comp's `busy`), as the kernel's binding defines them.
+pub use ppm_vk_kernels::ray::{MARK_EMISSION, MARK_LIT, MARK_ROUGH};
 
 /// ray.comp's count of emission-sample paths a pixel takes per eye pass after the pilot, from its marks:
 /// `emission` where the pilot saw emission or sampled through a rough lobe; with direct light sampled,
@@ -460,6 +453,8 @@ pub fn samples_for_mark(direct_light: bool, emission: u32, light: u32, mark: u32
     }
 }
 
+/// A whole eye pass: the ray kernel's dispatches `pushes` (`Renderer::ray_pushes`), hit points from the
+/// one that traces them, emission samples summed over all.
 /// `busy`: per pixel, whether the pilot marked it (ray.comp); the pilot pass (push.pilot) sets it.
 pub fn eye_pass(g: &GpuScene, pushes: &[RayPush], busy: &mut [u32]) -> EyePass {
     let mut out = EyePass {
