@@ -38,7 +38,7 @@ pub struct CompareArgs {
     #[arg(long, default_value_t = 10.0, value_parser = crate::parse_seconds)]
     time: f64,
     /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone". Words joined by
-    /// `+`: ppm, sppm, noprobe (every radius eq. 8's; the default is the curvature probe, probe-curv=1), probe, probe-sf, probe-nn[=K] (the k-nearest probe), probe-curv[=G] (the curvature probe, growing radii at most G times), pp=N (photons of the probe pass), cone[=K], beta=F, alpha=A, es=N (emission samples per pixel and pass),
+    /// `+`: ppm, sppm, noprobe (every radius eq. 8's; the default is the curvature probe, probe-curv=1), probe, probe-sf, probe-nn[=K] (the k-nearest probe), probe-curv[=G] (the curvature probe, growing radii at most G times), pp=N (photons of the probe pass), cone[=K], beta=F, alpha=A, shrink=Z (the adaptive shrink's significance; noshrink: off), es=N (emission samples per pixel and pass),
     /// rs=N (SPPM: lobe directions at the first rough vertex), gh=A (glossy hit points on rough conductors of alpha >= A), nogh (none), photons (direct light by the photons) or
     /// sample (by light sampling, the default), ls=N (light samples), gl=mis|bsdf|lights (the light rough
     /// vertices reflect straight from a light: both strategies, the default, or one of them).
@@ -120,6 +120,8 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
             "cone" => s.cone_k = Some(if value.is_some() { number("cone")? } else { 1.1 }),
             "beta" => s.probe_beta = number("beta")?,
             "alpha" => s.alpha = number("alpha")?,
+            "shrink" => s.shrink_z = number("shrink")?,
+            "noshrink" => s.shrink_z = 0.0,
             "es" | "ls" => {
                 let e = number(key)?;
                 if !(e >= 0.0 && e.fract() == 0.0) {
@@ -151,7 +153,7 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
             }
             other => bail!(
                 "variant {name:?}: unknown word {other:?} (ppm, sppm, noprobe, probe, probe-sf, probe-nn[=K], probe-curv[=G], pp=N, cone[=K], beta=F, alpha=A, \
-                 es=N, ls=N, rs=N, gh=A, nogh, photons, sample, gl=mis|bsdf|lights)"
+                 shrink=Z, noshrink, es=N, ls=N, rs=N, gh=A, nogh, photons, sample, gl=mis|bsdf|lights)"
             ),
         }
     }

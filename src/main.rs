@@ -233,6 +233,11 @@ pub(crate) struct SettingsArgs {
     /// shrink).
     #[arg(long, default_value_t = ppm_vk_engine::settings::DEFAULT_PROBE_GROW)]
     probe_grow: f32,
+    /// The adaptive shrink after every pass: where the photons a hit point has gathered show a curvature
+    /// beyond this many standard deviations of its noise (a narrow caustic, a sharp shadow), its radius
+    /// shrinks to the one of least bias^2 + variance; 0 turns it off (eq. 3's shrink alone).
+    #[arg(long, default_value_t = ppm_vk_engine::settings::DEFAULT_SHRINK_Z)]
+    shrink_z: f32,
     /// Cone filter (eq. 10-14): its constant k >= 1, or `off`.
     #[arg(long, default_value = "off", value_parser = parse_cone)]
     cone: Cone,
@@ -254,6 +259,7 @@ impl SettingsArgs {
             probe_photons: self.probe_photons,
             probe_k: self.probe_k,
             probe_grow: self.probe_grow,
+            shrink_z: self.shrink_z,
             cone_k: self.cone.0,
             emission_samples: self.emission_samples,
             direct: self.direct.into(),

@@ -84,6 +84,16 @@ fn settings_out_of_range_and_device_limits_are_told_apart() {
             other => panic!("expected Error::Settings for probe_grow {grow}, got {:?}", other.err()),
         }
     }
+    for z in [-1.0, f32::NAN, f32::INFINITY] {
+        let settings = Settings {
+            shrink_z: z,
+            ..Settings::default()
+        };
+        match Renderer::new(&ctx, &cornell(8, 8), settings) {
+            Err(Error::Settings { field: "shrink_z", .. }) => {}
+            other => panic!("expected Error::Settings for shrink_z {z}, got {:?}", other.err()),
+        }
+    }
     // 4096 x 4096 pixels with 8 hit points each: 2^27 hit points, 6 GiB of hit points alone, past the
     // device's memory (lavapipe: 2048 MiB). Per-pixel buffers are bound in tiles, so no one binding's
     // range limits them: the memory does.

@@ -791,13 +791,16 @@ fn check_gather(
     let slots = accum.len();
     let (mut m_equal, mut worst_m, mut flux_checked, mut gathered) = (0usize, 0u32, 0usize, 0usize);
     let non_empty = hits.iter().filter(|h| !h.is_empty()).count();
-    for (i, (a, (m, sum))) in accum.iter().zip(&cpu).enumerate() {
+    let mut half_equal = 0usize;
+    for (i, (a, c)) in accum.iter().zip(&cpu).enumerate() {
+        let (m, sum) = (&c.m, &c.flux);
         gathered += (a.m > 0) as usize;
         if a.m != *m {
             worst_m = worst_m.max(a.m.abs_diff(*m));
             continue;
         }
         m_equal += 1;
+        half_equal += (a.m_half == c.m_half) as usize;
         // Flux: the GPU adds f32 flux*w rounded to fixed point (flux_fixed units per unit, 2^25 for this
         // scene: error <= 2^-26 per photon), the CPU sums flux*w in f64 with w from the same f32
         // operations; 1e-5 relative covers the f32 rounding of flux*w, 1e-6 the rounding of dozens of
@@ -831,6 +834,12 @@ fn check_gather(
         slots - m_equal
     );
     assert!(worst_m <= 1, "{label}: M differs by {worst_m}");
+    // M_half (the photons within R / 2): the same, where the photon at a boundary is as rare.
+    assert!(
+        (m_equal - half_equal) * 1000 <= non_empty,
+        "{label}: M_half differs on {} of the {m_equal} hit points whose M agrees",
+        m_equal - half_equal
+    );
 }
 
 /// The grid's shape, where a test sets it.
@@ -1166,19 +1175,23 @@ fn gather_with_cone_filter_matches_brute_force() {
     gather_case(Some(1.1), GridShape::default());
 }
 
+/// Compares the GPU's update with the CPU's on `r`'s settings; returns how many slots the adaptive shrink
+/// shrank.
 fn check_update(
     label: &str,
+    r: &Renderer,
     hits: &[HitPoint],
     before: &[HitStats],
     accum: &[PassAccum],
     after: &[HitStats],
-    alpha: f32,
-    flux_fixed: f32,
-) {
-    let mut updated = 0;
+) -> usize {
+    let (alpha, flux_fixed) = (r.settings().alpha, r.gpu_scene().params.flux_fixed);
+    let (shrink_z, floor) = (r.settings().shrink_z, r.shrink_r2_floor());
+    let (mut updated, mut shrunk) = (0, 0);
     for (i, (((s, a), g), h)) in before.iter().zip(accum).zip(after).zip(hits).enumerate() {
-        let c = reference::update(s, a, h.weight, alpha, flux_fixed);
+        let c = reference::update(s, a, h.weight, alpha, flux_fixed, shrink_z, floor);
         updated += (a.m > 0) as usize;
+        shrunk += (a.m > 0 && c.n < s.n + alpha as f64 * a.m as f64 * (1.0 - 1e-9)) as usize;
         // Both in f64 with the same operations: 1e-12 relative leaves room only for a differently
         // rounded division; exact zeros must stay exact.
         for (name, x, y) in [
@@ -1187,6 +1200,8 @@ fn check_update(
             ("tau_r", g.tau_r, c.tau_r),
             ("tau_g", g.tau_g, c.tau_g),
             ("tau_b", g.tau_b, c.tau_b),
+            ("curv", g.curv, c.curv),
+            ("curv_var", g.curv_var, c.curv_var),
         ] {
             assert!(
                 close(x, y, 1e-12, 0.0),
@@ -1194,8 +1209,9 @@ fn check_update(
             );
         }
     }
-    println!("{label}: {updated} of {} slots updated", before.len());
+    println!("{label}: {updated} of {} slots updated, {shrunk} shrunk", before.len());
     assert!(updated > 0, "{label}: no slot received photons");
+    shrunk
 }
 
 #[test]
@@ -1203,7 +1219,6 @@ fn update_matches_reference() {
     let ctx = ctx();
     let scene = cornell(RES, RES);
     let mut r = Renderer::new(&ctx, &scene, settings()).unwrap();
-    let alpha = r.settings().alpha;
     // First from the initial state (N = 0), then from a state with N > 0 and shrunk radii.
     for round in 0..3 {
         r.trace_and_gather(r.emitted(), PHOTONS).unwrap();
@@ -1212,15 +1227,7 @@ fn update_matches_reference() {
         r.update_only().unwrap();
         let after = r.read_stats().unwrap();
         let hits = r.read_hit_points().unwrap();
-        check_update(
-            &format!("update round {round}"),
-            &hits,
-            &before,
-            &accum,
-            &after,
-            alpha,
-            r.gpu_scene().params.flux_fixed,
-        );
+        check_update(&format!("update round {round}"), &r, &hits, &before, &accum, &after);
         // The largest radius it reports, as the f32 the lookups read: over the live hit points (all of
         // PPM's non-empty slots) and over every slot it visited.
         let max = r.radius_max().unwrap();
@@ -1240,6 +1247,48 @@ fn update_matches_reference() {
         );
         r.set_emitted(r.emitted() + PHOTONS as u64);
     }
+    // The adaptive shrink on every branch: statistics written so the curvature statistic D spans flat
+    // (under shrink_z of its standard deviations), significant but with p >= R, a shrink to p, and a
+    // shrink held at SHRINK_MIN, of either sign.
+    r.trace_and_gather(r.emitted(), PHOTONS).unwrap();
+    let mut before = r.read_stats().unwrap();
+    let accum = r.read_accum().unwrap();
+    const SIGMAS: [f64; 7] = [0.0, 1.5, 2.15, 2.6, 3.5, 8.0, 3000.0];
+    for (i, st) in before.iter_mut().enumerate() {
+        st.n = 50.0 + (i % 97) as f64;
+        st.curv_var = 3.0 * st.n;
+        let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+        st.curv = sign * SIGMAS[(i / 2) % SIGMAS.len()] * st.curv_var.sqrt();
+    }
+    r.write_stats(&before).unwrap();
+    r.update_only().unwrap();
+    let after = r.read_stats().unwrap();
+    let hits = r.read_hit_points().unwrap();
+    let shrunk = check_update("shrink", &r, &hits, &before, &accum, &after);
+    let floored = before
+        .iter()
+        .zip(&accum)
+        .zip(&after)
+        .filter(|((b, a), g)| a.m > 0 && g.r2 <= b.r2 * reference::SHRINK_MIN * (1.0 + 1e-9))
+        .count();
+    // Significant (beyond shrink_z standard deviations) yet with p >= R: left as eq. 3 leaves it.
+    let (alpha, flux_fixed) = (r.settings().alpha, r.gpu_scene().params.flux_fixed);
+    let kept = before
+        .iter()
+        .zip(&accum)
+        .zip(&after)
+        .zip(&hits)
+        .filter(|(((b, a), g), h)| {
+            let plain = reference::update(b, a, h.weight, alpha, flux_fixed, 0.0, 0.0);
+            a.m > 0 && plain.curv.abs() > r.settings().shrink_z as f64 * plain.curv_var.sqrt() && g.n == plain.n
+        })
+        .count();
+    let updated = accum.iter().filter(|a| a.m > 0).count();
+    println!("shrink: {shrunk} of {updated} updated slots shrunk, {floored} at the floor, {kept} significant but kept");
+    assert!(
+        shrunk * 4 >= updated && shrunk * 4 <= updated * 3 && floored > 0 && floored < shrunk && kept > 0,
+        "shrink: {shrunk} of {updated} shrunk, {floored} at the floor, {kept} kept: the crafted cases missed a branch"
+    );
     assert_clean(&ctx);
 }
 

@@ -116,8 +116,10 @@ fn check_statistics(r: &mut Renderer) {
     let cpu_gather = reference::gather(&hits, &before, &records, 0.0, &r.gpu_scene().materials);
     let mut updated = 0;
     for i in 0..hits.len() {
-        assert_eq!(accum[i].m, cpu_gather[i].0, "pixel {i}: M");
-        let cpu = reference::update(&before[i], &accum[i], hits[i].weight, r.settings().alpha, flux_fixed);
+        assert_eq!(accum[i].m, cpu_gather[i].m, "pixel {i}: M");
+        assert_eq!(accum[i].m_half, cpu_gather[i].m_half, "pixel {i}: M_half");
+        let (alpha, z, floor) = (r.settings().alpha, r.settings().shrink_z, r.shrink_r2_floor());
+        let cpu = reference::update(&before[i], &accum[i], hits[i].weight, alpha, flux_fixed, z, floor);
         // f64 on both sides from the same fixed-point sums: only the last bits may differ.
         for (x, y) in [
             (after[i].n, cpu.n),

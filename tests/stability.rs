@@ -103,7 +103,7 @@ fn photon_streams_and_counts_past_32_bits() {
             tau_r: 1.0,
             tau_g: 1.0,
             tau_b: 1.0,
-            probe: 0.0
+            ..Default::default()
         };
         slots
     ];
@@ -114,7 +114,7 @@ fn photon_streams_and_counts_past_32_bits() {
             flux_g: 1 << 20,
             flux_b: 1 << 20,
             m: 3,
-            pad0: 0
+            m_half: 0
         };
         slots
     ])
@@ -134,8 +134,12 @@ fn photon_streams_and_counts_past_32_bits() {
     assert_clean(&ctx);
 }
 
-/// The f64 update applied `steps` times with M photons each pass, as the CPU model.
-fn model(steps: usize, m: u32, alpha: f32, flux_fixed: f32) -> HitStats {
+/// The shrink's settings of the CPU model: (shrink_z, the least R^2).
+type Shrink = (f32, f32);
+
+/// The f64 update applied `steps` times with M photons each pass, M_half of them within R / 2 (M / 4: a
+/// flat density), as the CPU model.
+fn model(steps: usize, m: u32, m_half: u32, alpha: f32, flux_fixed: f32, shrink: Shrink) -> HitStats {
     let mut s = HitStats {
         r2: 1e-4,
         ..Default::default()
@@ -145,10 +149,10 @@ fn model(steps: usize, m: u32, alpha: f32, flux_fixed: f32) -> HitStats {
         flux_g: 1 << 22,
         flux_b: 1 << 22,
         m,
-        pad0: 0,
+        m_half,
     };
     for _ in 0..steps {
-        s = reference::update(&s, &a, [0.2, 0.2, 0.2], alpha, flux_fixed);
+        s = reference::update(&s, &a, [0.2, 0.2, 0.2], alpha, flux_fixed, shrink.0, shrink.1);
     }
     s
 }
@@ -178,7 +182,7 @@ fn long_runs_stay_finite_positive_and_exact() {
             flux_g: 1 << 22,
             flux_b: 1 << 22,
             m: 20,
-            pad0: 0
+            m_half: 5
         };
         slots
     ];
@@ -186,7 +190,8 @@ fn long_runs_stay_finite_positive_and_exact() {
         r.write_accum(&accum).unwrap();
         r.update_only().unwrap();
     }
-    let m = model(2000, 20, 0.7, g.params.flux_fixed);
+    let shrink = (r.settings().shrink_z, r.shrink_r2_floor());
+    let m = model(2000, 20, 5, 0.7, g.params.flux_fixed, shrink);
     for (i, (s, h)) in r.read_stats().unwrap().iter().zip(&hits).enumerate() {
         if h.is_empty() {
             continue;
@@ -206,13 +211,103 @@ fn long_runs_stay_finite_positive_and_exact() {
     // The CPU model (the same f64 operations, checked equal above) over 10^5 and 10^6 updates: N counts
     // every alpha M exactly, R^2 shrinks but stays normal, tau / R^2 converges.
     for steps in [100_000usize, 1_000_000] {
-        let s = model(steps, 20, 0.7, g.params.flux_fixed);
+        let s = model(steps, 20, 5, 0.7, g.params.flux_fixed, shrink);
         // Adding alpha M = 13.99999976 (alpha is an f32 0.7) 10^6 times in f64 drifts by ~1e-10 relative.
         let want = steps as f64 * (0.7f32 as f64 * 20.0);
         assert!((s.n - want).abs() <= 1e-9 * want, "{steps}: N {} vs {want}", s.n);
         assert!(s.r2.is_normal() && s.r2 > 0.0 && s.r2 < 1e-4, "{steps}: R^2 {}", s.r2);
         assert!(s.tau_r.is_finite() && s.tau_r > 0.0, "{steps}: tau {}", s.tau_r);
     }
+}
+
+#[test]
+fn a_point_focus_shrinks_to_the_floor_and_no_further() {
+    // Every photon at the hit point itself (M_half = M: a point focus, the sharpest caustic there is): the
+    // adaptive shrink takes the radius down pass after pass, at most SHRINK_MIN on R^2 a pass, until the
+    // floor (SHRINK_FLOOR of the starting radius); from there eq. 3 alone shrinks it. On the device against
+    // the CPU model, then the model alone over 10^5 passes.
+    let ctx = ctx();
+    let mut r = Renderer::new(&ctx, &cornell(8, 8), small(1_000)).unwrap();
+    let g = r.gpu_scene().clone();
+    let slots = g.slots() as usize;
+    let hits = r.read_hit_points().unwrap();
+    r.write_stats(&vec![
+        HitStats {
+            r2: 1e-4,
+            ..Default::default()
+        };
+        slots
+    ])
+    .unwrap();
+    let accum = vec![
+        PassAccum {
+            flux_r: 1 << 22,
+            flux_g: 1 << 22,
+            flux_b: 1 << 22,
+            m: 20,
+            m_half: 20
+        };
+        slots
+    ];
+    let shrink = (r.settings().shrink_z, r.shrink_r2_floor());
+    assert!(shrink.0 > 0.0, "the adaptive shrink is on by default");
+    for _ in 0..300 {
+        r.write_accum(&accum).unwrap();
+        r.update_only().unwrap();
+    }
+    let m = model(300, 20, 20, 0.7, g.params.flux_fixed, shrink);
+    for (i, (s, h)) in r.read_stats().unwrap().iter().zip(&hits).enumerate() {
+        if h.is_empty() {
+            continue;
+        }
+        assert!(
+            (s.n - m.n).abs() <= 1e-9 * m.n && (s.r2 - m.r2).abs() <= 1e-9 * m.r2,
+            "slot {i}: {s:?} vs {m:?}"
+        );
+    }
+    assert_clean(&ctx);
+    let floor = shrink.1 as f64;
+    let (mut s, mut reached) = (
+        HitStats {
+            r2: 1e-4,
+            ..Default::default()
+        },
+        None,
+    );
+    let a = accum[0];
+    for step in 0..100_000 {
+        let next = reference::update(&s, &a, [0.2; 3], 0.7, g.params.flux_fixed, shrink.0, shrink.1);
+        let eq3 = (s.n + 0.7f32 as f64 * 20.0) / (s.n + 20.0);
+        let factor = next.r2 / s.r2;
+        assert!(
+            factor >= reference::SHRINK_MIN * eq3 * (1.0 - 1e-12),
+            "step {step}: R^2 took {factor}"
+        );
+        if reached.is_some() {
+            // Past the floor: eq. 3's factor alone.
+            assert!(
+                (factor / eq3 - 1.0).abs() < 1e-12,
+                "step {step}: shrunk below the floor ({factor})"
+            );
+        } else if next.r2 <= floor * (1.0 + 1e-9) {
+            reached = Some(step);
+        }
+        assert!(
+            next.r2 > 0.0 && next.tau_r.is_finite() && next.curv.is_finite(),
+            "step {step}: {next:?}"
+        );
+        s = next;
+    }
+    let reached = reached.expect("the radius never reached the floor");
+    println!(
+        "point focus: R^2 {:.3e} reached the floor {floor:.3e} after {reached} passes",
+        1e-4
+    );
+    // From 1e-4 to the floor takes at least log_4 of the ratio (SHRINK_MIN a pass).
+    assert!(
+        reached as f64 >= (1e-4 / floor).ln() / 4f64.ln() - 1.0,
+        "{reached} passes"
+    );
 }
 
 #[test]
@@ -578,8 +673,9 @@ fn hot_spot_sums_match_an_f64_brute_force() {
         hottest > 1000,
         "not a hot spot: at most {hottest} photons per hit point"
     );
-    for (i, (a, (m, sum))) in accum.iter().zip(&cpu).enumerate() {
-        assert_eq!(a.m, *m, "slot {i}: M");
+    for (i, (a, c)) in accum.iter().zip(&cpu).enumerate() {
+        let (m, sum) = (&c.m, &c.flux);
+        assert_eq!((a.m, a.m_half), (*m, c.m_half), "slot {i}: M, M_half");
         // Fixed point rounds each photon by at most 1/(2 flux_fixed): exact otherwise, whatever the order.
         let bound = *m as f64 / (2.0 * flux_fixed) + 1e-6 * sum.x;
         assert!(

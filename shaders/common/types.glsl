@@ -217,6 +217,8 @@ struct HitStats {
     double tau_g;
     double tau_b;
     double probe;    // lambda / r^2 from the probe pass (eq. 7), or 0 without probing
+    double curv;     // the curvature statistic D = M - 4 M_half summed over passes, scaled as R shrinks
+    double curv_var; // its variance, M + 8 M_half summed the same way (update.comp's adaptive shrink)
 };
 
 // What this pass's photons gave a hit point: M and tau_M, flux in fixed point (RenderParams.flux_fixed
@@ -227,7 +229,7 @@ struct PassAccum {
     int64_t flux_g;
     int64_t flux_b;
     uint m;
-    uint pad0;
+    uint m_half;     // of the m, those within R / 2 (the update's curvature statistic)
 };
 
 // A photon deposited on a diffuse surface.

@@ -44,8 +44,10 @@ layout(push_constant) uniform GatherPush {
 #define ROUGH_EVAL_ONLY
 #include "materials/rough_conductor.glsl"
 
-// Each member's sums over the photons it received.
+// Each member's sums over the photons it received, and the count of those within R / 2 (update.comp's
+// curvature statistic).
 uint m[GROUP];
+uint m_half[GROUP];
 int64_t fr[GROUP], fg[GROUP], fb[GROUP];
 float inv_kr[GROUP];
 uint q_brdf[GROUP];  // HitPoint.brdf: 0, or 1 + a rough conductor's material
@@ -62,6 +64,7 @@ void visit(uint j, vec3 flux, vec3 dir, float d2) {
     float scale = inv_kr[j] > 0.0 ? (1.0 - sqrt(d2) * inv_kr[j]) * flux_fixed : flux_fixed;
     vec3 v = flux * scale + 0.5; // round to nearest: flux and weight are never negative
     m[j]++;
+    if (d2 <= 0.25 * q_r2[j]) m_half[j]++;
 #if WIDE_FLUX
     if (max(v.r, max(v.g, v.b)) >= 2147483520.0) { // the largest f32 below 2^31
         i64vec3 w = i64vec3(min(v, vec3(FLUX_CAP_FIXED)));
@@ -85,6 +88,7 @@ void main() {
     uint slot[GROUP];
     [[unroll]] for (uint j = 0u; j < GROUP; j++) {
         m[j] = 0u;
+        m_half[j] = 0u;
         fr[j] = 0L;
         fg[j] = 0L;
         fb[j] = 0L;
@@ -110,6 +114,7 @@ void main() {
         if (m[j] == 0u) continue;
         uint i = slot[j];
         accum[i].m += m[j];
+        accum[i].m_half += m_half[j];
         accum[i].flux_r += fr[j];
         accum[i].flux_g += fg[j];
         accum[i].flux_b += fb[j];

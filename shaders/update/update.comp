@@ -1,5 +1,6 @@
 // The progressive update after a photon pass (eq. 3 and 6; with the cone filter the weighted sums of
-// eq. 12-13 stand in for tau, and eq. 14 is the same ratio), then clears the pass accumulators.
+// eq. 12-13 stand in for tau, and eq. 14 is the same ratio), then the adaptive shrink (shrunk()), then
+// clears the pass accumulators.
 // A hit point that received no photon is left as it is. tau carries the eye path's weight w f_r: for
 // PPM's fixed hit points that equals weighting at the resolve, and SPPM's hit point changes every pass.
 // It also leaves the largest R^2 (as the f32 the lookups read) for the renderer to size the next pass's
@@ -20,7 +21,8 @@ layout(push_constant) uniform UpdatePush {
     uint count;      // entries of `order` (the non-empty hit-point slots)
     float alpha;     // the fraction of new photons kept, in (0, 1)
     float flux_fixed; // RenderParams.flux_fixed
-    uint pad0;
+    float shrink_z;  // the adaptive shrink's significance in standard deviations; 0: off
+    float r2_floor;  // the least R^2 the adaptive shrink sets (SHRINK_FLOOR of the starting radius, squared)
 } pc;
 #include "invocation.glsl"
 
@@ -33,6 +35,52 @@ HitStats updated(uint i, PassAccum a, HitStats s) {
     s.tau_g = (s.tau_g + double(a.flux_g) * w.g) * ratio;
     s.tau_b = (s.tau_b + double(a.flux_b) * w.b) * ratio;
     s.n += double(pc.alpha) * m;
+    // The curvature statistic (shrunk()): D = M - 4 M_half ~ R^4, Var D = M + 8 M_half ~ R^2
+    s.curv = (s.curv + (m - 4.0 * double(a.m_half))) * ratio * ratio;
+    s.curv_var = (s.curv_var + (m + 8.0 * double(a.m_half))) * ratio;
+    return s;
+}
+
+// The adaptive shrink (pc.shrink_z > 0): probe.comp's curvature fit (mode 4), (p / R)^6 = 9 N / (32 D^2),
+// taken again after every pass over the photons gathered so far instead of once over the probe's, so a
+// caustic the probe could not resolve (or one it shrank towards but not enough, where the density is not
+// the quadratic the fit assumes) is found as photons arrive. N is the accumulated count itself; D and its
+// Poisson variance are summed the same way (updated(): D scales as R^4, its variance as R^2, under the
+// fit's quadratic density), so the fit weighs the estimate tau / (pi R^2) the passes have built. Only the
+// part of |D| beyond shrink_z standard deviations counts (a flat density reads as flat); where the fit's p
+// is below R, R^2 takes (p / R)^2 and N, tau, D and its variance scale with it as eq. 3 scales them (the
+// density held, fewer photons inside), so the estimate keeps its value and the next fit starts at p.
+// Radii only ever shrink here, so eq. 3's consistency stands; a flat density never triggers it, and the
+// images of scenes without narrow caustics barely move (docs/accuracy.md).
+// SHRINK_MIN: the least factor on R^2 in one pass (R halves at most), so one noisy pass cannot collapse a
+// radius; a caustic that needs more takes further passes, which only delays the shrink. pc.r2_floor: the
+// shrink stops at 1e-4 of the starting radius (renderer.rs's SHRINK_FLOOR), where f32 positions would
+// soon stop telling photons apart; below it eq. 3 alone shrinks the radius, so a caustic narrower than
+// that (a point focus) is blurred over it, never turned to a zero radius.
+const double SHRINK_MIN = 0.25;
+
+// Cube root in f64 (GLSL has no f64 pow): f32's, then two Newton steps (each squares the relative error).
+double cbrt_f64(double x) {
+    double y = double(pow(float(x), 1.0 / 3.0));
+    y -= (y * y * y - x) / (3.0 * y * y);
+    y -= (y * y * y - x) / (3.0 * y * y);
+    return y;
+}
+
+HitStats shrunk(HitStats s) {
+    double d = max(abs(s.curv) - double(pc.shrink_z) * sqrt(s.curv_var), 0.0);
+    if (!(9.0 * s.n < 32.0 * d * d)) return s; // p >= R (or no significant curvature)
+    double x = 9.0 * s.n / (32.0 * d * d); // (p / R)^6, in (0, 1)
+    double t = x > SHRINK_MIN * SHRINK_MIN * SHRINK_MIN ? cbrt_f64(x) : SHRINK_MIN; // (p / R)^2
+    t = max(t, double(pc.r2_floor) / s.r2);
+    if (!(t < 1.0)) return s;
+    s.r2 *= t;
+    s.n *= t;
+    s.tau_r *= t;
+    s.tau_g *= t;
+    s.tau_b *= t;
+    s.curv *= t * t;
+    s.curv_var *= t;
     return s;
 }
 
@@ -56,6 +104,7 @@ void main() {
         HitStats s = stats[i];
         if (a.m != 0u) {
             s = updated(i, a, s);
+            if (pc.shrink_z > 0.0) s = shrunk(s);
             stats[i] = s;
             accum[i] = PassAccum(0L, 0L, 0L, 0u, 0u);
         }

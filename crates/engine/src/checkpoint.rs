@@ -22,7 +22,7 @@ use crate::stats::ProbeReport;
 
 const MAGIC: &[u8; 8] = b"PPMVKCKP";
 /// Raised whenever the layout of the file or of a buffer in it changes.
-pub const FORMAT: u32 = 2;
+pub const FORMAT: u32 = 3;
 /// A header is a few KiB; anything larger is not a checkpoint.
 const MAX_HEADER: u32 = 1 << 20;
 /// Bytes of the file's checksum, after the buffers.

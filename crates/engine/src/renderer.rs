@@ -215,6 +215,11 @@ fn make_tiles(pixels: u32, per_tile: u32) -> Vec<Tile> {
 }
 
 /// Largest batch log (batches per pass).
+/// The adaptive shrink (update.comp) stops at this fraction of the starting radius: f32 positions hold
+/// about 2^-24 of the scene's extent, eq. 8's radius is about 1e-3 of it at 1024 pixels. Below it eq. 3
+/// alone shrinks the radius (tests/stability.rs, a point focus).
+pub const SHRINK_FLOOR: f32 = 1e-4;
+
 const MAX_BATCHES: u32 = 1024;
 
 /// Most photons one batch traces: 2^20. Each batch is its own submission and a pass checks its
@@ -957,8 +962,14 @@ impl Renderer {
             count,
             alpha: self.settings.alpha,
             flux_fixed: self.gpu.params.flux_fixed,
-            pad0: 0,
+            shrink_z: self.settings.shrink_z,
+            r2_floor: self.shrink_r2_floor(),
         }
+    }
+
+    /// The least R^2 the adaptive shrink sets: `SHRINK_FLOOR` of the starting radius, squared.
+    pub fn shrink_r2_floor(&self) -> f32 {
+        (self.gpu.initial_radius * SHRINK_FLOOR).powi(2)
     }
 
     fn probe_push(&self, phase: u32, count: u32) -> ProbePush {
@@ -1267,6 +1278,7 @@ impl Renderer {
                 tau_g: 0.0,
                 tau_b: 0.0,
                 probe: s.probe,
+                ..Default::default()
             })
             .collect();
         self.ctx

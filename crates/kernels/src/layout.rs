@@ -324,6 +324,11 @@ pub struct HitStats {
     pub tau_b: f64,
     /// lambda / r^2 from the probe pass (eq. 7), or 0 without probing.
     pub probe: f64,
+    /// The curvature statistic D = M - 4 M_half (photons within R against 4x those within R / 2), summed
+    /// over passes and scaled as R shrinks (update.comp's adaptive shrink).
+    pub curv: f64,
+    /// Its variance under Poisson counts, M + 8 M_half, summed and scaled the same way.
+    pub curv_var: f64,
 }
 gpu_struct!(HitStats {
     n,
@@ -331,7 +336,9 @@ gpu_struct!(HitStats {
     tau_r,
     tau_g,
     tau_b,
-    probe
+    probe,
+    curv,
+    curv_var
 });
 
 #[repr(C)]
@@ -341,14 +348,15 @@ pub struct PassAccum {
     pub flux_g: i64,
     pub flux_b: i64,
     pub m: u32,
-    pub pad0: u32,
+    /// Of the `m` photons, those within R / 2 (the update's curvature statistic).
+    pub m_half: u32,
 }
 gpu_struct!(PassAccum {
     flux_r,
     flux_g,
     flux_b,
     m,
-    pad0
+    m_half
 });
 
 #[repr(C)]

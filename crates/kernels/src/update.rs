@@ -15,7 +15,10 @@ pub struct UpdatePush {
     pub alpha: f32,
     /// `RenderParams::flux_fixed`.
     pub flux_fixed: f32,
-    pub pad0: u32,
+    /// The adaptive shrink's significance in standard deviations (`Settings::shrink_z`); 0: off.
+    pub shrink_z: f32,
+    /// The least R^2 the adaptive shrink sets.
+    pub r2_floor: f32,
 }
 push_struct!(UpdatePush, UPDATE);
 

@@ -908,14 +908,23 @@ pub fn photon_pass(g: &GpuScene, first: u64, count: u32, salt: u32) -> Vec<Photo
     out
 }
 
+/// What one hit point gathered (`gather_one`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Gathered {
+    /// M: the photons inside the sphere.
+    pub m: u32,
+    /// Of those, the ones within R / 2 (the update's curvature statistic).
+    pub m_half: u32,
+    /// Their flux sum in f64 (with the cone weight of eq. 10 when `cone_k` > 0).
+    pub flux: DVec3,
+}
+
 /// What one hit point gathers from `photons`, by brute force over every photon (an independent check
-/// of the grid): M, and the flux sum in f64 (with the cone weight of eq. 10 when `cone_k` > 0).
-/// `materials`: the scene's (`GpuScene::materials`), for the BRDFs of glossy hit points.
-pub fn gather_one(hp: &HitPoint, r2: f64, photons: &[Photon], cone_k: f32, materials: &[Material]) -> (u32, DVec3) {
-    let mut m = 0;
-    let mut sum = DVec3::ZERO;
+/// of the grid). `materials`: the scene's (`GpuScene::materials`), for the BRDFs of glossy hit points.
+pub fn gather_one(hp: &HitPoint, r2: f64, photons: &[Photon], cone_k: f32, materials: &[Material]) -> Gathered {
+    let mut g = Gathered::default();
     if hp.pixel == EMPTY_SLOT {
-        return (0, sum);
+        return g;
     }
     let r2f = r2 as f32;
     let r = r2f.sqrt();
@@ -937,10 +946,11 @@ pub fn gather_one(hp: &HitPoint, r2: f64, photons: &[Photon], cone_k: f32, mater
         } else {
             1.0
         }; // eq. 10
-        m += 1;
-        sum += (v3(p.flux) * ratio).as_dvec3() * w as f64;
+        g.m += 1;
+        g.m_half += (d2 <= 0.25 * r2f) as u32;
+        g.flux += (v3(p.flux) * ratio).as_dvec3() * w as f64;
     }
-    (m, sum)
+    g
 }
 
 /// `gather_one` for every slot.
@@ -950,7 +960,7 @@ pub fn gather(
     photons: &[Photon],
     cone_k: f32,
     materials: &[Material],
-) -> Vec<(u32, DVec3)> {
+) -> Vec<Gathered> {
     hits.iter()
         .zip(stats)
         .map(|(h, s)| gather_one(h, s.r2, photons, cone_k, materials))
@@ -959,23 +969,82 @@ pub fn gather(
 
 /// The progressive update of one hit point (eq. 3, 6; eq. 14 with the cone filter's sums), in f64;
 /// `flux_fixed` is the accumulator's fixed-point scale (`RenderParams::flux_fixed`). tau takes the new
-/// flux times the hit point's `weight` (w f_r).
-pub fn update(s: &HitStats, a: &PassAccum, weight: [f32; 3], alpha: f32, flux_fixed: f32) -> HitStats {
+/// flux times the hit point's `weight` (w f_r). Then the adaptive shrink (`shrunk`) where `shrink_z` > 0.
+pub fn update(
+    s: &HitStats,
+    a: &PassAccum,
+    weight: [f32; 3],
+    alpha: f32,
+    flux_fixed: f32,
+    shrink_z: f32,
+    r2_floor: f32,
+) -> HitStats {
     if a.m == 0 {
         return *s;
     }
     let m = a.m as f64;
+    let m_half = a.m_half as f64;
     let alpha = alpha as f64;
     let ratio = (s.n + alpha * m) / (s.n + m);
     let w = v3(weight).as_dvec3() / flux_fixed as f64;
-    HitStats {
+    let s = HitStats {
         n: s.n + alpha * m,
         r2: s.r2 * ratio,                                 // eq. 3, squared
         tau_r: (s.tau_r + a.flux_r as f64 * w.x) * ratio, // eq. 6
         tau_g: (s.tau_g + a.flux_g as f64 * w.y) * ratio,
         tau_b: (s.tau_b + a.flux_b as f64 * w.z) * ratio,
         probe: s.probe,
+        // The curvature statistic: D = M - 4 M_half ~ R^4, Var D = M + 8 M_half ~ R^2.
+        curv: (s.curv + (m - 4.0 * m_half)) * ratio * ratio,
+        curv_var: (s.curv_var + (m + 8.0 * m_half)) * ratio,
+    };
+    if shrink_z > 0.0 {
+        shrunk(s, shrink_z as f64, r2_floor as f64)
+    } else {
+        s
     }
+}
+
+/// The least factor on R^2 the adaptive shrink applies in one pass (update.comp's SHRINK_MIN).
+pub const SHRINK_MIN: f64 = 0.25;
+
+/// The adaptive shrink (update.comp): probe.comp's curvature fit (p / R)^6 = 9 N / (32 D^2) over the
+/// accumulated counts, with only the part of |D| beyond `z` standard deviations; where p < R, R^2 takes
+/// (p / R)^2 (at least `SHRINK_MIN`, and R^2 at least `r2_floor`) and N, tau and the statistic scale as
+/// eq. 3 scales them.
+pub fn shrunk(s: HitStats, z: f64, r2_floor: f64) -> HitStats {
+    let d = (s.curv.abs() - z * s.curv_var.sqrt()).max(0.0);
+    if !(9.0 * s.n < 32.0 * d * d) {
+        return s;
+    }
+    let x = 9.0 * s.n / (32.0 * d * d); // (p / R)^6, in (0, 1)
+    let t = if x > SHRINK_MIN * SHRINK_MIN * SHRINK_MIN {
+        cbrt_f64(x)
+    } else {
+        SHRINK_MIN
+    } // (p / R)^2
+    .max(r2_floor / s.r2);
+    if !(t < 1.0) {
+        return s;
+    }
+    HitStats {
+        n: s.n * t,
+        r2: s.r2 * t,
+        tau_r: s.tau_r * t,
+        tau_g: s.tau_g * t,
+        tau_b: s.tau_b * t,
+        probe: s.probe,
+        curv: s.curv * (t * t),
+        curv_var: s.curv_var * t,
+    }
+}
+
+/// The kernel's cube root: f32's, then two Newton steps in f64.
+fn cbrt_f64(x: f64) -> f64 {
+    let mut y = (x as f32).powf(1.0 / 3.0) as f64;
+    y -= (y * y * y - x) / (3.0 * y * y);
+    y -= (y * y * y - x) / (3.0 * y * y);
+    y
 }
 
 /// Pixel radiance from the statistics (eq. 1-2; eq. 11's normalisation `norm`); `direct` holds the
@@ -1231,7 +1300,7 @@ mod tests {
                 m,
                 ..Default::default()
             };
-            s = update(&s, &acc, [1.0; 3], alpha as f32, 65536.0);
+            s = update(&s, &acc, [1.0; 3], alpha as f32, 65536.0, 0.0, 0.0);
         }
         // Radiance-like estimate of the density: tau / (norm pi R^2) per emitted photon, times the
         // photons per pass per unit area (rho photons over an area of 1).
