@@ -1269,6 +1269,42 @@ mod tests {
     }
 
     #[test]
+    fn adaptive_shrink_finds_the_closed_form_optimum() {
+        // A density f(rho) = f0 + c rho^2 about the hit point (Laplacian L = 4c) holds
+        // N(p) = pi p^2 f0 + pi c p^4 / 2 photons within p. The estimate N(p) / (pi p^2) has bias
+        // c p^2 / 2 and variance f0 / (pi p^2) (Poisson), least in sum at p^6 = 2 f0 / (pi c^2): derived
+        // here from the density, not from the fit's counts. One pass of exactly the expected counts, no
+        // significance test (z = 0): the update's eq. 3 and then the shrink must land on that p, up to the
+        // c R^2 / f0 the counts hold beyond the quadratic's leading term.
+        let pi = std::f64::consts::PI;
+        let count = |f0: f64, c: f64, p: f64| pi * p * p * f0 + pi * c * p.powi(4) / 2.0;
+        for (f0, c, r) in [(4.0e5, -4.0e4, 0.3), (4.0e5, 4.0e4, 0.3), (1.0e9, -9.0e11, 0.004)] {
+            let optimum = (2.0 * f0 / (pi * c * c)).powf(1.0 / 6.0);
+            let s = HitStats {
+                r2: r * r,
+                ..Default::default()
+            };
+            let a = PassAccum {
+                m: count(f0, c, r).round() as u32,
+                m_half: count(f0, c, r / 2.0).round() as u32,
+                ..Default::default()
+            };
+            let alpha = 0.7f32;
+            let plain = update(&s, &a, [1.0; 3], alpha, 1.0, 0.0, 0.0);
+            let shrunk = update(&s, &a, [1.0; 3], alpha, 1.0, 1e-30, 0.0);
+            let (r_eq3, r_new) = (plain.r2.sqrt(), shrunk.r2.sqrt());
+            assert!(optimum < r_eq3 && optimum > 0.5 * r_eq3, "the case must be in the fit's range");
+            let drift = (c * r * r / f0).abs(); // the quadratic's next term, relative
+            assert!(
+                (r_new / optimum - 1.0).abs() < drift,
+                "f0 {f0}, c {c}: R {r_new} against the optimum {optimum} (eq. 3's {r_eq3})"
+            );
+            // The estimate keeps its value: tau and N scale as R^2 does.
+            assert!((shrunk.n / shrunk.r2 - plain.n / plain.r2).abs() < 1e-9 * plain.n / plain.r2);
+        }
+    }
+
+    #[test]
     fn cone_filter_progressive_estimate_is_unbiased() {
         // Photons of flux 1 uniform on a plane at density rho per unit area; the filtered progressive
         // estimate tau / ((1 - 2/(3k)) pi R^2 N_emitted / M_per_unit) must converge to rho over many
