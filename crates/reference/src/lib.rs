@@ -1293,7 +1293,10 @@ mod tests {
             let plain = update(&s, &a, [1.0; 3], alpha, 1.0, 0.0, 0.0);
             let shrunk = update(&s, &a, [1.0; 3], alpha, 1.0, 1e-30, 0.0);
             let (r_eq3, r_new) = (plain.r2.sqrt(), shrunk.r2.sqrt());
-            assert!(optimum < r_eq3 && optimum > 0.5 * r_eq3, "the case must be in the fit's range");
+            assert!(
+                optimum < r_eq3 && optimum > 0.5 * r_eq3,
+                "the case must be in the fit's range"
+            );
             let drift = (c * r * r / f0).abs(); // the quadratic's next term, relative
             assert!(
                 (r_new / optimum - 1.0).abs() < drift,
