@@ -7,7 +7,20 @@
 mod common;
 
 use common::*;
+use ppm_vk_engine::layout::{HitPoint, HitStats, PassAccum};
 use ppm_vk_engine::{Renderer, Settings};
+
+/// Bytes of the largest per-slot record, which sets the tiles (the statistics' 64).
+fn slot_bytes() -> u64 {
+    [
+        std::mem::size_of::<HitPoint>(),
+        std::mem::size_of::<HitStats>(),
+        std::mem::size_of::<PassAccum>(),
+    ]
+    .into_iter()
+    .max()
+    .unwrap() as u64
+}
 
 /// The image's mean after `passes` passes at w x h, and the most batches a pass took.
 fn mean(scene: &ppm_vk_engine::Scene, w: u32, h: u32, passes: u32) -> ([f64; 3], u32) {
@@ -50,7 +63,7 @@ fn tiny_images_render_without_a_limit_error() {
     }
 }
 
-/// 2048 x 2048 SPPM: 192 MiB of hit points and of their statistics, past lavapipe's largest storage
+/// 2048 x 2048 SPPM: 192 MiB of hit points and 256 MiB of their statistics, past lavapipe's largest storage
 /// binding (128 MiB), which the renderer binds in tiles. It renders; every tile's pixels were traced,
 /// gathered and resolved (each band of rows it covers is lit, the box's walls and floor); the tiles are
 /// as many as the device's binding asks; the validation layer saw no binding past the limit.
@@ -66,9 +79,9 @@ fn renders_at_2048_squared_without_a_limit_error() {
     r.pass().unwrap_or_else(|e| panic!("{e:#}"));
     let image = r.image().unwrap_or_else(|e| panic!("{e:#}"));
     assert_eq!(image.count_non_finite(), 0);
-    // The tiles the device's largest binding asks for: 48-byte hit points, in runs of 64 pixels.
+    // The tiles the device's largest binding asks for: the largest per-slot record, in runs of 64 pixels.
     let range = ctx.limits().max_storage_buffer_range as u64;
-    let per_tile = (range / 48 / 64 * 64).min((w * h) as u64);
+    let per_tile = (range / slot_bytes() / 64 * 64).min((w * h) as u64);
     let tiles = (w as u64 * h as u64).div_ceil(per_tile);
     assert_eq!(r.tile_count() as u64, tiles);
     if range < 192 << 20 {
@@ -117,7 +130,7 @@ fn small_tiles_render_the_same_bits_as_one() {
         ),
     ];
     for (what, settings) in cases {
-        let per_pixel = 48 * settings.slots(&scene) as u64;
+        let per_pixel = slot_bytes() * settings.slots(&scene) as u64;
         let small = Settings {
             max_tile_bytes: Some(1536 * per_pixel + 63 * per_pixel),
             ..settings.clone()
@@ -162,7 +175,7 @@ fn small_tiles_render_the_same_bits_as_one() {
 fn a_tile_cap_below_one_run_is_a_settings_error() {
     let ctx = ctx();
     let scene = cornell(16, 16);
-    let run = ppm_vk_engine::TILE_ALIGN_PIXELS as u64 * 48;
+    let run = ppm_vk_engine::TILE_ALIGN_PIXELS as u64 * slot_bytes();
     let at = |cap: u64| {
         let s = Settings {
             photons_per_pass: 1000,

@@ -448,8 +448,8 @@ impl Renderer {
             ));
         }
         fits_device(&per_pixel, &others, ctx.info().memory_bytes, &advice)?;
-        // The largest per-pixel buffer sets the tiles: hit points or statistics (slots of 48 bytes), or
-        // the emission sums (32 bytes a pixel).
+        // The largest per-pixel buffer sets the tiles: the statistics (slots of 64 bytes, hit points 48),
+        // or the emission sums (32 bytes a pixel).
         let slot_bytes = [
             std::mem::size_of::<HitPoint>(),
             std::mem::size_of::<HitStats>(),
@@ -1871,7 +1871,7 @@ fn morton_order(hits: &[HitPoint]) -> Vec<u32> {
 
 #[cfg(test)]
 mod tests {
-    use super::{fits_device, make_tiles, spread_marks, tile_pixels, TILE_ALIGN_PIXELS};
+    use super::{fits_device, make_tiles, spread_marks, tile_pixels, HitStats, TILE_ALIGN_PIXELS};
 
     #[test]
     fn marks_spread_to_the_eight_neighbours_only() {
@@ -1924,8 +1924,8 @@ mod tests {
     /// `TILE_ALIGN_PIXELS`, and every pixel is in exactly one tile.
     #[test]
     fn tiles_fit_the_cap_and_cover_the_image() {
-        let (range, hits) = (128u64 << 20, 48u64);
-        // lavapipe's 128 MiB at 2048x2048 SPPM: 48-byte slots, so a tile of 2^27 / 48 rounded down to 64.
+        let (range, hits) = (128u64 << 20, std::mem::size_of::<HitStats>() as u64);
+        // lavapipe's 128 MiB at 2048x2048 SPPM: 64-byte statistics, so a tile of 2^27 / 64 rounded down to 64.
         let per = tile_pixels(2048 * 2048, hits, range).unwrap();
         assert_eq!(per as u64, range / hits / 64 * 64);
         assert!(per as u64 * hits <= range && (per as u64 + 64) * hits > range);
