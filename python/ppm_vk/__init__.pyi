@@ -95,6 +95,7 @@ class Renderer:
         probe_photons: Optional[int] = ...,
         probe_k: float = ...,
         probe_grow: float = ...,
+        shrink_z: float = ...,
         hit_slots: int = ...,
         rough_splits: int = ...,
         max_eye_depth: int = ...,

@@ -50,8 +50,9 @@ HitStats updated(uint i, PassAccum a, HitStats s) {
 // part of |D| beyond shrink_z standard deviations counts (a flat density reads as flat); where the fit's p
 // is below R, R^2 takes (p / R)^2 and N, tau, D and its variance scale with it as eq. 3 scales them (the
 // density held, fewer photons inside), so the estimate keeps its value and the next fit starts at p.
-// Radii only ever shrink here, so eq. 3's consistency stands; a flat density never triggers it, and the
-// images of scenes without narrow caustics barely move (docs/accuracy.md).
+// Radii only ever shrink here, so eq. 3's consistency stands; a flat density reaches the threshold only by
+// noise (then a mild shrink of an unbiased estimate), and the images of scenes without narrow caustics
+// barely move (docs/accuracy.md).
 // SHRINK_MIN: the least factor on R^2 in one pass (R halves at most), so one noisy pass cannot collapse a
 // radius; a caustic that needs more takes further passes, which only delays the shrink. pc.r2_floor: the
 // shrink stops at 1e-4 of the starting radius (renderer.rs's SHRINK_FLOOR), where f32 positions would
