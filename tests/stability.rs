@@ -137,62 +137,86 @@ fn photon_streams_and_counts_past_32_bits() {
 /// The shrink's settings of the CPU model: (shrink_z, the least R^2).
 type Shrink = (f32, f32);
 
-/// The f64 update applied `steps` times with M photons each pass, M_half of them within R / 2 (M / 4: a
-/// flat density), as the CPU model.
-fn model(steps: usize, m: u32, m_half: u32, alpha: f32, flux_fixed: f32, shrink: Shrink) -> HitStats {
-    let mut s = HitStats {
-        r2: 1e-4,
-        ..Default::default()
-    };
-    let a = PassAccum {
+/// One pass's accumulator, the same every pass: flux 2^22 fixed-point units a channel, M photons, M_half of
+/// them within R / 2 (M / 4: a flat density).
+fn fixed_accum(m: u32, m_half: u32) -> PassAccum {
+    PassAccum {
         flux_r: 1 << 22,
         flux_g: 1 << 22,
         flux_b: 1 << 22,
         m,
         m_half,
-    };
+    }
+}
+
+/// The statistics every test here starts from: R^2 = 1e-4, nothing gathered.
+fn fresh() -> HitStats {
+    HitStats {
+        r2: 1e-4,
+        ..Default::default()
+    }
+}
+
+/// The f64 update of `fresh()` applied `steps` times with `fixed_accum(m, m_half)`, as the CPU model.
+fn model(steps: usize, m: u32, m_half: u32, alpha: f32, flux_fixed: f32, shrink: Shrink) -> HitStats {
+    let (mut s, a) = (fresh(), fixed_accum(m, m_half));
     for _ in 0..steps {
         s = reference::update(&s, &a, [0.2, 0.2, 0.2], alpha, flux_fixed, shrink.0, shrink.1);
     }
     s
 }
 
-#[test]
-fn long_runs_stay_finite_positive_and_exact() {
-    // On the device: 2000 updates of every hit point with the same input, against the CPU model.
+/// What `updates_on_device` leaves: every slot's statistics and hit point, the CPU model of the same
+/// updates, and the settings the model needs.
+struct DeviceRun {
+    stats: Vec<HitStats>,
+    hits: Vec<ppm_vk_engine::layout::HitPoint>,
+    model: HitStats,
+    flux_fixed: f32,
+    shrink: Shrink,
+}
+
+/// On the device: every slot of an 8 x 8 Cornell box starts at `fresh()` and takes `passes` updates of
+/// `fixed_accum(m, m_half)` (the default settings, so alpha 0.7 and the shrink on), validation clean.
+fn updates_on_device(passes: usize, m: u32, m_half: u32) -> DeviceRun {
     let ctx = ctx();
     let mut r = Renderer::new(&ctx, &cornell(8, 8), small(1_000)).unwrap();
-    let g = r.gpu_scene().clone();
-    let slots = g.slots() as usize;
+    let slots = r.gpu_scene().slots() as usize;
+    let flux_fixed = r.gpu_scene().params.flux_fixed;
     let hits = r.read_hit_points().unwrap();
-    let weight = [0.2f32; 3];
-    // Give every non-empty hit point the same weight so one CPU model serves all (weights come from
-    // the ray pass; the model uses 0.2): compare through the ratio tau / weight instead.
-    r.write_stats(&vec![
-        HitStats {
-            r2: 1e-4,
-            ..Default::default()
-        };
-        slots
-    ])
-    .unwrap();
-    let accum = vec![
-        PassAccum {
-            flux_r: 1 << 22,
-            flux_g: 1 << 22,
-            flux_b: 1 << 22,
-            m: 20,
-            m_half: 5
-        };
-        slots
-    ];
-    for _ in 0..2000 {
+    r.write_stats(&vec![fresh(); slots]).unwrap();
+    let accum = vec![fixed_accum(m, m_half); slots];
+    for _ in 0..passes {
         r.write_accum(&accum).unwrap();
         r.update_only().unwrap();
     }
     let shrink = (r.settings().shrink_z, r.shrink_r2_floor());
-    let m = model(2000, 20, 5, 0.7, g.params.flux_fixed, shrink);
-    for (i, (s, h)) in r.read_stats().unwrap().iter().zip(&hits).enumerate() {
+    let stats = r.read_stats().unwrap();
+    drop(r);
+    assert_clean(&ctx);
+    DeviceRun {
+        stats,
+        hits,
+        model: model(passes, m, m_half, 0.7, flux_fixed, shrink),
+        flux_fixed,
+        shrink,
+    }
+}
+
+#[test]
+fn long_runs_stay_finite_positive_and_exact() {
+    // On the device: 2000 updates of every hit point with the same input, against the CPU model.
+    // Every non-empty hit point has its own weight from the ray pass, the model 0.2: compare through the
+    // ratio tau / weight.
+    let weight = [0.2f32; 3];
+    let DeviceRun {
+        stats,
+        hits,
+        model: m,
+        flux_fixed,
+        shrink,
+    } = updates_on_device(2000, 20, 5);
+    for (i, (s, h)) in stats.iter().zip(&hits).enumerate() {
         if h.is_empty() {
             continue;
         }
@@ -207,11 +231,10 @@ fn long_runs_stay_finite_positive_and_exact() {
             m.tau_r
         );
     }
-    assert_clean(&ctx);
     // The CPU model (the same f64 operations, checked equal above) over 10^5 and 10^6 updates: N counts
     // every alpha M exactly, R^2 shrinks but stays normal, tau / R^2 converges.
     for steps in [100_000usize, 1_000_000] {
-        let s = model(steps, 20, 5, 0.7, g.params.flux_fixed, shrink);
+        let s = model(steps, 20, 5, 0.7, flux_fixed, shrink);
         // Adding alpha M = 13.99999976 (alpha is an f32 0.7) 10^6 times in f64 drifts by ~1e-10 relative.
         let want = steps as f64 * (0.7f32 as f64 * 20.0);
         assert!((s.n - want).abs() <= 1e-9 * want, "{steps}: N {} vs {want}", s.n);
@@ -226,37 +249,15 @@ fn a_point_focus_shrinks_to_the_floor_and_no_further() {
     // adaptive shrink takes the radius down pass after pass, at most SHRINK_MIN on R^2 a pass, until the
     // floor (SHRINK_FLOOR of the starting radius); from there eq. 3 alone shrinks it. On the device against
     // the CPU model, then the model alone over 10^5 passes.
-    let ctx = ctx();
-    let mut r = Renderer::new(&ctx, &cornell(8, 8), small(1_000)).unwrap();
-    let g = r.gpu_scene().clone();
-    let slots = g.slots() as usize;
-    let hits = r.read_hit_points().unwrap();
-    r.write_stats(&vec![
-        HitStats {
-            r2: 1e-4,
-            ..Default::default()
-        };
-        slots
-    ])
-    .unwrap();
-    let accum = vec![
-        PassAccum {
-            flux_r: 1 << 22,
-            flux_g: 1 << 22,
-            flux_b: 1 << 22,
-            m: 20,
-            m_half: 20
-        };
-        slots
-    ];
-    let shrink = (r.settings().shrink_z, r.shrink_r2_floor());
+    let DeviceRun {
+        stats,
+        hits,
+        model: m,
+        flux_fixed,
+        shrink,
+    } = updates_on_device(300, 20, 20);
     assert!(shrink.0 > 0.0, "the adaptive shrink is on by default");
-    for _ in 0..300 {
-        r.write_accum(&accum).unwrap();
-        r.update_only().unwrap();
-    }
-    let m = model(300, 20, 20, 0.7, g.params.flux_fixed, shrink);
-    for (i, (s, h)) in r.read_stats().unwrap().iter().zip(&hits).enumerate() {
+    for (i, (s, h)) in stats.iter().zip(&hits).enumerate() {
         if h.is_empty() {
             continue;
         }
@@ -265,18 +266,10 @@ fn a_point_focus_shrinks_to_the_floor_and_no_further() {
             "slot {i}: {s:?} vs {m:?}"
         );
     }
-    assert_clean(&ctx);
     let floor = shrink.1 as f64;
-    let (mut s, mut reached) = (
-        HitStats {
-            r2: 1e-4,
-            ..Default::default()
-        },
-        None,
-    );
-    let a = accum[0];
+    let (mut s, mut reached, a) = (fresh(), None, fixed_accum(20, 20));
     for step in 0..100_000 {
-        let next = reference::update(&s, &a, [0.2; 3], 0.7, g.params.flux_fixed, shrink.0, shrink.1);
+        let next = reference::update(&s, &a, [0.2; 3], 0.7, flux_fixed, shrink.0, shrink.1);
         let eq3 = (s.n + 0.7f32 as f64 * 20.0) / (s.n + 20.0);
         let factor = next.r2 / s.r2;
         assert!(
