@@ -191,6 +191,12 @@ pub(crate) struct SettingsArgs {
     #[arg(long, default_value_t = Settings::default().emission_samples,
           value_parser = clap::value_parser!(u32).range(0..=ppm_vk_engine::settings::MAX_EMISSION_SAMPLES as i64))]
     emission_samples: u32,
+    /// Emission paths per pixel of the pilot eye pass, which only marks the pixels that take
+    /// --emission-samples: fewer start the render sooner and miss more of a light's smallest images (their
+    /// pixels then take --light-samples; no bias either way).
+    #[arg(long, default_value_t = Settings::default().pilot_samples,
+          value_parser = clap::value_parser!(u32).range(1..=ppm_vk_engine::settings::MAX_EMISSION_SAMPLES as i64))]
+    pilot_samples: u32,
     /// Direct light: `sample` sends a shadow ray to a light at each emission sample's first diffuse point
     /// (light sampling; photons then leave no record where they first land), `photons` leaves it to the
     /// photons (the paper's estimator).
@@ -262,6 +268,7 @@ impl SettingsArgs {
             shrink_z: self.shrink_z,
             cone_k: self.cone.0,
             emission_samples: self.emission_samples,
+            pilot_samples: self.pilot_samples,
             direct: self.direct.into(),
             light_samples: self.light_samples,
             glossy_hits: self.glossy_hits.0,
@@ -770,12 +777,14 @@ fn render(args: RenderArgs) -> Result<Ended> {
         let m = renderer.pilot_marks()?;
         let pct = |n: u32| 100.0 * n as f64 / m.pixels.max(1) as f64;
         eprintln!(
-            "pilot marks: emission {:.1}%, rough {:.1}%, lit {:.1}% of {} pixels; all emission samples in {:.1}%",
+            "pilot marks: emission {:.1}%, rough {:.1}%, lit {:.1}% of {} pixels; all emission samples in {:.1}% \
+             (in the pilot: {:.1}%)",
             pct(m.emission),
             pct(m.rough),
             pct(m.lit),
             m.pixels,
-            pct(m.all_samples)
+            pct(m.all_samples),
+            pct(m.pilot_all)
         );
     }
     if let Some(p) = renderer.probe_report() {

@@ -94,6 +94,18 @@ fn settings_out_of_range_and_device_limits_are_told_apart() {
             other => panic!("expected Error::Settings for shrink_z {z}, got {:?}", other.err()),
         }
     }
+    for n in [0, ppm_vk_engine::settings::MAX_EMISSION_SAMPLES + 1] {
+        let settings = Settings {
+            pilot_samples: n,
+            ..Settings::default()
+        };
+        match Renderer::new(&ctx, &cornell(8, 8), settings) {
+            Err(Error::Settings {
+                field: "pilot_samples", ..
+            }) => {}
+            other => panic!("expected Error::Settings for pilot_samples {n}, got {:?}", other.err()),
+        }
+    }
     // 4096 x 4096 pixels with 8 hit points each: 2^27 hit points, 6 GiB of hit points alone, past the
     // device's memory (lavapipe: 2048 MiB). Per-pixel buffers are bound in tiles, so no one binding's
     // range limits them: the memory does.

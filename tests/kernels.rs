@@ -17,6 +17,7 @@ use ppm_vk_engine::layout::{HitPoint, HitStats, PassAccum, Photon};
 use ppm_vk_engine::scene::Surface;
 use ppm_vk_engine::{DirectLight, Mode, ProbeMode, Renderer, Settings};
 use ppm_vk_kernels::photon::SALT_PHOTON;
+use ppm_vk_kernels::ray::RayPush;
 use ppm_vk_reference::{self as reference, trace};
 
 const RES: u32 = 32;
@@ -223,7 +224,9 @@ fn emission_passes_match_reference(r: &mut Renderer, direct_rel: f64) {
     let g = r.gpu_scene().clone();
     let pixels = g.pixels() as usize;
     let mut busy = vec![0u32; pixels];
-    reference::eye_pass(&g, &r.ray_pushes(0, true), &mut busy);
+    let pilot = r.ray_pushes(0, true);
+    reference::eye_pass(&g, &pilot, &mut busy);
+    pilot_marks_a_prefix_of_the_full_pilot(&g, &pilot, &busy);
     ppm_vk_engine::spread_marks(&mut busy, g.params.width, g.params.height);
     let gpu_busy = r.read_busy().unwrap();
     let same = busy.iter().zip(&gpu_busy).filter(|(a, b)| a == b).count();
@@ -272,6 +275,42 @@ fn emission_passes_match_reference(r: &mut Renderer, direct_rel: f64) {
         ok * 1000 >= pixels * 995,
         "direct emission agrees on {ok} of {pixels} pixels"
     );
+}
+
+/// The pilot takes `pilot_samples` in every pixel and all `emission_samples` where one of those left a
+/// mirror, glass or a smooth coat (MARK_CHAIN). Its samples are a prefix of those of a pilot that takes all
+/// of them everywhere (the same streams), so its marks (`busy`, before they spread) are a subset of that
+/// pilot's, and the same where it chained; with fewer pilot samples than emission samples it must stop
+/// early somewhere (the twin alone: the GPU is held to the twin by the caller).
+fn pilot_marks_a_prefix_of_the_full_pilot(g: &ppm_vk_engine::lower::GpuScene, pilot: &[RayPush], busy: &[u32]) {
+    let all: Vec<RayPush> = pilot
+        .iter()
+        .map(|p| RayPush {
+            pilot_samples: p.emission_samples,
+            ..*p
+        })
+        .collect();
+    let mut full = vec![0u32; busy.len()];
+    reference::eye_pass(g, &all, &mut full);
+    for (i, (&b, &f)) in busy.iter().zip(&full).enumerate() {
+        assert_eq!(
+            b & !f,
+            0,
+            "pixel {i}: the pilot's marks {b:#b} are not within the full pilot's {f:#b}"
+        );
+        if b & reference::MARK_CHAIN != 0 {
+            assert_eq!(b, f, "pixel {i}: the pilot chained, so it took every sample");
+        }
+    }
+    let chained = busy.iter().filter(|&&m| m & reference::MARK_CHAIN != 0).count();
+    let (n, e) = (pilot[0].pilot_samples, pilot[0].emission_samples);
+    println!(
+        "pilot: {n} of {e} samples, all of them in {chained} of {} pixels",
+        busy.len()
+    );
+    if n < e {
+        assert!(chained < busy.len(), "the pilot took all {e} samples in every pixel");
+    }
 }
 
 /// scenes/references/cornell-smooth.xml at RES x RES with bump and normal maps (normal_map.glsl): a bumpy

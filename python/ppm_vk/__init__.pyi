@@ -101,6 +101,7 @@ class Renderer:
         max_eye_depth: int = ...,
         max_photon_depth: int = ...,
         emission_samples: int = ...,
+        pilot_samples: int = ...,
         direct: str = ...,
         light_samples: int = ...,
         glossy_hits: Optional[Union[float, str]] = ...,

@@ -80,6 +80,7 @@ layout(std430, binding = 11) buffer Busy { uint busy[]; };
 const uint MARK_EMISSION = 1u;
 const uint MARK_LIT = 2u;
 const uint MARK_ROUGH = 4u;
+const uint MARK_CHAIN = 8u;
 layout(std430, binding = 12) readonly buffer Lights { Light lights[]; };
 layout(push_constant) uniform RayPush {
     vec2 jitter;     // sample position inside the pixel, in [0,1)^2 (0.5, 0.5: the centre); negative:
@@ -91,6 +92,7 @@ layout(push_constant) uniform RayPush {
     uint chunk;      // dispatch of this eye pass: the emission samples' streams are chunk << 48 | stream
     uint pilot;      // 1: eye pass 0, whose emission samples only set `busy`
     uint light_samples; // the same paths per pixel the pilot did not mark
+    uint pilot_samples; // the pilot's in every pixel; the rest of emission_samples where MARK_CHAIN
     uint per_dispatch;  // paths per pixel one dispatch takes: dispatch k takes samples k * this onwards
     uint first_pixel;   // this dispatch's tile, pixels first_pixel.. (the renderer's tiles): HitPoints,
     uint tile_pixels;   // Direct and Busy are bound from its first pixel on, so index them by `local`
@@ -243,7 +245,8 @@ vec3 escaped(vec3 d) {
 // emitter (or the environment) that no shadow ray also takes, i.e. not straight after a rough vertex;
 // `lit`: set if its shadow ray reached a light; `rough`: set if it sampled through a rough conductor or
 // rough glass (rough_vertex).
-vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout bool lit, inout bool rough) {
+vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout bool lit, inout bool rough,
+                     inout bool chain) {
     vec2 jitter = vec2(rng_float(rng), rng_float(rng));
     vec3 o = params.eye;
     vec3 d = camera_ray(px, py, jitter);
@@ -256,6 +259,8 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
     vec3 lobe_from = vec3(0.0);
     for (uint depth = 0u;; depth++) {
         bvh_sync();
+        // Past the first vertex without a lobe's density: the path left a mirror, glass or a smooth coat.
+        if (depth > 0u && !(lobe_pdf > 0.0)) chain = true;
         if (HAS_SHADING_NORMALS && !shading_valid(d, vng, vns)) break;
         // The last vertex's bump or normal map term for the direction the path leaves it along.
         if (HAS_NORMAL_MAPS) { thr *= bump_shadowing(d); bump_alpha2 = 0.0; }
@@ -609,14 +614,23 @@ void main() {
     bool seen = false;
     bool lit = false;
     bool rough = false;
+    // The pilot takes pc.pilot_samples in every pixel, and the rest of its count only where one of them (or
+    // an earlier dispatch's) left a mirror, glass or a smooth coat: what such a chain shows of a light can
+    // be an image a pixel wide, which a few samples miss, while a light seen straight or through a rough
+    // lobe is found by few and spread to the neighbours (docs/performance.md, "The pilot's samples").
+    bool chain = pc.pilot != 0u && (mark & MARK_CHAIN) != 0u;
     for (uint s = 0u; s < want; s++) {
         if (bvh_spent || bvh_cut) break;
-        vec3 e = emission_sample(px, py, erng, seen, lit, rough);
+        if (pc.pilot != 0u && first + s >= pc.pilot_samples && !chain) break;
+        vec3 e = emission_sample(px, py, erng, seen, lit, rough, chain);
         if (bvh_spent || bvh_cut) break;
         if (pc.pilot != 0u) continue;
         emitted += dvec3(e);
         samples++;
     }
-    if (pc.pilot != 0u) busy[local] |= (seen ? MARK_EMISSION : 0u) | (lit ? MARK_LIT : 0u) | (rough ? MARK_ROUGH : 0u);
+    if (pc.pilot != 0u) {
+        busy[local] |= (seen ? MARK_EMISSION : 0u) | (lit ? MARK_LIT : 0u) | (rough ? MARK_ROUGH : 0u)
+            | (chain ? MARK_CHAIN : 0u);
+    }
     if (samples > 0u) direct[local] += dvec4(emitted, double(samples));
 }

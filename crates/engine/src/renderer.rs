@@ -11,7 +11,7 @@ use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon
 use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PathLimits, PhotonPush, SALT_EYE, SALT_PHOTON, SALT_PROBE};
 use ppm_vk_kernels::probe::{self, ProbePush, MODE_CURVATURE, MODE_NEAREST, MODE_PAPER, MODE_SCALE_FREE};
-use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers, JITTER_RANDOM};
+use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers, JITTER_RANDOM, MARK_CHAIN};
 use ppm_vk_kernels::reflected;
 use ppm_vk_kernels::resolve::{self, ResolvePush};
 use ppm_vk_kernels::specialize::{self, KernelTiming, SceneConstants, MAX_INLINE_PRIMITIVES};
@@ -135,6 +135,8 @@ pub struct Renderer {
     passes: u64,
     emitted: u64,
     ray_ms: f64,
+    /// Pixels where the pilot took all its samples (`PilotMarks::pilot_all`).
+    pilot_all: u32,
     probe_report: Option<ProbeReport>,
     cancel: CancelToken,
     /// What a checkpoint records the render is of.
@@ -603,6 +605,7 @@ impl Renderer {
                 passes: 0,
                 emitted: 0,
                 ray_ms: 0.0,
+                pilot_all: 0,
                 ctx: ctx.clone(),
                 settings,
                 gpu,
@@ -658,6 +661,7 @@ impl Renderer {
         self.path_counters()?;
         let (width, height) = (self.gpu.params.width, self.gpu.params.height);
         let mut busy: Vec<u32> = self.download(&self.busy, self.gpu.pixels(), "reading the pilot's marks")?;
+        self.pilot_all = busy.iter().filter(|&&m| m & MARK_CHAIN != 0).count() as u32;
         spread_marks(&mut busy, width, height);
         self.ctx
             .upload(&self.busy, bytemuck::cast_slice(&busy))
@@ -742,8 +746,9 @@ impl Renderer {
         };
         let pilot = eye_pass == 0;
         let (marked, unmarked) = (self.settings.emission_samples, self.settings.unmarked_samples());
-        // The pilot takes `marked` samples in every pixel (it only marks); other passes as many dispatches
-        // as the more numerous of the two counts needs.
+        // The pilot takes up to `marked` samples in a pixel (it only marks: `pilot_samples` in every pixel,
+        // the rest where those met a mirror or glass, ray.comp); other passes as many dispatches as the more
+        // numerous of the two counts needs.
         let total = if pilot { marked } else { marked.max(unmarked) };
         let per = self.limits.emission_per_dispatch.max(1);
         let push = |chunk: u32| RayPush {
@@ -755,6 +760,7 @@ impl Renderer {
             chunk,
             pilot: pilot as u32,
             light_samples: unmarked,
+            pilot_samples: self.settings.pilot_samples,
             per_dispatch: per,
             // The whole image; `ray_pass` sets each tile's.
             first_pixel: 0,
@@ -1458,7 +1464,10 @@ impl Renderer {
     /// What the pilot eye pass marked (read back from the device).
     pub fn pilot_marks(&self) -> anyhow::Result<PilotMarks> {
         let busy: Vec<u32> = self.download(&self.busy, self.gpu.pixels(), "reading the pilot's marks")?;
-        Ok(PilotMarks::new(&busy))
+        Ok(PilotMarks {
+            pilot_all: self.pilot_all,
+            ..PilotMarks::new(&busy)
+        })
     }
 
     /// GPU time of the ray pass, in milliseconds.
@@ -1730,7 +1739,11 @@ impl Renderer {
 pub fn spread_marks(marks: &mut [u32], width: u32, height: u32) {
     let (w, h) = (width as usize, height as usize);
     // The pilot's own marks, taken before any is added: the spread does not chain. Each kind of mark
-    // (reference::MARK_EMISSION, MARK_LIT, MARK_ROUGH) spreads on its own.
+    // (reference::MARK_EMISSION, MARK_LIT, MARK_ROUGH) spreads on its own; MARK_CHAIN, the pilot's note
+    // to itself, is dropped.
+    for m in marks.iter_mut() {
+        *m &= !MARK_CHAIN;
+    }
     let seeds: Vec<(usize, u32)> = (0..marks.len())
         .filter(|&i| marks[i] != 0)
         .map(|i| (i, marks[i]))

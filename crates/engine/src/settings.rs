@@ -134,6 +134,16 @@ pub struct Settings {
     /// and glass (ray.comp): the light's edges and its images get this many more samples than the photon
     /// estimate's one hit point per pixel. 0: only the hit-point path's own sample.
     pub emission_samples: u32,
+    /// Emission paths per pixel of the pilot eye pass (pass 0), which only marks the pixels that take
+    /// `emission_samples` (and, with light sampling, those where a shadow ray reached a light). Where one
+    /// of them leaves a mirror, smooth glass or a smooth coat the pilot takes all `emission_samples` there
+    /// (what such a chain shows of a light can be an image a pixel wide). Fewer make the set-up faster
+    /// and miss more of the light's smallest images seen straight, whose pixels then take
+    /// `light_samples`. The marks choose how many samples a pixel takes, never what they estimate: no
+    /// bias either way. At least `emission_samples`: every pixel takes them all (the rule before). See
+    /// [`DEFAULT_PILOT_SAMPLES`].
+    #[serde(default = "default_pilot_samples")]
+    pub pilot_samples: u32,
     /// Direct light by light sampling (the default) or by the photons.
     #[serde(default = "default_direct")]
     pub direct: DirectLight,
@@ -202,6 +212,7 @@ impl Default for Settings {
             max_eye_depth: 1024,
             max_photon_depth: 4096,
             emission_samples: 16,
+            pilot_samples: DEFAULT_PILOT_SAMPLES,
             direct: default_direct(),
             light_samples: default_light_samples(),
             glossy_hits: Some(DEFAULT_GLOSSY_ALPHA),
@@ -260,6 +271,16 @@ pub const DEFAULT_ROUGH_SPLITS: u32 = 4;
 
 fn default_rough_splits() -> u32 {
     DEFAULT_ROUGH_SPLITS
+}
+
+/// `Settings::pilot_samples`'s default (docs/performance.md, "The pilot's samples"): at equal passes the
+/// same error as all 16 on cornell-spheres, glass-on-table, cornell-aniso and penumbra, 2% more on the
+/// interior, for a pilot eye pass 0.7x as long there (0.1x on cornell-spheres); 2 costs the interior
+/// and textured-light 3-4%.
+pub const DEFAULT_PILOT_SAMPLES: u32 = 4;
+
+fn default_pilot_samples() -> u32 {
+    DEFAULT_PILOT_SAMPLES
 }
 
 fn default_light_samples() -> u32 {
@@ -400,6 +421,12 @@ impl Settings {
                     format!("the least roughness (alpha) of a glossy hit point must be finite and >= 0, got {a}"),
                 ));
             }
+        }
+        if !(1..=MAX_EMISSION_SAMPLES).contains(&self.pilot_samples) {
+            return Err(invalid(
+                "pilot_samples",
+                format!("must be 1..={MAX_EMISSION_SAMPLES}, got {}", self.pilot_samples),
+            ));
         }
         if self.emission_samples > MAX_EMISSION_SAMPLES {
             return Err(invalid(

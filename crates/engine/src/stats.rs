@@ -120,6 +120,11 @@ pub struct PilotMarks {
     pub rough: u32,
     /// Pixels with MARK_EMISSION or MARK_ROUGH: those that take all the emission samples.
     pub all_samples: u32,
+    /// Pixels where the pilot itself took all the emission samples, not only `Settings::pilot_samples`:
+    /// one of those met a mirror or glass (ray.comp's MARK_CHAIN). 0 after a resume (the checkpoint keeps
+    /// the marks, not the pilot's own count) and from `new`.
+    #[serde(default)]
+    pub pilot_all: u32,
 }
 
 impl PilotMarks {
@@ -132,6 +137,7 @@ impl PilotMarks {
             lit: count(MARK_LIT),
             rough: count(MARK_ROUGH),
             all_samples: count(MARK_EMISSION | MARK_ROUGH),
+            pilot_all: 0,
         }
     }
 }

@@ -26,8 +26,11 @@ pub struct RayPush {
     /// 1: eye pass 0, a pilot whose emission samples only mark the pixels that need them (ray.comp).
     pub pilot: u32,
     /// Emission samples (with direct light sampled: light samples too) per pixel the pilot did not mark;
-    /// `emission_samples` is the count in the pixels it marked (and in the pilot's).
+    /// `emission_samples` is the count in the pixels it marked (and the pilot's most).
     pub light_samples: u32,
+    /// The pilot's samples in every pixel; it takes the rest of `emission_samples` only where one of them
+    /// met a mirror, smooth glass or a smooth coat ([`MARK_CHAIN`]).
+    pub pilot_samples: u32,
     /// Samples per pixel one dispatch takes: dispatch `chunk` takes samples `chunk * per_dispatch` on.
     pub per_dispatch: u32,
     /// The dispatch's first pixel and its pixel count: the bound per-pixel slices start there (the
@@ -44,6 +47,10 @@ pub const MARK_LIT: u32 = 2;
 /// A pilot mark: one of the pilot's paths sampled through a rough conductor or rough glass, in the pixel or
 /// beside it.
 pub const MARK_ROUGH: u32 = 4;
+/// The pilot's own bit, read only by its later dispatches: one of its paths in the pixel left a vertex by a
+/// mirror, smooth glass or a smooth coat, which can show a light as an image a pixel wide, so the pixel
+/// takes the pilot's whole count. The renderer clears it before the marks spread (`spread_marks`).
+pub const MARK_CHAIN: u32 = 8;
 
 /// `RayPush::jitter` for a random position in every pixel (SPPM's box filter).
 pub const JITTER_RANDOM: [f32; 2] = [-1.0, -1.0];

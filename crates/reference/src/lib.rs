@@ -298,22 +298,22 @@ fn eye_vertex(
     })
 }
 
+/// What ray.comp's emission samples saw, which the pilot marks a pixel by: `seen`, a path met an emitter's
+/// front that no shadow ray takes; `lit`, a shadow ray reached a light; `rough`, a path sampled through a
+/// rough conductor or rough glass; `chain`, a path left a mirror, smooth glass or a smooth coat.
+#[derive(Clone, Copy, Debug, Default)]
+struct SampleMarks {
+    seen: bool,
+    lit: bool,
+    rough: bool,
+    chain: bool,
+}
+
 /// One emission eye sample of ray.comp's `emission_sample`: the emission met along the specular chain
 /// through a random point of the pixel, one Fresnel branch chosen with probability f, and with direct light
 /// sampled (`RenderParams::direct_light`) term (d) at its diffuse end. `cut` counts a path ended at the
-/// depth backstop; `seen` is set if the path met an emitter's front, `lit` if its shadow ray reached a
-/// light, `rough` if it sampled through a rough conductor or rough glass.
-#[allow(clippy::too_many_arguments)]
-fn emission_sample(
-    g: &GpuScene,
-    px: u32,
-    py: u32,
-    rng: &mut Rng,
-    cut: &mut u32,
-    seen: &mut bool,
-    lit: &mut bool,
-    rough: &mut bool,
-) -> Vec3 {
+/// depth backstop; `marks` gathers what the pilot marks by (`SampleMarks`).
+fn emission_sample(g: &GpuScene, px: u32, py: u32, rng: &mut Rng, cut: &mut u32, marks: &mut SampleMarks) -> Vec3 {
     let j = [rng.float(), rng.float()];
     let mut o = v3(g.params.eye);
     let mut d = camera_ray(g, px, py, j);
@@ -326,6 +326,8 @@ fn emission_sample(
     // Where d left a rough vertex: its lobe's density of d and the vertex (glossy_light.glsl); 0 else.
     let (mut lobe_pdf, mut lobe_from) = (0f32, Vec3::ZERO);
     for depth in 0.. {
+        // Past the first vertex without a lobe's density: the path left a mirror, glass or a smooth coat.
+        marks.chain |= depth > 0 && !(lobe_pdf > 0.0);
         let mut out = false;
         let Some(EyeVertex {
             h,
@@ -340,7 +342,7 @@ fn emission_sample(
         else {
             if out {
                 let e = thr * escaped(g, d) * glossy_light::escape_weight(g, lobe_pdf, d);
-                *seen |= e.max_element() > 0.0 && !(lobe_pdf > 0.0);
+                marks.seen |= e.max_element() > 0.0 && !(lobe_pdf > 0.0);
                 sum += e;
             }
             break;
@@ -353,10 +355,10 @@ fn emission_sample(
             } else {
                 Vec3::ZERO
             };
-            *seen |= e.max_element() > 0.0 && !(lobe_in > 0.0);
+            marks.seen |= e.max_element() > 0.0 && !(lobe_in > 0.0);
             if g.params.direct_light != 0 {
                 let l = direct_diffuse(g, h.pos, nf, ng, v3(m.color), None, &bump, rng);
-                *lit |= l.max_element() > 0.0;
+                marks.lit |= l.max_element() > 0.0;
                 e += thr * l;
             }
             return sum + e;
@@ -366,7 +368,7 @@ fn emission_sample(
             let mut e = Vec3::ZERO;
             if g.params.direct_light != 0 {
                 let l = direct_light(g, h.pos, nf, ng, v3(m.color), None, Some((m, -d)), &bump, rng);
-                *lit |= l.max_element() > 0.0;
+                marks.lit |= l.max_element() > 0.0;
                 e = thr * l;
             }
             return sum + e;
@@ -382,14 +384,14 @@ fn emission_sample(
             let (coat_d, spec, diff) = plastic::plastic_lobes(g, m, nf, rng, d);
             if g.params.direct_light != 0 {
                 let l = direct_diffuse(g, h.pos, nf, ng, diff, Some(m), &bump, rng);
-                *lit |= l.max_element() > 0.0;
+                marks.lit |= l.max_element() > 0.0;
                 sum += thr * l;
             }
             // A rough coat is a rough vertex: its shadow ray, then the lobe's (glossy_light.glsl).
             let wo = -d;
             let rough = glossy_light::rough_coat(m);
             if rough {
-                sum += thr * glossy_light::rough_light(g, m, &h, nf, ng, front, wo, &bump, rng, lit);
+                sum += thr * glossy_light::rough_light(g, m, &h, nf, ng, front, wo, &bump, rng, &mut marks.lit);
             }
             thr *= spec;
             d = coat_d;
@@ -409,8 +411,8 @@ fn emission_sample(
         if glossy_light::rough_vertex(g, m) {
             // The light this vertex reflects straight from an emitter by a shadow ray, then the lobe.
             let wo = -d;
-            *rough = true;
-            sum += thr * glossy_light::rough_light(g, m, &h, nf, ng, front, wo, &bump, rng, lit);
+            marks.rough = true;
+            sum += thr * glossy_light::rough_light(g, m, &h, nf, ng, front, wo, &bump, rng, &mut marks.lit);
             let (o2, d2, w) = rough_bounce(g, m, &h, nf, front, rng, d).expect("a rough surface");
             (o, d) = (o2, d2);
             thr *= w;
@@ -437,7 +439,7 @@ pub struct EyePass {
 }
 
 /// The pilot's marks (ray.comp's `busy`), as the kernel's binding defines them.
-pub use ppm_vk_kernels::ray::{MARK_EMISSION, MARK_LIT, MARK_ROUGH};
+pub use ppm_vk_kernels::ray::{MARK_CHAIN, MARK_EMISSION, MARK_LIT, MARK_ROUGH};
 
 /// ray.comp's count of emission-sample paths a pixel takes per eye pass after the pilot, from its marks:
 /// `emission` where the pilot saw emission or sampled through a rough lobe; with direct light sampled,
@@ -757,17 +759,27 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
         };
         let first = push.chunk * push.per_dispatch;
         let want = total.saturating_sub(first).min(push.per_dispatch);
-        let (mut seen, mut lit, mut rough) = (false, false, false);
-        for _ in 0..want {
-            let e = emission_sample(g, px, py, &mut rng, &mut out.cut, &mut seen, &mut lit, &mut rough);
+        // The pilot: `pilot_samples` in every pixel, the rest only where a path left a mirror or glass.
+        let mut marks = SampleMarks {
+            chain: pilot && busy[pixel as usize] & MARK_CHAIN != 0,
+            ..Default::default()
+        };
+        for s in 0..want {
+            if pilot && first + s >= push.pilot_samples && !marks.chain {
+                break;
+            }
+            let e = emission_sample(g, px, py, &mut rng, &mut out.cut, &mut marks);
             if !pilot {
                 emitted += e.as_dvec3();
                 samples += 1;
             }
         }
         if pilot {
-            busy[pixel as usize] |=
-                (seen as u32 * MARK_EMISSION) | (lit as u32 * MARK_LIT) | (rough as u32 * MARK_ROUGH);
+            let bit = |on: bool, mark: u32| on as u32 * mark;
+            busy[pixel as usize] |= bit(marks.seen, MARK_EMISSION)
+                | bit(marks.lit, MARK_LIT)
+                | bit(marks.rough, MARK_ROUGH)
+                | bit(marks.chain, MARK_CHAIN);
         }
         if samples > 0 {
             out.direct[pixel as usize] = [emitted.x, emitted.y, emitted.z, samples as f64];
