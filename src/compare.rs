@@ -38,7 +38,7 @@ pub struct CompareArgs {
     #[arg(long, default_value_t = 10.0, value_parser = crate::parse_seconds)]
     time: f64,
     /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone". Words joined by
-    /// `+`: ppm, sppm, noprobe (every radius eq. 8's; the default is the curvature probe, probe-curv=1), probe, probe-sf, probe-nn[=K] (the k-nearest probe), probe-curv[=G] (the curvature probe, growing radii at most G times), pp=N (photons of the probe pass), cone[=K], beta=F, alpha=A, shrink=Z (the adaptive shrink's significance; noshrink: off), es=N (emission samples per pixel and pass), ps=N (the pilot's),
+    /// `+`: ppm, sppm, noprobe (every radius eq. 8's; the default is the curvature probe, probe-curv=1), probe, probe-sf, probe-nn[=K] (the k-nearest probe), probe-curv[=G] (the curvature probe, growing radii at most G times), pp=N (photons of the probe pass), cone[=K], beta=F, alpha=A, shrink=Z (the adaptive shrink's significance; noshrink: off), aim=S (the share of photons aimed at caustics), es=N (emission samples per pixel and pass), ps=N (the pilot's),
     /// rs=N (SPPM: lobe directions at the first rough vertex), gh=A (glossy hit points on rough conductors of alpha >= A), nogh (none), photons (direct light by the photons) or
     /// sample (by light sampling, the default), ls=N (light samples), gl=mis|bsdf|lights (the light rough
     /// vertices reflect straight from a light: both strategies, the default, or one of them).
@@ -122,6 +122,7 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
             "alpha" => s.alpha = number("alpha")?,
             "shrink" => s.shrink_z = number("shrink")?,
             "noshrink" => s.shrink_z = 0.0,
+            "aim" => s.caustic_photons = number("aim")?,
             "es" | "ls" | "ps" => {
                 let e = number(key)?;
                 if !(e >= 0.0 && e.fract() == 0.0) {
@@ -154,7 +155,7 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
             }
             other => bail!(
                 "variant {name:?}: unknown word {other:?} (ppm, sppm, noprobe, probe, probe-sf, probe-nn[=K], probe-curv[=G], pp=N, cone[=K], beta=F, alpha=A, \
-                 shrink=Z, noshrink, es=N, ps=N, ls=N, rs=N, gh=A, nogh, photons, sample, gl=mis|bsdf|lights)"
+                 shrink=Z, noshrink, aim=S, es=N, ps=N, ls=N, rs=N, gh=A, nogh, photons, sample, gl=mis|bsdf|lights)"
             ),
         }
     }
@@ -265,9 +266,10 @@ pub fn run(args: CompareArgs) -> Result<()> {
         let image = renderer.image()?;
         let wall = clock(excluded).as_secs_f64();
         curve.push((wall, compare(&image, &reference, None, true)?.rel_mse));
-        let stem = args.out.join(file_name(&v.name));
-        image.save(stem.with_extension("exr"))?;
-        image.save(stem.with_extension("png"))?;
+        // The extension appended, not set: `with_extension` would cut a name such as aim=0.25 at its dot.
+        let stem = file_name(&v.name);
+        image.save(args.out.join(format!("{stem}.exr")))?;
+        image.save(args.out.join(format!("{stem}.png")))?;
         let whole = compare(&image, &reference, None, true)?;
         let per_region: Vec<(String, ErrorStats)> = regions
             .iter()

@@ -244,6 +244,10 @@ pub(crate) struct SettingsArgs {
     /// shrinks to the one of least bias^2 + variance; 0 turns it off (eq. 3's shrink alone).
     #[arg(long, default_value_t = ppm_vk_engine::settings::DEFAULT_SHRINK_Z)]
     shrink_z: f32,
+    /// The share of every area light's photons aimed at what casts caustics (the mirrors, glass and rough
+    /// lobes sampled through), weighed so that the image stays unbiased; 0 (the default): none.
+    #[arg(long, default_value_t = ppm_vk_engine::settings::DEFAULT_CAUSTIC_PHOTONS)]
+    caustic_photons: f32,
     /// Cone filter (eq. 10-14): its constant k >= 1, or `off`.
     #[arg(long, default_value = "off", value_parser = parse_cone)]
     cone: Cone,
@@ -266,6 +270,7 @@ impl SettingsArgs {
             probe_k: self.probe_k,
             probe_grow: self.probe_grow,
             shrink_z: self.shrink_z,
+            caustic_photons: self.caustic_photons,
             cone_k: self.cone.0,
             emission_samples: self.emission_samples,
             pilot_samples: self.pilot_samples,

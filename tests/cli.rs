@@ -733,7 +733,7 @@ fn compare_writes_table_json_and_a_readable_plot() {
             "--photons-per-pass",
             "5000",
             "--variants",
-            "ppm; sppm",
+            "ppm; sppm+alpha=0.7",
             "--validate",
             "--peer",
         ])
@@ -753,8 +753,14 @@ fn compare_writes_table_json_and_a_readable_plot() {
             .iter()
             .map(|v| v["variant"].as_str().unwrap())
             .collect::<Vec<_>>(),
-        ["ppm", "sppm"]
+        ["ppm", "sppm+alpha=0.7"]
     );
+    // Each variant's image, named after it whole (a dot in a number does not start its extension).
+    for name in ["ppm", "sppm_alpha_0.7"] {
+        for ext in ["exr", "png"] {
+            assert!(dir.join(format!("{name}.{ext}")).is_file(), "no {name}.{ext}");
+        }
+    }
     for v in variants {
         // Equal time: each variant's clock (set-up excluded) reaches --time and stops after one more pass.
         let (wall, setup) = (v["wall_s"].as_f64().unwrap(), v["setup_s"].as_f64().unwrap());
@@ -769,7 +775,7 @@ fn compare_writes_table_json_and_a_readable_plot() {
     }
     let table = std::fs::read_to_string(dir.join("compare.md")).unwrap();
     assert!(
-        table.contains("| ppm |") && table.contains("| sppm |") && table.contains("caustic relMSE"),
+        table.contains("| ppm |") && table.contains("| sppm+alpha=0.7 |") && table.contains("caustic relMSE"),
         "{table}"
     );
 
@@ -783,7 +789,7 @@ fn compare_writes_table_json_and_a_readable_plot() {
     for label in ["0.5", "1", "2", "0.2"] {
         assert!(texts.contains(&label), "no tick label {label} in {texts:?}");
     }
-    for label in ["ppm", "sppm", "other"] {
+    for label in ["ppm", "sppm+alpha=0.7", "other"] {
         assert!(texts.contains(&label), "no legend entry {label} in {texts:?}");
     }
     // One polyline per variant (the axes and ticks are 1 px wide, the variants' lines 2 px).

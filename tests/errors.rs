@@ -94,6 +94,22 @@ fn settings_out_of_range_and_device_limits_are_told_apart() {
             other => panic!("expected Error::Settings for shrink_z {z}, got {:?}", other.err()),
         }
     }
+    for share in [-0.1, 0.96, 1.0, f32::NAN] {
+        let settings = Settings {
+            caustic_photons: share,
+            ..Settings::default()
+        };
+        match Renderer::new(&ctx, &cornell(8, 8), settings) {
+            Err(Error::Settings {
+                field: "caustic_photons",
+                ..
+            }) => {}
+            other => panic!(
+                "expected Error::Settings for caustic_photons {share}, got {:?}",
+                other.err()
+            ),
+        }
+    }
     for n in [0, ppm_vk_engine::settings::MAX_EMISSION_SAMPLES + 1] {
         let settings = Settings {
             pilot_samples: n,

@@ -96,6 +96,7 @@ class Renderer:
         probe_k: float = ...,
         probe_grow: float = ...,
         shrink_z: float = ...,
+        caustic_photons: float = ...,
         hit_slots: int = ...,
         rough_splits: int = ...,
         max_eye_depth: int = ...,

@@ -187,6 +187,10 @@ struct RenderParams {
     uint glossy_light;      // GLOSSY_LIGHT_*: how eye paths take the light their rough vertices reflect
     uint rough_split;       // 1 (SPPM): the hit slots are for the first rough vertex's lobe directions, and
                             // glass, panes and plastics take one branch; 0 (PPM): those split while slots last
+    uint num_targets;       // spheres around what casts caustics, which emitted photons are aimed at
+                            // (photon/targets.glsl); 0: none, every photon leaves by the cosine
+    float target_share;     // the share of an area light's photons aimed at them
+    vec4 targets[8];        // MAX_TARGETS of them: centre, radius
 };
 
 // RenderParams.glossy_light (ray/glossy_light.glsl): the light a rough vertex reflects straight from an

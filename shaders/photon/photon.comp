@@ -45,6 +45,7 @@ layout(push_constant) uniform PhotonPush {
 #include "grid.glsl"
 #include "invocation.glsl"
 #include "lights.glsl"
+#include "targets.glsl"
 
 // Variants that `ppm-vk bench` times against this kernel to show where a step's time goes
 // (Renderer::photon_breakdown); never rendered with. PHOTON_NO_STORE: the append reserves its slots but
@@ -121,6 +122,7 @@ void main() {
     vec3 o, d, flux;
     vec3 lobe;               // the normal a direction is still to be drawn about (pending)
     bool pending = false;
+    bool aim = false;        // the pending direction is an emitted photon's (targets.glsl)
     // The last vertex's normals, true and shading (shading.glsl): d must lie on the same side of both, and
     // with `leave` the photon takes shading_out along d (not after a diffuse bounce, drawn about vng).
     vec3 vng, vns;
@@ -182,6 +184,7 @@ void main() {
                 pending = true;
                 flux = e.flux * emitter_radiance(e, a, b);
             }
+            aim = pending;
             leave = false;
             depth = 0u;
             alive = true;
@@ -189,8 +192,17 @@ void main() {
         if (pending) {
             float u1 = rng_float(rng);
             float u2 = rng_float(rng);
-            d = cosine_direction(lobe, u1, u2);
+            float w = 1.0;
+            if (HAS_TARGETS && aim && params.num_targets > 0u) {
+                // Maybe aimed at what casts caustics, the flux weighed by the mixture's density.
+                d = aimed_direction(o, lobe, u1, u2, rng_float(rng), w);
+                flux *= w;
+            } else {
+                d = cosine_direction(lobe, u1, u2);
+            }
             pending = false;
+            aim = false;
+            if (!(w > 0.0)) { alive = false; continue; } // below the light: it carries nothing
         }
         if (HAS_SHADING_NORMALS) {
             if (!shading_valid(d, vng, vns)) { alive = false; continue; }

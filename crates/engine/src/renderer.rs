@@ -1784,6 +1784,7 @@ fn trace_constants(gpu: &GpuScene, settings: &Settings) -> Option<String> {
             anisotropic: gpu.materials.iter().any(|m| m.alpha_u != m.alpha_v),
             normal_maps: gpu.materials.iter().any(|m| m.normal_map != 0),
             masks: gpu.materials.iter().any(|m| m.opacity != 0),
+            targets: gpu.params.num_targets > 0,
             light_kinds: gpu.light_kinds,
         })
     })

@@ -113,6 +113,12 @@ pub struct Settings {
     /// (eq. 3 alone). See [`DEFAULT_SHRINK_Z`].
     #[serde(default = "default_shrink_z")]
     pub shrink_z: f32,
+    /// The share of every area light's photons aimed at what casts caustics (a sphere around the mirrors,
+    /// glass and lobes sampled through of each material, photon/targets.glsl), each photon weighed by the
+    /// mixture's density so that the light it carries stays the light's: more photons make the caustics,
+    /// fewer the rest. 0: every photon leaves by the cosine; less than 1. See [`DEFAULT_CAUSTIC_PHOTONS`].
+    #[serde(default = "default_caustic_photons")]
+    pub caustic_photons: f32,
     /// Hit points per pixel in PPM: glass splits an eye path into both Fresnel branches up to this many
     /// leaves.
     pub hit_slots: u32,
@@ -207,6 +213,7 @@ impl Default for Settings {
             probe_k: DEFAULT_PROBE_K,
             probe_grow: DEFAULT_PROBE_GROW,
             shrink_z: DEFAULT_SHRINK_Z,
+            caustic_photons: DEFAULT_CAUSTIC_PHOTONS,
             hit_slots: 4,
             rough_splits: default_rough_splits(),
             max_eye_depth: 1024,
@@ -244,6 +251,13 @@ pub const DEFAULT_SHRINK_Z: f32 = 2.0;
 
 fn default_shrink_z() -> f32 {
     DEFAULT_SHRINK_Z
+}
+
+/// `Settings::caustic_photons`'s default.
+pub const DEFAULT_CAUSTIC_PHOTONS: f32 = 0.0;
+
+fn default_caustic_photons() -> f32 {
+    DEFAULT_CAUSTIC_PHOTONS
 }
 
 /// `Settings::probe_k`'s default.
@@ -336,6 +350,15 @@ impl Settings {
             return Err(invalid(
                 "shrink_z",
                 format!("must be finite and >= 0 (0: off), got {}", self.shrink_z),
+            ));
+        }
+        if !(0.0..=0.95).contains(&self.caustic_photons) {
+            return Err(invalid(
+                "caustic_photons",
+                format!(
+                    "the share of photons aimed at caustics must be in 0..=0.95, got {}",
+                    self.caustic_photons
+                ),
             ));
         }
         if let Some(k) = self.cone_k {

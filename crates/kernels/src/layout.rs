@@ -251,7 +251,15 @@ pub struct RenderParams {
     /// 1 (SPPM): the hit slots are for the lobe directions an eye path's first rough vertex splits it into,
     /// and glass, panes and plastics take one branch (ray.comp); 0 (PPM): those split while slots last.
     pub rough_split: u32,
+    /// Spheres around what casts caustics, which emitted photons are aimed at (photon/targets.glsl): the
+    /// first `num_targets` of `targets`, centre and radius each; 0 where none or `target_share` is 0.
+    pub num_targets: u32,
+    /// The share of an area light's photons aimed at them (`Settings::caustic_photons`).
+    pub target_share: f32,
+    pub targets: [[f32; 4]; MAX_TARGETS],
 }
+/// The most spheres photons are aimed at (`RenderParams::targets`; more casting materials share one).
+pub const MAX_TARGETS: usize = 8;
 gpu_struct!(RenderParams {
     eye,
     tan_half_fov,
@@ -284,7 +292,10 @@ gpu_struct!(RenderParams {
     masks,
     light_power,
     glossy_light,
-    rough_split
+    rough_split,
+    num_targets,
+    target_share,
+    targets
 });
 
 #[repr(C)]

@@ -55,6 +55,9 @@ pub struct SceneConstants<'a> {
     /// Whether any material is masked (materials/mask.glsl): without one the intersection loops and the
     /// traversal take every hit.
     pub masks: bool,
+    /// Whether emitted photons are aimed at what casts caustics (photon/targets.glsl): without it no
+    /// emission draws the choice.
+    pub targets: bool,
     /// The kinds of light in `lights`, as bits `1 << LIGHT_*`: lights.glsl leaves out the code of glowing
     /// spheres, delta lights (point, spot, directional) and environments where there are none.
     pub light_kinds: u32,
@@ -114,6 +117,7 @@ pub fn scene_constants(c: &SceneConstants) -> String {
     s += &format!("const bool SCENE_ANISOTROPIC = {};\n", c.anisotropic);
     s += &format!("const bool SCENE_NORMAL_MAPS = {};\n", c.normal_maps);
     s += &format!("const bool SCENE_MASKS = {};\n", c.masks);
+    s += &format!("const bool SCENE_TARGETS = {};\n", c.targets);
     let kind = |k: u32| c.light_kinds & (1 << k) != 0;
     s += &format!(
         "const bool SCENE_SPHERE_LIGHTS = {};\nconst bool SCENE_DELTA_LIGHTS = {};\nconst bool SCENE_ENVIRONMENT = {};\n",

@@ -25,6 +25,7 @@ pub use ppm_vk_materials::rng;
 pub mod rough_conductor;
 pub mod rough_dielectric;
 pub mod shading;
+pub mod targets;
 pub mod texture;
 pub mod thin_dielectric;
 pub mod trace;
@@ -797,23 +798,24 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
     let a = rng.float();
     let b = rng.float();
     let (mut o, mut d, mut flux);
+    let mut w = 1.0f32;
     if !is_area(&e) {
         // lights.glsl's emit_photon: a sphere gives its point and normal, for the cosine draw below.
         let (o2, dir, f, direction_given) = lights::emit_photon(g, &e, a, b, &mut rng);
         (o, flux) = (o2, f);
-        d = if direction_given {
-            dir
-        } else {
-            let u1 = rng.float();
-            let u2 = rng.float();
-            cosine_direction(dir, u1, u2)
-        };
+        d = dir;
+        if !direction_given {
+            (d, w) = targets::emit(&g.params, o, dir, &mut rng);
+            flux *= w;
+        }
     } else {
         o = offset_ray(g, emitter_point(&e, a, b), e.normal);
-        let u1 = rng.float();
-        let u2 = rng.float();
-        d = cosine_direction(e.normal, u1, u2);
-        flux = e.flux * emitter_radiance(g, &e, a, b);
+        (d, w) = targets::emit(&g.params, o, e.normal, &mut rng);
+        flux = e.flux * emitter_radiance(g, &e, a, b) * w;
+    }
+    // photon.comp: a photon aimed below its light carries nothing and ends.
+    if !(w > 0.0) {
+        return true;
     }
     // photon.comp's `capped`, without its count.
     let cap = |f: Vec3| shading::capped(f, p.flux_fixed).0;

@@ -19,6 +19,7 @@ use crate::settings::{GlossyLight, Settings};
 mod grid;
 mod lights;
 mod materials;
+mod targets;
 mod textures;
 
 pub use grid::{default_radius, grid_buckets, CELL_PER_RADIUS};
@@ -88,7 +89,15 @@ impl GpuScene {
         let built = triangles(scene)?;
         let triangle_texels = textures::triangle_texels(scene, &built.triangles);
         let table = lights::lights(scene, &built.triangles, &triangle_texels, &texture_at, &mut textures)?;
-        let flux_fixed = lights::flux_fixed(scene, table.max_flux)?;
+        let glossy_alpha = settings.glossy_hits.unwrap_or(f32::MAX);
+        // Photons aimed at what casts caustics (targets.rs) leave with up to 1 / (1 - share) of their
+        // light's flux (photon/targets.glsl).
+        let aim = match settings.caustic_photons {
+            s if s > 0.0 => targets::targets(&materials, &spheres, &quads, &built.triangles, glossy_alpha),
+            _ => Vec::new(),
+        };
+        let share = if aim.is_empty() { 0.0 } else { settings.caustic_photons };
+        let flux_fixed = lights::flux_fixed(scene, table.max_flux / (1.0 - share as f64))?;
         let (lights, total_power, light_kinds) = (table.lights, table.total_power, table.kinds);
         let (lo, hi) = scene.bounds();
         let extent = (hi - lo).max_element();
@@ -118,7 +127,7 @@ impl GpuScene {
             seed: settings.seed,
             flux_fixed,
             direct_light: (settings.direct == crate::settings::DirectLight::Sample) as u32,
-            glossy_alpha: settings.glossy_hits.unwrap_or(f32::MAX),
+            glossy_alpha,
             masks: draws_mask_keys(scene) as u32,
             light_power: total_power.iter().sum::<f64>() as f32,
             glossy_light: match settings.glossy_light {
@@ -126,8 +135,11 @@ impl GpuScene {
                 GlossyLight::Bsdf => GLOSSY_LIGHT_BSDF,
                 GlossyLight::Lights => GLOSSY_LIGHT_LIGHTS,
             },
+            num_targets: aim.len() as u32,
+            target_share: share,
             ..Default::default()
         };
+        params.targets[..aim.len()].copy_from_slice(&aim);
         set_camera(&mut params, &scene.camera);
         // Small meshes are compiled into the tracing kernels with the spheres and quads (specialize.rs).
         let triangles_inline = settings.specialize
