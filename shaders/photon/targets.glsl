@@ -30,6 +30,16 @@ bool target_cone(uint k, vec3 o, out vec3 axis, out float cos_a, out float one_m
     return sin2 < 1.0;
 }
 
+// Target k's term of the mixture's density at d (none past params.num_targets): its share of the choice
+// goes to the cosine where it holds o, else the cone's density 1 / W_k where d is in its cone.
+void target_density(uint k, vec3 o, vec3 d, inout float cosine, inout float cones) {
+    if (k >= params.num_targets) return;
+    vec3 axis;
+    float cos_a, one_minus;
+    if (!target_cone(k, o, axis, cos_a, one_minus)) cosine += params.target_share / float(params.num_targets);
+    else if (dot(d, axis) >= cos_a) cones += 1.0 / (2.0 * PI * one_minus);
+}
+
 // The direction an emitted photon leaves o along (n: the light's normal there), from the uniform numbers
 // u1, u2 (the direction) and c (the choice); `w` the weight its flux takes.
 vec3 aimed_direction(vec3 o, vec3 n, float u1, float u2, float c, out float w) {
@@ -53,13 +63,17 @@ vec3 aimed_direction(vec3 o, vec3 n, float u1, float u2, float c, out float w) {
     if (!(cos_n > 0.0)) { w = 0.0; return d; }
     float cosine = 1.0 - s;
     float cones = 0.0;
-    for (uint k = 0u; k < count; k++) {
-        vec3 axis;
-        float cos_a, one_minus;
-        bool outside = target_cone(k, o, axis, cos_a, one_minus);
-        if (!outside) cosine += s / float(count);
-        else if (dot(d, axis) >= cos_a) cones += 1.0 / (2.0 * PI * one_minus);
-    }
+    // Written out for each of the MAX_TARGETS, not a loop: lavapipe counts every loop's iterations against
+    // the SIMD group's budget, which photon.comp's PATH_STEP_LOOPS accounts for (and runs this on every
+    // step of the path, under an empty mask where no lane emits).
+    target_density(0u, o, d, cosine, cones);
+    target_density(1u, o, d, cosine, cones);
+    target_density(2u, o, d, cosine, cones);
+    target_density(3u, o, d, cosine, cones);
+    target_density(4u, o, d, cosine, cones);
+    target_density(5u, o, d, cosine, cones);
+    target_density(6u, o, d, cosine, cones);
+    target_density(7u, o, d, cosine, cones);
     // (cos / pi) / p(d)
     w = cos_n / (cosine * cos_n + PI * s / float(count) * cones);
     return d;

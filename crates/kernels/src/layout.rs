@@ -259,6 +259,7 @@ pub struct RenderParams {
     pub targets: [[f32; 4]; MAX_TARGETS],
 }
 /// The most spheres photons are aimed at (`RenderParams::targets`; more casting materials share one).
+/// types.glsl sizes the array and photon/targets.glsl writes the density's term out once for each.
 pub const MAX_TARGETS: usize = 8;
 gpu_struct!(RenderParams {
     eye,
