@@ -147,6 +147,8 @@ struct CaseResult {
     /// The first warm-up pass's wall time: with the set-up, what the first image of a new scene costs
     /// (on lavapipe it compiles the photon-stage kernels at their first dispatch).
     first_pass_wall_ms: Option<f64>,
+    /// What the pilot eye pass marked: pixels of each mark, and those where the pilot took all its samples.
+    pilot_marks: ppm_vk_engine::PilotMarks,
     stage_ms_median: BTreeMap<&'static str, f64>,
     pass_wall_ms_median: f64,
     pass_wall_ms_all: Vec<f64>,
@@ -366,6 +368,7 @@ fn measure(args: &BenchArgs, ctx: &Context, scene_path: &Path, scene: &Scene, ph
         ray_ms: renderer.ray_ms(),
         setup: renderer.setup_times().clone(),
         first_pass_wall_ms,
+        pilot_marks: renderer.pilot_marks()?,
         pass_wall_ms_median: wall,
         pass_wall_ms_all: measured.iter().map(|p| p.wall_ms).collect(),
         resolve_ms_median: resolve_ms,

@@ -261,6 +261,11 @@ fn bench_writes_cases_with_stages_and_memory() {
             "{setup}"
         );
         assert!(c["first_pass_wall_ms"].as_f64().unwrap() > 0.0, "{c}");
+        // The pilot's marks: every pixel counted, some lit (the test scene's light reaches most of it).
+        let marks = &c["pilot_marks"];
+        let pixels = c["width"].as_u64().unwrap() * c["height"].as_u64().unwrap();
+        assert_eq!(marks["pixels"].as_u64(), Some(pixels), "{marks}");
+        assert!(marks["lit"].as_u64().unwrap() > 0, "{marks}");
     }
     // The second case compiles nothing: the first left every kernel compiled for the scene in the cache.
     let second = cases[1]["setup"]["kernels"].as_array().unwrap();
