@@ -8,24 +8,15 @@ mod common;
 
 use common::*;
 use ppm_vk_engine::metrics::{compare, Reference, Region};
-use ppm_vk_engine::{Renderer, RgbImage, Scene, Settings};
+use ppm_vk_engine::{RgbImage, Scene, Settings};
 
 fn render_aimed(scene: &Scene, share: f32, passes: u32) -> RgbImage {
-    let ctx = ctx();
     let settings = Settings {
         photons_per_pass: 250_000,
         caustic_photons: share,
         ..Settings::default()
     };
-    let mut r = Renderer::new(&ctx, scene, settings).unwrap_or_else(|e| panic!("{e:#}"));
-    for _ in 0..passes {
-        r.pass().unwrap();
-    }
-    let image = r.image().unwrap();
-    drop(r);
-    assert_clean(&ctx);
-    assert_eq!(image.count_non_finite(), 0);
-    image
+    render_clean(scene, settings, passes)
 }
 
 #[test]

@@ -64,63 +64,45 @@ fn a_missing_file_is_an_io_error_with_its_path() {
 #[test]
 fn settings_out_of_range_and_device_limits_are_told_apart() {
     let ctx = ctx();
-    let settings = Settings {
-        alpha: 1.5,
-        ..Settings::default()
+    // Each setting out of its range is refused before any work, the error naming its field.
+    let refused = |field: &str, value: String, settings: Settings| match Renderer::new(&ctx, &cornell(8, 8), settings) {
+        Err(Error::Settings { field: f, .. }) if f == field => {}
+        other => panic!("expected Error::Settings for {field} {value}, got {:?}", other.err()),
     };
-    match Renderer::new(&ctx, &cornell(8, 8), settings) {
-        Err(Error::Settings { field: "alpha", .. }) => {}
-        other => panic!("expected Error::Settings for alpha, got {:?}", other.err()),
-    }
+    let s = Settings::default;
+    refused("alpha", "1.5".into(), Settings { alpha: 1.5, ..s() });
     for grow in [0.5, 2.5, f32::NAN] {
-        let settings = Settings {
-            probe_grow: grow,
-            ..Settings::default()
-        };
-        match Renderer::new(&ctx, &cornell(8, 8), settings) {
-            Err(Error::Settings {
-                field: "probe_grow", ..
-            }) => {}
-            other => panic!("expected Error::Settings for probe_grow {grow}, got {:?}", other.err()),
-        }
+        refused(
+            "probe_grow",
+            grow.to_string(),
+            Settings {
+                probe_grow: grow,
+                ..s()
+            },
+        );
     }
     for z in [-1.0, f32::NAN, f32::INFINITY] {
-        let settings = Settings {
-            shrink_z: z,
-            ..Settings::default()
-        };
-        match Renderer::new(&ctx, &cornell(8, 8), settings) {
-            Err(Error::Settings { field: "shrink_z", .. }) => {}
-            other => panic!("expected Error::Settings for shrink_z {z}, got {:?}", other.err()),
-        }
+        refused("shrink_z", z.to_string(), Settings { shrink_z: z, ..s() });
     }
     for share in [-0.1, 0.96, 1.0, f32::NAN] {
-        let settings = Settings {
-            caustic_photons: share,
-            ..Settings::default()
-        };
-        match Renderer::new(&ctx, &cornell(8, 8), settings) {
-            Err(Error::Settings {
-                field: "caustic_photons",
-                ..
-            }) => {}
-            other => panic!(
-                "expected Error::Settings for caustic_photons {share}, got {:?}",
-                other.err()
-            ),
-        }
+        refused(
+            "caustic_photons",
+            share.to_string(),
+            Settings {
+                caustic_photons: share,
+                ..s()
+            },
+        );
     }
     for n in [0, ppm_vk_engine::settings::MAX_EMISSION_SAMPLES + 1] {
-        let settings = Settings {
-            pilot_samples: n,
-            ..Settings::default()
-        };
-        match Renderer::new(&ctx, &cornell(8, 8), settings) {
-            Err(Error::Settings {
-                field: "pilot_samples", ..
-            }) => {}
-            other => panic!("expected Error::Settings for pilot_samples {n}, got {:?}", other.err()),
-        }
+        refused(
+            "pilot_samples",
+            n.to_string(),
+            Settings {
+                pilot_samples: n,
+                ..s()
+            },
+        );
     }
     // 4096 x 4096 pixels with 8 hit points each: 2^27 hit points, 6 GiB of hit points alone, past the
     // device's memory (lavapipe: 2048 MiB). Per-pixel buffers are bound in tiles, so no one binding's

@@ -8,7 +8,7 @@ mod common;
 
 use common::*;
 use ppm_vk_engine::metrics::{compare, Reference, Region};
-use ppm_vk_engine::{Renderer, RgbImage, Scene, Settings};
+use ppm_vk_engine::{RgbImage, Scene, Settings};
 
 /// The torus's foot, in the reference's 256 x 256 pixels (docs/accuracy.md's region).
 fn torus() -> Region {
@@ -20,21 +20,12 @@ fn glass_on_table(w: u32) -> Scene {
 }
 
 fn render_with(scene: &Scene, shrink_z: f32, passes: u32) -> RgbImage {
-    let ctx = ctx();
     let settings = Settings {
         photons_per_pass: 250_000,
         shrink_z,
         ..Settings::default()
     };
-    let mut r = Renderer::new(&ctx, scene, settings).unwrap_or_else(|e| panic!("{e:#}"));
-    for _ in 0..passes {
-        r.pass().unwrap();
-    }
-    let image = r.image().unwrap();
-    drop(r);
-    assert_clean(&ctx);
-    assert_eq!(image.count_non_finite(), 0);
-    image
+    render_clean(scene, settings, passes)
 }
 
 #[test]

@@ -106,6 +106,16 @@ pub fn render(ctx: &Context, scene: &Scene, settings: ppm_vk_engine::Settings, p
     r.image().unwrap_or_else(|e| panic!("{e:#}"))
 }
 
+/// [`render`] on a context of its own, which must end with no validation message, and an image without
+/// a non-finite pixel.
+pub fn render_clean(scene: &Scene, settings: ppm_vk_engine::Settings, passes: u32) -> ppm_vk_engine::RgbImage {
+    let ctx = ctx();
+    let image = render(&ctx, scene, settings, passes);
+    assert_clean(&ctx);
+    assert_eq!(image.count_non_finite(), 0);
+    image
+}
+
 pub fn close(a: f64, b: f64, rel: f64, abs: f64) -> bool {
     (a - b).abs() <= rel * a.abs().max(b.abs()) + abs
 }
