@@ -38,7 +38,7 @@ pub struct CompareArgs {
     #[arg(long, default_value_t = 10.0, value_parser = crate::parse_seconds)]
     time: f64,
     /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone". Words joined by
-    /// `+`: ppm, sppm, noprobe (every radius eq. 8's; the default is the curvature probe, probe-curv=1), probe, probe-sf, probe-nn[=K] (the k-nearest probe), probe-curv[=G] (the curvature probe, growing radii at most G times), pp=N (photons of the probe pass), cone[=K], beta=F, alpha=A, shrink=Z (the adaptive shrink's significance; noshrink: off), aim=S (the share of photons aimed at caustics), es=N (emission samples per pixel and pass), ps=N (the pilot's),
+    /// `+`: ppm, sppm, noprobe (every radius eq. 8's; the default is the curvature probe, probe-curv=1), probe, probe-sf, probe-nn[=K] (the k-nearest probe), probe-curv[=G] (the curvature probe, growing radii at most G times), pp=N (photons of the probe pass), cone[=K], beta=F, alpha=A, shrink=Z (the adaptive shrink's significance; noshrink: off), aim=S (the share of photons aimed at caustics), es=N (emission samples per pixel and pass), ps=N (the pilot's), rsp=N (where a rough lobe is seen),
     /// rs=N (SPPM: lobe directions at the first rough vertex), gh=A (glossy hit points on rough conductors of alpha >= A), nogh (none), photons (direct light by the photons) or
     /// sample (by light sampling, the default), ls=N (light samples), gl=mis|bsdf|lights (the light rough
     /// vertices reflect straight from a light: both strategies, the default, or one of them).
@@ -123,14 +123,15 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
             "shrink" => s.shrink_z = number("shrink")?,
             "noshrink" => s.shrink_z = 0.0,
             "aim" => s.caustic_photons = number("aim")?,
-            "es" | "ls" | "ps" => {
+            "es" | "ls" | "ps" | "rsp" => {
                 let e = number(key)?;
                 if !(e >= 0.0 && e.fract() == 0.0) {
-                    bail!("variant {name:?}: {key} (emission, light or pilot samples) must be a whole number, got {e}");
+                    bail!("variant {name:?}: {key} (emission, light, pilot or rough-pixel samples) must be a whole number, got {e}");
                 }
                 match key {
                     "es" => s.emission_samples = e as u32,
                     "ps" => s.pilot_samples = e as u32,
+                    "rsp" => s.rough_samples = e as u32,
                     _ => s.light_samples = e as u32,
                 }
             }
@@ -155,7 +156,7 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
             }
             other => bail!(
                 "variant {name:?}: unknown word {other:?} (ppm, sppm, noprobe, probe, probe-sf, probe-nn[=K], probe-curv[=G], pp=N, cone[=K], beta=F, alpha=A, \
-                 shrink=Z, noshrink, aim=S, es=N, ps=N, ls=N, rs=N, gh=A, nogh, photons, sample, gl=mis|bsdf|lights)"
+                 shrink=Z, noshrink, aim=S, es=N, ps=N, rsp=N, ls=N, rs=N, gh=A, nogh, photons, sample, gl=mis|bsdf|lights)"
             ),
         }
     }

@@ -197,6 +197,11 @@ pub(crate) struct SettingsArgs {
     #[arg(long, default_value_t = Settings::default().pilot_samples,
           value_parser = clap::value_parser!(u32).range(1..=ppm_vk_engine::settings::MAX_EMISSION_SAMPLES as i64))]
     pilot_samples: u32,
+    /// Eye paths per pixel and pass where the pilot sampled through a rough lobe (rough metal, rough glass):
+    /// the light such a vertex reflects is the noisiest term there (at least --emission-samples).
+    #[arg(long, default_value_t = Settings::default().rough_samples,
+          value_parser = clap::value_parser!(u32).range(0..=ppm_vk_engine::settings::MAX_EMISSION_SAMPLES as i64))]
+    rough_samples: u32,
     /// Direct light: `sample` sends a shadow ray to a light at each emission sample's first diffuse point
     /// (light sampling; photons then leave no record where they first land), `photons` leaves it to the
     /// photons (the paper's estimator).
@@ -274,6 +279,7 @@ impl SettingsArgs {
             cone_k: self.cone.0,
             emission_samples: self.emission_samples,
             pilot_samples: self.pilot_samples,
+            rough_samples: self.rough_samples,
             direct: self.direct.into(),
             light_samples: self.light_samples,
             glossy_hits: self.glossy_hits.0,
@@ -945,7 +951,7 @@ fn render(args: RenderArgs) -> Result<Ended> {
     if let Some(last) = history.last() {
         let pixels = scene.camera.width as f64 * scene.camera.height as f64;
         let eye_paths = pixels
-            * (renderer.settings().slots(&scene) + renderer.settings().emission_samples).max(1) as f64
+            * (renderer.settings().slots(&scene) + renderer.settings().most_samples()).max(1) as f64
             * (renderer.passes() as f64 + 1.0);
         let photon_share = last.photon_paths_cut as f64 / last.emitted_total.max(1) as f64;
         let eye_share = last.eye_paths_cut as f64 / eye_paths;

@@ -18,6 +18,7 @@ fn settings() -> Settings {
         photons_per_pass: 4_000,
         seed: 5,
         emission_samples: 2,
+        rough_samples: 2,
         light_samples: 2,
         ..Settings::default()
     }

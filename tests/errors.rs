@@ -104,6 +104,15 @@ fn settings_out_of_range_and_device_limits_are_told_apart() {
             },
         );
     }
+    let n = ppm_vk_engine::settings::MAX_EMISSION_SAMPLES + 1;
+    refused(
+        "rough_samples",
+        n.to_string(),
+        Settings {
+            rough_samples: n,
+            ..s()
+        },
+    );
     // 4096 x 4096 pixels with 8 hit points each: 2^27 hit points, 6 GiB of hit points alone, past the
     // device's memory (lavapipe: 2048 MiB). Per-pixel buffers are bound in tiles, so no one binding's
     // range limits them: the memory does.

@@ -259,7 +259,7 @@ fn emission_passes_match_reference(r: &mut Renderer, direct_rel: f64) {
     for (i, d) in cpu.iter().enumerate() {
         assert_eq!(
             d[3],
-            reference::samples_for_mark(sampled, e, unmarked, busy[i]) as f64 + hit,
+            reference::samples_for_mark(sampled, e, r.settings().rough_pixel_samples(), unmarked, busy[i]) as f64 + hit,
             "pixel {i}: CPU sample count"
         );
     }
@@ -444,6 +444,18 @@ fn ray_pass_matches_reference_with_glossy_hit_points() {
 #[test]
 fn ray_pass_matches_reference_with_anisotropic_surfaces() {
     ray_pass_matches_reference_on(cornell_aniso(), true, DirectLight::Sample);
+}
+
+/// More eye paths where the pilot saw a rough lobe (`Settings::rough_samples` above `emission_samples`):
+/// the count per mark, and the sums, as the twin's.
+#[test]
+fn ray_pass_matches_reference_with_more_samples_through_rough_lobes() {
+    let settings = Settings {
+        rough_samples: 24,
+        ..settings()
+    };
+    assert_eq!(settings.rough_pixel_samples(), 24);
+    ray_pass_matches_reference_with(cornell_aniso(), settings);
 }
 
 #[test]

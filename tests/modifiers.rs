@@ -17,6 +17,7 @@ fn settings() -> Settings {
         photons_per_pass: 4_000,
         seed: 11,
         emission_samples: 2,
+        rough_samples: 2,
         light_samples: 2,
         ..Settings::default()
     }

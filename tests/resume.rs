@@ -18,6 +18,7 @@ fn settings(mode: Mode) -> Settings {
         photons_per_pass: 10_000,
         probe: ProbeMode::ScaleFree,
         emission_samples: 2,
+        rough_samples: 2,
         ..Settings::default()
     }
 }

@@ -103,6 +103,7 @@ class Renderer:
         max_photon_depth: int = ...,
         emission_samples: int = ...,
         pilot_samples: int = ...,
+        rough_samples: int = ...,
         direct: str = ...,
         light_samples: int = ...,
         glossy_hits: Optional[Union[float, str]] = ...,

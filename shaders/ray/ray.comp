@@ -93,6 +93,7 @@ layout(push_constant) uniform RayPush {
     uint pilot;      // 1: eye pass 0, whose emission samples only set `busy`
     uint light_samples; // the same paths per pixel the pilot did not mark
     uint pilot_samples; // the pilot's in every pixel; the rest of emission_samples where MARK_CHAIN
+    uint rough_samples; // per pixel marked MARK_ROUGH (at least emission_samples)
     uint per_dispatch;  // paths per pixel one dispatch takes: dispatch k takes samples k * this onwards
     uint first_pixel;   // this dispatch's tile, pixels first_pixel.. (the renderer's tiles): HitPoints,
     uint tile_pixels;   // Direct and Busy are bound from its first pixel on, so index them by `local`
@@ -600,14 +601,17 @@ void main() {
     Rng erng = rng_new(uint64_t(params.seed) | (uint64_t(SALT_EMISSION) << 32), (uint64_t(pc.chunk) << 48) | stream);
     // Only whole samples count: once long paths have spent the thread's BVH budget (bvh_spent, counted),
     // the remaining samples are not taken rather than taken as black.
-    // How many (reference::samples_for_mark, the CPU twin's rule): all of them where the pilot saw
-    // emission or sampled through a rough lobe (whose light, by shadow rays and the lobe, is the noisiest
-    // term there, docs/accuracy.md); with direct light sampled, light_samples where one of its shadow rays
-    // reached a light and one where none did (in the umbra, or where no light is in direct view: the
-    // shadow rays there would add nothing); else light_samples.
+    // How many (reference::samples_for_mark, the CPU twin's rule): pc.rough_samples where the pilot
+    // sampled through a rough lobe (whose light, by shadow rays and the lobe, is the noisiest term there,
+    // docs/accuracy.md, "Samples through rough lobes"); all of emission_samples where it saw emission; with
+    // direct light sampled, light_samples where one of its shadow rays reached a light and one where none
+    // did (in the umbra, or where no light is in direct view: the shadow rays there would add nothing);
+    // else light_samples.
     uint mark = busy[local];
     uint total = pc.light_samples;
-    if (pc.pilot != 0u || (mark & (MARK_EMISSION | MARK_ROUGH)) != 0u) total = pc.emission_samples;
+    if (pc.pilot != 0u) total = pc.emission_samples;
+    else if ((mark & MARK_ROUGH) != 0u) total = pc.rough_samples;
+    else if ((mark & MARK_EMISSION) != 0u) total = pc.emission_samples;
     else if (params.direct_light != 0u && pc.emission_samples > 0u && (mark & MARK_LIT) == 0u) total = min(total, 1u);
     uint first = pc.chunk * pc.per_dispatch;
     uint want = total > first ? min(total - first, pc.per_dispatch) : 0u;

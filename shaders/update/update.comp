@@ -48,8 +48,9 @@ HitStats updated(uint i, PassAccum a, HitStats s) {
 // Poisson variance are summed the same way (updated(): D scales as R^4, its variance as R^2, under the
 // fit's quadratic density), so the fit weighs the estimate tau / (pi R^2) the passes have built. Only the
 // part of |D| beyond shrink_z standard deviations counts (a flat density reads as flat); where the fit's p
-// is below R, R^2 takes (p / R)^2 and N, tau, D and its variance scale with it as eq. 3 scales them (the
-// density held, fewer photons inside), so the estimate keeps its value and the next fit starts at p.
+// is below R, R^2 takes (p / R)^2, D scales as R^4, and N, tau and D's variance keep what the fit's
+// density puts within p (more than the area's share at a peak, less in a dip; docs/design.md), and the
+// next fit starts at p.
 // Radii only ever shrink here, so eq. 3's consistency stands; a flat density reaches the threshold only by
 // noise (then a mild shrink of an unbiased estimate), and the images of scenes without narrow caustics
 // barely move (docs/accuracy.md).
@@ -75,13 +76,19 @@ HitStats shrunk(HitStats s) {
     double t = x > SHRINK_MIN * SHRINK_MIN * SHRINK_MIN ? cbrt_f64(x) : SHRINK_MIN; // (p / R)^2
     t = max(t, double(pc.r2_floor) / s.r2);
     if (!(t < 1.0)) return s;
+    // What the gathered statistics hold within p under the fit's density: N(p) = A t + (4/3) D t^2 with
+    // A = N - (4/3) D (t = (p / R)^2), so N(p) / N = t (1 - k (1 - t)), k = 4 D / (3 N), D the significant
+    // part signed. At a peak (D < 0) that keeps more than the area's share t: the photons gathered at the
+    // larger radii are not spread evenly over the disc (kept = t would blur a caustic's history).
+    double k = s.n > 0.0 ? 4.0 * sign(s.curv) * d / (3.0 * s.n) : 0.0;
+    double kept = clamp(t * (1.0 - k * (1.0 - t)), 0.0, 1.0);
     s.r2 *= t;
-    s.n *= t;
-    s.tau_r *= t;
-    s.tau_g *= t;
-    s.tau_b *= t;
+    s.n *= kept;
+    s.tau_r *= kept;
+    s.tau_g *= kept;
+    s.tau_b *= kept;
     s.curv *= t * t;
-    s.curv_var *= t;
+    s.curv_var *= kept;
     return s;
 }
 

@@ -353,7 +353,7 @@ impl Renderer {
             // choose_emitter's binary search, and an environment map's two (photon.comp's LIGHT_LOOPS)
             u32::BITS - gpu.params.num_lights.leading_zeros() + 1 + if gpu.has_environment { 48 } else { 0 },
             gpu.params.hit_slots,
-            settings.emission_samples.max(settings.unmarked_samples()),
+            settings.most_samples(),
             settings.max_photon_depth,
             settings.max_eye_depth,
         )
@@ -747,9 +747,9 @@ impl Renderer {
         let pilot = eye_pass == 0;
         let (marked, unmarked) = (self.settings.emission_samples, self.settings.unmarked_samples());
         // The pilot takes up to `marked` samples in a pixel (it only marks: `pilot_samples` in every pixel,
-        // the rest where those met a mirror or glass, ray.comp); other passes as many dispatches as the more
-        // numerous of the two counts needs.
-        let total = if pilot { marked } else { marked.max(unmarked) };
+        // the rest where those met a mirror or glass, ray.comp); other passes as many dispatches as the most
+        // numerous of the counts needs.
+        let total = if pilot { marked } else { self.settings.most_samples() };
         let per = self.limits.emission_per_dispatch.max(1);
         let push = |chunk: u32| RayPush {
             jitter,
@@ -761,6 +761,7 @@ impl Renderer {
             pilot: pilot as u32,
             light_samples: unmarked,
             pilot_samples: self.settings.pilot_samples,
+            rough_samples: self.settings.rough_pixel_samples(),
             per_dispatch: per,
             // The whole image; `ray_pass` sets each tile's.
             first_pixel: 0,

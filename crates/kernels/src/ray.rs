@@ -31,6 +31,9 @@ pub struct RayPush {
     /// The pilot's samples in every pixel; it takes the rest of `emission_samples` only where one of them
     /// met a mirror, smooth glass or a smooth coat ([`MARK_CHAIN`]).
     pub pilot_samples: u32,
+    /// Samples per pixel (outside the pilot) where the pilot marked a rough lobe ([`MARK_ROUGH`]): at least
+    /// `emission_samples` (`Settings::rough_pixel_samples`).
+    pub rough_samples: u32,
     /// Samples per pixel one dispatch takes: dispatch `chunk` takes samples `chunk * per_dispatch` on.
     pub per_dispatch: u32,
     /// The dispatch's first pixel and its pixel count: the bound per-pixel slices start there (the

@@ -443,11 +443,14 @@ pub struct EyePass {
 pub use ppm_vk_kernels::ray::{MARK_CHAIN, MARK_EMISSION, MARK_LIT, MARK_ROUGH};
 
 /// ray.comp's count of emission-sample paths a pixel takes per eye pass after the pilot, from its marks:
-/// `emission` where the pilot saw emission or sampled through a rough lobe; with direct light sampled,
-/// `light` where a pilot shadow ray reached a light and one where none did (if the pilot took samples at
-/// all); else `light` (the renderer passes `Settings::unmarked_samples` there).
-pub fn samples_for_mark(direct_light: bool, emission: u32, light: u32, mark: u32) -> u32 {
-    if mark & (MARK_EMISSION | MARK_ROUGH) != 0 {
+/// `rough` where the pilot sampled through a rough lobe (the renderer passes
+/// `Settings::rough_pixel_samples`, at least `emission`), `emission` where it saw emission; with direct
+/// light sampled, `light` where a pilot shadow ray reached a light and one where none did (if the pilot
+/// took samples at all); else `light` (the renderer passes `Settings::unmarked_samples` there).
+pub fn samples_for_mark(direct_light: bool, emission: u32, rough: u32, light: u32, mark: u32) -> u32 {
+    if mark & MARK_ROUGH != 0 {
+        rough
+    } else if mark & MARK_EMISSION != 0 {
         emission
     } else if direct_light && emission > 0 && mark & MARK_LIT == 0 {
         light.min(1)
@@ -754,6 +757,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
             samples_for_mark(
                 p.direct_light != 0,
                 push.emission_samples,
+                push.rough_samples,
                 push.light_samples,
                 busy[pixel as usize],
             )
@@ -1024,8 +1028,8 @@ pub const SHRINK_MIN: f64 = 0.25;
 
 /// The adaptive shrink (update.comp): probe.comp's curvature fit (p / R)^6 = 9 N / (32 D^2) over the
 /// accumulated counts, with only the part of |D| beyond `z` standard deviations; where p < R, R^2 takes
-/// (p / R)^2 (at least `SHRINK_MIN`, and R^2 at least `r2_floor`) and N, tau and the statistic scale as
-/// eq. 3 scales them.
+/// (p / R)^2 (at least `SHRINK_MIN`, and R^2 at least `r2_floor`), D scales as R^4, and N, tau and D's
+/// variance keep the share of them the fit's density puts within p.
 pub fn shrunk(s: HitStats, z: f64, r2_floor: f64) -> HitStats {
     let d = (s.curv.abs() - z * s.curv_var.sqrt()).max(0.0);
     if !(9.0 * s.n < 32.0 * d * d) {
@@ -1041,15 +1045,22 @@ pub fn shrunk(s: HitStats, z: f64, r2_floor: f64) -> HitStats {
     if !(t < 1.0) {
         return s;
     }
+    // The share of the statistics within p under the fit's density (update.comp): t (1 - k (1 - t)).
+    let k = if s.n > 0.0 {
+        4.0 * s.curv.signum() * d / (3.0 * s.n)
+    } else {
+        0.0
+    };
+    let kept = (t * (1.0 - k * (1.0 - t))).clamp(0.0, 1.0);
     HitStats {
-        n: s.n * t,
+        n: s.n * kept,
         r2: s.r2 * t,
-        tau_r: s.tau_r * t,
-        tau_g: s.tau_g * t,
-        tau_b: s.tau_b * t,
+        tau_r: s.tau_r * kept,
+        tau_g: s.tau_g * kept,
+        tau_b: s.tau_b * kept,
         probe: s.probe,
         curv: s.curv * (t * t),
-        curv_var: s.curv_var * t,
+        curv_var: s.curv_var * kept,
     }
 }
 
@@ -1316,8 +1327,51 @@ mod tests {
                 (r_new / optimum - 1.0).abs() < drift,
                 "f0 {f0}, c {c}: R {r_new} against the optimum {optimum} (eq. 3's {r_eq3})"
             );
-            // The estimate keeps its value: tau and N scale as R^2 does.
-            assert!((shrunk.n / shrunk.r2 - plain.n / plain.r2).abs() < 1e-9 * plain.n / plain.r2);
+            // What the statistics keep within the new radius: adaptive_shrink_keeps_what_the_density_holds.
+        }
+    }
+
+    #[test]
+    fn adaptive_shrink_keeps_what_the_density_holds() {
+        // Statistics of exactly the counts a density f(rho) = f0 + c rho^2 puts within R and R / 2, at a
+        // peak much narrower than R (f(R) a fifth of f0) and at a dip: the shrink to p must keep the
+        // closed form's N(p) of them (and as much of tau), not the area's share (p / R)^2 of N(R), which
+        // would spread the peak's photons over the disc.
+        let pi = std::f64::consts::PI;
+        let count = |f0: f64, c: f64, p: f64| pi * p * p * f0 + pi * c * p.powi(4) / 2.0;
+        for (f0, c, r) in [
+            (1.0e6, -0.8e6 / 0.09, 0.3),
+            (1.0e6, -0.5e6 / 0.09, 0.3),
+            (1.0e6, 2.0e6 / 0.09, 0.3),
+        ] {
+            let (n, half) = (count(f0, c, r), count(f0, c, r / 2.0));
+            let s = HitStats {
+                r2: r * r,
+                n,
+                tau_r: n,
+                tau_g: 2.0 * n,
+                tau_b: 0.5 * n,
+                curv: n - 4.0 * half,
+                curv_var: n + 8.0 * half,
+                ..Default::default()
+            };
+            let shrunk = shrunk(s, 0.0, 0.0);
+            let p = shrunk.r2.sqrt();
+            assert!(p < 0.9 * r, "f0 {f0}, c {c}: the case must shrink ({p} of {r})");
+            let want = count(f0, c, p);
+            assert!(
+                (shrunk.n / want - 1.0).abs() < 1e-9,
+                "c {c}: N(p) {} against {want}",
+                shrunk.n
+            );
+            assert!((shrunk.tau_g / (2.0 * want) - 1.0).abs() < 1e-9);
+            let area = n * (p / r).powi(2);
+            println!(
+                "c {c:e}: p / R {:.3}, kept {:.4} of N, the area's share {:.4}",
+                p / r,
+                want / n,
+                area / n
+            );
         }
     }
 
