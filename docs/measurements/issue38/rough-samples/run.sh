@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Issue 38, eye paths where a rough lobe is seen (`--rough-samples`): each scene whose eye paths sample
 # through rough metal or rough glass, 60 s of passes per variant (compare --time), the variants in one run
-# so they see the same hour: rsp=16 (every marked pixel emission_samples, the rule before), the default
-# (32) and rsp=64.
+# so they see the same hour: rsp=16 (every marked pixel emission_samples: the rule before, and the default
+# after this run), 32 and 64. run.txt's `sppm` rows are rsp=32, the default of the build that ran it
+# (fa29023 plus the change with 32 as its default, before the default went back to 16 in c1b1efb).
 # Usage: docs/measurements/issue38/rough-samples/run.sh [SECONDS] [scene ...]  (from the repository root;
 # needs target/release/ppm-vk)
 set -euo pipefail
@@ -26,7 +27,7 @@ for entry in "${SCENES[@]}"; do
   echo "== $name $(date -u +%H:%M:%S) load $(cut -d' ' -f1-3 /proc/loadavg)"
   # shellcheck disable=SC2086
   target/release/ppm-vk compare $scene --reference "$refs/$name.exr" --time "$T" \
-    --variants "sppm+rsp=16; sppm; sppm+rsp=64" "${cr[@]}" --out "$o/$name" > "$o/$name.log" 2>&1
+    --variants "sppm+rsp=16; sppm+rsp=32; sppm+rsp=64" "${cr[@]}" --out "$o/$name" > "$o/$name.log" 2>&1
   grep '^|' "$o/$name/compare.md"
 done
 echo "== done $(date -u +%H:%M:%S) load $(cut -d' ' -f1-3 /proc/loadavg)"
