@@ -77,10 +77,12 @@ HitStats shrunk(HitStats s) {
     t = max(t, double(pc.r2_floor) / s.r2);
     if (!(t < 1.0)) return s;
     // What the gathered statistics hold within p under the fit's density: N(p) = A t + (4/3) D t^2 with
-    // A = N - (4/3) D (t = (p / R)^2), so N(p) / N = t (1 - k (1 - t)), k = 4 D / (3 N), D the significant
-    // part signed. At a peak (D < 0) that keeps more than the area's share t: the photons gathered at the
-    // larger radii are not spread evenly over the disc (kept = t would blur a caustic's history).
-    double k = s.n > 0.0 ? 4.0 * sign(s.curv) * d / (3.0 * s.n) : 0.0;
+    // A = N - (4/3) D (t = (p / R)^2), so N(p) / N = t (1 - k (1 - t)), k = 4 D / (3 N): at t = 1/4 the
+    // count within R / 2 itself. D whole, not its significant part: the threshold decides whether to
+    // shrink; what lies within p is then best told by the counts. At a peak (D < 0) that keeps more than
+    // the area's share t: the photons gathered at the larger radii are not spread evenly over the disc
+    // (kept = t would blur a caustic's history).
+    double k = s.n > 0.0 ? 4.0 * s.curv / (3.0 * s.n) : 0.0;
     double kept = clamp(t * (1.0 - k * (1.0 - t)), 0.0, 1.0);
     s.r2 *= t;
     s.n *= kept;

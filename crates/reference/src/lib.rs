@@ -1045,12 +1045,9 @@ pub fn shrunk(s: HitStats, z: f64, r2_floor: f64) -> HitStats {
     if !(t < 1.0) {
         return s;
     }
-    // The share of the statistics within p under the fit's density (update.comp): t (1 - k (1 - t)).
-    let k = if s.n > 0.0 {
-        4.0 * s.curv.signum() * d / (3.0 * s.n)
-    } else {
-        0.0
-    };
+    // The share of the statistics within p under the fit's density (update.comp): t (1 - k (1 - t)), with
+    // D whole.
+    let k = if s.n > 0.0 { 4.0 * s.curv / (3.0 * s.n) } else { 0.0 };
     let kept = (t * (1.0 - k * (1.0 - t))).clamp(0.0, 1.0);
     HitStats {
         n: s.n * kept,
@@ -1355,23 +1352,26 @@ mod tests {
                 curv_var: n + 8.0 * half,
                 ..Default::default()
             };
-            let shrunk = shrunk(s, 0.0, 0.0);
-            let p = shrunk.r2.sqrt();
-            assert!(p < 0.9 * r, "f0 {f0}, c {c}: the case must shrink ({p} of {r})");
-            let want = count(f0, c, p);
-            assert!(
-                (shrunk.n / want - 1.0).abs() < 1e-9,
-                "c {c}: N(p) {} against {want}",
-                shrunk.n
-            );
-            assert!((shrunk.tau_g / (2.0 * want) - 1.0).abs() < 1e-9);
-            let area = n * (p / r).powi(2);
-            println!(
-                "c {c:e}: p / R {:.3}, kept {:.4} of N, the area's share {:.4}",
-                p / r,
-                want / n,
-                area / n
-            );
+            // With or without the significance test: it decides whether to shrink, not what is kept.
+            for z in [0.0, 2.0] {
+                let shrunk = shrunk(s, z, 0.0);
+                let p = shrunk.r2.sqrt();
+                assert!(p < 0.9 * r, "f0 {f0}, c {c}: the case must shrink ({p} of {r})");
+                let want = count(f0, c, p);
+                assert!(
+                    (shrunk.n / want - 1.0).abs() < 1e-9,
+                    "c {c}, z {z}: N(p) {} against {want}",
+                    shrunk.n
+                );
+                assert!((shrunk.tau_g / (2.0 * want) - 1.0).abs() < 1e-9);
+                let area = n * (p / r).powi(2);
+                println!(
+                    "c {c:e}, z {z}: p / R {:.3}, kept {:.4} of N, the area's share {:.4}",
+                    p / r,
+                    want / n,
+                    area / n
+                );
+            }
         }
     }
 
