@@ -603,7 +603,7 @@ void main() {
     // the remaining samples are not taken rather than taken as black.
     // How many (reference::samples_for_mark, the CPU twin's rule): pc.rough_samples where the pilot
     // sampled through a rough lobe (whose light, by shadow rays and the lobe, is the noisiest term there,
-    // docs/accuracy.md, "Samples through rough lobes"); all of emission_samples where it saw emission; with
+    // docs/accuracy.md, "Eye paths through rough lobes"); all of emission_samples where it saw emission; with
     // direct light sampled, light_samples where one of its shadow rays reached a light and one where none
     // did (in the umbra, or where no light is in direct view: the shadow rays there would add nothing);
     // else light_samples.

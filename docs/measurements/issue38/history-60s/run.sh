@@ -31,13 +31,11 @@ SCENES=(
 # `cargo run --release -p ppm-vk-scene-gen --bin gen_scenes` writes the demo mesh.
 "$PY" -c "import sys; sys.path.insert(0, 'scenes/references'); import make_reference as m; \
 m.split_obj('scenes/meshes/glass-on-table.obj', 'scenes/references/meshes')"
-i=0
 for entry in "${SCENES[@]}"; do
   IFS='|' read -r name scene ref xml res cregions mregions <<<"$entry"
   if [ $# -gt 0 ] && [[ " $* " != *" $name "* ]]; then continue; fi
   v="sppm"
   [ "$name" = cornell-aniso ] && v="sppm; sppm+rsp=32"
-  i=$((i + 1))
   cr=(); for r in $cregions; do cr+=(--region "$r"); done
   mr=(); for r in $mregions; do mr+=(--region "$r"); done
   mres=(); [ -n "$res" ] && mres=(--res "$res")
