@@ -3,7 +3,9 @@
 # statistics (docs/design.md): every scene with a Mitsuba reference, the default settings (`sppm`) given
 # 60 s of passes (compare --time: set-up and the probe pass excluded), cornell-aniso also with
 # --rough-samples 32 (`sppm+rsp=32`), then Mitsuba 3's path tracer given the same 60 s on the same machine
-# right after, scene by scene (so both renderers see the same hour).
+# right after, scene by scene (so both renderers see the same hour). OUT=DIR writes there instead: build
+# 110c95d's glass-on-table (the shrink keeping the share the whole D gives) is
+# `OUT=docs/measurements/issue38/history-60s-whole history-60s/run.sh 60 glass-on-table`.
 # Usage: docs/measurements/issue38/history-60s/run.sh [SECONDS] [scene ...]  (from the repository root;
 # needs target/release/ppm-vk and `pip install mitsuba numpy` with libllvm19, ../shared/notes/TOOLCHAIN.md;
 # PYTHON=path names the Python that has them, default python3)
@@ -14,7 +16,8 @@ export DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-/usr/lib/x86_64-linux-gnu/libLLV
 PY=${PYTHON:-python3}
 T=${1:-60}
 shift || true
-o=docs/measurements/issue38/history-60s
+o=${OUT:-docs/measurements/issue38/history-60s}
+mkdir -p "$o"
 refs=scenes/references
 # name | ppm-vk scene and its flags | reference | Mitsuba XML | Mitsuba --res | compare regions (x,y,w,h) | Mitsuba regions (x0,y0,x1,y1)
 SCENES=(
