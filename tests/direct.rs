@@ -193,3 +193,92 @@ fn emission_after_a_rough_coat_marks_no_pixel() {
     );
     assert_clean(&ctx);
 }
+
+/// The pilot takes each branch of smooth glass with probability 1/2 (ray.comp's `branch_u`), so it finds
+/// a light reflected in glass as readily as one seen through it: the penumbra's floor made glass of index
+/// 1.2 (a Fresnel reflectance near 1%, so a pilot drawing branches by Fresnel would find the reflection in
+/// about one of its 16 paths a pixel in seven), its occluder removed and the camera turned down to the
+/// light's reflection. The light's mirror image is worked
+/// out here from the pinhole camera and the plane (not by the renderer): every pixel it covers whole is
+/// marked for emission, and no pixel more than one (the spread) from a pixel it touches.
+#[test]
+fn the_pilot_finds_a_light_reflected_in_glass() {
+    use glam::Vec3;
+    use ppm_vk_engine::scene::Surface;
+    use ppm_vk_kernels::ray::MARK_EMISSION;
+    let ctx = ctx();
+    let (w, h) = (64u32, 64u32);
+    let mut scene = load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/penumbra.toml")).with_resolution(w, h);
+    let floor = scene.materials.iter().position(|m| m.name == "floor").unwrap() as u32;
+    let occluder = scene.materials.iter().position(|m| m.name == "occluder").unwrap() as u32;
+    scene.materials[floor as usize].surface = Surface::Glass { ior: 1.2 };
+    scene.quads.retain(|q| q.material != occluder);
+    scene.camera.look_at = glam::Vec3::new(0.0, -0.6, 0.0);
+    scene.validate().unwrap();
+    let settings = Settings {
+        mode: Mode::Sppm,
+        photons_per_pass: 20_000,
+        ..Settings::default()
+    };
+    let busy = Renderer::new(&ctx, &scene, settings).unwrap().read_busy().unwrap();
+
+    // Where the ray through image point (x, y) (pixels, y down) meets the light after reflecting in y = 0:
+    // the light is the square |x|, |z| < 0.25 at y = 2 (scenes/penumbra.toml).
+    let cam = &scene.camera;
+    let forward = (cam.look_at - cam.eye).normalize();
+    let right = forward.cross(cam.up).normalize();
+    let up = right.cross(forward);
+    let tan_half = (cam.vfov_deg.to_radians() * 0.5).tan();
+    let sees_light = |x: f32, y: f32| {
+        let sx = (2.0 * x / w as f32 - 1.0) * (w as f32 / h as f32) * tan_half;
+        let sy = (1.0 - 2.0 * y / h as f32) * tan_half;
+        let d = (forward + sx * right + sy * up).normalize();
+        if d.y >= 0.0 {
+            return false;
+        }
+        let p = cam.eye + d * (-cam.eye.y / d.y);
+        let r = Vec3::new(d.x, -d.y, d.z);
+        let q = p + r * (2.0 / r.y);
+        q.x.abs() < 0.25 && q.z.abs() < 0.25
+    };
+    let corners = |px: u32, py: u32| {
+        [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].map(|(dx, dy)| sees_light(px as f32 + dx, py as f32 + dy))
+    };
+    let mut whole = Vec::new();
+    let mut touched = vec![false; (w * h) as usize];
+    for py in 0..h {
+        for px in 0..w {
+            let c = corners(px, py);
+            // The image of a square under reflection and projection is convex: four corners in, all in.
+            if c.iter().all(|&b| b) {
+                whole.push((px, py));
+            }
+            touched[(py * w + px) as usize] = c.iter().any(|&b| b);
+        }
+    }
+    let near = |px: u32, py: u32| {
+        (py.saturating_sub(2)..=(py + 2).min(h - 1))
+            .any(|y| (px.saturating_sub(2)..=(px + 2).min(w - 1)).any(|x| touched[(y * w + x) as usize]))
+    };
+    let marked = |px: u32, py: u32| busy[(py * w + px) as usize] & MARK_EMISSION != 0;
+    let missed: Vec<_> = whole.iter().filter(|&&(x, y)| !marked(x, y)).collect();
+    let stray: Vec<_> = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .filter(|&(x, y)| marked(x, y) && !near(x, y))
+        .collect();
+    let count = busy.iter().filter(|&&m| m & MARK_EMISSION != 0).count();
+    println!(
+        "the reflection covers {} pixels whole and touches {}; {count} marked, {} of the whole ones missed, {} stray",
+        whole.len(),
+        touched.iter().filter(|&&t| t).count(),
+        missed.len(),
+        stray.len()
+    );
+    assert!(whole.len() >= 20, "the reflection is in view: {} pixels", whole.len());
+    assert!(
+        missed.is_empty(),
+        "pixels showing the light's reflection left unmarked: {missed:?}"
+    );
+    assert!(stray.is_empty(), "pixels marked away from the reflection: {stray:?}");
+    assert_clean(&ctx);
+}

@@ -241,6 +241,18 @@ vec3 escaped(vec3 d) {
     return e.kind == LIGHT_ENVIRONMENT ? environment_radiance(e, d) : vec3(0.0);
 }
 
+// The uniform number that picks a smooth dielectric's branch (glass_branch, thin_branch: reflection where
+// it is below the reflectance). Counted samples draw it uniformly, so each branch is taken with its
+// Fresnel probability at weight 1. The pilot only marks, and takes each branch with probability 1/2: a
+// light reflected in glass is met by a counted sample with probability F (about 4%) at full radiance,
+// variance F L^2, as much a reason for a pixel's samples as a light seen through it; a pilot drawing by
+// Fresnel finds those reflections in F of its few paths (docs/accuracy.md, "The pilot's Fresnel branches").
+const float ONE_BELOW = 0.99999994; // the largest float below 1: refraction unless totally reflected
+float branch_u(inout Rng rng) {
+    float u = rng_float(rng);
+    return pc.pilot == 0u ? u : (u < 0.5 ? 0.0 : ONE_BELOW);
+}
+
 // One emission sample: the emission met along the specular chain from the eye through `jitter`, and with
 // direct light sampled, term (d) at the chain's diffuse end. `seen`: set if the path met the front of an
 // emitter (or the environment) that no shadow ray also takes, i.e. not straight after a rough vertex;
@@ -345,7 +357,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             continue;
         }
         if (HAS_THIN && m.surface == SURFACE_THIN) {
-            thr *= thin_branch(h.material, m, h.pos, nf, rng_float(rng), o, d);
+            thr *= thin_branch(h.material, m, h.pos, nf, branch_u(rng), o, d);
             continue;
         }
         if (rough_vertex(m, h.material)) {
@@ -361,7 +373,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             lobe_from = h.pos;
             continue;
         }
-        glass_branch(h.pos, nf, front, m.ior, rng_float(rng), o, d);
+        glass_branch(h.pos, nf, front, m.ior, branch_u(rng), o, d);
     }
     return sum;
 }

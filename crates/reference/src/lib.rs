@@ -314,7 +314,17 @@ struct SampleMarks {
 /// through a random point of the pixel, one Fresnel branch chosen with probability f, and with direct light
 /// sampled (`RenderParams::direct_light`) term (d) at its diffuse end. `cut` counts a path ended at the
 /// depth backstop; `marks` gathers what the pilot marks by (`SampleMarks`).
-fn emission_sample(g: &GpuScene, px: u32, py: u32, rng: &mut Rng, cut: &mut u32, marks: &mut SampleMarks) -> Vec3 {
+/// `pilot`: the pilot's sample, which takes each smooth dielectric branch with probability 1/2
+/// (`branch_u`).
+fn emission_sample(
+    g: &GpuScene,
+    px: u32,
+    py: u32,
+    rng: &mut Rng,
+    cut: &mut u32,
+    marks: &mut SampleMarks,
+    pilot: bool,
+) -> Vec3 {
     let j = [rng.float(), rng.float()];
     let mut o = v3(g.params.eye);
     let mut d = camera_ray(g, px, py, j);
@@ -405,7 +415,7 @@ fn emission_sample(g: &GpuScene, px: u32, py: u32, rng: &mut Rng, cut: &mut u32,
         }
         if m.surface == SURFACE_THIN {
             let w;
-            (o, d, w) = thin_dielectric::branch(g, m, h.pos, nf, rng.float(), d);
+            (o, d, w) = thin_dielectric::branch(g, m, h.pos, nf, branch_u(rng, pilot), d);
             thr *= w;
             continue;
         }
@@ -424,9 +434,23 @@ fn emission_sample(g: &GpuScene, px: u32, py: u32, rng: &mut Rng, cut: &mut u32,
             lobe_from = h.pos;
             continue;
         }
-        (o, d) = glass_branch(g, h.pos, nf, front, m.ior, rng.float(), d);
+        (o, d) = glass_branch(g, h.pos, nf, front, m.ior, branch_u(rng, pilot), d);
     }
     sum
+}
+
+/// ray.comp's `branch_u`: the uniform number that picks a smooth dielectric's branch (reflection below the
+/// reflectance). Counted samples draw it uniformly (each branch with its Fresnel probability); the pilot,
+/// which only marks, takes each branch with probability 1/2, so that it finds a light reflected in glass as
+/// readily as one seen through it.
+fn branch_u(rng: &mut Rng, pilot: bool) -> f32 {
+    let u = rng.float();
+    match pilot {
+        false => u,
+        true if u < 0.5 => 0.0,
+        // The largest float below 1: refraction unless totally reflected.
+        true => 1.0 - f32::EPSILON / 2.0,
+    }
 }
 
 /// What one eye pass of `ray.comp` makes.
@@ -773,7 +797,7 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
             if pilot && first + s >= push.pilot_samples && !marks.chain {
                 break;
             }
-            let e = emission_sample(g, px, py, &mut rng, &mut out.cut, &mut marks);
+            let e = emission_sample(g, px, py, &mut rng, &mut out.cut, &mut marks, pilot);
             if !pilot {
                 emitted += e.as_dvec3();
                 samples += 1;
