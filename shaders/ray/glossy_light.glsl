@@ -112,17 +112,19 @@ float area_light_density(vec3 x, vec3 y, vec3 ny, vec3 le) {
 
 // The shadow ray's part at rough vertex h (material i, `m`), seen from wo (towards the eye): one light
 // chosen by power, weighed against the lobe. nf, ng: the shading and true normals on wo's side. Draws
-// three numbers, and a mask key where it traces the shadow ray. `lit`: set if it reached a light.
-vec3 rough_light(uint i, Material m, Hit h, vec3 nf, vec3 ng, bool front, vec3 wo, inout Rng rng, inout bool lit) {
+// three numbers, and a mask key where it traces the shadow ray (ray.comp's ShadowRay: prepared here,
+// traced by the caller).
+ShadowRay rough_light_ray(uint i, Material m, Hit h, vec3 nf, vec3 ng, bool front, vec3 wo, inout Rng rng) {
+    ShadowRay ray = no_shadow();
     Emitter e = choose_emitter(rng_float(rng));
     float a = rng_float(rng);
     float b = rng_float(rng);
-    if (HAS_SPHERE_LIGHTS && e.kind == LIGHT_SPHERE) return vec3(0.0); // the lobe's alone
+    if (HAS_SPHERE_LIGHTS && e.kind == LIGHT_SPHERE) return ray; // the lobe's alone
     vec3 w, li, o;
     float d;
     float pl = -1.0; // the shadow ray's p_l' for the power heuristic; below 0: weight 1 (no other strategy)
     if (is_area(e)) {
-        if (params.glossy_light == GLOSSY_LIGHT_BSDF) return vec3(0.0);
+        if (params.glossy_light == GLOSSY_LIGHT_BSDF) return ray;
         vec3 point = emitter_point(e, a, b);
         // The side of the surface the light lies on (rough glass transmits), then the ray from there.
         o = offset_ray(h.pos, dot(point - h.pos, nf) >= 0.0 ? nf : -nf);
@@ -132,7 +134,7 @@ vec3 rough_light(uint i, Material m, Hit h, vec3 nf, vec3 ng, bool front, vec3 w
         d = sqrt(d2);
         w /= d;
         float cos_y = -dot(e.normal, w);
-        if (!(cos_y > 0.0) || !(d2 > 0.0)) return vec3(0.0); // emitters are one-sided
+        if (!(cos_y > 0.0) || !(d2 > 0.0)) return ray; // emitters are one-sided
         vec3 tex = emitter_radiance(e, a, b); // a radiance texture there, else 1
         vec3 le = e.value * tex;
         // Le / p_l: the flux e.flux (Le A pi / prob) times cos_y / (pi d^2).
@@ -143,22 +145,28 @@ vec3 rough_light(uint i, Material m, Hit h, vec3 nf, vec3 ng, bool front, vec3 w
         // surface is sampled again from below, with the same numbers.
         float pdf;
         o = offset_ray(h.pos, nf);
-        if (!light_sample(e, o, a, b, w, d, li, pdf)) return vec3(0.0);
+        if (!light_sample(e, o, a, b, w, d, li, pdf)) return ray;
         if (dot(w, nf) < 0.0) {
             o = offset_ray(h.pos, -nf);
-            if (!light_sample(e, o, a, b, w, d, li, pdf)) return vec3(0.0);
+            if (!light_sample(e, o, a, b, w, d, li, pdf)) return ray;
         }
-        if (pdf > 0.0 && params.glossy_light == GLOSSY_LIGHT_BSDF) return vec3(0.0); // the environment
+        if (pdf > 0.0 && params.glossy_light == GLOSSY_LIGHT_BSDF) return ray; // the environment
         if (pdf > 0.0 && params.glossy_light == GLOSSY_LIGHT_MIS) pl = pdf;
     }
-    if (HAS_SHADING_NORMALS && !shading_valid(w, ng, nf)) return vec3(0.0);
+    if (HAS_SHADING_NORMALS && !shading_valid(w, ng, nf)) return ray;
     vec3 fw;
     float pb = rough_lobe(i, m, h, nf, front, wo, w, fw);
-    if (!(pb > 0.0)) return vec3(0.0);
+    if (!(pb > 0.0)) return ray;
     float weight = pl < 0.0 ? 1.0 : power_heuristic(pl, pb);
-    if (shadowed(o, w, d, mask_key(rng))) return vec3(0.0);
+    ray.key = mask_key(rng);
     vec3 l = fw * (pb * weight) * li; // f |cos_l| Le / p_l w_l
     if (HAS_NORMAL_MAPS) l *= bump_shadowing(w); // a bump or normal map's term (normal_map.glsl)
+    return ShadowRay(o, w, d, ray.key, l, true);
+}
+
+// The same traced at once. `lit`: set if it reached a light.
+vec3 rough_light(uint i, Material m, Hit h, vec3 nf, vec3 ng, bool front, vec3 wo, inout Rng rng, inout bool lit) {
+    vec3 l = trace_shadow(rough_light_ray(i, m, h, nf, ng, front, wo, rng));
     if (max3(l) > 0.0) lit = true;
     return l;
 }

@@ -47,7 +47,7 @@
 // meet (a) and shadow rays sample by the solid angle of its cap (d); points, spots and the sun no eye path
 // meets (no (a)), shadow rays reach them (d); the environment is (a) where an eye path leaves the scene, and
 // its (d) is two strategies weighted by the power heuristic, direct_light's sample of the map and
-// environment_by_bsdf's cosine direction that leaves the scene: the weights sum to one in every direction,
+// environment_ray's cosine direction that leaves the scene: the weights sum to one in every direction,
 // so together they are one unbiased estimate of (d). Photons from every kind skip their first landing alike.
 // A plastic is both an S (its coat's reflection) and a D (its base, plastic.glsl): an emission-sample path
 // takes the base's term (d) there and goes on along the coat, without choosing between them. Rough
@@ -138,6 +138,24 @@ bool shadowed(vec3 o, vec3 w, float d, uint key) {
     return true;
 }
 
+// A shadow ray prepared where a vertex samples a light (direct_light_ray, environment_ray, rough_light_ray)
+// and traced apart (trace_shadow): `l` is the light it brings if nothing blocks it. A path's loop prepares
+// its vertex's rays in whichever branch its kind of surface takes and traces them after the branches, so
+// the kernel holds one traversal for each ray a vertex may send, not one for every kind of vertex that
+// sends it: lavapipe runs every traversal a kernel holds for a SIMD group, under a mask, whether or not
+// one of its lanes takes it (docs/performance.md, "One traversal per shadow ray"). Preparing draws every
+// number the ray's sample needs, in the order tracing it at once did.
+struct ShadowRay { vec3 o; vec3 w; float d; uint key; vec3 l; bool live; };
+
+ShadowRay no_shadow() {
+    return ShadowRay(vec3(0.0), vec3(0.0), 0.0, 0u, vec3(0.0), false);
+}
+
+// The light s brings: s.l if it is live and nothing blocks it, else 0.
+vec3 trace_shadow(ShadowRay s) {
+    return s.live && !shadowed(s.o, s.w, s.d, s.key) ? s.l : vec3(0.0);
+}
+
 // Term (d) at diffuse point p (nf the side its eye path arrives on, albedo its reflectance), one sample:
 // a light chosen in proportion to its power, a point y uniform on it, the shadow ray towards y. Its
 // estimate f_r Le G / pdf is (albedo / pi) Le (cos_p cos_y / d^2) (area / prob), and the light's flux
@@ -149,9 +167,11 @@ bool shadowed(vec3 o, vec3 w, float d, uint key) {
 // the light's direction (rough_conductor.glsl); albedo then holds its specular_reflectance.
 // nf is the shading normal, ng the true surface's on its side: a light on different sides of them adds
 // nothing (shading.glsl).
-// A shadow ray that runs out of traversal steps is counted (shadowed) and the caller drops the sample.
-vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, uint rough, vec3 wo,
-                  inout Rng rng) {
+// Prepared as a ShadowRay; direct_light traces it at once. A shadow ray that runs out of traversal steps is
+// counted (shadowed) and the caller drops the sample.
+ShadowRay direct_light_ray(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, uint rough,
+                           vec3 wo, inout Rng rng) {
+    ShadowRay ray = no_shadow();
     Emitter e = choose_emitter(rng_float(rng));
     float a = rng_float(rng);
     float b = rng_float(rng);
@@ -159,16 +179,16 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint co
     // The light reaching p along w from as far as d: the estimate is f_r lflux s (with cos_p in s).
     vec3 w, lflux;
     float d, s, cos_p;
-    float weight = 1.0; // an environment's multiple-importance weight against environment_by_bsdf
+    float weight = 1.0; // an environment's multiple-importance weight against environment_ray
     if (HAS_OTHER_LIGHTS && !is_area(e)) {
         // Spheres, points, spots, the sun, the environment (lights.glsl): li / pdf per unit cos_p.
         float pdf;
-        if (!light_sample(e, o, a, b, w, d, lflux, pdf)) return vec3(0.0);
+        if (!light_sample(e, o, a, b, w, d, lflux, pdf)) return ray;
         cos_p = dot(nf, w);
-        if (!(cos_p > 0.0)) return vec3(0.0);
+        if (!(cos_p > 0.0)) return ray;
         s = cos_p;
         if (HAS_ENVIRONMENT && pdf > 0.0 && rough == 0u) {
-            float pb = cos_p / PI; // the cosine-weighted direction's density (environment_by_bsdf)
+            float pb = cos_p / PI; // the cosine-weighted direction's density (environment_ray)
             weight = pdf * pdf / (pdf * pdf + pb * pb); // power heuristic
         }
     } else {
@@ -179,12 +199,12 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint co
         w /= d;
         cos_p = dot(nf, w);
         float cos_y = -dot(e.normal, w);
-        if (cos_p <= 0.0 || cos_y <= 0.0 || d2 <= 0.0) return vec3(0.0);
+        if (cos_p <= 0.0 || cos_y <= 0.0 || d2 <= 0.0) return ray;
         lflux = e.flux * emitter_radiance(e, a, b);
         s = cos_p * cos_y / (PI * d2);
     }
-    if (HAS_SHADING_NORMALS && !shading_valid(w, ng, nf)) return vec3(0.0);
-    if (shadowed(o, w, d, mask_key(rng))) return vec3(0.0);
+    if (HAS_SHADING_NORMALS && !shading_valid(w, ng, nf)) return ray;
+    ray.key = mask_key(rng);
     vec3 fr = albedo / PI;
     if (HAS_ROUGH_CONDUCTORS && rough != 0u) {
         vec3 f;
@@ -195,7 +215,12 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint co
     if (HAS_PLASTICS && coat_ior > 0.0) l *= coat_transmittance(coat_table, cos_p, coat_ior);
     if (HAS_ENVIRONMENT) l *= weight;
     if (HAS_NORMAL_MAPS) l *= bump_shadowing(w); // a bump or normal map's term (normal_map.glsl)
-    return l;
+    return ShadowRay(o, w, d, ray.key, l, true);
+}
+
+vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, uint rough, vec3 wo,
+                  inout Rng rng) {
+    return trace_shadow(direct_light_ray(p, nf, ng, albedo, coat_ior, coat_table, rough, wo, rng));
 }
 
 // The environment's light at diffuse point p by the other strategy: a cosine-weighted direction (the
@@ -204,32 +229,46 @@ vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint co
 // (d)) with the lower variance of each where it is better: the map's bright spots by direct_light, the
 // broad sky by this. Same arguments as direct_light's (a diffuse or plastic base only: a glossy hit point
 // takes the environment by direct_light alone, at weight 1).
-vec3 environment_by_bsdf(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, inout Rng rng) {
+ShadowRay environment_ray(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, inout Rng rng) {
+    ShadowRay ray = no_shadow();
     Emitter e = first_emitter();
-    if (e.kind != LIGHT_ENVIRONMENT) return vec3(0.0);
+    if (e.kind != LIGHT_ENVIRONMENT) return ray;
     float u1 = rng_float(rng);
     float u2 = rng_float(rng);
     vec3 w = cosine_direction(nf, u1, u2);
     float cos_p = dot(nf, w);
-    if (!(cos_p > 0.0)) return vec3(0.0);
-    if (HAS_SHADING_NORMALS && !shading_valid(w, ng, nf)) return vec3(0.0);
+    if (!(cos_p > 0.0)) return ray;
+    if (HAS_SHADING_NORMALS && !shading_valid(w, ng, nf)) return ray;
     vec3 o = offset_ray(p, nf);
-    if (shadowed(o, w, infinite_reach(e, o), mask_key(rng))) return vec3(0.0);
+    ray.key = mask_key(rng);
     float pb = cos_p / PI;
     float pl = environment_pdf(e, w) * e.cdf;
     // f_r L cos_p / pb = albedo L.
     vec3 l = albedo * environment_radiance(e, w) * (pb * pb / (pb * pb + pl * pl));
     if (HAS_PLASTICS && coat_ior > 0.0) l *= coat_transmittance(coat_table, cos_p, coat_ior);
     if (HAS_NORMAL_MAPS) l *= bump_shadowing(w);
-    return l;
+    return ShadowRay(o, w, infinite_reach(e, o), ray.key, l, true);
 }
 
 // Term (d) at a diffuse point or a plastic's base: direct_light, and with an environment its other
 // strategy.
-vec3 direct_diffuse(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, inout Rng rng) {
-    vec3 l = direct_light(p, nf, ng, albedo, coat_ior, coat_table, 0u, vec3(0.0), rng);
-    if (HAS_ENVIRONMENT) l += environment_by_bsdf(p, nf, ng, albedo, coat_ior, coat_table, rng);
+void direct_diffuse_rays(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, inout Rng rng,
+                         out ShadowRay light, out ShadowRay sky) {
+    light = direct_light_ray(p, nf, ng, albedo, coat_ior, coat_table, 0u, vec3(0.0), rng);
+    sky = HAS_ENVIRONMENT ? environment_ray(p, nf, ng, albedo, coat_ior, coat_table, rng) : no_shadow();
+}
+
+// Their light: the two rays' sum.
+vec3 trace_diffuse(ShadowRay light, ShadowRay sky) {
+    vec3 l = trace_shadow(light);
+    if (HAS_ENVIRONMENT) l += trace_shadow(sky);
     return l;
+}
+
+vec3 direct_diffuse(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, inout Rng rng) {
+    ShadowRay light, sky;
+    direct_diffuse_rays(p, nf, ng, albedo, coat_ior, coat_table, rng, light, sky);
+    return trace_diffuse(light, sky);
 }
 
 #include "glossy_light.glsl"
@@ -300,35 +339,30 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
         vns = nf;
         float lobe_in = lobe_pdf;
         lobe_pdf = 0.0;
+        // This vertex's shadow rays, prepared by its kind of surface and traced after the branches
+        // (ShadowRay): `light` (and with an environment `sky`) for term (d) at a diffuse point, a glossy
+        // hit point or a plastic's base, `lobe` for the light a rough vertex or a rough coat reflects.
+        ShadowRay light = no_shadow(), sky = no_shadow(), lobe = no_shadow();
+        vec3 vthr = thr;     // the path's weight at this vertex (thr goes on with the path)
+        vec3 e = vec3(0.0);  // the emission here, where the path ends here
+        bool ends = false;   // the path ends here (a diffuse point or a glossy hit point)
+        bool stops = false;  // a rough vertex's lobe left the path no weight
         if (m.surface == SURFACE_DIFFUSE) {
             // Emitters are one-sided; after a rough vertex the emission is weighed against its shadow ray,
             // and marks nothing: `seen` is for the emission no shadow ray takes (lobe_in 0).
-            vec3 e = front ? thr * m.emission * lobe_weight(lobe_in, lobe_from, h, m.emission) : vec3(0.0);
+            e = front ? thr * m.emission * lobe_weight(lobe_in, lobe_from, h, m.emission) : vec3(0.0);
             if (max(e.r, max(e.g, e.b)) > 0.0 && !(lobe_in > 0.0)) seen = true;
-            if (params.direct_light != 0u) {
-                vec3 l = direct_diffuse(h.pos, nf, ng, m.color, 0.0, 0u, rng);
-                if (max(l.r, max(l.g, l.b)) > 0.0) lit = true;
-                e += thr * l;
-            }
-            return sum + e;
-        }
-        if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR && glossy_hit(h.material)) {
+            if (params.direct_light != 0u) direct_diffuse_rays(h.pos, nf, ng, m.color, 0.0, 0u, rng, light, sky);
+            ends = true;
+        } else if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR && glossy_hit(h.material)) {
             // A glossy hit point's vertex: its term (d), and the path ends (the photons have the rest).
-            vec3 e = vec3(0.0);
-            if (params.direct_light != 0u) {
-                vec3 l = direct_light(h.pos, nf, ng, m.color, 0.0, 0u, h.material + 1u, -d, rng);
-                if (max3(l) > 0.0) lit = true;
-                e = thr * l;
-            }
-            return sum + e;
-        }
-        if (is_reflector(m.surface)) {
+            if (params.direct_light != 0u) light = direct_light_ray(h.pos, nf, ng, m.color, 0.0, 0u, h.material + 1u, -d, rng);
+            ends = true;
+        } else if (is_reflector(m.surface)) {
             thr *= reflector_weight(h.material, m, -dot(d, nf));
             d = reflect(d, nf);
             o = offset_ray(h.pos, nf);
-            continue;
-        }
-        if (HAS_PLASTICS && m.surface == SURFACE_PLASTIC) {
+        } else if (HAS_PLASTICS && m.surface == SURFACE_PLASTIC) {
             // Both lobes, without a choice between them: the base's term (d) by its shadow ray here, and
             // the path goes on along the coat's reflection (term (a) and (d) further along its chain).
             // Plastic does not emit.
@@ -336,17 +370,10 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             uint table = HAS_ROUGH_PLASTICS ? material_table(h.material) : 0u;
             vec3 coat_d = d;
             plastic_lobes(h.material, m, table, nf, rng, coat_d, spec, diff);
-            if (params.direct_light != 0u) {
-                vec3 l = direct_diffuse(h.pos, nf, ng, diff, m.ior, table, rng);
-                if (max3(l) > 0.0) lit = true;
-                sum += thr * l;
-            }
+            if (params.direct_light != 0u) direct_diffuse_rays(h.pos, nf, ng, diff, m.ior, table, rng, light, sky);
             vec3 wo = -d;
-            if (rough_coat(m, table)) {
-                // A rough coat is a rough vertex (glossy_light.glsl): its shadow ray, then the lobe's.
-                sum += thr * rough_light(h.material, m, h, nf, ng, front, wo, rng, lit);
-                if (bvh_spent || bvh_cut) break; // counted by shadowed; the sample is dropped
-            }
+            // A rough coat is a rough vertex (glossy_light.glsl): its shadow ray, then the lobe's.
+            if (rough_coat(m, table)) lobe = rough_light_ray(h.material, m, h, nf, ng, front, wo, rng);
             thr *= spec;
             d = coat_d;
             o = offset_ray(h.pos, nf);
@@ -354,26 +381,37 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
                 lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, d);
                 lobe_from = h.pos;
             }
-            continue;
-        }
-        if (HAS_THIN && m.surface == SURFACE_THIN) {
+        } else if (HAS_THIN && m.surface == SURFACE_THIN) {
             thr *= thin_branch(h.material, m, h.pos, nf, branch_u(rng), o, d);
-            continue;
-        }
-        if (rough_vertex(m, h.material)) {
+        } else if (rough_vertex(m, h.material)) {
             // The light this vertex reflects straight from an emitter, by a shadow ray (glossy_light.glsl),
             // then the lobe's direction, whose emission met next is weighed against it.
             vec3 wo = -d;
             rough = true;
-            sum += thr * rough_light(h.material, m, h, nf, ng, front, wo, rng, lit);
-            if (bvh_spent || bvh_cut) break; // counted by shadowed; the sample is dropped
+            lobe = rough_light_ray(h.material, m, h, nf, ng, front, wo, rng);
             rough_bounce(h.material, m, h, nf, front, rng, o, d, thr);
-            if (max3(thr) <= 0.0) break;
-            lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, d);
-            lobe_from = h.pos;
-            continue;
+            stops = max3(thr) <= 0.0;
+            if (!stops) {
+                lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, d);
+                lobe_from = h.pos;
+            }
+        } else {
+            glass_branch(h.pos, nf, front, m.ior, branch_u(rng), o, d);
         }
-        glass_branch(h.pos, nf, front, m.ior, branch_u(rng), o, d);
+        // The shadow rays, in the order the sums took them before they were traced here.
+        if (light.live || sky.live) {
+            vec3 l = trace_diffuse(light, sky);
+            if (max3(l) > 0.0) lit = true;
+            if (ends) e += vthr * l; else sum += vthr * l;
+        }
+        if (lobe.live) {
+            vec3 l = trace_shadow(lobe);
+            if (max3(l) > 0.0) lit = true;
+            sum += vthr * l;
+        }
+        if (bvh_spent || bvh_cut) break; // counted by shadowed; the sample is dropped
+        if (ends) return sum + e;
+        if (stops) break;
     }
     return sum;
 }
@@ -449,6 +487,12 @@ void main() {
                 float lobe_in = lobe_pdf;
                 lobe_pdf = 0.0;
                 bool diffuse = m.surface == SURFACE_DIFFUSE;
+                // This vertex's shadow rays where this path is one of the samples, traced after the branches
+                // (ShadowRay, as emission_sample): `light` and `sky` for term (d), weighted r.thr as the
+                // vertex found it; `lobe` for a rough vertex's or rough coat's light, weighted lobe_thr.
+                ShadowRay light = no_shadow(), sky = no_shadow(), lobe = no_shadow();
+                vec3 vthr = r.thr, lobe_thr = r.thr;
+                bool ends = false; // the path ends at this vertex, once its shadow rays are traced
                 if (diffuse || (HAS_PLASTICS && m.surface == SURFACE_PLASTIC)) {
                     // A diffuse surface, or a plastic's base under its coat: the hit point and term (d).
                     // A plastic keeps both lobes while the pixel has slots for the reflection's path and
@@ -478,61 +522,51 @@ void main() {
                     }
                     if (base) {
                         // Term (d) for this path, where it is one of the samples (below).
-                        if (params.direct_light != 0u && hit_is_sample) {
-                            hit_emitted += r.thr * direct_diffuse(h.pos, nf, ng, diff, diffuse ? 0.0 : m.ior, table, rng);
-                            if (bvh_spent) sp = 0u; // counted there; no budget for the rest
-                        }
+                        if (params.direct_light != 0u && hit_is_sample)
+                            direct_diffuse_rays(h.pos, nf, ng, diff, diffuse ? 0.0 : m.ior, table, rng, light, sky);
                         if (max3(diff) > 0.0 && slot < params.hit_slots) {
                             hit_points[base_slot + slot] = HitPoint(h.pos, pixel, nf, 0u, r.thr * diff / PI, 0u);
                             slot++;
                         }
-                        if (!coat || bvh_spent) break;
+                        ends = !coat;
                     }
-                    // A rough coat followed is a rough vertex (glossy_light.glsl): its shadow ray where this
-                    // path is a sample, weighed as the coat's lobe is, then the lobe's direction.
-                    vec3 wo = -r.d;
-                    bool rough = !diffuse && rough_coat(m, table) && hit_is_sample;
-                    if (rough) {
-                        bool unused = false;
-                        hit_emitted += r.thr * coat_scale * rough_light(h.material, m, h, nf, ng, front, wo, rng, unused);
-                        if (bvh_spent) { sp = 0u; break; } // counted there; no budget for the rest
+                    if (!ends) {
+                        // A rough coat followed is a rough vertex (glossy_light.glsl): its shadow ray where
+                        // this path is a sample, weighed as the coat's lobe is, then the lobe's direction.
+                        vec3 wo = -r.d;
+                        bool rough = !diffuse && rough_coat(m, table) && hit_is_sample;
+                        if (rough) {
+                            lobe = rough_light_ray(h.material, m, h, nf, ng, front, wo, rng);
+                            lobe_thr = r.thr * coat_scale;
+                        }
+                        r.depth++;
+                        r.thr *= spec;
+                        r.d = coat_d;
+                        r.o = offset_ray(h.pos, nf);
+                        if (rough) {
+                            lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, r.d);
+                            lobe_from = h.pos;
+                        }
                     }
-                    r.depth++;
-                    r.thr *= spec;
-                    r.d = coat_d;
-                    r.o = offset_ray(h.pos, nf);
-                    if (rough) {
-                        lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, r.d);
-                        lobe_from = h.pos;
-                    }
-                    continue;
-                }
-                if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR && glossy_hit(h.material)) {
+                } else if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR && glossy_hit(h.material)) {
                     // A glossy hit point (rough_conductor.glsl): term (d) by its BRDF, the hit point whose
                     // gather evaluates the BRDF per photon; the path ends here.
                     vec3 wo = -r.d;
                     float cos_o = dot(wo, nf);
                     if (!(cos_o > 0.0)) break;
-                    if (params.direct_light != 0u && hit_is_sample) {
-                        hit_emitted += r.thr * direct_light(h.pos, nf, ng, m.color, 0.0, 0u, h.material + 1u, wo, rng);
-                        if (bvh_spent) sp = 0u; // counted there; no budget for the rest
-                    }
+                    if (params.direct_light != 0u && hit_is_sample)
+                        light = direct_light_ray(h.pos, nf, ng, m.color, 0.0, 0u, h.material + 1u, wo, rng);
                     if (slot < params.hit_slots) {
                         vec3 w = rough_conductor_hit_weight(h.material, m.color, r.thr, cos_o);
                         hit_points[base_slot + slot] = HitPoint(h.pos, pixel, nf, h.material + 1u, w, oct_encode(wo));
                         slot++;
                     }
-                    break;
-                }
-                r.depth++;
-                if (rough_vertex(m, h.material)) {
+                    ends = true;
+                } else if (rough_vertex(m, h.material)) {
+                    r.depth++;
                     // As the emission samples: a shadow ray where this path is one of them, then the lobe.
                     vec3 wo = -r.d;
-                    if (hit_is_sample) {
-                        bool unused = false;
-                        hit_emitted += r.thr * rough_light(h.material, m, h, nf, ng, front, wo, rng, unused);
-                        if (bvh_spent) { sp = 0u; break; } // counted there; no budget for the rest
-                    }
+                    if (hit_is_sample) lobe = rough_light_ray(h.material, m, h, nf, ng, front, wo, rng);
                     // SPPM's split (params.rough_split): the first rough vertex draws a direction of its lobe
                     // for every slot (glass and plastics take one branch there, so the stack is empty and
                     // no slot is taken yet), each branch weighted 1 / k, so the light seen through the lobe
@@ -551,12 +585,13 @@ void main() {
                         stack[sp++] = b;
                     }
                     rough_bounce(h.material, m, h, nf, front, rng, r.o, r.d, r.thr);
-                    if (max3(r.thr) <= 0.0) break;
-                    if (hit_is_sample) lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, r.d);
-                    lobe_from = h.pos;
-                    continue;
-                }
-                if (HAS_THIN && m.surface == SURFACE_THIN) {
+                    ends = max3(r.thr) <= 0.0;
+                    if (!ends) {
+                        if (hit_is_sample) lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, r.d);
+                        lobe_from = h.pos;
+                    }
+                } else if (HAS_THIN && m.surface == SURFACE_THIN) {
+                    r.depth++;
                     // As glass: both branches while the pixel has slots, else one.
                     float rr = thin_reflectance(-dot(r.d, nf), m.ior);
                     if (rr < 1.0 && slot + sp + 1u < branch_slots) {
@@ -568,37 +603,48 @@ void main() {
                     } else {
                         r.thr *= thin_branch(h.material, m, h.pos, nf, rng_float(rng), r.o, r.d);
                     }
-                    continue;
-                }
-                if (is_reflector(m.surface)) {
+                } else if (is_reflector(m.surface)) {
+                    r.depth++;
                     r.thr *= reflector_weight(h.material, m, -dot(r.d, nf));
                     r.d = reflect(r.d, nf);
                     r.o = offset_ray(h.pos, nf);
-                    continue;
-                }
-                // Glass: the exact Fresnel split.
-                float eta = front ? 1.0 / m.ior : m.ior;
-                float cos_i = -dot(r.d, nf);
-                float cos_t;
-                float f = fresnel_dielectric(cos_i, eta, cos_t);
-                vec3 refl = reflect(r.d, nf);
-                vec3 refr = normalize(eta * r.d + (eta * cos_i - cos_t) * nf);
-                if (f >= 1.0) {
-                    r.d = refl;
-                    r.o = offset_ray(h.pos, nf);
-                } else if (slot + sp + 1u < branch_slots) {
-                    if (!HAS_SHADING_NORMALS || shading_valid(refl, ng, nf))
-                        stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * f * bump_shadowing(refl), r.depth, 0.0, vec3(0.0));
-                    r.thr *= 1.0 - f;
-                    r.d = refr;
-                    r.o = offset_ray(h.pos, -nf);
-                } else if (rng_float(rng) < f) {
-                    r.d = refl;
-                    r.o = offset_ray(h.pos, nf);
                 } else {
-                    r.d = refr;
-                    r.o = offset_ray(h.pos, -nf);
+                    r.depth++;
+                    // Glass: the exact Fresnel split.
+                    float eta = front ? 1.0 / m.ior : m.ior;
+                    float cos_i = -dot(r.d, nf);
+                    float cos_t;
+                    float f = fresnel_dielectric(cos_i, eta, cos_t);
+                    vec3 refl = reflect(r.d, nf);
+                    vec3 refr = normalize(eta * r.d + (eta * cos_i - cos_t) * nf);
+                    if (f >= 1.0) {
+                        r.d = refl;
+                        r.o = offset_ray(h.pos, nf);
+                    } else if (slot + sp + 1u < branch_slots) {
+                        if (!HAS_SHADING_NORMALS || shading_valid(refl, ng, nf))
+                            stack[sp++] = Pending(offset_ray(h.pos, nf), refl, r.thr * f * bump_shadowing(refl), r.depth, 0.0, vec3(0.0));
+                        r.thr *= 1.0 - f;
+                        r.d = refr;
+                        r.o = offset_ray(h.pos, -nf);
+                    } else if (rng_float(rng) < f) {
+                        r.d = refl;
+                        r.o = offset_ray(h.pos, nf);
+                    } else {
+                        r.d = refr;
+                        r.o = offset_ray(h.pos, -nf);
+                    }
                 }
+                // The shadow rays, in the order the sums took them before they were traced here. One that
+                // runs out of the budget ends this path and the pixel's others (counted by shadowed).
+                if (light.live || sky.live) {
+                    hit_emitted += vthr * trace_diffuse(light, sky);
+                    if (bvh_spent) { sp = 0u; ends = true; }
+                }
+                if (lobe.live && !bvh_spent) {
+                    hit_emitted += lobe_thr * trace_shadow(lobe);
+                    if (bvh_spent) { sp = 0u; ends = true; }
+                }
+                if (ends) break;
             }
         }
         for (; slot < params.hit_slots; slot++) {

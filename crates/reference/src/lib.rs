@@ -128,7 +128,7 @@ fn direct_light(
     l * weight * bump.shadowing(w)
 }
 
-/// ray.comp's `environment_by_bsdf`: the environment's light at diffuse point p by a cosine-weighted
+/// ray.comp's `environment_ray` traced: the environment's light at diffuse point p by a cosine-weighted
 /// direction, weighted against direct_light's environment samples (power heuristic).
 #[allow(clippy::too_many_arguments)]
 fn environment_by_bsdf(
