@@ -341,62 +341,73 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
         lobe_pdf = 0.0;
         // This vertex's shadow rays, prepared by its kind of surface and traced after the branches
         // (ShadowRay): `light` (and with an environment `sky`) for term (d) at a diffuse point, a glossy
-        // hit point or a plastic's base, `lobe` for the light a rough vertex or a rough coat reflects.
+        // hit point or a plastic's base, or for the light a rough vertex reflects; `lobe` for a rough
+        // coat's, the one vertex that sends two (a scene without rough plastics has no such traversal).
         ShadowRay light = no_shadow(), sky = no_shadow(), lobe = no_shadow();
         vec3 vthr = thr;     // the path's weight at this vertex (thr goes on with the path)
         vec3 e = vec3(0.0);  // the emission here, where the path ends here
-        bool ends = false;   // the path ends here (a diffuse point or a glossy hit point)
+        bool diffuse = m.surface == SURFACE_DIFFUSE;
+        bool glossy = HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR && glossy_hit(h.material);
+        bool plastic = HAS_PLASTICS && m.surface == SURFACE_PLASTIC;
+        bool ends = diffuse || glossy; // the path ends here (at a glossy hit point the photons have the rest)
         bool stops = false;  // a rough vertex's lobe left the path no weight
-        if (m.surface == SURFACE_DIFFUSE) {
+        // Each kind of vertex's numbers are drawn in the order its branch drew them when each branch
+        // prepared its own rays; one preparation of each kind of ray serves every branch, as one
+        // traversal does (ShadowRay: lavapipe runs each copy under a mask).
+        vec3 albedo = m.color; // the reflectance term (d) takes here
+        float coat_ior = 0.0;
+        uint table = 0u;
+        vec3 spec = vec3(0.0), coat_d = d;
+        vec3 wo = -d;
+        if (diffuse) {
             // Emitters are one-sided; after a rough vertex the emission is weighed against its shadow ray,
             // and marks nothing: `seen` is for the emission no shadow ray takes (lobe_in 0).
             e = front ? thr * m.emission * lobe_weight(lobe_in, lobe_from, h, m.emission) : vec3(0.0);
             if (max(e.r, max(e.g, e.b)) > 0.0 && !(lobe_in > 0.0)) seen = true;
-            if (params.direct_light != 0u) direct_diffuse_rays(h.pos, nf, ng, m.color, 0.0, 0u, rng, light, sky);
-            ends = true;
-        } else if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR && glossy_hit(h.material)) {
-            // A glossy hit point's vertex: its term (d), and the path ends (the photons have the rest).
-            if (params.direct_light != 0u) light = direct_light_ray(h.pos, nf, ng, m.color, 0.0, 0u, h.material + 1u, -d, rng);
-            ends = true;
-        } else if (is_reflector(m.surface)) {
-            thr *= reflector_weight(h.material, m, -dot(d, nf));
-            d = reflect(d, nf);
-            o = offset_ray(h.pos, nf);
-        } else if (HAS_PLASTICS && m.surface == SURFACE_PLASTIC) {
+        } else if (plastic) {
             // Both lobes, without a choice between them: the base's term (d) by its shadow ray here, and
             // the path goes on along the coat's reflection (term (a) and (d) further along its chain).
             // Plastic does not emit.
-            vec3 spec, diff;
-            uint table = HAS_ROUGH_PLASTICS ? material_table(h.material) : 0u;
-            vec3 coat_d = d;
-            plastic_lobes(h.material, m, table, nf, rng, coat_d, spec, diff);
-            if (params.direct_light != 0u) direct_diffuse_rays(h.pos, nf, ng, diff, m.ior, table, rng, light, sky);
-            vec3 wo = -d;
-            // A rough coat is a rough vertex (glossy_light.glsl): its shadow ray, then the lobe's.
-            if (rough_coat(m, table)) lobe = rough_light_ray(h.material, m, h, nf, ng, front, wo, rng);
+            table = HAS_ROUGH_PLASTICS ? material_table(h.material) : 0u;
+            plastic_lobes(h.material, m, table, nf, rng, coat_d, spec, albedo);
+            coat_ior = m.ior;
+        }
+        // Term (d): at a diffuse point, a glossy hit point (by its BRDF) and a plastic's base.
+        if (params.direct_light != 0u && (ends || plastic)) {
+            light = direct_light_ray(h.pos, nf, ng, albedo, coat_ior, table, glossy ? h.material + 1u : 0u, wo, rng);
+            if (HAS_ENVIRONMENT && !glossy) sky = environment_ray(h.pos, nf, ng, albedo, coat_ior, table, rng);
+        }
+        // A rough vertex, or a plastic's rough coat (glossy_light.glsl): the light it reflects straight from
+        // an emitter by a shadow ray, then the lobe's direction, whose emission met next is weighed
+        // against it.
+        bool coat_rough = plastic && rough_coat(m, table);
+        bool rough_here = coat_rough || rough_vertex(m, h.material);
+        if (rough_here) {
+            ShadowRay r = rough_light_ray(h.material, m, h, nf, ng, front, wo, rng);
+            if (coat_rough) lobe = r; else light = r;
+        }
+        if (plastic) {
             thr *= spec;
             d = coat_d;
             o = offset_ray(h.pos, nf);
-            if (rough_coat(m, table)) {
-                lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, d);
-                lobe_from = h.pos;
-            }
-        } else if (HAS_THIN && m.surface == SURFACE_THIN) {
-            thr *= thin_branch(h.material, m, h.pos, nf, branch_u(rng), o, d);
-        } else if (rough_vertex(m, h.material)) {
-            // The light this vertex reflects straight from an emitter, by a shadow ray (glossy_light.glsl),
-            // then the lobe's direction, whose emission met next is weighed against it.
-            vec3 wo = -d;
+        } else if (rough_here) {
             rough = true;
-            lobe = rough_light_ray(h.material, m, h, nf, ng, front, wo, rng);
             rough_bounce(h.material, m, h, nf, front, rng, o, d, thr);
             stops = max3(thr) <= 0.0;
-            if (!stops) {
-                lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, d);
-                lobe_from = h.pos;
+        } else if (!ends) {
+            if (is_reflector(m.surface)) {
+                thr *= reflector_weight(h.material, m, -dot(d, nf));
+                d = reflect(d, nf);
+                o = offset_ray(h.pos, nf);
+            } else if (HAS_THIN && m.surface == SURFACE_THIN) {
+                thr *= thin_branch(h.material, m, h.pos, nf, branch_u(rng), o, d);
+            } else {
+                glass_branch(h.pos, nf, front, m.ior, branch_u(rng), o, d);
             }
-        } else {
-            glass_branch(h.pos, nf, front, m.ior, branch_u(rng), o, d);
+        }
+        if (rough_here && !stops) {
+            lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, d);
+            lobe_from = h.pos;
         }
         // The shadow rays, in the order the sums took them before they were traced here.
         if (light.live || sky.live) {
@@ -404,7 +415,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             if (max3(l) > 0.0) lit = true;
             if (ends) e += vthr * l; else sum += vthr * l;
         }
-        if (lobe.live) {
+        if (HAS_ROUGH_PLASTICS && lobe.live) {
             vec3 l = trace_shadow(lobe);
             if (max3(l) > 0.0) lit = true;
             sum += vthr * l;
@@ -487,86 +498,85 @@ void main() {
                 float lobe_in = lobe_pdf;
                 lobe_pdf = 0.0;
                 bool diffuse = m.surface == SURFACE_DIFFUSE;
+                bool glossy = HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR && glossy_hit(h.material);
+                bool plastic = HAS_PLASTICS && m.surface == SURFACE_PLASTIC;
                 // This vertex's shadow rays where this path is one of the samples, traced after the branches
-                // (ShadowRay, as emission_sample): `light` and `sky` for term (d), weighted r.thr as the
-                // vertex found it; `lobe` for a rough vertex's or rough coat's light, weighted lobe_thr.
+                // (ShadowRay, as emission_sample): `light` and `sky` for term (d) or a rough vertex's light,
+                // weighted r.thr as the vertex found it; `lobe` for a rough coat's, weighted lobe_thr.
                 ShadowRay light = no_shadow(), sky = no_shadow(), lobe = no_shadow();
                 vec3 vthr = r.thr, lobe_thr = r.thr;
                 bool ends = false; // the path ends at this vertex, once its shadow rays are traced
-                if (diffuse || (HAS_PLASTICS && m.surface == SURFACE_PLASTIC)) {
-                    // A diffuse surface, or a plastic's base under its coat: the hit point and term (d).
-                    // A plastic keeps both lobes while the pixel has slots for the reflection's path and
-                    // those pending (the base's hit point, weighted D (1 - F(cos_o)) / pi, and the coat's
-                    // reflection, weighted ks F(cos_o)), else one, chosen in proportion to its largest
-                    // weight.
-                    vec3 diff = m.color, spec = vec3(0.0);
-                    bool base = true, coat = false;
-                    uint table = 0u;
-                    vec3 coat_d = r.d;
-                    float coat_scale = 1.0; // 1 / the probability of the coat where one lobe is chosen
-                    if (diffuse) {
-                        // Emitters are one-sided; after a rough vertex weighed against its shadow ray.
-                        if (front) hit_emitted += r.thr * m.emission * lobe_weight(lobe_in, lobe_from, h, m.emission);
-                    } else if (HAS_PLASTICS) {
-                        table = HAS_ROUGH_PLASTICS ? material_table(h.material) : 0u;
-                        plastic_lobes(h.material, m, table, nf, rng, coat_d, spec, diff);
-                        coat = true;
-                        if (slot + sp + 1u >= branch_slots) {
-                            if (!(max3(spec) + max3(diff) > 0.0)) break;
-                            float ps = max3(spec) / (max3(spec) + max3(diff));
-                            coat = rng_float(rng) < ps;
-                            base = !coat;
-                            if (coat) spec /= ps; else diff /= 1.0 - ps;
-                            if (coat) coat_scale = 1.0 / ps;
-                        }
+                // A diffuse surface, or a plastic's base under its coat: the hit point and term (d). A
+                // plastic keeps both lobes while the pixel has slots for the reflection's path and those
+                // pending (the base's hit point, weighted D (1 - F(cos_o)) / pi, and the coat's reflection,
+                // weighted ks F(cos_o)), else one, chosen in proportion to its largest weight. A glossy hit
+                // point (rough_conductor.glsl): term (d) by its BRDF, the hit point whose gather evaluates
+                // the BRDF per photon; the path ends there.
+                vec3 diff = m.color, spec = vec3(0.0);
+                bool base = diffuse || plastic, coat = false;
+                uint table = 0u;
+                vec3 coat_d = r.d;
+                float coat_scale = 1.0; // 1 / the probability of the coat where one lobe is chosen
+                vec3 wo = -r.d;
+                float cos_o = dot(wo, nf);
+                if (diffuse) {
+                    // Emitters are one-sided; after a rough vertex weighed against its shadow ray.
+                    if (front) hit_emitted += r.thr * m.emission * lobe_weight(lobe_in, lobe_from, h, m.emission);
+                } else if (plastic) {
+                    table = HAS_ROUGH_PLASTICS ? material_table(h.material) : 0u;
+                    plastic_lobes(h.material, m, table, nf, rng, coat_d, spec, diff);
+                    coat = true;
+                    if (slot + sp + 1u >= branch_slots) {
+                        if (!(max3(spec) + max3(diff) > 0.0)) break;
+                        float ps = max3(spec) / (max3(spec) + max3(diff));
+                        coat = rng_float(rng) < ps;
+                        base = !coat;
+                        if (coat) spec /= ps; else diff /= 1.0 - ps;
+                        if (coat) coat_scale = 1.0 / ps;
                     }
-                    if (base) {
-                        // Term (d) for this path, where it is one of the samples (below).
-                        if (params.direct_light != 0u && hit_is_sample)
-                            direct_diffuse_rays(h.pos, nf, ng, diff, diffuse ? 0.0 : m.ior, table, rng, light, sky);
-                        if (max3(diff) > 0.0 && slot < params.hit_slots) {
-                            hit_points[base_slot + slot] = HitPoint(h.pos, pixel, nf, 0u, r.thr * diff / PI, 0u);
-                            slot++;
-                        }
-                        ends = !coat;
+                } else if (glossy && !(cos_o > 0.0)) {
+                    break;
+                }
+                // Term (d) for this path, where it is one of the samples (below); one preparation for every
+                // kind of vertex that takes it, each drawing its numbers where its own branch did.
+                if ((base || glossy) && params.direct_light != 0u && hit_is_sample) {
+                    float coat_ior = plastic ? m.ior : 0.0;
+                    light = direct_light_ray(h.pos, nf, ng, diff, coat_ior, table, glossy ? h.material + 1u : 0u, wo, rng);
+                    if (HAS_ENVIRONMENT && !glossy) sky = environment_ray(h.pos, nf, ng, diff, coat_ior, table, rng);
+                }
+                if (base) {
+                    if (max3(diff) > 0.0 && slot < params.hit_slots) {
+                        hit_points[base_slot + slot] = HitPoint(h.pos, pixel, nf, 0u, r.thr * diff / PI, 0u);
+                        slot++;
                     }
-                    if (!ends) {
-                        // A rough coat followed is a rough vertex (glossy_light.glsl): its shadow ray where
-                        // this path is a sample, weighed as the coat's lobe is, then the lobe's direction.
-                        vec3 wo = -r.d;
-                        bool rough = !diffuse && rough_coat(m, table) && hit_is_sample;
-                        if (rough) {
-                            lobe = rough_light_ray(h.material, m, h, nf, ng, front, wo, rng);
-                            lobe_thr = r.thr * coat_scale;
-                        }
-                        r.depth++;
-                        r.thr *= spec;
-                        r.d = coat_d;
-                        r.o = offset_ray(h.pos, nf);
-                        if (rough) {
-                            lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, r.d);
-                            lobe_from = h.pos;
-                        }
-                    }
-                } else if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR && glossy_hit(h.material)) {
-                    // A glossy hit point (rough_conductor.glsl): term (d) by its BRDF, the hit point whose
-                    // gather evaluates the BRDF per photon; the path ends here.
-                    vec3 wo = -r.d;
-                    float cos_o = dot(wo, nf);
-                    if (!(cos_o > 0.0)) break;
-                    if (params.direct_light != 0u && hit_is_sample)
-                        light = direct_light_ray(h.pos, nf, ng, m.color, 0.0, 0u, h.material + 1u, wo, rng);
+                    ends = !coat;
+                }
+                if (glossy) {
                     if (slot < params.hit_slots) {
                         vec3 w = rough_conductor_hit_weight(h.material, m.color, r.thr, cos_o);
                         hit_points[base_slot + slot] = HitPoint(h.pos, pixel, nf, h.material + 1u, w, oct_encode(wo));
                         slot++;
                     }
                     ends = true;
-                } else if (rough_vertex(m, h.material)) {
+                }
+                // A rough coat followed, or a rough vertex (glossy_light.glsl): its shadow ray where this path
+                // is a sample, weighed as the lobe is, then the lobe's direction.
+                bool coat_rough = plastic && !ends && rough_coat(m, table);
+                bool rough_here = coat_rough || (!ends && rough_vertex(m, h.material));
+                if (rough_here && hit_is_sample) {
+                    ShadowRay sr = rough_light_ray(h.material, m, h, nf, ng, front, wo, rng);
+                    if (coat_rough) lobe = sr; else light = sr;
+                    lobe_thr = r.thr * coat_scale;
+                }
+                if (ends) {
+                    // A diffuse point or a glossy hit point: nothing follows.
+                } else if (plastic) {
                     r.depth++;
-                    // As the emission samples: a shadow ray where this path is one of them, then the lobe.
-                    vec3 wo = -r.d;
-                    if (hit_is_sample) lobe = rough_light_ray(h.material, m, h, nf, ng, front, wo, rng);
+                    r.thr *= spec;
+                    r.d = coat_d;
+                    r.o = offset_ray(h.pos, nf);
+                } else if (rough_here) {
+                    r.depth++;
                     // SPPM's split (params.rough_split): the first rough vertex draws a direction of its lobe
                     // for every slot (glass and plastics take one branch there, so the stack is empty and
                     // no slot is taken yet), each branch weighted 1 / k, so the light seen through the lobe
@@ -586,10 +596,6 @@ void main() {
                     }
                     rough_bounce(h.material, m, h, nf, front, rng, r.o, r.d, r.thr);
                     ends = max3(r.thr) <= 0.0;
-                    if (!ends) {
-                        if (hit_is_sample) lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, r.d);
-                        lobe_from = h.pos;
-                    }
                 } else if (HAS_THIN && m.surface == SURFACE_THIN) {
                     r.depth++;
                     // As glass: both branches while the pixel has slots, else one.
@@ -634,13 +640,17 @@ void main() {
                         r.o = offset_ray(h.pos, -nf);
                     }
                 }
+                if (rough_here && !ends) {
+                    if (hit_is_sample) lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, r.d);
+                    lobe_from = h.pos;
+                }
                 // The shadow rays, in the order the sums took them before they were traced here. One that
                 // runs out of the budget ends this path and the pixel's others (counted by shadowed).
                 if (light.live || sky.live) {
                     hit_emitted += vthr * trace_diffuse(light, sky);
                     if (bvh_spent) { sp = 0u; ends = true; }
                 }
-                if (lobe.live && !bvh_spent) {
+                if (HAS_ROUGH_PLASTICS && lobe.live && !bvh_spent) {
                     hit_emitted += lobe_thr * trace_shadow(lobe);
                     if (bvh_spent) { sp = 0u; ends = true; }
                 }
