@@ -4,8 +4,8 @@
 # a few times right after, on the same machine (seed-to-seed spread is a third of the error in both).
 # glass-on-table: its torus band, three Mitsuba runs; cornell-aniso: its gold and glass spheres (how much of
 # the gold's 1.30x in history-60s, one seed, is the seed), two Mitsuba runs. Writes equal-time-SCENE.txt
-# and the compare folders SCENE-seedN beside this.
-# Usage: docs/measurements/issue38/pilot-fresnel/equal-time.sh SCENE [SECONDS]  (from the repository root;
+# and the compare folders SCENE-seedN beside this (or in $OUT, for a later build's record).
+# Usage: [OUT=DIR] docs/measurements/issue38/pilot-fresnel/equal-time.sh SCENE [SECONDS]  (from the repository root;
 # needs target/release/ppm-vk and `pip install mitsuba numpy` with libllvm19, ../shared/notes/TOOLCHAIN.md)
 set -euo pipefail
 cd "$(dirname "$0")/../../../.."
@@ -14,7 +14,8 @@ export DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-/usr/lib/x86_64-linux-gnu/libLLV
 PY=${PYTHON:-python3}
 name=$1
 T=${2:-60}
-o=docs/measurements/issue38/pilot-fresnel
+o=${OUT:-docs/measurements/issue38/pilot-fresnel}
+mkdir -p "$o"
 refs=scenes/references
 case $name in
   glass-on-table)
