@@ -570,32 +570,45 @@ void main() {
                 }
                 if (ends) {
                     // A diffuse point or a glossy hit point: nothing follows.
-                } else if (plastic) {
+                } else if (plastic || rough_here) {
+                    // The coat's reflection, or a rough vertex's lobe. SPPM's split (params.rough_split): the
+                    // first rough vertex draws a direction of its lobe for every slot (glass and plastics take
+                    // one branch there, so the stack is empty and no slot is taken yet), each branch weighted
+                    // 1 / k, so the light seen through the lobe gets k hit points a pass; their sum is one
+                    // sample of it (each branch's terms (a) and (d) too). The k - 1 stacked first, in order;
+                    // this path takes the last. One loop for all of them, so that the kernel holds one copy
+                    // of the lobe's sampling and density (lavapipe runs every copy).
                     r.depth++;
-                    r.thr *= spec;
-                    r.d = coat_d;
-                    r.o = offset_ray(h.pos, nf);
-                } else if (rough_here) {
-                    r.depth++;
-                    // SPPM's split (params.rough_split): the first rough vertex draws a direction of its lobe
-                    // for every slot (glass and plastics take one branch there, so the stack is empty and
-                    // no slot is taken yet), each branch weighted 1 / k, so the light seen through the lobe
-                    // gets k hit points a pass; their sum is one sample of it (each branch's terms (a)
-                    // and (d) too). The k - 1 stacked first, in order; this path takes the last.
-                    uint k = may_split ? params.hit_slots : 1u;
-                    may_split = false;
+                    bool split = rough_here && !coat_rough && may_split;
+                    if (rough_here && !coat_rough) may_split = false;
+                    uint k = split ? params.hit_slots : 1u;
                     r.thr /= float(k);
-                    for (uint j = 1u; j < k; j++) {
+                    Pending own = Pending(r.o, r.d, r.thr, r.depth, 0.0, h.pos);
+                    for (uint j = 1u; j <= k; j++) {
                         Pending b = Pending(r.o, r.d, r.thr, r.depth, 0.0, h.pos);
-                        rough_bounce(h.material, m, h, nf, front, rng, b.o, b.d, b.thr);
-                        if (!(max3(b.thr) > 0.0)) continue;
-                        if (HAS_SHADING_NORMALS && !shading_valid(b.d, ng, nf)) continue;
-                        if (HAS_NORMAL_MAPS) b.thr *= bump_shadowing(b.d);
-                        if (hit_is_sample) b.lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, b.d);
-                        stack[sp++] = b;
+                        if (plastic) {
+                            b.thr *= spec;
+                            b.d = coat_d;
+                            b.o = offset_ray(h.pos, nf);
+                        } else {
+                            rough_bounce(h.material, m, h, nf, front, rng, b.o, b.d, b.thr);
+                        }
+                        bool mine = j == k;
+                        if (!mine && !(max3(b.thr) > 0.0)) continue;
+                        if (!mine && HAS_SHADING_NORMALS && !shading_valid(b.d, ng, nf)) continue;
+                        if (!mine && HAS_NORMAL_MAPS) b.thr *= bump_shadowing(b.d);
+                        bool weighed = rough_here && hit_is_sample && (!mine || plastic || !(max3(b.thr) <= 0.0));
+                        if (weighed) b.lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, b.d);
+                        if (mine) own = b; else stack[sp++] = b;
                     }
-                    rough_bounce(h.material, m, h, nf, front, rng, r.o, r.d, r.thr);
-                    ends = max3(r.thr) <= 0.0;
+                    r.o = own.o;
+                    r.d = own.d;
+                    r.thr = own.thr;
+                    ends = rough_here && !coat_rough && max3(r.thr) <= 0.0;
+                    if (rough_here && !ends) {
+                        lobe_pdf = own.lobe_pdf;
+                        lobe_from = h.pos;
+                    }
                 } else if (HAS_THIN && m.surface == SURFACE_THIN) {
                     r.depth++;
                     // As glass: both branches while the pixel has slots, else one.
@@ -639,10 +652,6 @@ void main() {
                         r.d = refr;
                         r.o = offset_ray(h.pos, -nf);
                     }
-                }
-                if (rough_here && !ends) {
-                    if (hit_is_sample) lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, r.d);
-                    lobe_from = h.pos;
                 }
                 // The shadow rays, in the order the sums took them before they were traced here. One that
                 // runs out of the budget ends this path and the pixel's others (counted by shadowed).
