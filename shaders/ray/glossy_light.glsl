@@ -6,7 +6,7 @@
 // before, only the direction the lobe sampled could meet the light, one per vertex and eye path, which
 // on a narrow lobe under a small light is rare and bright (the speckle on rough metal), and never met a
 // point light or the sun at all. Now each rough vertex also sends a shadow ray to one light (chosen by
-// power, a point uniform on it, as direct_light), and the emission that the next ray meets is weighed
+// power, a point uniform on it, as direct_light_ray), and the emission that the next ray meets is weighed
 // against it:
 //   shadow ray:  f cos Le / p_l  times  w_l = p_l'^2 / (p_l'^2 + p_b^2)
 //   lobe's ray:  f cos Le / p_b  times  w_b = p_b^2 / (p_l'^2 + p_b^2)
@@ -162,13 +162,6 @@ ShadowRay rough_light_ray(uint i, Material m, Hit h, vec3 nf, vec3 ng, bool fron
     vec3 l = fw * (pb * weight) * li; // f |cos_l| Le / p_l w_l
     if (HAS_NORMAL_MAPS) l *= bump_shadowing(w); // a bump or normal map's term (normal_map.glsl)
     return ShadowRay(o, w, d, ray.key, l, true);
-}
-
-// The same traced at once. `lit`: set if it reached a light.
-vec3 rough_light(uint i, Material m, Hit h, vec3 nf, vec3 ng, bool front, vec3 wo, inout Rng rng, inout bool lit) {
-    vec3 l = trace_shadow(rough_light_ray(i, m, h, nf, ng, front, wo, rng));
-    if (max3(l) > 0.0) lit = true;
-    return l;
 }
 
 // The lobe's part: the weight of the emission `le` met at hit h by a ray that a rough vertex at x sampled

@@ -33,7 +33,7 @@
 // Direct light (params.direct_light, `--direct sample`): each of these paths also estimates (d), the light
 // that reaches the chain's first diffuse vertex straight from an emitter and is reflected towards the eye,
 // by sampling one light (in proportion to its power, a point uniform on it) with a shadow ray
-// (direct_light below); every pixel then takes pc.light_samples such paths, marked ones
+// (direct_light_ray below); every pixel then takes pc.light_samples such paths, marked ones
 // pc.emission_samples, and those where none of the pilot's shadow rays reached a light (nor a
 // neighbour's) one: the pilot marks the lit pixels too, and its samples stay out of the sums. The photons
 // leave no record where they first land straight from a light (photon.comp), so the partition of the
@@ -46,7 +46,7 @@
 // Every kind of light keeps this partition (lights.glsl): a glowing sphere is an emitter that eye paths
 // meet (a) and shadow rays sample by the solid angle of its cap (d); points, spots and the sun no eye path
 // meets (no (a)), shadow rays reach them (d); the environment is (a) where an eye path leaves the scene, and
-// its (d) is two strategies weighted by the power heuristic, direct_light's sample of the map and
+// its (d) is two strategies weighted by the power heuristic, direct_light_ray's sample of the map and
 // environment_ray's cosine direction that leaves the scene: the weights sum to one in every direction,
 // so together they are one unbiased estimate of (d). Photons from every kind skip their first landing alike.
 // A plastic is both an S (its coat's reflection) and a D (its base, plastic.glsl): an emission-sample path
@@ -167,8 +167,8 @@ vec3 trace_shadow(ShadowRay s) {
 // the light's direction (rough_conductor.glsl); albedo then holds its specular_reflectance.
 // nf is the shading normal, ng the true surface's on its side: a light on different sides of them adds
 // nothing (shading.glsl).
-// Prepared as a ShadowRay; direct_light traces it at once. A shadow ray that runs out of traversal steps is
-// counted (shadowed) and the caller drops the sample.
+// Prepared as a ShadowRay (traced by the caller). A shadow ray that runs out of traversal steps is counted
+// (shadowed) and the caller drops the sample.
 ShadowRay direct_light_ray(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, uint rough,
                            vec3 wo, inout Rng rng) {
     ShadowRay ray = no_shadow();
@@ -218,17 +218,12 @@ ShadowRay direct_light_ray(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior
     return ShadowRay(o, w, d, ray.key, l, true);
 }
 
-vec3 direct_light(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, uint rough, vec3 wo,
-                  inout Rng rng) {
-    return trace_shadow(direct_light_ray(p, nf, ng, albedo, coat_ior, coat_table, rough, wo, rng));
-}
-
 // The environment's light at diffuse point p by the other strategy: a cosine-weighted direction (the
-// diffuse BRDF's) that leaves the scene, weighted against direct_light's environment samples by the
+// diffuse BRDF's) that leaves the scene, weighted against direct_light_ray's environment samples by the
 // power heuristic, so that the two together are one estimate of the environment's direct light (term
-// (d)) with the lower variance of each where it is better: the map's bright spots by direct_light, the
-// broad sky by this. Same arguments as direct_light's (a diffuse or plastic base only: a glossy hit point
-// takes the environment by direct_light alone, at weight 1).
+// (d)) with the lower variance of each where it is better: the map's bright spots by direct_light_ray, the
+// broad sky by this. Same arguments as direct_light_ray's (a diffuse or plastic base only: a glossy hit
+// point takes the environment by direct_light_ray alone, at weight 1).
 ShadowRay environment_ray(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, inout Rng rng) {
     ShadowRay ray = no_shadow();
     Emitter e = first_emitter();
@@ -250,25 +245,13 @@ ShadowRay environment_ray(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior,
     return ShadowRay(o, w, infinite_reach(e, o), ray.key, l, true);
 }
 
-// Term (d) at a diffuse point or a plastic's base: direct_light, and with an environment its other
-// strategy.
-void direct_diffuse_rays(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, inout Rng rng,
-                         out ShadowRay light, out ShadowRay sky) {
-    light = direct_light_ray(p, nf, ng, albedo, coat_ior, coat_table, 0u, vec3(0.0), rng);
-    sky = HAS_ENVIRONMENT ? environment_ray(p, nf, ng, albedo, coat_ior, coat_table, rng) : no_shadow();
-}
-
-// Their light: the two rays' sum.
+// Term (d) at a diffuse point or a plastic's base is direct_light_ray's ray and, with an environment,
+// environment_ray's (drawn in that order); a glossy hit point's, direct_light_ray's alone. What they bring
+// together: the two rays' sum.
 vec3 trace_diffuse(ShadowRay light, ShadowRay sky) {
     vec3 l = trace_shadow(light);
     if (HAS_ENVIRONMENT) l += trace_shadow(sky);
     return l;
-}
-
-vec3 direct_diffuse(vec3 p, vec3 nf, vec3 ng, vec3 albedo, float coat_ior, uint coat_table, inout Rng rng) {
-    ShadowRay light, sky;
-    direct_diffuse_rays(p, nf, ng, albedo, coat_ior, coat_table, rng, light, sky);
-    return trace_diffuse(light, sky);
 }
 
 #include "glossy_light.glsl"

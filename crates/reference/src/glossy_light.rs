@@ -108,8 +108,8 @@ fn area_light_density(g: &GpuScene, x: Vec3, y: Vec3, ny: Vec3, le: Vec3) -> f32
     }
 }
 
-/// `rough_light`: the shadow ray's part at rough vertex `h`, seen from `wo`; `lit` set if it reached a
-/// light.
+/// glossy_light.glsl's `rough_light_ray`, traced at once: the shadow ray's part at rough vertex `h`,
+/// seen from `wo`; `lit` set if it reached a light.
 #[allow(clippy::too_many_arguments)]
 pub fn rough_light(
     g: &GpuScene,

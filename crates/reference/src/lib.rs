@@ -55,7 +55,8 @@ fn camera_ray(g: &GpuScene, px: u32, py: u32, j: [f32; 2]) -> Vec3 {
     (v3(p.forward) + sx * v3(p.right) + sy * v3(p.up)).normalize()
 }
 
-/// ray.comp's `direct_light`: term (d) at diffuse point p, one light sample with its shadow ray;
+/// ray.comp's `direct_light_ray`, traced at once: term (d) at diffuse point p, one light sample with its
+/// shadow ray;
 /// `coat`: p is that plastic's base under its coat.
 /// `rough`: p is a glossy hit point on that rough conductor, seen from the direction given (albedo: its
 /// specular_reflectance). `nf` is the shading normal, `ng` the true surface's on its side.
@@ -166,8 +167,8 @@ fn environment_by_bsdf(
     l * bump.shadowing(w)
 }
 
-/// ray.comp's `direct_diffuse`: direct_light at a diffuse point or plastic base, and with an environment
-/// its other strategy.
+/// ray.comp's term (d) at a diffuse point or plastic base (`direct_light_ray`, and with an environment
+/// `environment_ray`), traced at once and summed (`trace_diffuse`).
 #[allow(clippy::too_many_arguments)]
 fn direct_diffuse(
     g: &GpuScene,
