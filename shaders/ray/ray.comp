@@ -334,9 +334,9 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
         bool plastic = HAS_PLASTICS && m.surface == SURFACE_PLASTIC;
         bool ends = diffuse || glossy; // the path ends here (at a glossy hit point the photons have the rest)
         bool stops = false;  // a rough vertex's lobe left the path no weight
-        // Each kind of vertex's numbers are drawn in the order its branch drew them when each branch
-        // prepared its own rays; one preparation of each kind of ray serves every branch, as one
-        // traversal does (ShadowRay: lavapipe runs each copy under a mask).
+        // One preparation of each kind of ray serves every kind of vertex, as one traversal does
+        // (lavapipe runs every copy under a mask); each vertex still draws its numbers in the order it
+        // did when its branch prepared its own.
         vec3 albedo = m.color; // the reflectance term (d) takes here
         float coat_ior = 0.0;
         uint table = 0u;
@@ -392,7 +392,8 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             lobe_pdf = lobe_density(h.material, m, h, nf, front, wo, d);
             lobe_from = h.pos;
         }
-        // The shadow rays, in the order the sums took them before they were traced here.
+        // The shadow rays, added to the sums in the order the branches added them when they traced their
+        // own.
         if (light.live || sky.live) {
             vec3 l = trace_diffuse(light, sky);
             if (max3(l) > 0.0) lit = true;
@@ -636,8 +637,9 @@ void main() {
                         r.o = offset_ray(h.pos, -nf);
                     }
                 }
-                // The shadow rays, in the order the sums took them before they were traced here. One that
-                // runs out of the budget ends this path and the pixel's others (counted by shadowed).
+                // The shadow rays, added to the sums in the order the branches added them when they traced
+                // their own. One that runs out of the budget ends this path and the pixel's others (counted
+                // by shadowed).
                 if (light.live || sky.live) {
                     hit_emitted += vthr * trace_diffuse(light, sky);
                     if (bvh_spent) { sp = 0u; ends = true; }
