@@ -112,8 +112,8 @@ float area_light_density(vec3 x, vec3 y, vec3 ny, vec3 le) {
 
 // The shadow ray's part at rough vertex h (material i, `m`), seen from wo (towards the eye): one light
 // chosen by power, weighed against the lobe. nf, ng: the shading and true normals on wo's side. Draws
-// three numbers, and a mask key where it traces the shadow ray (ray.comp's ShadowRay: prepared here,
-// traced by the caller).
+// three numbers, and a mask key where there is a shadow ray to trace (ray.comp's ShadowRay: prepared
+// here, traced by the caller).
 ShadowRay rough_light_ray(uint i, Material m, Hit h, vec3 nf, vec3 ng, bool front, vec3 wo, inout Rng rng) {
     ShadowRay ray = no_shadow();
     Emitter e = choose_emitter(rng_float(rng));
