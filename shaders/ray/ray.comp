@@ -486,9 +486,10 @@ void main() {
                 bool plastic = HAS_PLASTICS && m.surface == SURFACE_PLASTIC;
                 // This vertex's shadow rays where this path is one of the samples, traced after the branches
                 // (ShadowRay, as emission_sample): `light` and `sky` for term (d) or a rough vertex's light,
-                // weighted r.thr as the vertex found it; `lobe` for a rough coat's, weighted lobe_thr.
+                // weighted r.thr as the vertex found it (vthr); `lobe` for a rough coat's, weighted vthr
+                // times coat_scale.
                 ShadowRay light = no_shadow(), sky = no_shadow(), lobe = no_shadow();
-                vec3 vthr = r.thr, lobe_thr = r.thr;
+                vec3 vthr = r.thr;
                 bool ends = false; // the path ends at this vertex, once its shadow rays are traced
                 // A diffuse surface, or a plastic's base under its coat: the hit point and term (d). A
                 // plastic keeps both lobes while the pixel has slots for the reflection's path and those
@@ -546,11 +547,11 @@ void main() {
                 // A rough coat followed, or a rough vertex (glossy_light.glsl): its shadow ray where this path
                 // is a sample, weighed as the lobe is, then the lobe's direction.
                 bool coat_rough = plastic && !ends && rough_coat(m, table);
-                bool rough_here = coat_rough || (!ends && rough_vertex(m, h.material));
+                bool lobe_vertex = !ends && rough_vertex(m, h.material); // a rough conductor or rough glass
+                bool rough_here = coat_rough || lobe_vertex;
                 if (rough_here && hit_is_sample) {
                     ShadowRay sr = rough_light_ray(h.material, m, h, nf, ng, front, wo, rng);
                     if (coat_rough) lobe = sr; else light = sr;
-                    lobe_thr = r.thr * coat_scale;
                 }
                 if (ends) {
                     // A diffuse point or a glossy hit point: nothing follows.
@@ -563,9 +564,8 @@ void main() {
                     // this path takes the last. One loop for all of them, so that the kernel holds one copy
                     // of the lobe's sampling and density (lavapipe runs every copy).
                     r.depth++;
-                    bool split = rough_here && !coat_rough && may_split;
-                    if (rough_here && !coat_rough) may_split = false;
-                    uint k = split ? params.hit_slots : 1u;
+                    uint k = lobe_vertex && may_split ? params.hit_slots : 1u;
+                    if (lobe_vertex) may_split = false;
                     r.thr /= float(k);
                     Pending own = Pending(r.o, r.d, r.thr, r.depth, 0.0, h.pos);
                     for (uint j = 1u; j <= k; j++) {
@@ -588,7 +588,7 @@ void main() {
                     r.o = own.o;
                     r.d = own.d;
                     r.thr = own.thr;
-                    ends = rough_here && !coat_rough && max3(r.thr) <= 0.0;
+                    ends = lobe_vertex && max3(r.thr) <= 0.0;
                     if (rough_here && !ends) {
                         lobe_pdf = own.lobe_pdf;
                         lobe_from = h.pos;
@@ -645,7 +645,7 @@ void main() {
                     if (bvh_spent) { sp = 0u; ends = true; }
                 }
                 if (HAS_ROUGH_PLASTICS && lobe.live && !bvh_spent) {
-                    hit_emitted += lobe_thr * trace_shadow(lobe);
+                    hit_emitted += vthr * coat_scale * trace_shadow(lobe);
                     if (bvh_spent) { sp = 0u; ends = true; }
                 }
                 if (ends) break;
