@@ -428,6 +428,34 @@ fn ray_pass_matches_reference_with_rough_plastics() {
     ray_pass_matches_reference_on(cornell_roughplastic(), true, DirectLight::Sample);
 }
 
+/// `scene` with every rough surface's distribution made GGX (`ggx`) or Beckmann: a scene of one kind,
+/// whose specialised kernels leave the other's code out (microfacet.glsl's mf_is_ggx).
+fn one_distribution(mut scene: ppm_vk_engine::Scene, ggx: bool) -> ppm_vk_engine::Scene {
+    for m in &mut scene.materials {
+        match &mut m.surface {
+            Surface::RoughConductor { rough, .. } | Surface::RoughGlass { rough, .. } => rough.ggx = ggx,
+            Surface::Plastic { rough: Some(rough), .. } => rough.ggx = ggx,
+            _ => {}
+        }
+    }
+    scene.validate().unwrap();
+    scene
+}
+
+/// Rough metal, glass and plastics of one distribution, GGX or Beckmann, in kernels specialised to it.
+#[test]
+fn ray_pass_matches_reference_with_one_distribution() {
+    for ggx in [true, false] {
+        for scene in [cornell_rough(), cornell_roughplastic()] {
+            let settings = Settings {
+                glossy_hits: None,
+                ..settings()
+            };
+            ray_pass_matches_reference_with(one_distribution(scene, ggx), settings);
+        }
+    }
+}
+
 /// Glossy hit points on the rough gold sphere (the glass still sampled through): their weight (the BRDF's
 /// bound over 4 cos_o), the direction towards the eye, and term (d) by the BRDF.
 #[test]
@@ -797,6 +825,20 @@ fn photon_records_match_reference_with_rough_surfaces() {
         ..settings()
     };
     photon_records_match_reference_within(cornell_rough(), settings, 1e-3, 0.993);
+}
+
+/// Rough metal, glass and plastics of one distribution (ray_pass_matches_reference_with_one_distribution).
+#[test]
+fn photon_records_match_reference_with_one_distribution() {
+    for ggx in [true, false] {
+        for scene in [cornell_rough(), cornell_roughplastic()] {
+            let settings = Settings {
+                glossy_hits: None,
+                ..settings()
+            };
+            photon_records_match_reference_within(one_distribution(scene, ggx), settings, 1e-3, 0.993);
+        }
+    }
 }
 
 /// Anisotropic rough metal and glass: bounces in the frame of each hit's tangent; as the rough surfaces'

@@ -10,11 +10,27 @@
 const uint MICROFACET_BECKMANN = 0u;
 const uint MICROFACET_GGX = 1u;
 
+// A kernel compiled for one scene (SCENE_CONSTANTS) knows which distributions its rough surfaces use, and
+// leaves out the other's code: Beckmann's sampling (erf, erfinv, Newton's steps) is long, and lavapipe
+// runs both sides of a branch, so a GGX-only scene would pay for it at every rough vertex.
+#ifdef SCENE_CONSTANTS
+#define HAS_BECKMANN SCENE_BECKMANN
+#define HAS_GGX SCENE_GGX
+#else
+#define HAS_BECKMANN true
+#define HAS_GGX true
+#endif
+
 struct Microfacet {
     uint kind;       // MICROFACET_*
     float au;        // alpha along the tangent
     float av;        // alpha along the bitangent
 };
+
+// Whether mf is GGX (else Beckmann), settled at compile time where the scene has one kind.
+bool mf_is_ggx(Microfacet mf) {
+    return !HAS_BECKMANN || (HAS_GGX && mf.kind == MICROFACET_GGX);
+}
 
 // Direction d in the local frame (t, b, nf).
 vec3 to_local(vec3 d, vec3 t, vec3 b, vec3 nf) {
@@ -63,7 +79,7 @@ float mf_d(Microfacet mf, vec3 m) {
     if (m.z <= 0.0) return 0.0;
     float x = m.x / mf.au, y = m.y / mf.av, z2 = m.z * m.z;
     float r;
-    if (mf.kind == MICROFACET_GGX) {
+    if (mf_is_ggx(mf)) {
         float t = x * x + y * y + z2;
         r = 1.0 / (PI * mf.au * mf.av * t * t);
     } else {
@@ -78,7 +94,7 @@ float mf_g1(Microfacet mf, vec3 v, vec3 m) {
     float xy = (mf.au * v.x) * (mf.au * v.x) + (mf.av * v.y) * (mf.av * v.y);
     if (xy <= 0.0) return 1.0;
     float tan2 = xy / (v.z * v.z); // tan^2 theta times the projected alpha^2
-    if (mf.kind == MICROFACET_GGX) return 2.0 / (1.0 + sqrt(1.0 + tan2));
+    if (mf_is_ggx(mf)) return 2.0 / (1.0 + sqrt(1.0 + tan2));
     float a = inversesqrt(tan2);
     // Mitsuba's rational fit (Walter et al. 2007), which rises to 1.00006 just below a = 1.6: held at 1,
     // so that no bounce gains flux.
@@ -145,7 +161,7 @@ vec2 mf_beckmann_slopes(float cos_theta, vec2 u) {
 // D_wi(m) = G1(wi, m) max(0, wi.m) D(m) / wi.z.
 vec3 mf_sample_visible(Microfacet mf, vec3 wi, vec2 u) {
     vec3 v = normalize(vec3(mf.au * wi.x, mf.av * wi.y, wi.z)); // stretched to unit roughness
-    if (mf.kind == MICROFACET_GGX) {
+    if (mf_is_ggx(mf)) {
         // Heitz 2018: a point on the projected hemisphere, seen from v.
         float len2 = v.x * v.x + v.y * v.y;
         vec3 t1 = len2 > 0.0 ? vec3(-v.y, v.x, 0.0) * inversesqrt(len2) : vec3(1.0, 0.0, 0.0);

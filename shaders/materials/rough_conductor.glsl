@@ -33,9 +33,9 @@
 float rough_conductor_bound(Microfacet mf) {
     float a2 = mf.au * mf.av;
     float peak;
-    if (mf.kind == MICROFACET_GGX) peak = max(1.0, a2 * a2);
+    if (mf_is_ggx(mf)) peak = max(1.0, a2 * a2);
     else peak = a2 > 0.5 ? 4.0 * a2 * a2 * exp(1.0 / a2 - 2.0) : 1.0;
-    float gb = mf.kind == MICROFACET_GGX ? 2.0 / min(mf.au, 2.0) : 3.535 / mf.au + 1.0;
+    float gb = mf_is_ggx(mf) ? 2.0 / min(mf.au, 2.0) : 3.535 / mf.au + 1.0;
     return gb * peak / (PI * a2);
 }
 

@@ -1781,6 +1781,11 @@ fn trace_constants(gpu: &GpuScene, settings: &Settings) -> Option<String> {
                 .any(|m| m.specular_texture != 0 || m.alpha_texture != 0),
             emission_textures: gpu.materials.iter().any(|m| m.emission_texture != 0),
             rough_plastics: gpu.materials.iter().any(|m| m.table != 0),
+            microfacets: gpu
+                .materials
+                .iter()
+                .filter(|m| m.is_rough())
+                .fold(0, |bits, m| bits | 1 << m.distribution),
             shading_normals: gpu.smooth_shading(),
             anisotropic: gpu.materials.iter().any(|m| m.alpha_u != m.alpha_v),
             normal_maps: gpu.materials.iter().any(|m| m.normal_map != 0),

@@ -94,6 +94,16 @@ pub use crate::reflected::constants::{NORMAL_MAP_BUMP, NORMAL_MAP_NORMAL};
 /// rare photon past this is held at it and counted (`PathCounters::capped`).
 pub const FLUX_CAP_FIXED: f64 = 70368744177664.0;
 
+impl Material {
+    /// Whether its lobe is a microfacet distribution's (`distribution` then names it): a rough conductor,
+    /// rough glass, or a plastic with a rough coat.
+    pub fn is_rough(&self) -> bool {
+        self.surface == SURFACE_ROUGH_CONDUCTOR
+            || self.surface == SURFACE_ROUGH_GLASS
+            || (self.surface == SURFACE_PLASTIC && self.table != 0)
+    }
+}
+
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Sphere {

@@ -8,8 +8,8 @@ use anyhow::{anyhow, Context as _, Result};
 
 use crate::layout::{
     Light, Quad, Sphere, Triangle, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_QUAD, LIGHT_SPHERE,
-    LIGHT_SPOT, LIGHT_TRIANGLE, QUAD_DISK, SURFACE_BLEND, SURFACE_CONDUCTOR, SURFACE_PLASTIC, SURFACE_ROUGH_CONDUCTOR,
-    SURFACE_ROUGH_GLASS, SURFACE_THIN,
+    LIGHT_SPOT, LIGHT_TRIANGLE, MICROFACET_BECKMANN, MICROFACET_GGX, QUAD_DISK, SURFACE_BLEND, SURFACE_CONDUCTOR,
+    SURFACE_PLASTIC, SURFACE_ROUGH_CONDUCTOR, SURFACE_ROUGH_GLASS, SURFACE_THIN,
 };
 use crate::reflected::{KernelInfo, SOURCES};
 use crate::spirv_cache;
@@ -44,6 +44,9 @@ pub struct SceneConstants<'a> {
     pub emission_textures: bool,
     /// Whether any plastic is rough (Material::table): without one the plastics' code leaves it out.
     pub rough_plastics: bool,
+    /// The microfacet distributions the rough surfaces use, as bits `1 << MICROFACET_*`
+    /// (microfacet.glsl leaves out the other's code where there is one kind).
+    pub microfacets: u32,
     /// Whether any mesh has vertex normals (shading.glsl): without one no shading normal is read.
     pub shading_normals: bool,
     /// Whether any rough surface is anisotropic (geometry.glsl's surface_tangent): without one no
@@ -113,6 +116,11 @@ pub fn scene_constants(c: &SceneConstants) -> String {
     s += &format!("const bool SCENE_PARAMETER_TEXTURES = {};\n", c.parameter_textures);
     s += &format!("const bool SCENE_EMISSION_TEXTURES = {};\n", c.emission_textures);
     s += &format!("const bool SCENE_ROUGH_PLASTICS = {};\n", c.rough_plastics);
+    s += &format!(
+        "const bool SCENE_BECKMANN = {};\nconst bool SCENE_GGX = {};\n",
+        c.microfacets & (1 << MICROFACET_BECKMANN) != 0,
+        c.microfacets & (1 << MICROFACET_GGX) != 0
+    );
     s += &format!("const bool SCENE_SHADING_NORMALS = {};\n", c.shading_normals);
     s += &format!("const bool SCENE_ANISOTROPIC = {};\n", c.anisotropic);
     s += &format!("const bool SCENE_NORMAL_MAPS = {};\n", c.normal_maps);
