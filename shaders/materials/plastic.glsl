@@ -71,63 +71,6 @@ void plastic_lobes(uint i, Material m, uint table, vec3 nf, inout Rng rng, inout
     d = normalize(wo.x * t + wo.y * b + wo.z * nf);
 }
 
-// A photon's scattering off plastic i (table: material_table(i)), arriving along d at a point with normal nf
-// facing it, where the coat reflects with probability fi: the coat with probability max(ks) fi (weight ks /
-// max(ks)), the diffuse lobe with probability (1 - fi) bound (weight D t(cos_o) / bound, at most 1 per
-// channel: the host keeps bound = max(D) max(t) <= 1), else absorbed: false. Roulette and the choice of
-// lobe in one draw, and no bounce gains flux, which the fixed-point sums rely on. u: the choice; u1, u2:
-// the direction. A smooth coat's fi is F(cos_i) and its reflection a mirror's; a rough coat draws a normal
-// h visible from d (two more numbers from rng), fi = F(wi.h), reflects about h with the weight times G1(wo,
-// h), and lets the photon into the base with weight times G1 of its refraction through h, whose mean over
-// h is the table's t(cos_i): so the record's flux times t(cos_i) and this bounce agree.
-bool plastic_scatter(uint i, Material m, uint table, vec3 pos, vec3 nf, float u, float u1, float u2,
-                     inout Rng rng, inout vec3 o, inout vec3 d, inout vec3 flux) {
-    vec3 ks, bound;
-    material_terms(i, ks, bound);
-    float ks_max = max3(ks);
-    if (!HAS_ROUGH_PLASTICS || table == 0u) {
-        float fi = coat_fresnel(-dot(d, nf), m.ior);
-        float ps = ks_max * fi;
-        if (u < ps) {
-            flux *= ks / ks_max;
-            d = reflect(d, nf);
-        } else if (u < ps + (1.0 - fi) * bound.x) {
-            d = cosine_direction(nf, u1, u2);
-            flux *= m.color * ((1.0 - coat_fresnel(dot(d, nf), m.ior)) / bound.x);
-        } else {
-            return false;
-        }
-        o = offset_ray(pos, nf);
-        return true;
-    }
-    float v1 = rng_float(rng);
-    float v2 = rng_float(rng);
-    vec3 t, b;
-    onb(nf, t, b);
-    vec3 wi = -to_local(d, t, b, nf);
-    if (wi.z <= 0.0) return false;
-    Microfacet mf = material_microfacet(i);
-    vec3 h = mf_sample_visible(mf, wi, vec2(v1, v2));
-    float cos_h = dot(wi, h);
-    float cos_t;
-    float fi = fresnel_dielectric(cos_h, 1.0 / m.ior, cos_t);
-    float ps = ks_max * fi;
-    float g;
-    if (u < ps) {
-        vec3 wo = reflect(-wi, h);
-        g = wo.z > 0.0 ? mf_g1(mf, wo, h) : 0.0;
-        flux *= ks / ks_max * g;
-        d = normalize(wo.x * t + wo.y * b + wo.z * nf);
-    } else if (u < ps + (1.0 - fi) * bound.x) {
-        float e = 1.0 / m.ior;
-        vec3 wt = normalize(-e * wi + (e * cos_h - cos_t) * h);
-        g = wt.z < 0.0 ? mf_g1(mf, wt, h) : 0.0;
-        d = cosine_direction(nf, u1, u2);
-        flux *= m.color * (coat_transmittance(table, dot(d, nf), m.ior) / bound.x * g);
-    } else {
-        return false;
-    }
-    o = offset_ray(pos, nf);
-    return g > 0.0;
-}
+// A photon's scattering off a plastic is photon/lobe_bounce.glsl's, which samples the coat with the rough
+// conductors' and rough glass's lobes in one place.
 #endif

@@ -54,9 +54,10 @@ vec3 rough_tangent(uint i, Hit h) {
     return mf.au != mf.av ? surface_tangent(h) : vec3(0.0);
 }
 
-// The bounce of an eye path or a photon off material i (`m` as apply_texture left it) at hit h, if it is
-// rough: draws its numbers from rng, moves the ray (o, d) on, multiplies w by the weight (0: the path
-// ends) and returns true; false for every other surface, untouched.
+// The bounce of an eye path off material i (`m` as apply_texture left it) at hit h, if it is rough: draws
+// its numbers from rng, moves the ray (o, d) on, multiplies w by the weight (0: the path ends) and returns
+// true; false for every other surface, untouched. A photon's is photon/lobe_bounce.glsl's (the same
+// numbers and weights, its code shared with the plastics' coat).
 bool rough_bounce(uint i, Material m, Hit h, vec3 nf, bool front, inout Rng rng, inout vec3 o,
                   inout vec3 d, inout vec3 w) {
     if (HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR) {

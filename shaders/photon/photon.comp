@@ -46,6 +46,7 @@ layout(push_constant) uniform PhotonPush {
 #include "invocation.glsl"
 #include "lights.glsl"
 #include "targets.glsl"
+#include "lobe_bounce.glsl"
 
 // Variants that `ppm-vk bench` times against this kernel to show where a step's time goes
 // (Renderer::photon_breakdown); never rendered with. PHOTON_NO_STORE: the append reserves its slots but
@@ -294,24 +295,21 @@ void main() {
             flux *= reflector_weight(h.material, m, -dot(d, nf));
             d = reflect(d, nf);
             o = offset_ray(h.pos, nf);
-        } else if (HAS_PLASTICS && m.surface == SURFACE_PLASTIC) {
-            // The diffuse lobe's record carries the flux the coat lets in, times t(cos_i) (1 - F(cos_i)
-            // when smooth: plastic.glsl); the first landing is skipped with direct light sampled, as on a
-            // diffuse surface (its shadow rays evaluate the plastic too).
-            uint table = HAS_ROUGH_PLASTICS ? material_table(h.material) : 0u;
-            if ((params.direct_light == 0u || depth > 1u) && max3(m.color) > 0.0) {
+        } else if (lobe_surface(m)) {
+            // A plastic's diffuse lobe leaves a record carrying the flux the coat lets in, times t(cos_i)
+            // (1 - F(cos_i) when smooth: plastic.glsl); the first landing is skipped with direct light
+            // sampled, as on a diffuse surface (its shadow rays evaluate the plastic too). Then the coat,
+            // or a rough lobe sampled as the eye paths sample it (no record: an S vertex, ray.comp), in
+            // one routine for all of them (lobe_bounce.glsl).
+            bool plastic = HAS_PLASTICS && m.surface == SURFACE_PLASTIC;
+            uint table = HAS_ROUGH_PLASTICS && plastic ? material_table(h.material) : 0u;
+            if (plastic && (params.direct_light == 0u || depth > 1u) && max3(m.color) > 0.0) {
                 record = true;
                 record_flux = flux * coat_transmittance(table, -dot(d, nf), m.ior);
             }
-            float u = rng_float(rng);
-            float u1 = rng_float(rng);
-            float u2 = rng_float(rng);
-            if (!plastic_scatter(h.material, m, table, h.pos, nf, u, u1, u2, rng, o, d, flux)) alive = false;
+            if (!lobe_bounce(h.material, m, table, h, nf, front, rng, o, d, flux)) alive = false;
         } else if (HAS_THIN && m.surface == SURFACE_THIN) {
             flux *= thin_branch(h.material, m, h.pos, nf, rng_float(rng), o, d);
-        } else if (rough_bounce(h.material, m, h, nf, front, rng, o, d, flux)) {
-            // A rough lobe, sampled as the eye paths sample it (no record: an S vertex, ray.comp).
-            if (max3(flux) <= 0.0) alive = false;
         } else {
             glass_branch(h.pos, nf, front, m.ior, rng_float(rng), o, d);
         }

@@ -904,6 +904,8 @@ pub fn trace_photon(g: &GpuScene, index: u64, salt: u32, out: &mut Vec<Photon>) 
             d = reflect(d, nf);
             o = offset_ray(g, h.pos, nf);
         } else if m.surface == SURFACE_PLASTIC {
+            // photon.comp samples the plastics, rough conductors and rough glass in one routine
+            // (lobe_bounce.glsl); here each keeps its own, as the eye paths' twins do.
             if (p.direct_light == 0 || depth > 1) && v3(m.color).max_element() > 0.0 {
                 let t = plastic::coat_transmittance(g, m.table, -d.dot(nf), m.ior);
                 out.push(Photon {
