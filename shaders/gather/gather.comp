@@ -41,7 +41,6 @@ layout(push_constant) uniform GatherPush {
 #include "invocation.glsl"
 #include "materials.glsl"
 #include "materials/conductor.glsl"
-#define ROUGH_EVAL_ONLY
 #include "materials/rough_conductor.glsl"
 
 // Each member's sums over the photons it received, and the count of those within R / 2 (update.comp's

@@ -8,7 +8,6 @@
 // weight; the BSDF is reciprocal, so the photons' weight is the eye paths'. Rough enough conductors
 // (RenderParams.glossy_alpha) may instead hold hit points, below. CPU twin:
 // crates/reference/src/rough_conductor.rs (density and bound: crates/materials/src/rough_conductor.rs).
-// ROUGH_EVAL_ONLY (the gather) leaves the bounce out.
 #ifndef ROUGH_CONDUCTOR_GLSL
 #define ROUGH_CONDUCTOR_GLSL
 #include "materials/microfacet.glsl"
@@ -96,25 +95,6 @@ bool glossy_hit(uint i) {
         && texelFetch(material_texels, int(MATERIAL_TEXELS * i + 5u)).z == 0u;
 }
 
-#ifndef ROUGH_EVAL_ONLY
-// One bounce off rough conductor i (`m` as apply_texture left it) at pos, dpdu its tangent (frame): o and d
-// become the reflected ray; returns its weight, 0 where the sampled direction goes below the surface (the
-// path ends there).
-vec3 rough_conductor_bounce(uint i, Material m, vec3 pos, vec3 nf, vec3 dpdu, vec2 u, inout vec3 o,
-                            inout vec3 d) {
-    vec3 t, b;
-    frame(nf, dpdu, t, b);
-    vec3 wi = -to_local(d, t, b, nf);
-    if (wi.z <= 0.0) return vec3(0.0);
-    Microfacet mf = hit_microfacet(i, m);
-    vec3 h = mf_sample_visible(mf, wi, u);
-    vec3 wo = reflect(-wi, h);
-    if (wo.z <= 0.0) return vec3(0.0);
-    vec3 eta, k;
-    material_terms(i, eta, k);
-    d = normalize(wo.x * t + wo.y * b + wo.z * nf);
-    o = offset_ray(pos, nf);
-    return m.color * fresnel_conductor(dot(wi, h), eta, k) * mf_g1(mf, wo, h);
-}
-#endif
+// A bounce off a rough conductor is materials/lobe_bounce.glsl's (for the eye paths and the photons): a
+// normal m visible from wi, the reflection about it, weight ks F(wi.m) G1(wo, m).
 #endif

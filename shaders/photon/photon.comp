@@ -39,6 +39,7 @@ layout(push_constant) uniform PhotonPush {
 #include "materials/plastic.glsl"
 #include "materials/thin_dielectric.glsl"
 #include "materials/rough_dielectric.glsl"
+#include "materials/lobe_bounce.glsl"
 #include "texture.glsl"
 #include "materials/blend.glsl"
 #include "shading.glsl"
@@ -46,7 +47,6 @@ layout(push_constant) uniform PhotonPush {
 #include "invocation.glsl"
 #include "lights.glsl"
 #include "targets.glsl"
-#include "lobe_bounce.glsl"
 
 // Variants that `ppm-vk bench` times against this kernel to show where a step's time goes
 // (Renderer::photon_breakdown); never rendered with. PHOTON_NO_STORE: the append reserves its slots but
@@ -307,7 +307,7 @@ void main() {
                 record = true;
                 record_flux = flux * coat_transmittance(table, -dot(d, nf), m.ior);
             }
-            if (!lobe_bounce(h.material, m, table, h, nf, front, rng, o, d, flux)) alive = false;
+            if (!lobe_bounce(h.material, m, table, h, nf, front, true, rng, o, d, flux)) alive = false;
         } else if (HAS_THIN && m.surface == SURFACE_THIN) {
             flux *= thin_branch(h.material, m, h.pos, nf, rng_float(rng), o, d);
         } else {

@@ -39,7 +39,7 @@ bool rough_coat(Material m, uint table) {
 }
 
 // The lobe of rough material i (`m` as apply_texture left it) at hit h, seen from wo (unit, towards the
-// eye, on nf's side), for unit direction l: the density with which its bounce (rough_bounce) samples l,
+// eye, on nf's side), for unit direction l: the density with which its bounce (lobe_bounce.glsl) samples l,
 // per unit solid angle, and the bounce's weight f |cos_l| / pdf there (so f |cos_l| = pdf weight). 0
 // where the bounce cannot reach l. front: h is met from outside (rough glass's index ratio).
 float rough_lobe(uint i, Material m, Hit h, vec3 nf, bool front, vec3 wo, vec3 l, out vec3 weight) {
@@ -63,11 +63,11 @@ float rough_lobe(uint i, Material m, Hit h, vec3 nf, bool front, vec3 wo, vec3 l
         vec3 hv = normalize(lo + li);
         vec3 eta, k;
         material_terms(i, eta, k);
-        // rough_conductor_bounce: weight ks F(wo.h) G1(l, h), density D_wo(h) / (4 l.h).
+        // lobe_bounce.glsl, a rough conductor: weight ks F(wo.h) G1(l, h), density D_wo(h) / (4 l.h).
         weight = m.color * fresnel_conductor(dot(lo, hv), eta, k) * mf_g1(mf, li, hv);
         return mf_visible_pdf(mf, lo, hv) / (4.0 * dot(li, hv));
     }
-    // Rough glass (rough_dielectric_bounce): the facet h by the visible normals, then reflection with
+    // Rough glass (lobe_bounce.glsl): the facet h by the visible normals, then reflection with
     // probability F(wo.h) or refraction; the weight G1(l, h) on either branch.
     float eta = front ? 1.0 / m.ior : m.ior; // incident (eye side) index over transmitted
     vec3 hv;

@@ -106,6 +106,7 @@ layout(push_constant) uniform RayPush {
 #include "materials/plastic.glsl"
 #include "materials/thin_dielectric.glsl"
 #include "materials/rough_dielectric.glsl"
+#include "materials/lobe_bounce.glsl"
 #include "texture.glsl"
 #include "materials/blend.glsl"
 #include "shading.glsl"
@@ -375,7 +376,7 @@ vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout boo
             o = offset_ray(h.pos, nf);
         } else if (rough_here) {
             rough = true;
-            rough_bounce(h.material, m, h, nf, front, rng, o, d, thr);
+            lobe_bounce(h.material, m, 0u, h, nf, front, false, rng, o, d, thr);
             stops = max3(thr) <= 0.0;
         } else if (!ends) {
             if (is_reflector(m.surface)) {
@@ -575,7 +576,7 @@ void main() {
                             b.d = coat_d;
                             b.o = offset_ray(h.pos, nf);
                         } else {
-                            rough_bounce(h.material, m, h, nf, front, rng, b.o, b.d, b.thr);
+                            lobe_bounce(h.material, m, 0u, h, nf, front, false, rng, b.o, b.d, b.thr);
                         }
                         bool mine = j == k;
                         if (!mine && !(max3(b.thr) > 0.0)) continue;

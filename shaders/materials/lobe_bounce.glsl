@@ -1,12 +1,13 @@
-// A photon's bounce off a surface with a Fresnel-weighted lobe choice or a microfacet lobe: plastic (smooth
-// or rough coat, plastic.glsl), rough conductor (rough_conductor.glsl) and rough glass
-// (rough_dielectric.glsl), in one routine. lavapipe runs every copy of code under a mask, so a kernel with
-// a sampler per surface paid for each at every bounce (an idle copy of the rough conductor's and the rough
-// coat's cost the interior's photon stage 21-24%, docs/performance.md); here one frame, one draw of a
-// visible normal, one dielectric Fresnel term, one reflection and one refraction about the facet serve them
-// all. Each surface draws its numbers in the order its own routine drew them, and computes its weight with
-// the same operations, so the photons are the CPU twin's, which keeps them apart
-// (crates/reference/src/plastic.rs, rough_conductor.rs, rough_dielectric.rs):
+// The bounce off a surface with a Fresnel-weighted lobe choice or a microfacet lobe: plastic (smooth or
+// rough coat, plastic.glsl; photons only: an eye path takes both of its lobes, ray.comp), rough conductor
+// (rough_conductor.glsl) and rough glass (rough_dielectric.glsl), in one routine for the photons and the
+// eye paths alike. lavapipe runs every copy of code under a mask, so a kernel with a sampler per surface
+// paid for each at every bounce (an idle copy of the rough conductor's and the rough coat's cost the
+// interior's photon stage 21-24%, docs/performance.md); here one frame, one draw of a visible normal, one
+// dielectric Fresnel term, one reflection and one refraction about the facet serve them all. Each surface
+// draws its numbers in the order its own routine drew them, and computes its weight with the same
+// operations, so the paths are the CPU twin's, which keeps them apart (crates/reference/src/plastic.rs,
+// rough_conductor.rs, rough_dielectric.rs, and lib.rs's rough_bounce):
 //   rough conductor: the normal's two numbers; reflects about the normal, weight ks F(wi.m) G1(wo, m) (its
 //     complex-index Fresnel term per channel);
 //   rough glass: the branch, then the normal's two; reflects with probability F(wi.m), else refracts, weight
@@ -19,8 +20,10 @@
 //     lobe in one draw; no bounce gains flux (the host keeps bound = max(D) max(t) <= 1), which the
 //     fixed-point sums rely on.
 // i: the material (`m` as apply_texture left it) at hit h, nf its normal facing d, front: d arrives from the
-// outside; table: material_table(i) for a plastic (0: a smooth coat). Moves the ray (o, d) on and multiplies
-// flux by the weight; false where the photon ends (absorbed, or sent below the surface).
+// outside; table: material_table(i) for a plastic (0: a smooth coat); plastics: whether the caller's
+// surfaces include plastics (a constant: false leaves their code out). Moves the ray (o, d) on and
+// multiplies w by the weight; where the path ends (absorbed, or sent below the surface) w becomes 0 and it
+// returns false.
 #ifndef LOBE_BOUNCE_GLSL
 #define LOBE_BOUNCE_GLSL
 
@@ -30,12 +33,14 @@ bool lobe_surface(Material m) {
         || (HAS_ROUGH_GLASS && m.surface == SURFACE_ROUGH_GLASS);
 }
 
-bool lobe_bounce(uint i, Material m, uint table, Hit h, vec3 nf, bool front, inout Rng rng, inout vec3 o,
-                 inout vec3 d, inout vec3 flux) {
+bool lobe_bounce(uint i, Material m, uint table, Hit h, vec3 nf, bool front, bool plastics, inout Rng rng,
+                 inout vec3 o, inout vec3 d, inout vec3 w) {
     bool conductor = HAS_ROUGH_CONDUCTORS && m.surface == SURFACE_ROUGH_CONDUCTOR;
     bool glass = HAS_ROUGH_GLASS && m.surface == SURFACE_ROUGH_GLASS;
-    bool plastic = !conductor && !glass;
-    bool rough = !plastic || (HAS_ROUGH_PLASTICS && table != 0u);
+    bool plastic = plastics && !conductor && !glass;
+    // A kernel whose caller has none of these surfaces holds none of this code.
+    if (!plastics && !HAS_ROUGH_CONDUCTORS && !HAS_ROUGH_GLASS) return false;
+    bool rough = conductor || glass || (HAS_ROUGH_PLASTICS && plastic && table != 0u);
     // The numbers, in each surface's order (above).
     float x0 = rng_float(rng);
     float x1 = rng_float(rng);
@@ -49,7 +54,10 @@ bool lobe_bounce(uint i, Material m, uint table, Hit h, vec3 nf, bool front, ino
     vec3 t, b;
     frame(nf, rough_tangent(i, h), t, b);
     vec3 wi = -to_local(d, t, b, nf);
-    if (rough && wi.z <= 0.0) return false;
+    if (rough && wi.z <= 0.0) {
+        w = vec3(0.0);
+        return false;
+    }
     Microfacet mf = hit_microfacet(i, m);
     vec3 mn = vec3(0.0, 0.0, 1.0);
     if (rough) mn = mf_sample_visible(mf, wi, conductor ? vec2(x0, x1) : glass ? vec2(x1, x2) : vec2(x3, x4));
@@ -64,24 +72,27 @@ bool lobe_bounce(uint i, Material m, uint table, Hit h, vec3 nf, bool front, ino
     float ks_max = max3(ta);
     float ps = conductor ? 1.0 : glass ? f : ks_max * f; // the probability of reflecting
     bool reflects = x0 < ps;
-    if (plastic && !reflects && !(x0 < ps + (1.0 - f) * tb.x)) return false; // absorbed
+    if (plastic && !reflects && !(x0 < ps + (1.0 - f) * tb.x)) { // absorbed
+        w = vec3(0.0);
+        return false;
+    }
     // Through the facet: its reflection, or its refraction (glass's way on, the base's entry into a coat).
-    vec3 w = reflects ? reflect(-wi, mn) : normalize(-eta * wi + (eta * cos_h - cos_t) * mn);
+    vec3 wf = reflects ? reflect(-wi, mn) : normalize(-eta * wi + (eta * cos_h - cos_t) * mn);
     float g = 1.0;
-    if (rough) g = (reflects ? w.z > 0.0 : w.z < 0.0) ? mf_g1(mf, w, mn) : 0.0;
+    if (rough) g = (reflects ? wf.z > 0.0 : wf.z < 0.0) ? mf_g1(mf, wf, mn) : 0.0;
     if (plastic && !reflects) {
         // Into the base: a cosine direction about nf (cosine_direction in the frame onb gave).
         float r = sqrt(x1);
         float phi = 2.0 * PI * x2;
         d = normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(0.0, 1.0 - x1)) * nf);
-        flux *= m.color * (coat_transmittance(table, dot(d, nf), m.ior) / tb.x * g);
+        w *= m.color * (coat_transmittance(table, dot(d, nf), m.ior) / tb.x * g);
     } else {
-        if (conductor) flux *= m.color * fresnel_conductor(cos_h, ta, tb) * g;
-        else if (glass) flux *= g;
-        else flux *= ta / ks_max * g;
-        d = rough ? normalize(w.x * t + w.y * b + w.z * nf) : reflect(d, nf);
+        if (conductor) w *= m.color * fresnel_conductor(cos_h, ta, tb) * g;
+        else if (glass) w *= g;
+        else w *= ta / ks_max * g;
+        d = rough ? normalize(wf.x * t + wf.y * b + wf.z * nf) : reflect(d, nf);
     }
     o = offset_ray(h.pos, glass && !reflects ? -nf : nf);
-    return plastic ? g > 0.0 : !(max3(flux) <= 0.0);
+    return plastic ? g > 0.0 : !(max3(w) <= 0.0);
 }
 #endif
