@@ -71,6 +71,6 @@ void plastic_lobes(uint i, Material m, uint table, vec3 nf, inout Rng rng, inout
     d = normalize(wo.x * t + wo.y * b + wo.z * nf);
 }
 
-// A photon's scattering off a plastic is photon/lobe_bounce.glsl's, which samples the coat with the rough
+// A photon's scattering off a plastic is common/lobe_bounce.glsl's, which samples the coat with the rough
 // conductors' and rough glass's lobes in one place.
 #endif

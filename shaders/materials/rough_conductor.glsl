@@ -95,6 +95,6 @@ bool glossy_hit(uint i) {
         && texelFetch(material_texels, int(MATERIAL_TEXELS * i + 5u)).z == 0u;
 }
 
-// A bounce off a rough conductor is materials/lobe_bounce.glsl's (for the eye paths and the photons): a
+// A bounce off a rough conductor is common/lobe_bounce.glsl's (for the eye paths and the photons): a
 // normal m visible from wi, the reflection about it, weight ks F(wi.m) G1(wo, m).
 #endif

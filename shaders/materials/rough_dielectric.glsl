@@ -18,7 +18,7 @@
 #define HAS_ROUGH_GLASS true
 #endif
 
-// A bounce off rough glass is materials/lobe_bounce.glsl's (for the eye paths and the photons): a normal m
+// A bounce off rough glass is common/lobe_bounce.glsl's (for the eye paths and the photons): a normal m
 // visible from wi, reflection with probability F(wi.m) or refraction through m, weight G1(wo, m).
 
 // The tangent an anisotropic rough material i needs at hit h (frame); 0 for an isotropic one.

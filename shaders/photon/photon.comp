@@ -39,7 +39,7 @@ layout(push_constant) uniform PhotonPush {
 #include "materials/plastic.glsl"
 #include "materials/thin_dielectric.glsl"
 #include "materials/rough_dielectric.glsl"
-#include "materials/lobe_bounce.glsl"
+#include "lobe_bounce.glsl"
 #include "texture.glsl"
 #include "materials/blend.glsl"
 #include "shading.glsl"

@@ -106,7 +106,7 @@ layout(push_constant) uniform RayPush {
 #include "materials/plastic.glsl"
 #include "materials/thin_dielectric.glsl"
 #include "materials/rough_dielectric.glsl"
-#include "materials/lobe_bounce.glsl"
+#include "lobe_bounce.glsl"
 #include "texture.glsl"
 #include "materials/blend.glsl"
 #include "shading.glsl"

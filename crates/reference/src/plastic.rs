@@ -61,7 +61,7 @@ pub fn plastic_lobes(g: &GpuScene, m: &Material, nf: Vec3, rng: &mut Rng, d: Vec
     ((wo.x * t + wo.y * b + wo.z * nf).normalize(), spec, diff)
 }
 
-/// photon/lobe_bounce.glsl's bounce off a plastic (its plastic branch): the photon's new (origin, direction, weight) off plastic
+/// common/lobe_bounce.glsl's bounce off a plastic (its plastic branch): the photon's new (origin, direction, weight) off plastic
 /// `m`, or None where it is absorbed. A rough coat draws two more numbers from `rng`.
 pub fn scatter(
     g: &GpuScene,

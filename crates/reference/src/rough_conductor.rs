@@ -78,9 +78,9 @@ pub fn glossy_hit(g: &GpuScene, m: &Material) -> bool {
         && m.alpha_texture == 0
 }
 
-/// materials/lobe_bounce.glsl, a rough conductor: the new origin, direction and weight of a path
+/// common/lobe_bounce.glsl, a rough conductor: the new origin, direction and weight of a path
 /// arriving along `d` at `pos` (`nf` facing it); a zero weight ends the path.
-/// One bounce at `pos` (materials/lobe_bounce.glsl); `dpdu` the tangent (frame).
+/// One bounce at `pos` (common/lobe_bounce.glsl); `dpdu` the tangent (frame).
 pub fn bounce(g: &GpuScene, m: &Material, pos: Vec3, nf: Vec3, dpdu: Vec3, u: Vec2, d: Vec3) -> (Vec3, Vec3, Vec3) {
     let (t, b) = frame(nf, dpdu);
     let wi = -to_local(d, t, b, nf);

@@ -10,7 +10,7 @@ use super::microfacet;
 use super::trace::offset_ray;
 use ppm_vk_engine::lower::GpuScene;
 
-/// materials/lobe_bounce.glsl, rough glass: the new origin, direction and weight of a path
+/// common/lobe_bounce.glsl, rough glass: the new origin, direction and weight of a path
 /// arriving along `d` at `pos` (`nf` facing it, `front` if from outside); a zero weight ends the path.
 #[allow(clippy::too_many_arguments)]
 pub fn bounce(
