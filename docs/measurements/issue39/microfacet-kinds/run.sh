@@ -7,17 +7,6 @@
 # Usage: BEFORE_BIN=/tmp/ppm-vk-base docs/measurements/issue39/microfacet-kinds/run.sh
 set -euo pipefail
 cd "$(dirname "$0")/../../../.."
-out=docs/measurements/issue39/microfacet-kinds
-bench() {
-  "$1" bench --scene scenes/cornell-spheres.toml --scene scenes/interior.xml \
-    --cases 1M@512x512 --warmup 1 --passes 3 --json "$out/bench-$2.json" 2>&1 | tee "$out/bench-$2.txt"
-}
-for round in 1 2; do
-  if [ "$round" = 1 ]; then order="before after"; else order="after before"; fi
-  for b in $order; do
-    if [ "$b" = before ]; then bin=$BEFORE_BIN; else bin=target/release/ppm-vk; fi
-    echo "== $b, round $round ($(uptime))"
-    bench "$bin" "$b-$round"
-  done
-done
-docs/measurements/issue39/shadow-sites/setup.sh | tee "$out/setup.txt"
+o=docs/measurements/issue39/microfacet-kinds
+docs/measurements/issue39/bench-rounds.sh $o bench scenes/cornell-spheres.toml scenes/interior.xml
+docs/measurements/issue39/shadow-sites/setup.sh | tee "$o/setup.txt"
