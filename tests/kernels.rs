@@ -428,31 +428,36 @@ fn ray_pass_matches_reference_with_rough_plastics() {
     ray_pass_matches_reference_on(cornell_roughplastic(), true, DirectLight::Sample);
 }
 
-/// `scene` with every rough surface's distribution made GGX (`ggx`) or Beckmann: a scene of one kind,
-/// whose specialised kernels leave the other's code out (microfacet.glsl's mf_is_ggx).
-fn one_distribution(mut scene: ppm_vk_engine::Scene, ggx: bool) -> ppm_vk_engine::Scene {
-    for m in &mut scene.materials {
-        match &mut m.surface {
-            Surface::RoughConductor { rough, .. } | Surface::RoughGlass { rough, .. } => rough.ggx = ggx,
-            Surface::Plastic { rough: Some(rough), .. } => rough.ggx = ggx,
-            _ => {}
+/// cornell-rough and cornell-roughplastic with every rough surface's distribution made GGX, then the same
+/// made Beckmann: scenes of one kind, whose specialised kernels leave the other's code out
+/// (microfacet.glsl's mf_is_ggx).
+fn one_distribution_scenes() -> Vec<ppm_vk_engine::Scene> {
+    let mut scenes = Vec::new();
+    for ggx in [true, false] {
+        for mut scene in [cornell_rough(), cornell_roughplastic()] {
+            for m in &mut scene.materials {
+                match &mut m.surface {
+                    Surface::RoughConductor { rough, .. } | Surface::RoughGlass { rough, .. } => rough.ggx = ggx,
+                    Surface::Plastic { rough: Some(rough), .. } => rough.ggx = ggx,
+                    _ => {}
+                }
+            }
+            scene.validate().unwrap();
+            scenes.push(scene);
         }
     }
-    scene.validate().unwrap();
-    scene
+    scenes
 }
 
 /// Rough metal, glass and plastics of one distribution, GGX or Beckmann, in kernels specialised to it.
 #[test]
 fn ray_pass_matches_reference_with_one_distribution() {
-    for ggx in [true, false] {
-        for scene in [cornell_rough(), cornell_roughplastic()] {
-            let settings = Settings {
-                glossy_hits: None,
-                ..settings()
-            };
-            ray_pass_matches_reference_with(one_distribution(scene, ggx), settings);
-        }
+    for scene in one_distribution_scenes() {
+        let settings = Settings {
+            glossy_hits: None,
+            ..settings()
+        };
+        ray_pass_matches_reference_with(scene, settings);
     }
 }
 
@@ -830,14 +835,12 @@ fn photon_records_match_reference_with_rough_surfaces() {
 /// Rough metal, glass and plastics of one distribution (ray_pass_matches_reference_with_one_distribution).
 #[test]
 fn photon_records_match_reference_with_one_distribution() {
-    for ggx in [true, false] {
-        for scene in [cornell_rough(), cornell_roughplastic()] {
-            let settings = Settings {
-                glossy_hits: None,
-                ..settings()
-            };
-            photon_records_match_reference_within(one_distribution(scene, ggx), settings, 1e-3, 0.993);
-        }
+    for scene in one_distribution_scenes() {
+        let settings = Settings {
+            glossy_hits: None,
+            ..settings()
+        };
+        photon_records_match_reference_within(scene, settings, 1e-3, 0.993);
     }
 }
 
