@@ -10,8 +10,8 @@
 // chain of the eye path through each point and (b) the radiance reflected at the chain's first diffuse
 // vertex. The photon estimate at the hit points covers (b). Term (a) has the sharp edges (the light and
 // its images in mirrors and glass), so each eye pass also traces pc.emission_samples paths through
-// uniformly random points of the pixel, one Fresnel branch each chosen with probability f (weight f / f
-// = 1): each is an unbiased sample of (a), independent of (b). `direct` sums them in double over all
+// points of the pixel, each uniform over it and all of them stratified (stratum_point), one Fresnel branch
+// each chosen with probability f (weight f / f = 1): each is an unbiased sample of (a), independent of (b). `direct` sums them in double over all
 // eye passes (rgb) with their count (w); the resolve divides. The hit-point path's own emission is one
 // more such sample when its position is random (SPPM), or the only one when there are no others.
 //
@@ -115,6 +115,7 @@ layout(push_constant) uniform RayPush {
 
 const uint MAX_SLOTS = 8u;
 const uint SALT_EMISSION = 4u;
+const uint SALT_STRATA = 5u;
 
 // A branch waiting for its turn: the ray, its weight, its depth, and where it left a rough vertex the
 // lobe's density of d and the vertex (glossy_light.glsl; 0 after glass, a delta vertex).
@@ -276,14 +277,34 @@ float branch_u(inout Rng rng) {
     return pc.pilot == 0u ? u : (u < 0.5 ? 0.0 : ONE_BELOW);
 }
 
-// One emission sample: the emission met along the specular chain from the eye through `jitter`, and with
+// The cells of a pixel for `count` samples: m columns and n rows, m = floor(sqrt(count)), n = ceil(count / m)
+// (count 4: 2 x 2; 16: 4 x 4; 1: the whole pixel). sqrt of an integer this small rounds to within its floor.
+uvec2 strata_grid(uint count) {
+    uint m = max(uint(sqrt(float(count))), 1u);
+    return uvec2(m, (count + m - 1u) / m);
+}
+
+// The position in the pixel of sample `index` of those stratified over `grid`: the samples take the cells
+// in raster order from cell `shift` on (wrapping), each a uniform point `u` in its cell. With `shift`
+// uniform over the cells, each sample's cell is uniform over them, so each position is uniform over the
+// pixel and each sample stays an unbiased sample of the pixel's terms; together they cover the pixel
+// evenly, which takes the variance over its area (texture, edges, penumbrae) down
+// (docs/accuracy.md, "Stratified positions in the pixel").
+vec2 stratum_point(uint index, uvec2 grid, uint shift, vec2 u) {
+    uint cell = (index + shift) % (grid.x * grid.y);
+    return (vec2(float(cell % grid.x), float(cell / grid.x)) + u) * (vec2(1.0) / vec2(grid));
+}
+
+// One emission sample: the emission met along the specular chain from the eye through its position (sample
+// `index` of the pixel's, stratum_point over `grid` from `shift`), and with
 // direct light sampled, term (d) at the chain's diffuse end. `seen`: set if the path met the front of an
 // emitter (or the environment) that no shadow ray also takes, i.e. not straight after a rough vertex;
 // `lit`: set if its shadow ray reached a light; `rough`: set if it sampled through a rough conductor or
 // rough glass (rough_vertex).
-vec3 emission_sample(uint px, uint py, inout Rng rng, inout bool seen, inout bool lit, inout bool rough,
-                     inout bool chain) {
-    vec2 jitter = vec2(rng_float(rng), rng_float(rng));
+vec3 emission_sample(uint px, uint py, uint index, uvec2 grid, uint shift, inout Rng rng, inout bool seen,
+                     inout bool lit, inout bool rough, inout bool chain) {
+    vec2 u = vec2(rng_float(rng), rng_float(rng));
+    vec2 jitter = stratum_point(index, grid, shift, u);
     vec3 o = params.eye;
     vec3 d = camera_ray(px, py, jitter);
     vec3 thr = vec3(1.0);
@@ -686,10 +707,17 @@ void main() {
     // be an image a pixel wide, which a few samples miss, while a light seen straight or through a rough
     // lobe is found by few and spread to the neighbours (docs/performance.md, "The pilot's samples").
     bool chain = pc.pilot != 0u && (mark & MARK_CHAIN) != 0u;
+    // The positions of this pass's `total` samples, stratified (stratum_point); the pilot's, which only
+    // mark, are uniform. The first cell comes from a stream of its own, the same in every dispatch of the
+    // pass.
+    uvec2 grid = strata_grid(pc.pilot != 0u ? 1u : max(total, 1u));
+    uint cells = grid.x * grid.y;
+    Rng srng = rng_new(uint64_t(params.seed) | (uint64_t(SALT_STRATA) << 32), stream);
+    uint shift = min(uint(rng_float(srng) * float(cells)), cells - 1u);
     for (uint s = 0u; s < want; s++) {
         if (bvh_spent || bvh_cut) break;
         if (pc.pilot != 0u && first + s >= pc.pilot_samples && !chain) break;
-        vec3 e = emission_sample(px, py, erng, seen, lit, rough, chain);
+        vec3 e = emission_sample(px, py, first + s, grid, shift, erng, seen, lit, rough, chain);
         if (bvh_spent || bvh_cut) break;
         if (pc.pilot != 0u) continue;
         emitted += dvec3(e);

@@ -17,6 +17,9 @@ pub const SALT_PROBE: u32 = 2;
 pub const SALT_EYE: u32 = 3;
 /// The eye pass's emission-only samples (`SALT_EMISSION` in ray.comp).
 pub const SALT_EMISSION: u32 = crate::reflected::constants::SALT_EMISSION;
+/// The first cell of a pixel's stratified emission-sample positions in an eye pass (`SALT_STRATA` in
+/// ray.comp).
+pub const SALT_STRATA: u32 = crate::reflected::constants::SALT_STRATA;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -35,7 +35,7 @@ use ppm_vk_kernels::layout::{
     HitPoint, HitStats, Material, PassAccum, Photon, EMPTY_SLOT, LIGHT_ENVIRONMENT, SURFACE_DIFFUSE, SURFACE_PLASTIC,
     SURFACE_ROUGH_CONDUCTOR, SURFACE_ROUGH_GLASS, SURFACE_THIN,
 };
-use ppm_vk_kernels::photon::SALT_EMISSION;
+use ppm_vk_kernels::photon::{SALT_EMISSION, SALT_STRATA};
 use ppm_vk_kernels::ray::RayPush;
 use ppm_vk_materials::math::{cosine_direction, fresnel_dielectric, oct_decode, oct_encode, reflect, v3, PI};
 
@@ -311,22 +311,54 @@ struct SampleMarks {
     chain: bool,
 }
 
+/// ray.comp's stratified positions of a pixel's emission samples in one pass (`strata_grid`,
+/// `stratum_point`): `count` samples in the cells of an m x n grid (m = floor(sqrt(count)), n = ceil(count /
+/// m)), taken in raster order from cell `shift` on, each at a uniform point of its cell.
+pub struct Strata {
+    pub grid: [u32; 2],
+    pub shift: u32,
+}
+
+impl Strata {
+    /// The grid for `count` samples, its first cell from the uniform number `u`.
+    pub fn new(count: u32, u: f32) -> Strata {
+        let m = ((count as f32).sqrt() as u32).max(1);
+        let grid = [m, count.div_ceil(m)];
+        let cells = grid[0] * grid[1];
+        Strata {
+            grid,
+            shift: ((u * cells as f32) as u32).min(cells - 1),
+        }
+    }
+
+    /// Sample `index`'s position in the pixel, `u` uniform in the unit square.
+    pub fn point(&self, index: u32, u: [f32; 2]) -> [f32; 2] {
+        let cell = (index + self.shift) % (self.grid[0] * self.grid[1]);
+        let c = [cell % self.grid[0], cell / self.grid[0]];
+        [0, 1].map(|k| (c[k] as f32 + u[k]) * (1.0 / self.grid[k] as f32))
+    }
+}
+
 /// One emission eye sample of ray.comp's `emission_sample`: the emission met along the specular chain
-/// through a random point of the pixel, one Fresnel branch chosen with probability f, and with direct light
+/// through sample `index`'s point of the pixel (`strata`), one Fresnel branch chosen with probability f, and with direct light
 /// sampled (`RenderParams::direct_light`) term (d) at its diffuse end. `cut` counts a path ended at the
 /// depth backstop; `marks` gathers what the pilot marks by (`SampleMarks`).
 /// `pilot`: the pilot's sample, which takes each smooth dielectric branch with probability 1/2
 /// (`branch_u`).
+// The path's state and its marks, each read and set along it.
+#[allow(clippy::too_many_arguments)]
 fn emission_sample(
     g: &GpuScene,
     px: u32,
     py: u32,
+    (strata, index): (&Strata, u32),
     rng: &mut Rng,
     cut: &mut u32,
     marks: &mut SampleMarks,
     pilot: bool,
 ) -> Vec3 {
-    let j = [rng.float(), rng.float()];
+    let u = [rng.float(), rng.float()];
+    let j = strata.point(index, u);
     let mut o = v3(g.params.eye);
     let mut d = camera_ray(g, px, py, j);
     let mut thr = Vec3::ONE;
@@ -794,11 +826,23 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
             chain: pilot && busy[pixel as usize] & MARK_CHAIN != 0,
             ..Default::default()
         };
+        // The positions of the pass's samples, stratified; the pilot's (marks only) uniform (ray.comp).
+        let mut srng = Rng::new(p.seed as u64 | ((SALT_STRATA as u64) << 32), stream);
+        let strata = Strata::new(if pilot { 1 } else { total.max(1) }, srng.float());
         for s in 0..want {
             if pilot && first + s >= push.pilot_samples && !marks.chain {
                 break;
             }
-            let e = emission_sample(g, px, py, &mut rng, &mut out.cut, &mut marks, pilot);
+            let e = emission_sample(
+                g,
+                px,
+                py,
+                (&strata, first + s),
+                &mut rng,
+                &mut out.cut,
+                &mut marks,
+                pilot,
+            );
             if !pilot {
                 emitted += e.as_dvec3();
                 samples += 1;
@@ -1440,5 +1484,63 @@ mod tests {
         // photons per pass per unit area (rho photons over an area of 1).
         let estimate = s.tau_r / (norm * std::f64::consts::PI * s.r2 * emitted) * rho;
         assert!((estimate / rho - 1.0).abs() < 0.03, "estimate {estimate} vs {rho}");
+    }
+}
+
+#[cfg(test)]
+mod strata_tests {
+    use super::Strata;
+
+    /// ray.comp's stratified positions: for every count a pixel may take and every first cell, the samples
+    /// fall in distinct cells (all of them when the count fills the grid), each position inside its own
+    /// cell and the pixel; and each sample's cell, over the first cells, is every cell once, so a uniform
+    /// first cell makes each position uniform over the pixel (each sample unbiased).
+    #[test]
+    fn strata_cover_the_pixel_once_and_each_sample_is_uniform() {
+        for count in 1..=40u32 {
+            let grid = Strata::new(count, 0.0).grid;
+            let cells = grid[0] * grid[1];
+            assert!(
+                cells >= count && cells < count + grid[0],
+                "count {count}: grid {grid:?}"
+            );
+            assert!(
+                grid[0] <= grid[1] && grid[1] <= grid[0] + 2,
+                "count {count}: grid {grid:?} not near square"
+            );
+            if let Some(m) = (1..=6).find(|m| m * m == count) {
+                assert_eq!(grid, [m, m], "a square count is a square grid");
+            }
+            for shift in 0..cells {
+                let u = (shift as f32 + 0.5) / cells as f32;
+                let s = Strata::new(count, u);
+                assert_eq!(s.shift, shift, "count {count}: u {u}");
+                let mut seen = vec![false; cells as usize];
+                for index in 0..count {
+                    for corner in [[0.0, 0.0], [0.999_999, 0.999_999], [0.3, 0.7]] {
+                        let p = s.point(index, corner);
+                        assert!(p.iter().all(|&x| (0.0..1.0).contains(&x)), "count {count}: {p:?}");
+                        let cell = (p[1] * grid[1] as f32) as u32 * grid[0] + (p[0] * grid[0] as f32) as u32;
+                        assert_eq!(cell, (index + shift) % cells, "count {count}, index {index}: {p:?}");
+                    }
+                    let cell = ((index + shift) % cells) as usize;
+                    assert!(
+                        !std::mem::replace(&mut seen[cell], true),
+                        "count {count}: cell {cell} twice"
+                    );
+                }
+                assert_eq!(seen.iter().filter(|&&s| s).count() as u32, count);
+            }
+            // Over the first cells, each sample takes every cell once.
+            for index in 0..count {
+                let mut hits = vec![0u32; cells as usize];
+                for shift in 0..cells {
+                    hits[((index + shift) % cells) as usize] += 1;
+                }
+                assert!(hits.iter().all(|&h| h == 1), "count {count}, index {index}: {hits:?}");
+            }
+        }
+        // The last first cell for u just below 1.
+        assert_eq!(Strata::new(16, 0.999_999_94).shift, 15);
     }
 }
