@@ -10,9 +10,10 @@
 // chain of the eye path through each point and (b) the radiance reflected at the chain's first diffuse
 // vertex. The photon estimate at the hit points covers (b). Term (a) has the sharp edges (the light and
 // its images in mirrors and glass), so each eye pass also traces pc.emission_samples paths through
-// points of the pixel, each uniform over it and all of them stratified (stratum_point), one Fresnel branch
-// each chosen with probability f (weight f / f = 1): each is an unbiased sample of (a), independent of (b). `direct` sums them in double over all
-// eye passes (rgb) with their count (w); the resolve divides. The hit-point path's own emission is one
+// points of the pixel, each uniform over it and all of them stratified (stratum_point), one Fresnel
+// branch each chosen with probability f (weight f / f = 1): each is an unbiased sample of (a),
+// independent of (b). `direct` sums them in double over all eye passes (rgb) with their count (w); the
+// resolve divides. The hit-point path's own emission is one
 // more such sample when its position is random (SPPM), or the only one when there are no others.
 //
 // Most pixels see no emitter through any point of them, where (a) is 0 and samples are wasted. Eye pass 0 is
@@ -277,8 +278,9 @@ float branch_u(inout Rng rng) {
     return pc.pilot == 0u ? u : (u < 0.5 ? 0.0 : ONE_BELOW);
 }
 
-// The cells of a pixel for `count` samples: m columns and n rows, m = floor(sqrt(count)), n = ceil(count / m)
-// (count 4: 2 x 2; 16: 4 x 4; 1: the whole pixel). sqrt of an integer this small rounds to within its floor.
+// The cells of a pixel for `count` samples: m columns and n rows, m = floor(sqrt(count)), n = ceil(count /
+// m) (count 4: 2 x 2; 16: 4 x 4; 1: the whole pixel). The square root of an integer this small, correctly
+// rounded, has that floor.
 uvec2 strata_grid(uint count) {
     uint m = max(uint(sqrt(float(count))), 1u);
     return uvec2(m, (count + m - 1u) / m);
@@ -295,9 +297,9 @@ vec2 stratum_point(uint index, uvec2 grid, uint shift, vec2 u) {
     return (vec2(float(cell % grid.x), float(cell / grid.x)) + u) * (vec2(1.0) / vec2(grid));
 }
 
-// One emission sample: the emission met along the specular chain from the eye through its position (sample
-// `index` of the pixel's, stratum_point over `grid` from `shift`), and with
-// direct light sampled, term (d) at the chain's diffuse end. `seen`: set if the path met the front of an
+// One emission sample: the emission met along the specular chain from the eye through its position
+// (sample `index` of the pixel's, stratum_point over `grid` from `shift`), and with direct light sampled,
+// term (d) at the chain's diffuse end. `seen`: set if the path met the front of an
 // emitter (or the environment) that no shadow ray also takes, i.e. not straight after a rough vertex;
 // `lit`: set if its shadow ray reached a light; `rough`: set if it sampled through a rough conductor or
 // rough glass (rough_vertex).
