@@ -341,8 +341,8 @@ impl Strata {
 
 /// One emission eye sample of ray.comp's `emission_sample`: the emission met along the specular chain
 /// through sample `index`'s point of the pixel (`strata`), one Fresnel branch chosen with probability f,
-/// and with direct light sampled (`RenderParams::direct_light`) term (d) at its diffuse end. `cut` counts a path ended at the
-/// depth backstop; `marks` gathers what the pilot marks by (`SampleMarks`).
+/// and with direct light sampled (`RenderParams::direct_light`) term (d) at its diffuse end. `cut` counts
+/// a path ended at the depth backstop; `marks` gathers what the pilot marks by (`SampleMarks`).
 /// `pilot`: the pilot's sample, which takes each smooth dielectric branch with probability 1/2
 /// (`branch_u`).
 // The path's state and its marks, each read and set along it.
