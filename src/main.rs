@@ -788,9 +788,10 @@ fn render(args: RenderArgs) -> Result<Ended> {
         let m = renderer.pilot_marks()?;
         let pct = |n: u32| 100.0 * n as f64 / m.pixels.max(1) as f64;
         eprintln!(
-            "pilot marks: emission {:.1}%, rough {:.1}%, lit {:.1}% of {} pixels; all emission samples in {:.1}% \
-             (in the pilot: {:.1}%)",
+            "pilot marks: emission {:.1}%, near a light {:.1}%, rough {:.1}%, lit {:.1}% of {} pixels; all emission \
+             samples in {:.1}% (in the pilot: {:.1}%)",
             pct(m.emission),
+            pct(m.near),
             pct(m.rough),
             pct(m.lit),
             m.pixels,

@@ -250,6 +250,26 @@ vec3 env_sample(Emitter e, float a, float b, out float pdf, out vec3 radiance) {
 // bounding sphere.
 float infinite_reach(Emitter e, vec3 o) { return 2.0 * (e.radius + length(o - e.origin)); }
 
+// The sphere around an emitter with an area (a quad, a disk, a triangle, a sphere): its centre and radius.
+// False for a point, a spot, the sun and the environment, which have none (ray.comp's pilot: a chain
+// passing near a light).
+bool emitter_bounds(Emitter e, out vec3 centre, out float radius) {
+    if (e.kind == LIGHT_QUAD) {
+        centre = e.origin + 0.5 * (e.edge_u + e.edge_v);
+        radius = 0.5 * max(length(e.edge_u + e.edge_v), length(e.edge_u - e.edge_v));
+        return true;
+    }
+    if (e.kind == LIGHT_TRIANGLE) {
+        centre = e.origin + (e.edge_u + e.edge_v) * (1.0 / 3.0);
+        vec3 a = e.origin - centre;
+        radius = max(length(a), max(length(a + e.edge_u), length(a + e.edge_v)));
+        return true;
+    }
+    centre = e.origin;
+    radius = e.radius;
+    return e.kind == LIGHT_SPHERE;
+}
+
 // --- Shadow rays: light other than a quad's or triangle's reaching the ray origin o (offset from its
 // surface), for uniform (a, b): the unit direction w towards it, how far the shadow ray goes, and li, the
 // radiance (or intensity / d^2, or irradiance) divided by the density of w and by prob, so that the

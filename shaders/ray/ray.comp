@@ -82,6 +82,11 @@ const uint MARK_EMISSION = 1u;
 const uint MARK_LIT = 2u;
 const uint MARK_ROUGH = 4u;
 const uint MARK_CHAIN = 8u;
+// MARK_NEAR: one of the pilot's chains left a curved mirror or glass (a sphere, or a shading normal off its
+// face: `bent`) and then passed near an area light (passes_near_light). A curve magnifies: the pixel's
+// other positions may meet that light as an image too thin for the pilot's samples to find, and one such
+// sample among a few is a firefly (docs/accuracy.md, "Chains that pass near a light").
+const uint MARK_NEAR = 16u;
 layout(std430, binding = 12) readonly buffer Lights { Light lights[]; };
 layout(push_constant) uniform RayPush {
     vec2 jitter;     // sample position inside the pixel, in [0,1)^2 (0.5, 0.5: the centre); negative:
@@ -297,14 +302,44 @@ vec2 stratum_point(uint index, uvec2 grid, uint shift, vec2 u) {
     return (vec2(float(cell % grid.x), float(cell / grid.x)) + u) * (vec2(1.0) / vec2(grid));
 }
 
+// Whether the ray (o, d) passes within NEAR_REACH times the radius of the sphere around an area light
+// (emitter_bounds), ahead of o. A ratio of lengths, so a scaled scene marks the same pixels. Read from the
+// buffer, only the first NEAR_LIGHTS_MAX lights are looked at: the marks only move samples, so a light
+// past them costs noise, never bias.
+const float NEAR_REACH = 2.0;
+const uint NEAR_LIGHTS_MAX = 64u;
+bool near_light(Emitter e, vec3 o, vec3 d) {
+    vec3 c;
+    float rb;
+    if (!emitter_bounds(e, c, rb)) return false;
+    vec3 v = c - o;
+    float t = dot(v, d);
+    float reach = NEAR_REACH * rb;
+    return (t > 0.0 ? dot(v, v) - t * t : dot(v, v)) < reach * reach;
+}
+
+bool passes_near_light(vec3 o, vec3 d) {
+    bool near = false;
+#ifdef SCENE_INLINE_LIGHTS
+    [[unroll]] for (uint i = 0u; i < min(NUM_LIGHTS, NEAR_LIGHTS_MAX); i++) {
+        near = near || near_light(SCENE_EMITTERS[i], o, d);
+    }
+#else
+    uint n = min(params.num_lights, NEAR_LIGHTS_MAX);
+    for (uint i = 0u; i < n && !near; i++) near = near_light(emitter_of(lights[i]), o, d);
+#endif
+    return near;
+}
+
 // One emission sample: the emission met along the specular chain from the eye through its position
 // (sample `index` of the pixel's, stratum_point over `grid` from `shift`), and with direct light sampled,
 // term (d) at the chain's diffuse end. `seen`: set if the path met the front of an
 // emitter (or the environment) that no shadow ray also takes, i.e. not straight after a rough vertex;
 // `lit`: set if its shadow ray reached a light; `rough`: set if it sampled through a rough conductor or
-// rough glass (rough_vertex).
+// rough glass (rough_vertex); `chain`: set past a mirror, smooth glass or a smooth coat; `near`, in the
+// pilot: set where such a chain, after a curved vertex, passed near a light (MARK_NEAR).
 vec3 emission_sample(uint px, uint py, uint index, uvec2 grid, uint shift, inout Rng rng, inout bool seen,
-                     inout bool lit, inout bool rough, inout bool chain) {
+                     inout bool lit, inout bool rough, inout bool chain, inout bool near) {
     vec2 u = vec2(rng_float(rng), rng_float(rng));
     vec2 jitter = stratum_point(index, grid, shift, u);
     vec3 o = params.eye;
@@ -316,10 +351,14 @@ vec3 emission_sample(uint px, uint py, uint index, uvec2 grid, uint shift, inout
     // Where d left a rough vertex: its lobe's density of d and the vertex (glossy_light.glsl); 0 else.
     float lobe_pdf = 0.0;
     vec3 lobe_from = vec3(0.0);
+    bool bent = false; // the path met a curved vertex (MARK_NEAR)
     for (uint depth = 0u;; depth++) {
         bvh_sync();
         // Past the first vertex without a lobe's density: the path left a mirror, glass or a smooth coat.
-        if (depth > 0u && !(lobe_pdf > 0.0)) chain = true;
+        if (depth > 0u && !(lobe_pdf > 0.0)) {
+            chain = true;
+            if (pc.pilot != 0u && bent && !near) near = passes_near_light(o, d);
+        }
         if (HAS_SHADING_NORMALS && !shading_valid(d, vng, vns)) break;
         // The last vertex's bump or normal map term for the direction the path leaves it along.
         if (HAS_NORMAL_MAPS) { thr *= bump_shadowing(d); bump_alpha2 = 0.0; }
@@ -342,6 +381,9 @@ vec3 emission_sample(uint px, uint py, uint index, uvec2 grid, uint shift, inout
         vec3 ng = front ? h.normal : -h.normal;
         vec3 nf = shading_normal(h, ng);
         if (HAS_SHADING_NORMALS && !shading_valid(d, ng, nf)) break;
+        // Curved: a sphere, or a shading normal more than 0.8 degrees off the face (a flat face's own
+        // interpolated normals are not, but for rounding).
+        bent = bent || h.kind == HIT_SPHERE || dot(nf, ng) < 0.9999;
         vng = ng;
         vns = nf;
         float lobe_in = lobe_pdf;
@@ -689,21 +731,22 @@ void main() {
     // the remaining samples are not taken rather than taken as black.
     // How many (reference::samples_for_mark, the CPU twin's rule): pc.rough_samples where the pilot
     // sampled through a rough lobe (whose light, by shadow rays and the lobe, is the noisiest term there,
-    // docs/accuracy.md, "Eye paths through rough lobes"); all of emission_samples where it saw emission; with
-    // direct light sampled, light_samples where one of its shadow rays reached a light and one where none
-    // did (in the umbra, or where no light is in direct view: the shadow rays there would add nothing);
-    // else light_samples.
+    // docs/accuracy.md, "Eye paths through rough lobes"); all of emission_samples where it saw emission or
+    // a curved chain passed near a light (MARK_NEAR); with direct light sampled, light_samples where one of
+    // its shadow rays reached a light and one where none did (in the umbra, or where no light is in direct
+    // view: the shadow rays there would add nothing); else light_samples.
     uint mark = busy[local];
     uint total = pc.light_samples;
     if (pc.pilot != 0u) total = pc.emission_samples;
     else if ((mark & MARK_ROUGH) != 0u) total = pc.rough_samples;
-    else if ((mark & MARK_EMISSION) != 0u) total = pc.emission_samples;
+    else if ((mark & (MARK_EMISSION | MARK_NEAR)) != 0u) total = pc.emission_samples;
     else if (params.direct_light != 0u && pc.emission_samples > 0u && (mark & MARK_LIT) == 0u) total = min(total, 1u);
     uint first = pc.chunk * pc.per_dispatch;
     uint want = total > first ? min(total - first, pc.per_dispatch) : 0u;
     bool seen = false;
     bool lit = false;
     bool rough = false;
+    bool near = false;
     // The pilot takes pc.pilot_samples in every pixel, and the rest of its count only where one of them (or
     // an earlier dispatch's) left a mirror, glass or a smooth coat: what such a chain shows of a light can
     // be an image a pixel wide, which a few samples miss, while a light seen straight or through a rough
@@ -719,7 +762,7 @@ void main() {
     for (uint s = 0u; s < want; s++) {
         if (bvh_spent || bvh_cut) break;
         if (pc.pilot != 0u && first + s >= pc.pilot_samples && !chain) break;
-        vec3 e = emission_sample(px, py, first + s, grid, shift, erng, seen, lit, rough, chain);
+        vec3 e = emission_sample(px, py, first + s, grid, shift, erng, seen, lit, rough, chain, near);
         if (bvh_spent || bvh_cut) break;
         if (pc.pilot != 0u) continue;
         emitted += dvec3(e);
@@ -727,7 +770,7 @@ void main() {
     }
     if (pc.pilot != 0u) {
         busy[local] |= (seen ? MARK_EMISSION : 0u) | (lit ? MARK_LIT : 0u) | (rough ? MARK_ROUGH : 0u)
-            | (chain ? MARK_CHAIN : 0u);
+            | (chain ? MARK_CHAIN : 0u) | (near ? MARK_NEAR : 0u);
     }
     if (samples > 0u) direct[local] += dvec4(emitted, double(samples));
 }

@@ -118,7 +118,10 @@ pub struct PilotMarks {
     pub emission: u32,
     pub lit: u32,
     pub rough: u32,
-    /// Pixels with MARK_EMISSION or MARK_ROUGH: those that take all the emission samples.
+    /// Pixels where a chain passed near a light after a curved vertex (ray.comp's MARK_NEAR).
+    #[serde(default)]
+    pub near: u32,
+    /// Pixels with MARK_EMISSION, MARK_NEAR or MARK_ROUGH: those that take all the emission samples.
     pub all_samples: u32,
     /// Pixels where the pilot itself took all the emission samples, not only `Settings::pilot_samples`:
     /// one of those met a mirror or glass (ray.comp's MARK_CHAIN). 0 after a resume (the checkpoint keeps
@@ -129,14 +132,15 @@ pub struct PilotMarks {
 
 impl PilotMarks {
     pub fn new(busy: &[u32]) -> PilotMarks {
-        use ppm_vk_kernels::ray::{MARK_EMISSION, MARK_LIT, MARK_ROUGH};
+        use ppm_vk_kernels::ray::{MARK_EMISSION, MARK_LIT, MARK_NEAR, MARK_ROUGH};
         let count = |bits: u32| busy.iter().filter(|&&m| m & bits != 0).count() as u32;
         PilotMarks {
             pixels: busy.len() as u32,
             emission: count(MARK_EMISSION),
             lit: count(MARK_LIT),
             rough: count(MARK_ROUGH),
-            all_samples: count(MARK_EMISSION | MARK_ROUGH),
+            near: count(MARK_NEAR),
+            all_samples: count(MARK_EMISSION | MARK_NEAR | MARK_ROUGH),
             pilot_all: 0,
         }
     }

@@ -54,6 +54,10 @@ pub const MARK_ROUGH: u32 = 4;
 /// mirror, smooth glass or a smooth coat, which can show a light as an image a pixel wide, so the pixel
 /// takes the pilot's whole count. The renderer clears it before the marks spread (`spread_marks`).
 pub const MARK_CHAIN: u32 = 8;
+/// A pilot mark: one of the pilot's chains left a curved mirror or glass (a sphere, or a shading normal
+/// off its face) and then passed near an area light, in the pixel or beside it: the pixel takes all the
+/// emission samples, as for [`MARK_EMISSION`] (ray.comp's `passes_near_light`).
+pub const MARK_NEAR: u32 = 16;
 
 /// `RayPush::jitter` for a random position in every pixel (SPPM's box filter).
 pub const JITTER_RANDOM: [f32; 2] = [-1.0, -1.0];

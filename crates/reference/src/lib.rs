@@ -302,13 +302,34 @@ fn eye_vertex(
 
 /// What ray.comp's emission samples saw, which the pilot marks a pixel by: `seen`, a path met an emitter's
 /// front that no shadow ray takes; `lit`, a shadow ray reached a light; `rough`, a path sampled through a
-/// rough conductor or rough glass; `chain`, a path left a mirror, smooth glass or a smooth coat.
+/// rough conductor or rough glass; `chain`, a path left a mirror, smooth glass or a smooth coat; `near`,
+/// in the pilot, such a chain passed near a light after a curved vertex (ray.comp's MARK_NEAR).
 #[derive(Clone, Copy, Debug, Default)]
 struct SampleMarks {
     seen: bool,
     lit: bool,
     rough: bool,
     chain: bool,
+    near: bool,
+}
+
+/// ray.comp's `NEAR_REACH`: how near a chain passes a light to mark its pixel (MARK_NEAR), in radii of the
+/// sphere around the light.
+pub const NEAR_REACH: f32 = 2.0;
+/// ray.comp's `NEAR_LIGHTS_MAX`: the lights the pilot's near test looks at, the first in the table.
+pub const NEAR_LIGHTS_MAX: usize = 64;
+
+/// ray.comp's `passes_near_light`: whether the ray (o, d) passes within NEAR_REACH times the radius of the
+/// sphere around one of the first NEAR_LIGHTS_MAX lights (`lights::emitter_bounds`), ahead of o.
+fn passes_near_light(g: &GpuScene, o: Vec3, d: Vec3) -> bool {
+    g.lights.iter().take(NEAR_LIGHTS_MAX).any(|light| {
+        lights::emitter_bounds(&lights::emitter_of(g, light)).is_some_and(|(c, rb)| {
+            let v = c - o;
+            let t = v.dot(d);
+            let reach = NEAR_REACH * rb;
+            (if t > 0.0 { v.dot(v) - t * t } else { v.dot(v) }) < reach * reach
+        })
+    })
 }
 
 /// ray.comp's stratified positions of a pixel's emission samples in one pass (`strata_grid`,
@@ -369,9 +390,16 @@ fn emission_sample(
     let mut last = Bump::default();
     // Where d left a rough vertex: its lobe's density of d and the vertex (glossy_light.glsl); 0 else.
     let (mut lobe_pdf, mut lobe_from) = (0f32, Vec3::ZERO);
+    // The path met a curved vertex (MARK_NEAR).
+    let mut bent = false;
     for depth in 0.. {
         // Past the first vertex without a lobe's density: the path left a mirror, glass or a smooth coat.
-        marks.chain |= depth > 0 && !(lobe_pdf > 0.0);
+        if depth > 0 && !(lobe_pdf > 0.0) {
+            marks.chain = true;
+            if pilot && bent && !marks.near {
+                marks.near = passes_near_light(g, o, d);
+            }
+        }
         let mut out = false;
         let Some(EyeVertex {
             h,
@@ -391,6 +419,8 @@ fn emission_sample(
             }
             break;
         };
+        // Curved: a sphere, or a shading normal more than 0.8 degrees off the face (ray.comp).
+        bent |= h.sphere || nf.dot(ng) < 0.9999;
         let m = &m;
         let lobe_in = std::mem::take(&mut lobe_pdf);
         if m.surface == SURFACE_DIFFUSE {
@@ -497,17 +527,18 @@ pub struct EyePass {
 }
 
 /// The pilot's marks (ray.comp's `busy`), as the kernel's binding defines them.
-pub use ppm_vk_kernels::ray::{MARK_CHAIN, MARK_EMISSION, MARK_LIT, MARK_ROUGH};
+pub use ppm_vk_kernels::ray::{MARK_CHAIN, MARK_EMISSION, MARK_LIT, MARK_NEAR, MARK_ROUGH};
 
 /// ray.comp's count of emission-sample paths a pixel takes per eye pass after the pilot, from its marks:
 /// `rough` where the pilot sampled through a rough lobe (the renderer passes
-/// `Settings::rough_pixel_samples`, at least `emission`), `emission` where it saw emission; with direct
+/// `Settings::rough_pixel_samples`, at least `emission`), `emission` where it saw emission or a curved
+/// chain passed near a light (MARK_NEAR); with direct
 /// light sampled, `light` where a pilot shadow ray reached a light and one where none did (if the pilot
 /// took samples at all); else `light` (the renderer passes `Settings::unmarked_samples` there).
 pub fn samples_for_mark(direct_light: bool, emission: u32, rough: u32, light: u32, mark: u32) -> u32 {
     if mark & MARK_ROUGH != 0 {
         rough
-    } else if mark & MARK_EMISSION != 0 {
+    } else if mark & (MARK_EMISSION | MARK_NEAR) != 0 {
         emission
     } else if direct_light && emission > 0 && mark & MARK_LIT == 0 {
         light.min(1)
@@ -853,7 +884,8 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
             busy[pixel as usize] |= bit(marks.seen, MARK_EMISSION)
                 | bit(marks.lit, MARK_LIT)
                 | bit(marks.rough, MARK_ROUGH)
-                | bit(marks.chain, MARK_CHAIN);
+                | bit(marks.chain, MARK_CHAIN)
+                | bit(marks.near, MARK_NEAR);
         }
         if samples > 0 {
             out.direct[pixel as usize] = [emitted.x, emitted.y, emitted.z, samples as f64];

@@ -220,6 +220,27 @@ pub fn infinite_reach(e: &Emitter, o: Vec3) -> f32 {
     2.0 * (e.radius + (o - e.origin).length())
 }
 
+/// lights.glsl's `emitter_bounds`: the centre and radius of the sphere around an emitter with an area;
+/// `None` for a point, a spot, the sun and the environment.
+pub fn emitter_bounds(e: &Emitter) -> Option<(Vec3, f32)> {
+    match e.kind {
+        LIGHT_QUAD => Some((
+            e.origin + 0.5 * (e.edge_u + e.edge_v),
+            0.5 * (e.edge_u + e.edge_v).length().max((e.edge_u - e.edge_v).length()),
+        )),
+        LIGHT_TRIANGLE => {
+            let centre = e.origin + (e.edge_u + e.edge_v) * (1.0 / 3.0);
+            let a = e.origin - centre;
+            Some((
+                centre,
+                a.length().max((a + e.edge_u).length().max((a + e.edge_v).length())),
+            ))
+        }
+        LIGHT_SPHERE => Some((e.origin, e.radius)),
+        _ => None,
+    }
+}
+
 fn env_size(g: &GpuScene, e: &Emitter) -> (u32, u32) {
     let t = g.textures[e.table as usize];
     (t[0], t[1])
@@ -416,6 +437,64 @@ mod tests {
     use ppm_vk_engine::scene::emitter::envmap_uv;
     use ppm_vk_engine::scene::{Emitter as SceneEmitter, EnvMap, Environment, Scene};
     use ppm_vk_engine::settings::Settings;
+
+    fn emitter(kind: u32, origin: Vec3, edge_u: Vec3, edge_v: Vec3, radius: f32) -> Emitter {
+        Emitter {
+            origin,
+            edge_u,
+            edge_v,
+            normal: edge_u.cross(edge_v).normalize_or_zero(),
+            flux: Vec3::ONE,
+            cdf: 1.0,
+            kind,
+            value: Vec3::ONE,
+            radius,
+            cos_cutoff: 0.0,
+            cos_beam: 0.0,
+            cutoff: 0.0,
+            inv_width: 0.0,
+            table: 0,
+        }
+    }
+
+    /// The sphere around a quad (a skewed one too), a triangle and a sphere holds every corner, and for a
+    /// quad and a triangle touches the farthest: the smallest sphere about that centre. Point lights and
+    /// the sun have none.
+    #[test]
+    fn emitter_bounds_hold_the_emitter() {
+        let o = Vec3::new(0.3, -1.0, 2.0);
+        for (u, v) in [
+            (Vec3::new(0.15, 0.0, 0.0), Vec3::new(0.0, 0.0, 0.15)),
+            (Vec3::new(2.0, 0.0, 0.0), Vec3::new(1.5, 0.5, 0.0)),
+        ] {
+            let (c, r) = emitter_bounds(&emitter(LIGHT_QUAD, o, u, v, 0.0)).unwrap();
+            let far = [o, o + u, o + v, o + u + v]
+                .map(|p| (p - c).length())
+                .into_iter()
+                .fold(0f32, f32::max);
+            assert!(
+                (far - r).abs() <= 1e-6 * r.max(1.0),
+                "quad: farthest corner {far}, radius {r}"
+            );
+            let (c, r) = emitter_bounds(&emitter(LIGHT_TRIANGLE, o, u, v, 0.0)).unwrap();
+            assert!((c - (o + (u + v) / 3.0)).length() < 1e-6);
+            let far = [o, o + u, o + v]
+                .map(|p| (p - c).length())
+                .into_iter()
+                .fold(0f32, f32::max);
+            assert!(
+                (far - r).abs() <= 1e-6 * r.max(1.0),
+                "triangle: farthest corner {far}, radius {r}"
+            );
+        }
+        assert_eq!(
+            emitter_bounds(&emitter(LIGHT_SPHERE, o, Vec3::X, Vec3::Z, 0.25)),
+            Some((o, 0.25))
+        );
+        for kind in [LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT] {
+            assert_eq!(emitter_bounds(&emitter(kind, o, Vec3::X, Vec3::Z, 0.25)), None);
+        }
+    }
 
     /// A scene whose only light is an environment map of w x h pixels given by `f(row, col)`, lowered.
     fn lowered(w: u32, h: u32, f: impl Fn(u32, u32) -> Vec3) -> GpuScene {
