@@ -39,7 +39,7 @@ pub struct CompareArgs {
     time: f64,
     /// Variants separated by `;` or `,`, e.g. "ppm; ppm+probe; ppm+cone; ppm+probe-sf+cone". Words joined by
     /// `+`: ppm, sppm, noprobe (every radius eq. 8's; the default is the curvature probe, probe-curv=1), probe, probe-sf, probe-nn[=K] (the k-nearest probe), probe-curv[=G] (the curvature probe, growing radii at most G times), pp=N (photons of the probe pass), cone[=K], beta=F, alpha=A, shrink=Z (the adaptive shrink's significance; noshrink: off), aim=S (the share of photons aimed at caustics), es=N (emission samples per pixel and pass), ps=N (the pilot's), rsp=N (where a rough lobe is seen),
-    /// rs=N (SPPM: lobe directions at the first rough vertex), gh=A (glossy hit points on rough conductors of alpha >= A), nogh (none), photons (direct light by the photons) or
+    /// rs=N (SPPM: lobe directions at the first rough vertex), gs=N (SPPM: Fresnel splits at smooth glass), gh=A (glossy hit points on rough conductors of alpha >= A), nogh (none), photons (direct light by the photons) or
     /// sample (by light sampling, the default), ls=N (light samples), gl=mis|bsdf|lights (the light rough
     /// vertices reflect straight from a light: both strategies, the default, or one of them).
     #[arg(
@@ -142,6 +142,13 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
                 }
                 s.rough_splits = k as u32;
             }
+            "gs" => {
+                let k = number("gs")?;
+                if !(k >= 1.0 && k.fract() == 0.0) {
+                    bail!("variant {name:?}: gs (glass splits) must be a whole number, got {k}");
+                }
+                s.glass_splits = k as u32;
+            }
             "gh" => s.glossy_hits = Some(number("gh")?),
             "nogh" => s.glossy_hits = None,
             "photons" => s.direct = ppm_vk_engine::DirectLight::Photons,
@@ -156,7 +163,7 @@ fn parse_variant(text: &str, base: &Settings) -> Result<Variant> {
             }
             other => bail!(
                 "variant {name:?}: unknown word {other:?} (ppm, sppm, noprobe, probe, probe-sf, probe-nn[=K], probe-curv[=G], pp=N, cone[=K], beta=F, alpha=A, \
-                 shrink=Z, noshrink, aim=S, es=N, ps=N, rsp=N, ls=N, rs=N, gh=A, nogh, photons, sample, gl=mis|bsdf|lights)"
+                 shrink=Z, noshrink, aim=S, es=N, ps=N, rsp=N, ls=N, rs=N, gs=N, gh=A, nogh, photons, sample, gl=mis|bsdf|lights)"
             ),
         }
     }

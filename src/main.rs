@@ -185,6 +185,10 @@ pub(crate) struct SettingsArgs {
     /// samples a pass (1: one direction).
     #[arg(long, default_value_t = Settings::default().rough_splits, value_parser = clap::value_parser!(u32).range(1..=8))]
     rough_splits: u32,
+    /// SPPM: the hit points an eye path may split into at smooth glass and thin panes, both Fresnel
+    /// branches while it has slots (1: one branch drawn by Fresnel), in scenes without a rough split.
+    #[arg(long, default_value_t = Settings::default().glass_splits, value_parser = clap::value_parser!(u32).range(1..=8))]
+    glass_splits: u32,
     /// Eye paths per pixel and pass that only collect the emission seen directly or through mirrors and
     /// glass: the light's edges and its images converge this many times faster (0: the hit-point path's
     /// own sample only).
@@ -269,6 +273,7 @@ impl SettingsArgs {
             initial_radius: self.radius,
             hit_slots: self.hit_slots,
             rough_splits: self.rough_splits,
+            glass_splits: self.glass_splits,
             probe: self.probe.into(),
             probe_beta: self.beta,
             probe_photons: self.probe_photons,

@@ -87,6 +87,8 @@ const uint MARK_CHAIN = 8u;
 // other positions may meet that light as an image too thin for the pilot's samples to find, and one such
 // sample among a few is a firefly (docs/accuracy.md, "Chains that pass near a light").
 const uint MARK_NEAR = 16u;
+// MARK_SPLIT: set by the renderer from MARK_CHAIN (and spread) where SPPM splits at glass (kernels' ray.rs).
+const uint MARK_SPLIT = 32u;
 layout(std430, binding = 12) readonly buffer Lights { Light lights[]; };
 layout(push_constant) uniform RayPush {
     vec2 jitter;     // sample position inside the pixel, in [0,1)^2 (0.5, 0.5: the centre); negative:
@@ -513,6 +515,10 @@ void main() {
         // The slots glass, panes and plastics may split into both branches: all of them in PPM, none where
         // they are the rough vertex's (one branch each there).
         uint branch_slots = params.rough_split != 0u ? 1u : params.hit_slots;
+        // SPPM (hit points at random points of the pixel) splits at glass only in the pixels the renderer
+        // marked MARK_SPLIT, whose split slots alone the gather and the update visit: a slot the rest would
+        // leave empty still costs lavapipe a thread of each. The marks are fixed before any counted path.
+        if (pc.jitter.x < 0.0 && (busy[local] & MARK_SPLIT) == 0u) branch_slots = 1u;
 
         while (sp > 0u) {
             Pending r = stack[--sp];

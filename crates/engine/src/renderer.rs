@@ -11,7 +11,7 @@ use ppm_vk_kernels::layout::{HitPoint, HitStats, PassAccum, PathCounters, Photon
 use ppm_vk_kernels::lookup::{Grid, Lookup};
 use ppm_vk_kernels::photon::{self, PathLimits, PhotonPush, SALT_EYE, SALT_PHOTON, SALT_PROBE};
 use ppm_vk_kernels::probe::{self, ProbePush, MODE_CURVATURE, MODE_NEAREST, MODE_PAPER, MODE_SCALE_FREE};
-use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers, JITTER_RANDOM, MARK_CHAIN};
+use ppm_vk_kernels::ray::{self, RayPush, SceneBuffers, JITTER_RANDOM, MARK_CHAIN, MARK_SPLIT};
 use ppm_vk_kernels::reflected;
 use ppm_vk_kernels::resolve::{self, ResolvePush};
 use ppm_vk_kernels::specialize::{self, KernelTiming, SceneConstants, MAX_INLINE_PRIMITIVES};
@@ -662,6 +662,13 @@ impl Renderer {
         let (width, height) = (self.gpu.params.width, self.gpu.params.height);
         let mut busy: Vec<u32> = self.download(&self.busy, self.gpu.pixels(), "reading the pilot's marks")?;
         self.pilot_all = busy.iter().filter(|&&m| m & MARK_CHAIN != 0).count() as u32;
+        // SPPM's glass splits: where a pilot path left a mirror or glass, and beside it (spread_marks).
+        let glass_splits = self.glass_splits();
+        if glass_splits {
+            for m in busy.iter_mut().filter(|m| **m & MARK_CHAIN != 0) {
+                *m |= MARK_SPLIT;
+            }
+        }
         spread_marks(&mut busy, width, height);
         self.ctx
             .upload(&self.busy, bytemuck::cast_slice(&busy))
@@ -670,15 +677,28 @@ impl Renderer {
         // PPM's hit points never move: order them by position once, on the host. SPPM's move every pass:
         // order the pixels by their screen position, which is nearly as coherent and never changes; where
         // rough vertices split the eye paths, each slot's pixels in turn (the pixels' first slots, then
-        // their second, ...), so that the slots most pixels leave empty fill whole subgroups, which cost
-        // next to nothing, rather than idling lanes beside the live ones.
+        // their second, ...), so that the slots most pixels leave empty fill whole subgroups rather than
+        // idling lanes beside the live ones. Where glass splits them, only the pixels marked MARK_SPLIT
+        // have slots past the first (ray.comp), and only theirs are visited: an empty slot still costs
+        // lavapipe a thread of the gather and of the update (cornell-spheres' 3 more slots a pixel took
+        // the gather from 129 to 279 ms a pass with none of them filled).
         let order = match self.settings.mode {
             Mode::Ppm => morton_order(&self.download(&self.hit_points, self.gpu.slots(), "reading the hit points")?),
             Mode::Sppm => {
                 let pixels = pixel_order(self.gpu.params.width, self.gpu.params.height);
                 let slots = self.gpu.params.hit_slots;
-                (0..slots)
-                    .flat_map(|s| pixels.iter().map(move |&p| p * slots + s))
+                let split: Vec<u32> = if glass_splits {
+                    pixels
+                        .iter()
+                        .copied()
+                        .filter(|&p| busy[p as usize] & MARK_SPLIT != 0)
+                        .collect()
+                } else {
+                    pixels.clone()
+                };
+                let first = pixels.iter().map(|&p| p * slots);
+                first
+                    .chain((1..slots).flat_map(|s| split.iter().map(move |&p| p * slots + s)))
                     .collect()
             }
         };
@@ -713,6 +733,12 @@ impl Renderer {
     /// The camera the render is seen from (the scene's, or the last [`Renderer::set_camera`]'s).
     pub fn camera(&self) -> &Camera {
         &self.camera
+    }
+
+    /// Whether SPPM's eye paths split at glass in marked pixels (`Settings::splits_glass`): more than one
+    /// slot a pixel, and not for a rough vertex's lobe.
+    fn glass_splits(&self) -> bool {
+        self.settings.mode == Mode::Sppm && self.gpu.params.hit_slots > 1 && self.gpu.params.rough_split == 0
     }
 
     /// The hit-point slots the gather and the update visit, in this order.

@@ -128,6 +128,13 @@ pub struct Settings {
     /// seen through a glossy lobe gets this many samples a pass (ray.comp). Elsewhere SPPM has one.
     #[serde(default = "default_rough_splits")]
     pub rough_splits: u32,
+    /// Hit points per pixel in SPPM where the scene has smooth glass or a thin pane and no rough surface
+    /// that splits: an eye path takes both Fresnel branches at smooth glass while the pixel has slots (the
+    /// reflection weighted F, the refraction 1 - F), each leaf a hit point with statistics of its own,
+    /// as PPM's `hit_slots`; past them it draws one branch by Fresnel. So the view through glass is not a
+    /// coin flip between two images each pass (docs/accuracy.md, "Fresnel splits in SPPM").
+    #[serde(default = "default_glass_splits")]
+    pub glass_splits: u32,
     /// Most specular bounces of an eye path. Eye paths end at diffuse surfaces or by escaping; this is a
     /// backstop (for a camera between parallel mirrors), lowered where the device's loop budget needs it
     /// (`PathLimits`). Paths cut there are counted in `PassStats::eye_paths_cut`.
@@ -223,6 +230,7 @@ impl Default for Settings {
             caustic_photons: DEFAULT_CAUSTIC_PHOTONS,
             hit_slots: 4,
             rough_splits: default_rough_splits(),
+            glass_splits: default_glass_splits(),
             max_eye_depth: 1024,
             max_photon_depth: 4096,
             emission_samples: 16,
@@ -293,6 +301,13 @@ pub const DEFAULT_ROUGH_SPLITS: u32 = 4;
 
 fn default_rough_splits() -> u32 {
     DEFAULT_ROUGH_SPLITS
+}
+
+/// `Settings::glass_splits`'s default (docs/accuracy.md, "Fresnel splits in SPPM").
+pub const DEFAULT_GLASS_SPLITS: u32 = 4;
+
+fn default_glass_splits() -> u32 {
+    DEFAULT_GLASS_SPLITS
 }
 
 /// `Settings::pilot_samples`'s default (docs/performance.md, "The pilot's samples"): at equal passes the
@@ -441,6 +456,12 @@ impl Settings {
                 format!("rough splits per pixel must be in 1..=8, got {}", self.rough_splits),
             ));
         }
+        if !(1..=8).contains(&self.glass_splits) {
+            return Err(invalid(
+                "glass_splits",
+                format!("glass splits per pixel must be in 1..=8, got {}", self.glass_splits),
+            ));
+        }
         if let Some(b) = self.grid_buckets {
             if !b.is_power_of_two() || !(SCAN_BLOCK..=SCAN_BLOCK * 65536).contains(&b) {
                 return Err(invalid(
@@ -509,6 +530,7 @@ impl Settings {
         match self.mode {
             Mode::Ppm => self.hit_slots,
             Mode::Sppm if self.splits_rough(scene) => self.rough_splits,
+            Mode::Sppm if self.splits_glass(scene) => self.glass_splits,
             Mode::Sppm => 1,
         }
     }
@@ -528,6 +550,20 @@ impl Settings {
                 }
                 _ => false,
             })
+    }
+
+    /// Whether SPPM's eye paths split at smooth glass and thin panes in `scene` (ray.comp: both Fresnel
+    /// branches while the pixel has slots): it has such a material, no rough split (`splits_rough`, whose
+    /// slots glass then leaves to the lobe), and more than one split is asked for.
+    pub fn splits_glass(&self, scene: &crate::scene::Scene) -> bool {
+        use crate::scene::Surface;
+        self.mode == Mode::Sppm
+            && self.glass_splits > 1
+            && !self.splits_rough(scene)
+            && scene
+                .materials
+                .iter()
+                .any(|m| matches!(m.surface, Surface::Glass { .. } | Surface::ThinDielectric { .. }))
     }
 
     /// The cone filter's normalisation 1 - 2/(3k) (eq. 11), or 1 without it.

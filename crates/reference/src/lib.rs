@@ -527,7 +527,7 @@ pub struct EyePass {
 }
 
 /// The pilot's marks (ray.comp's `busy`), as the kernel's binding defines them.
-pub use ppm_vk_kernels::ray::{MARK_CHAIN, MARK_EMISSION, MARK_LIT, MARK_NEAR, MARK_ROUGH};
+pub use ppm_vk_kernels::ray::{MARK_CHAIN, MARK_EMISSION, MARK_LIT, MARK_NEAR, MARK_ROUGH, MARK_SPLIT};
 
 /// ray.comp's count of emission-sample paths a pixel takes per eye pass after the pilot, from its marks:
 /// `rough` where the pilot sampled through a rough lobe (the renderer passes
@@ -609,8 +609,13 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
             let base = pixel as usize * slots;
             // SPPM's split happens once, at the first rough vertex (ray.comp).
             let mut may_split = p.rough_split != 0;
-            // The slots glass, panes and plastics may split into both branches (ray.comp).
-            let branch_slots = if may_split { 1 } else { slots };
+            // The slots glass, panes and plastics may split into both branches (ray.comp); SPPM's only in
+            // the pixels marked MARK_SPLIT.
+            let branch_slots = if may_split || (push.jitter[0] < 0.0 && busy[pixel as usize] & MARK_SPLIT == 0) {
+                1
+            } else {
+                slots
+            };
             // A fixed point of the pixel counts only when no random sample does (ray.comp).
             let hit_is_sample = push.jitter[0] < 0.0 || push.emission_samples == 0;
             while let Some((mut o, mut d, mut thr, mut depth, mut lobe_pdf, mut lobe_from)) = stack.pop() {
