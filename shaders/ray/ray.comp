@@ -87,8 +87,10 @@ const uint MARK_CHAIN = 8u;
 // other positions may meet that light as an image too thin for the pilot's samples to find, and one such
 // sample among a few is a firefly (docs/accuracy.md, "Chains that pass near a light").
 const uint MARK_NEAR = 16u;
-// MARK_SPLIT: set by the renderer from MARK_CHAIN (and spread) where SPPM splits at glass (kernels' ray.rs).
+// MARK_SPLIT: set by the renderer from MARK_CURVED (and spread) where SPPM splits at glass (kernels'
+// ray.rs). MARK_CURVED, the pilot's: one of its chains left a curved mirror or glass (`bent`).
 const uint MARK_SPLIT = 32u;
+const uint MARK_CURVED = 64u;
 layout(std430, binding = 12) readonly buffer Lights { Light lights[]; };
 layout(push_constant) uniform RayPush {
     vec2 jitter;     // sample position inside the pixel, in [0,1)^2 (0.5, 0.5: the centre); negative:
@@ -339,9 +341,10 @@ bool passes_near_light(vec3 o, vec3 d) {
 // emitter (or the environment) that no shadow ray also takes, i.e. not straight after a rough vertex;
 // `lit`: set if its shadow ray reached a light; `rough`: set if it sampled through a rough conductor or
 // rough glass (rough_vertex); `chain`: set past a mirror, smooth glass or a smooth coat; `near`, in the
-// pilot: set where such a chain, after a curved vertex, passed near a light (MARK_NEAR).
+// pilot: set where such a chain, after a curved vertex, passed near a light (MARK_NEAR); `curved`, in the
+// pilot: set where such a chain followed a curved vertex (MARK_CURVED).
 vec3 emission_sample(uint px, uint py, uint index, uvec2 grid, uint shift, inout Rng rng, inout bool seen,
-                     inout bool lit, inout bool rough, inout bool chain, inout bool near) {
+                     inout bool lit, inout bool rough, inout bool chain, inout bool near, inout bool curved) {
     vec2 u = vec2(rng_float(rng), rng_float(rng));
     vec2 jitter = stratum_point(index, grid, shift, u);
     vec3 o = params.eye;
@@ -359,7 +362,10 @@ vec3 emission_sample(uint px, uint py, uint index, uvec2 grid, uint shift, inout
         // Past the first vertex without a lobe's density: the path left a mirror, glass or a smooth coat.
         if (depth > 0u && !(lobe_pdf > 0.0)) {
             chain = true;
-            if (pc.pilot != 0u && bent && !near) near = passes_near_light(o, d);
+            if (pc.pilot != 0u && bent) {
+                curved = true;
+                if (!near) near = passes_near_light(o, d);
+            }
         }
         if (HAS_SHADING_NORMALS && !shading_valid(d, vng, vns)) break;
         // The last vertex's bump or normal map term for the direction the path leaves it along.
@@ -753,6 +759,7 @@ void main() {
     bool lit = false;
     bool rough = false;
     bool near = false;
+    bool curved = false;
     // The pilot takes pc.pilot_samples in every pixel, and the rest of its count only where one of them (or
     // an earlier dispatch's) left a mirror, glass or a smooth coat: what such a chain shows of a light can
     // be an image a pixel wide, which a few samples miss, while a light seen straight or through a rough
@@ -768,7 +775,7 @@ void main() {
     for (uint s = 0u; s < want; s++) {
         if (bvh_spent || bvh_cut) break;
         if (pc.pilot != 0u && first + s >= pc.pilot_samples && !chain) break;
-        vec3 e = emission_sample(px, py, first + s, grid, shift, erng, seen, lit, rough, chain, near);
+        vec3 e = emission_sample(px, py, first + s, grid, shift, erng, seen, lit, rough, chain, near, curved);
         if (bvh_spent || bvh_cut) break;
         if (pc.pilot != 0u) continue;
         emitted += dvec3(e);
@@ -776,7 +783,7 @@ void main() {
     }
     if (pc.pilot != 0u) {
         busy[local] |= (seen ? MARK_EMISSION : 0u) | (lit ? MARK_LIT : 0u) | (rough ? MARK_ROUGH : 0u)
-            | (chain ? MARK_CHAIN : 0u) | (near ? MARK_NEAR : 0u);
+            | (chain ? MARK_CHAIN : 0u) | (near ? MARK_NEAR : 0u) | (curved ? MARK_CURVED : 0u);
     }
     if (samples > 0u) direct[local] += dvec4(emitted, double(samples));
 }

@@ -59,10 +59,14 @@ pub const MARK_CHAIN: u32 = 8;
 /// emission samples, as for [`MARK_EMISSION`] (ray.comp's `passes_near_light`).
 pub const MARK_NEAR: u32 = 16;
 /// The renderer's mark for SPPM's glass splits (`Settings::glass_splits`): the pixel or a neighbour had a
-/// pilot path leave a mirror or glass ([`MARK_CHAIN`]), so its eye path takes both Fresnel branches at
-/// glass while it has slots, and the gather and update visit its split slots; elsewhere one branch, drawn
-/// by Fresnel, and one slot (ray.comp).
+/// pilot chain leave a curved mirror or glass ([`MARK_CURVED`]), so its eye path takes both Fresnel
+/// branches at glass while it has slots, and the gather and update visit its split slots; elsewhere one
+/// branch, drawn by Fresnel, and one slot (ray.comp).
 pub const MARK_SPLIT: u32 = 32;
+/// The pilot's own bit: one of its chains in the pixel followed a curved vertex (a sphere, or a shading
+/// normal off its face), where a flat pane's chain would not. The renderer turns it into [`MARK_SPLIT`]
+/// and clears it before the marks spread.
+pub const MARK_CURVED: u32 = 64;
 
 /// `RayPush::jitter` for a random position in every pixel (SPPM's box filter).
 pub const JITTER_RANDOM: [f32; 2] = [-1.0, -1.0];

@@ -303,7 +303,8 @@ fn eye_vertex(
 /// What ray.comp's emission samples saw, which the pilot marks a pixel by: `seen`, a path met an emitter's
 /// front that no shadow ray takes; `lit`, a shadow ray reached a light; `rough`, a path sampled through a
 /// rough conductor or rough glass; `chain`, a path left a mirror, smooth glass or a smooth coat; `near`,
-/// in the pilot, such a chain passed near a light after a curved vertex (ray.comp's MARK_NEAR).
+/// in the pilot, such a chain passed near a light after a curved vertex (ray.comp's MARK_NEAR); `curved`,
+/// in the pilot, such a chain followed a curved vertex (MARK_CURVED).
 #[derive(Clone, Copy, Debug, Default)]
 struct SampleMarks {
     seen: bool,
@@ -311,6 +312,7 @@ struct SampleMarks {
     rough: bool,
     chain: bool,
     near: bool,
+    curved: bool,
 }
 
 /// ray.comp's `NEAR_REACH`: how near a chain passes a light to mark its pixel (MARK_NEAR), in radii of the
@@ -396,8 +398,11 @@ fn emission_sample(
         // Past the first vertex without a lobe's density: the path left a mirror, glass or a smooth coat.
         if depth > 0 && !(lobe_pdf > 0.0) {
             marks.chain = true;
-            if pilot && bent && !marks.near {
-                marks.near = passes_near_light(g, o, d);
+            if pilot && bent {
+                marks.curved = true;
+                if !marks.near {
+                    marks.near = passes_near_light(g, o, d);
+                }
             }
         }
         let mut out = false;
@@ -527,7 +532,7 @@ pub struct EyePass {
 }
 
 /// The pilot's marks (ray.comp's `busy`), as the kernel's binding defines them.
-pub use ppm_vk_kernels::ray::{MARK_CHAIN, MARK_EMISSION, MARK_LIT, MARK_NEAR, MARK_ROUGH, MARK_SPLIT};
+pub use ppm_vk_kernels::ray::{MARK_CHAIN, MARK_CURVED, MARK_EMISSION, MARK_LIT, MARK_NEAR, MARK_ROUGH, MARK_SPLIT};
 
 /// ray.comp's count of emission-sample paths a pixel takes per eye pass after the pilot, from its marks:
 /// `rough` where the pilot sampled through a rough lobe (the renderer passes
@@ -890,7 +895,8 @@ pub fn ray_pass(g: &GpuScene, push: &RayPush, busy: &mut [u32]) -> EyePass {
                 | bit(marks.lit, MARK_LIT)
                 | bit(marks.rough, MARK_ROUGH)
                 | bit(marks.chain, MARK_CHAIN)
-                | bit(marks.near, MARK_NEAR);
+                | bit(marks.near, MARK_NEAR)
+                | bit(marks.curved, MARK_CURVED);
         }
         if samples > 0 {
             out.direct[pixel as usize] = [emitted.x, emitted.y, emitted.z, samples as f64];
