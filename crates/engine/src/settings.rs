@@ -129,10 +129,12 @@ pub struct Settings {
     #[serde(default = "default_rough_splits")]
     pub rough_splits: u32,
     /// Hit points per pixel in SPPM where the scene has smooth glass or a thin pane and no rough surface
-    /// that splits: an eye path takes both Fresnel branches at smooth glass while the pixel has slots (the
-    /// reflection weighted F, the refraction 1 - F), each leaf a hit point with statistics of its own,
-    /// as PPM's `hit_slots`; past them it draws one branch by Fresnel. So the view through glass is not a
-    /// coin flip between two images each pass (docs/accuracy.md, "Fresnel splits in SPPM").
+    /// that splits: in the pixels where a pilot chain left a curved mirror or glass (ray.comp's MARK_SPLIT),
+    /// an eye path takes both Fresnel branches at smooth glass while the pixel has slots (the reflection
+    /// weighted F, the refraction 1 - F), each leaf a hit point with statistics of its own, as PPM's
+    /// `hit_slots`; past them, and in the other pixels, it draws one branch by Fresnel. So the view through
+    /// curved glass is not a coin flip between two images each pass (docs/accuracy.md, "Fresnel splits in
+    /// SPPM").
     #[serde(default = "default_glass_splits")]
     pub glass_splits: u32,
     /// Most specular bounces of an eye path. Eye paths end at diffuse surfaces or by escaping; this is a
