@@ -571,8 +571,9 @@ fn signals_during_set_up_write_nothing() {
 }
 
 /// Limits are checked before any pass: an image whose hit points exceed the device's largest buffer
-/// (lavapipe: 128 MiB, 48 bytes a hit point: 4096x4096 needs 768 MiB) says what to lower and writes
-/// nothing; an unknown device lists the ones there are.
+/// (lavapipe: 128 MiB, 48 bytes a hit point: 4096x4096 needs 768 MiB a slot, 4 slots a pixel where
+/// cornell-spheres' glass splits) says what to lower and writes nothing; an unknown device lists the ones
+/// there are.
 #[test]
 fn device_limits_are_checked_before_work() {
     let dir = scratch("limits");
@@ -592,8 +593,8 @@ fn device_limits_are_checked_before_work() {
     // all of them must fit the device's memory.
     assert!(
         e.contains("the render's device memory (")
-            && e.contains("the hit points 768 MiB")
-            && e.contains("lower the resolution (4096x4096)"),
+            && e.contains("the hit points 3072 MiB")
+            && e.contains("lower the resolution (4096x4096) or the hit points per pixel (4, --glass-splits)"),
         "{e}"
     );
     assert!(!dir.join("never.exr").exists());

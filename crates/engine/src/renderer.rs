@@ -401,8 +401,14 @@ impl Renderer {
             ("the image", pixels * 16),
             ("the emission-sampled pixels' marks", pixels * 4),
         ];
+        // The flag that sets the hit points per pixel in this render.
+        let slots_flag = match settings.mode {
+            Mode::Ppm => "--hit-slots",
+            Mode::Sppm if gpu.params.rough_split != 0 => "--rough-splits",
+            Mode::Sppm => "--glass-splits",
+        };
         let advice = format!(
-            "the resolution ({}x{}) or the hit points per pixel ({})",
+            "the resolution ({}x{}) or the hit points per pixel ({}, {slots_flag})",
             gpu.params.width, gpu.params.height, gpu.params.hit_slots
         );
         // Only a BVH scene suspends photons (photon.comp); the others bind one entry's worth.
