@@ -388,19 +388,22 @@ impl Renderer {
         // Every buffer within the device's largest binding and all of them within its memory, checked
         // before anything is allocated.
         let size = std::mem::size_of::<HitPoint>() as u64;
-        let per_pixel = [
-            ("the hit points", slots * size),
-            (
-                "the hit-point statistics",
-                slots * std::mem::size_of::<HitStats>() as u64,
-            ),
-            ("the pass accumulators", slots * std::mem::size_of::<PassAccum>() as u64),
-            ("the hit-point order", slots * 4),
-            ("the direct emission", pixels * 32),
-            ("the direct emission's copy (a cancelled pass restores it)", pixels * 32),
-            ("the image", pixels * 16),
-            ("the emission-sampled pixels' marks", pixels * 4),
-        ];
+        let per_pixel_of = |slots: u64| {
+            [
+                ("the hit points", slots * size),
+                (
+                    "the hit-point statistics",
+                    slots * std::mem::size_of::<HitStats>() as u64,
+                ),
+                ("the pass accumulators", slots * std::mem::size_of::<PassAccum>() as u64),
+                ("the hit-point order", slots * 4),
+                ("the direct emission", pixels * 32),
+                ("the direct emission's copy (a cancelled pass restores it)", pixels * 32),
+                ("the image", pixels * 16),
+                ("the emission-sampled pixels' marks", pixels * 4),
+            ]
+        };
+        let mut per_pixel = per_pixel_of(slots);
         // The flag that sets the hit points per pixel in this render.
         let slots_flag = match settings.mode {
             Mode::Ppm => "--hit-slots",
@@ -455,7 +458,24 @@ impl Renderer {
                 lower,
             ));
         }
-        fits_device(&per_pixel, &others, ctx.info().memory_bytes, &advice)?;
+        // SPPM's glass splits only lower the variance: where their slots would not fit the device's memory,
+        // the render takes one hit point a pixel, as with --glass-splits 1, and says so.
+        let memory = ctx.info().memory_bytes;
+        if settings.splits_glass(scene)
+            && gpu.params.hit_slots > 1
+            && fits_device(&per_pixel, &others, memory, &advice).is_err()
+            && fits_device(&per_pixel_of(pixels), &others, memory, &advice).is_ok()
+        {
+            eprintln!(
+                "note: {} glass splits a pixel do not fit this device's memory at {}x{}: one hit point a pixel \
+                 (--glass-splits 1)",
+                gpu.params.hit_slots, gpu.params.width, gpu.params.height
+            );
+            gpu.params.hit_slots = 1;
+            per_pixel = per_pixel_of(pixels);
+        }
+        fits_device(&per_pixel, &others, memory, &advice)?;
+        let slots = gpu.slots() as u64;
         // The largest per-pixel buffer sets the tiles: the statistics (slots of 64 bytes, hit points 48),
         // or the emission sums (32 bytes a pixel).
         let slot_bytes = [
