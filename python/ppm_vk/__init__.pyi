@@ -99,6 +99,7 @@ class Renderer:
         caustic_photons: float = ...,
         hit_slots: int = ...,
         rough_splits: int = ...,
+        glass_splits: int = ...,
         max_eye_depth: int = ...,
         max_photon_depth: int = ...,
         emission_samples: int = ...,
