@@ -715,15 +715,9 @@ impl Renderer {
             Mode::Sppm => {
                 let pixels = pixel_order(self.gpu.params.width, self.gpu.params.height);
                 let slots = self.gpu.params.hit_slots;
-                let split: Vec<u32> = if glass_splits {
-                    pixels
-                        .iter()
-                        .copied()
-                        .filter(|&p| busy[p as usize] & MARK_SPLIT != 0)
-                        .collect()
-                } else {
-                    pixels.clone()
-                };
+                let split: Vec<u32> = (pixels.iter().copied())
+                    .filter(|&p| !glass_splits || busy[p as usize] & MARK_SPLIT != 0)
+                    .collect();
                 let first = pixels.iter().map(|&p| p * slots);
                 first
                     .chain((1..slots).flat_map(|s| split.iter().map(move |&p| p * slots + s)))

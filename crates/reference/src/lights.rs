@@ -467,25 +467,19 @@ mod tests {
             (Vec3::new(0.15, 0.0, 0.0), Vec3::new(0.0, 0.0, 0.15)),
             (Vec3::new(2.0, 0.0, 0.0), Vec3::new(1.5, 0.5, 0.0)),
         ] {
-            let (c, r) = emitter_bounds(&emitter(LIGHT_QUAD, o, u, v, 0.0)).unwrap();
-            let far = [o, o + u, o + v, o + u + v]
-                .map(|p| (p - c).length())
-                .into_iter()
-                .fold(0f32, f32::max);
-            assert!(
-                (far - r).abs() <= 1e-6 * r.max(1.0),
-                "quad: farthest corner {far}, radius {r}"
-            );
-            let (c, r) = emitter_bounds(&emitter(LIGHT_TRIANGLE, o, u, v, 0.0)).unwrap();
+            // The bounds of `kind` on (o, u, v), whose farthest corner must lie on the sphere.
+            let touches = |kind: u32, corners: &[Vec3]| {
+                let (c, r) = emitter_bounds(&emitter(kind, o, u, v, 0.0)).unwrap();
+                let far = corners.iter().map(|p| (*p - c).length()).fold(0f32, f32::max);
+                assert!(
+                    (far - r).abs() <= 1e-6 * r.max(1.0),
+                    "kind {kind}: farthest corner {far}, radius {r}"
+                );
+                c
+            };
+            touches(LIGHT_QUAD, &[o, o + u, o + v, o + u + v]);
+            let c = touches(LIGHT_TRIANGLE, &[o, o + u, o + v]);
             assert!((c - (o + (u + v) / 3.0)).length() < 1e-6);
-            let far = [o, o + u, o + v]
-                .map(|p| (p - c).length())
-                .into_iter()
-                .fold(0f32, f32::max);
-            assert!(
-                (far - r).abs() <= 1e-6 * r.max(1.0),
-                "triangle: farthest corner {far}, radius {r}"
-            );
         }
         assert_eq!(
             emitter_bounds(&emitter(LIGHT_SPHERE, o, Vec3::X, Vec3::Z, 0.25)),
