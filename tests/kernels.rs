@@ -2577,3 +2577,61 @@ fn photon_records_match_reference_with_parameter_textures_unspecialized() {
     };
     photon_records_match_reference_within(cornell_param_textured(false), settings, 1e-3, 0.993);
 }
+
+/// The grid build's dispatches (grid_dispatch.comp) against their closed form at the bounds: no records,
+/// one, a chunk and one, a batch past the record buffer's capacity (capped: the renderer runs such a
+/// batch again, smaller), and more placing workgroups than one dimension holds (past 16.7M records, which
+/// lavapipe's buffers never reach: spread over y, as `ComputePipeline::dispatch` spreads its own).
+#[test]
+fn the_grid_build_is_dispatched_for_the_records_there_are() {
+    use ppm_vk_engine::layout::{GridDispatch, RenderParams};
+    use ppm_vk_kernels::lookup::{GridDispatchPush, Lookup, CHUNK};
+    let ctx = ctx();
+    let lookup = Lookup::new(&ctx).unwrap();
+    let push = GridDispatchPush {
+        chunk: CHUNK,
+        local_size: lookup.scatter.local_size(),
+    };
+    let cases = [
+        (0u32, 4096u32),
+        (1, 4096),
+        (CHUNK + 1, 1 << 20),
+        (5000, 4096),
+        (40_000_000, 1 << 30),
+    ];
+    for (count, capacity) in cases {
+        let params = RenderParams {
+            photon_capacity: capacity,
+            ..RenderParams::default()
+        };
+        let params = ctx.buffer_from("params", &[params]).unwrap();
+        let counter = ctx.buffer_from("counter", &[count]).unwrap();
+        let out = ctx.buffer_from("grid dispatch", &[GridDispatch::default()]).unwrap();
+        ctx.run(|cmd| {
+            let buffers = [&params, &counter, &out];
+            lookup
+                .dispatch
+                .dispatch_groups(cmd, &buffers, bytemuck::bytes_of(&push), [1, 1, 1])
+        })
+        .unwrap();
+        let d: Vec<GridDispatch> = ctx.download(&out).unwrap();
+        let n = count.min(capacity) as u64;
+        assert_eq!(d[0].chunks, [n.div_ceil(CHUNK as u64) as u32, 1, 1], "{count} records");
+        // Every record has a thread, and no more than a row of workgroups is past the last one.
+        let groups = n.div_ceil(push.local_size as u64);
+        let [x, y, z] = d[0].records;
+        assert!(
+            x <= 65535 && y <= 65535 && z == 1,
+            "{count} records: {:?}",
+            d[0].records
+        );
+        let given = x as u64 * y as u64;
+        assert!(
+            given >= groups && given < groups + x.max(1) as u64,
+            "{count} records: {:?}",
+            d[0].records
+        );
+        assert_eq!(y > 1, groups > 65535, "{count} records: {:?}", d[0].records);
+    }
+    assert_clean(&ctx);
+}

@@ -295,6 +295,16 @@ struct PhotonWork {
     uint pad2;
 };
 
+// The photon grid build's dispatches (VkDispatchIndirectCommand each), sized from the batch's records by
+// grid_dispatch.comp: the count's and the split's workgroups (one per CHUNK records), and the placing's
+// (one thread per record, spread over y as photon_resume.comp spreads its own).
+struct GridDispatch {
+    uvec3 chunks;
+    uint pad0;
+    uvec3 records;
+    uint pad1;
+};
+
 // A photon suspended where its thread's loop budget ran out, to go on from the same intersection.
 struct PhotonState {
     uint64_t state;  // its random stream (Rng)

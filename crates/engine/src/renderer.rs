@@ -557,7 +557,7 @@ impl Renderer {
                 let lookup_start = Instant::now();
                 let lookup = Lookup::new(ctx);
                 timings.push(KernelTiming {
-                    name: "lookup (5 kernels)",
+                    name: "lookup (6 kernels)",
                     pipeline_s: lookup_start.elapsed().as_secs_f64(),
                     ..KernelTiming::default()
                 });
@@ -947,7 +947,6 @@ impl Renderer {
     ) -> anyhow::Result<()> {
         let ctx = &self.ctx;
         let k = &self.kernels;
-        let capacity = self.gpu.params.photon_capacity;
         let salt = match use_ {
             GridUse::Gather => SALT_PHOTON,
             GridUse::Probe => SALT_PROBE,
@@ -960,15 +959,8 @@ impl Renderer {
             self.counter.cmd_copy(cmd, &self.batch_log, 0, log_index as u64 * 4, 4);
         }
         if stages.contains(&BatchStage::Lookup) {
-            k.lookup.record(
-                ctx,
-                cmd,
-                &self.profiler,
-                &self.params,
-                &self.counter,
-                &self.grid,
-                capacity,
-            )?;
+            k.lookup
+                .record(ctx, cmd, &self.profiler, &self.params, &self.counter, &self.grid)?;
             barrier(ctx, cmd);
         }
         if !stages.contains(&BatchStage::Gather) {

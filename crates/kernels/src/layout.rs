@@ -439,6 +439,29 @@ impl PhotonWork {
     pub const GROUPS_OFFSET: u64 = std::mem::offset_of!(PhotonWork, groups) as u64;
 }
 
+/// The photon grid build's dispatches, sized from the batch's records (grid_dispatch.comp).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GridDispatch {
+    /// The count's and the split's workgroups: a `VkDispatchIndirectCommand` at [`GridDispatch::CHUNKS_OFFSET`].
+    pub chunks: [u32; 3],
+    pub pad0: u32,
+    /// The placing's workgroups, at [`GridDispatch::RECORDS_OFFSET`].
+    pub records: [u32; 3],
+    pub pad1: u32,
+}
+gpu_struct!(GridDispatch {
+    chunks,
+    pad0,
+    records,
+    pad1
+});
+
+impl GridDispatch {
+    pub const CHUNKS_OFFSET: u64 = std::mem::offset_of!(GridDispatch, chunks) as u64;
+    pub const RECORDS_OFFSET: u64 = std::mem::offset_of!(GridDispatch, records) as u64;
+}
+
 /// A photon suspended where its thread's loop budget ran out (photon.comp).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -37,6 +37,7 @@ pub mod reflected {
         PROBE,
         PHOTON,
         PHOTON_RESUME,
+        GRID_DISPATCH,
         GRID_COUNT,
         GRID_SCAN,
         GRID_OFFSETS,

@@ -1,12 +1,14 @@
 //! Stage 3b, `shaders/lookup/`: the photon grid, a hashed uniform grid rebuilt per batch by a counting
 //! sort in two levels: count (per bucket, and per chunk of records per partition of the buckets), scan,
-//! partition offsets, split by partition, then place within the partition. Hit points then read the
+//! partition offsets, split by partition, then place within the partition; the count, the split and the
+//! placing run indirectly, sized from the batch's records (grid_dispatch.comp). Hit points then read the
 //! buckets their sphere overlaps.
 
 use anyhow::{bail, Result};
 use bytemuck::{Pod, Zeroable};
 use ppm_vk_device::{barrier, vk, Buffer, BufferKind, ComputePipeline, Context, Profiler};
 
+use crate::layout::GridDispatch;
 use crate::push_struct;
 
 /// Loop steps of a subgroup that the gather and probe kernels keep for their loops other than the
@@ -52,6 +54,17 @@ push_struct!(GridPush, GRID_COUNT);
 push_struct!(GridPush, GRID_OFFSETS);
 push_struct!(GridPush, GRID_PARTITION);
 
+/// grid_dispatch.comp's push constants: what its dispatches are sized by.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GridDispatchPush {
+    /// Records per workgroup of the count and the split ([`CHUNK`]).
+    pub chunk: u32,
+    /// grid_scatter.comp's workgroup size.
+    pub local_size: u32,
+}
+push_struct!(GridDispatchPush, GRID_DISPATCH);
+
 impl GridPush {
     /// One partition per scan block of `cells` buckets, at most [`MAX_PARTS`]: a partition's records
     /// (the batch over the partitions) stay in cache while they are placed.
@@ -81,6 +94,8 @@ pub struct Grid {
     /// Per bucket: index of its first record in `records`; `cells + 1` entries.
     pub cell_start: Buffer,
     pub block_sums: Buffer,
+    /// The count's, the split's and the placing's dispatches for the batch (`GridDispatch`).
+    pub dispatch: Buffer,
     /// One word the kernels that read the grid set to 1 when a lookup loop stopped early (lavapipe's
     /// limit on loop iterations); zero otherwise.
     pub status: Buffer,
@@ -135,6 +150,12 @@ impl Grid {
                 (cells / SCAN_BLOCK) as u64 * 4,
                 BufferKind::Storage,
             )?,
+            dispatch: Buffer::new(
+                ctx,
+                "grid dispatch",
+                std::mem::size_of::<GridDispatch>() as u64,
+                BufferKind::Storage,
+            )?,
             status,
         })
     }
@@ -166,8 +187,9 @@ pub fn chunks_for(capacity: u32) -> Result<u32> {
     Ok(chunks)
 }
 
-/// The five grid kernels.
+/// The grid kernels: the five steps of the build and the sizing of their dispatches.
 pub struct Lookup {
+    pub dispatch: ComputePipeline,
     pub count: ComputePipeline,
     pub scan: ComputePipeline,
     pub offsets: ComputePipeline,
@@ -179,6 +201,7 @@ impl Lookup {
     pub fn new(ctx: &Context) -> Result<Lookup> {
         use crate::reflected::*;
         Ok(Lookup {
+            dispatch: crate::pipeline(ctx, &GRID_DISPATCH)?,
             count: crate::pipeline(ctx, &GRID_COUNT)?,
             scan: crate::pipeline(ctx, &GRID_SCAN)?,
             offsets: crate::pipeline(ctx, &GRID_OFFSETS)?,
@@ -187,9 +210,10 @@ impl Lookup {
         })
     }
 
-    /// Records the grid build over the records in `grid.records` (their number is in `counter`), which
-    /// it leaves grouped by bucket; dispatches cover `capacity` records and the kernels stop at the count.
-    /// Profiler scopes: `lookup/count`, `lookup/scan` (with the partition offsets), `lookup/split` and
+    /// Records the grid build over the records in `grid.records` (their number is in `counter`, capped at
+    /// the buffer's capacity), which it leaves grouped by bucket; the count, the split and the placing are
+    /// dispatched for that number of records (grid_dispatch.comp sizes them on the device).
+    /// Profiler scopes: `lookup/count` (with the sizing), `lookup/scan` (with the partition offsets), `lookup/split` and
     /// `lookup/scatter`. Placing each record straight at its bucket's place, the way this build did before
     /// the split, took 130-260 ms for 2.8M records, and 41-48 ms with the same writes in order: the
     /// writes' cache misses were the cost (docs/performance.md).
@@ -203,14 +227,21 @@ impl Lookup {
         params: &Buffer,
         counter: &Buffer,
         grid: &Grid,
-        capacity: u32,
     ) -> Result<()> {
         let parts = GridPush::for_cells(grid.cells);
-        let chunks = chunks_for(capacity)?;
         let push = bytemuck::bytes_of(&parts);
         profiler.scope(cmd, "lookup/count", || {
+            let sizes = GridDispatchPush {
+                chunk: CHUNK,
+                local_size: self.scatter.local_size(),
+            };
+            let buffers = [params, counter, &grid.dispatch];
+            self.dispatch
+                .dispatch_groups(cmd, &buffers, bytemuck::bytes_of(&sizes), [1, 1, 1])?;
+            barrier(ctx, cmd);
             let buffers = [params, &grid.records, counter, &grid.cell_count, &grid.part_count];
-            self.count.dispatch_groups(cmd, &buffers, push, [chunks, 1, 1])
+            self.count
+                .dispatch_indirect(cmd, &buffers, push, &grid.dispatch, GridDispatch::CHUNKS_OFFSET)
         })?;
         barrier(ctx, cmd);
         let blocks = grid.cells / SCAN_BLOCK;
@@ -235,7 +266,8 @@ impl Lookup {
         barrier(ctx, cmd);
         profiler.scope(cmd, "lookup/split", || {
             let buffers = [params, &grid.records, counter, &grid.part_count, &grid.staging];
-            self.partition.dispatch_groups(cmd, &buffers, push, [chunks, 1, 1])
+            self.partition
+                .dispatch_indirect(cmd, &buffers, push, &grid.dispatch, GridDispatch::CHUNKS_OFFSET)
         })?;
         barrier(ctx, cmd);
         profiler.scope(cmd, "lookup/scatter", || {
@@ -247,7 +279,8 @@ impl Lookup {
                 &grid.cell_start,
                 &grid.records,
             ];
-            self.scatter.dispatch(cmd, &buffers, &[], capacity as u64)
+            self.scatter
+                .dispatch_indirect(cmd, &buffers, &[], &grid.dispatch, GridDispatch::RECORDS_OFFSET)
         })
     }
 }
