@@ -6,6 +6,7 @@
 //   2: each block adds its scanned total to its entries.
 #version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 layout(local_size_x = 256) in;
 layout(std430, binding = 0) readonly buffer CellCount { uint cell_count[]; };
 layout(std430, binding = 1) buffer CellStart { uint cell_start[]; };   // cells + 1 entries
@@ -17,23 +18,35 @@ layout(push_constant) uniform ScanPush {
 
 const uint PER_THREAD = 4u;
 const uint BLOCK = 256u * PER_THREAD;
-shared uint partial[256];
+shared uint partial[256]; // per subgroup: its total, then its offset in the workgroup
+shared uint group_total;
 
-// Exclusive scan of one value per thread across the workgroup (Hillis-Steele in shared memory).
+// Exclusive scan of one value per thread across the workgroup: within each subgroup by subgroup
+// arithmetic, then over the subgroups' totals by the first subgroup. Two barriers, where a Hillis-Steele
+// scan in shared memory took sixteen, each of which lavapipe pays once per SIMD batch of every workgroup
+// (docs/performance.md, "The grid build's scan"). Subgroups are full here: 256 is a multiple of every
+// subgroup size.
 uint workgroup_exclusive_scan(uint v, out uint total) {
-    uint t = gl_LocalInvocationIndex;
-    partial[t] = v;
+    uint before = subgroupExclusiveAdd(v);
+    uint sum = subgroupAdd(v);
+    if (subgroupElect()) partial[gl_SubgroupID] = sum;
     barrier();
-    for (uint off = 1u; off < 256u; off <<= 1u) {
-        uint add = t >= off ? partial[t - off] : 0u;
-        barrier();
-        partial[t] += add;
-        barrier();
+    if (gl_SubgroupID == 0u) {
+        uint carry = 0u;
+        for (uint base = 0u; base < gl_NumSubgroups; base += gl_SubgroupSize) {
+            uint i = base + gl_SubgroupInvocationID;
+            uint s = i < gl_NumSubgroups ? partial[i] : 0u;
+            uint offset = carry + subgroupExclusiveAdd(s);
+            if (i < gl_NumSubgroups) partial[i] = offset;
+            carry += subgroupAdd(s);
+        }
+        if (subgroupElect()) group_total = carry;
     }
-    total = partial[255];
-    uint inclusive = partial[t];
     barrier();
-    return inclusive - v;
+    total = group_total;
+    uint result = partial[gl_SubgroupID] + before;
+    barrier(); // `partial` is free for the caller's next scan
+    return result;
 }
 
 void main() {
