@@ -297,7 +297,7 @@ struct PhotonWork {
 
 // The photon grid build's dispatches (VkDispatchIndirectCommand each), sized from the batch's records by
 // grid_dispatch.comp: the count's and the split's workgroups (one per CHUNK records), and the placing's
-// (one thread per record, spread over y as photon_resume.comp spreads its own).
+// (one thread per record, spread over y by invocation.glsl's spread_groups).
 struct GridDispatch {
     uvec3 chunks;
     uint pad0;

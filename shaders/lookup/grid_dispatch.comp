@@ -7,6 +7,7 @@
 layout(local_size_x = 1) in;
 #include "types.glsl"
 #include "params.glsl"
+#include "invocation.glsl"
 layout(std430, binding = 1) readonly buffer Counter { uint photon_count; };
 layout(std430, binding = 2) writeonly buffer Dispatch { GridDispatch dispatch; };
 layout(push_constant) uniform GridDispatchPush {
@@ -18,8 +19,5 @@ void main() {
     load_params();
     uint n = min(photon_count, params.photon_capacity); // as partition.glsl's batch_records()
     dispatch.chunks = uvec3((n + pc.chunk - 1u) / pc.chunk, 1u, 1u);
-    uint groups = (n + pc.local_size - 1u) / pc.local_size;
-    // Past the 65535 workgroups one dimension may hold, over y too (invocation_index linearises them).
-    uint x = min(groups, 65535u);
-    dispatch.records = uvec3(x, x == 0u ? 1u : (groups + x - 1u) / x, 1u);
+    dispatch.records = spread_groups((n + pc.local_size - 1u) / pc.local_size);
 }

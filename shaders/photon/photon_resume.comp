@@ -5,6 +5,7 @@
 layout(local_size_x = 1) in;
 
 #include "types.glsl"
+#include "invocation.glsl"
 layout(std430, binding = 0) buffer Work { PhotonWork work; };
 layout(push_constant) uniform PhotonResumePush {
     uint count;      // photons in the batch
@@ -13,8 +14,5 @@ layout(push_constant) uniform PhotonResumePush {
 
 void main() {
     uint n = work.suspended + pc.count - min(work.started, pc.count);
-    uint groups = (n + pc.local_size - 1u) / pc.local_size;
-    // Spread over y past the 65535 workgroups one dimension may hold (invocation_index linearises them).
-    uint x = min(groups, 65535u);
-    work.groups = uvec3(x, x == 0u ? 1u : (groups + x - 1u) / x, 1u);
+    work.groups = spread_groups((n + pc.local_size - 1u) / pc.local_size);
 }
