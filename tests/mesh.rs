@@ -237,15 +237,17 @@ fn a_degenerate_bvh_stops_the_render_instead_of_losing_hits() {
     assert_clean(&ctx);
 }
 
-/// A small mesh is written into the tracing kernels and tested triangle by triangle, with the BVH's
-/// watertight test: it must trace exactly what the BVH traces. cornell-mesh (14 triangles, three spheres)
-/// both ways: the same hit points from the eye pass and the same photon records, bit for bit, and those
-/// the CPU reference traces.
+/// A small mesh is written into the tracing kernels and tested triangle by triangle by their planes
+/// (geometry.glsl's inline_triangle_test), not by the BVH's watertight test: it must trace what the BVH
+/// traces, to rounding. cornell-mesh (14 triangles, three spheres) both ways: the eye pass's hit points
+/// in the same places and the photon records matched one to one, and both paths' records matched by the
+/// CPU reference's.
 #[test]
 fn a_small_mesh_written_into_the_kernels_traces_what_the_bvh_traces() {
     let ctx = ctx();
     let s = scene("cornell-mesh.toml").with_resolution(32, 32);
     let photons = 20_000;
+    let tol = 1e-4 * (s.bounds().1 - s.bounds().0).max_element();
     let run = |max_inline_triangles: u32| {
         let settings = Settings {
             max_inline_triangles,
@@ -256,30 +258,64 @@ fn a_small_mesh_written_into_the_kernels_traces_what_the_bvh_traces() {
         let hits = r.read_hit_points().unwrap();
         let records = r.trace_and_gather(0, photons).unwrap();
         let cpu = ppm_vk_reference::photon_pass(r.gpu_scene(), 0, photons, ppm_vk_kernels::photon::SALT_PHOTON);
-        let matched = match_records(&records, &cpu, 1e-4 * (s.bounds().1 - s.bounds().0).max_element());
-        (inline, hits, sorted_records(records), (cpu.len(), matched))
+        let matched = match_records(&records, &cpu, tol);
+        (inline, hits, records, (cpu.len(), matched))
     };
-    let (inline, hits_inline, records_inline, (cpu, matched)) = run(64);
-    let (bvh, hits_bvh, records_bvh, _) = run(0);
+    let (inline, hits_inline, records_inline, (cpu_inline, matched_inline)) = run(64);
+    let (bvh, hits_bvh, records_bvh, (cpu_bvh, matched_bvh)) = run(0);
     assert!(
         inline && !bvh,
         "cornell-mesh should be written out with the default, traversed with 0"
     );
+    // The same slots filled, at the same places: an eye path that a last bit sends the other way at glass
+    // would differ, and none does at this size.
     assert_eq!(hits_inline.len(), hits_bvh.len());
-    let differ = hits_inline.iter().zip(&hits_bvh).filter(|(a, b)| a != b).count();
-    assert_eq!(differ, 0, "{differ} of {} hit points differ", hits_inline.len());
+    let far = hits_inline
+        .iter()
+        .zip(&hits_bvh)
+        .filter(|(a, b)| {
+            a.pixel != b.pixel
+                || a.brdf != b.brdf
+                || (glam::Vec3::from_array(a.pos) - glam::Vec3::from_array(b.pos))
+                    .abs()
+                    .max_element()
+                    > tol
+                || (0..3).any(|c| !close(a.weight[c] as f64, b.weight[c] as f64, 1e-4, 1e-9))
+        })
+        .count();
+    let filled = hits_bvh.iter().filter(|h| h.pixel != u32::MAX).count();
+    assert!(filled > 900, "only {filled} hit points");
+    assert_eq!(
+        far,
+        0,
+        "{far} of {} hit points differ beyond rounding",
+        hits_inline.len()
+    );
+    // The photons: one to one within rounding, but for paths a last bit sends the other way (a threshold
+    // met exactly, as tests/kernels.rs allows between the GPU and its twin).
+    let between = match_records(&records_inline, &records_bvh, tol);
     println!(
-        "records: {} written out, {} through the BVH, {cpu} on the CPU, {matched} of them matched",
+        "records: {} written out, {} through the BVH, {between} matched; CPU {matched_inline} of \
+         {cpu_inline} and {matched_bvh} of {cpu_bvh} matched",
         records_inline.len(),
         records_bvh.len(),
     );
-    assert!(records_inline == records_bvh, "the two paths left different records");
-    // The CPU twin of the written-out triangles (reference::trace) tests them in the same order; its
-    // records match as tests/kernels.rs's do (paths split where a last bit lands on a threshold).
+    let (n_in, n_bvh) = (records_inline.len(), records_bvh.len());
+    assert!(n_in.abs_diff(n_bvh) * 200 <= n_bvh, "{n_in} records against {n_bvh}");
     assert!(
-        matched * 1000 >= cpu * 995,
-        "only {matched} of {cpu} CPU records have a GPU twin"
+        between * 1000 >= n_bvh * 995,
+        "only {between} of {n_bvh} records of the BVH's have a twin from the written-out triangles"
     );
+    // Each path's CPU twin (reference::trace tests the written-out triangles by their planes too).
+    for (what, matched, cpu) in [
+        ("written out", matched_inline, cpu_inline),
+        ("BVH", matched_bvh, cpu_bvh),
+    ] {
+        assert!(
+            matched * 1000 >= cpu * 995,
+            "{what}: only {matched} of {cpu} CPU records have a GPU twin"
+        );
+    }
     assert_clean(&ctx);
 }
 

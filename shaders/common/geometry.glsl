@@ -87,13 +87,38 @@ uint trace_key = 0u;
 
 // bvh.glsl's any-hit filter: whether the ray stops at triangle `tri` (leaf order) of material m at
 // barycentric weights `bary`, or passes a masked surface there.
-bool bvh_filter(BvhRay r, uint tri, uint m, vec2 bary) {
+bool triangle_stops(uint tri, uint m, vec2 bary) {
     if (!HAS_MASKS) return true;
     Hit h;
     h.kind = HIT_TRIANGLE;
     h.prim = tri;
     h.local = bary;
     return mask_keeps(m, trace_key, tri, h);
+}
+
+bool bvh_filter(BvhRay r, uint tri, uint m, vec2 bary) {
+    return triangle_stops(tri, m, bary);
+}
+
+// A triangle written into the kernel (specialize.rs, a small mesh) by its plane, as a quad is tested: t
+// where the ray meets the plane, then the point's weights of v1 and v2 (bary) from the edges. Its edges,
+// normal and 1 / |n|^2 are constants there, so the compiler folds them into the test (an axis-aligned
+// wall's to a few operations), which the BVH's watertight test, permuted by the ray's own axes, does not
+// allow: it took 2.4x cornell-spheres' eye pass on cornell-mesh, this 1.6x (docs/performance.md,
+// "Small meshes by their planes"). Not watertight: a ray within an ulp or so of an edge two triangles
+// share can miss both, as at the edge of two quads. Two-sided; a degenerate triangle (n = 0) or a ray in
+// its plane gives no finite t and no hit. CPU twin: reference::trace::inline_triangle_test.
+bool inline_triangle_test(vec3 o, vec3 d, Triangle tr, float tmin, float tmax, out float t, out vec2 bary) {
+    vec3 e1 = tr.v1 - tr.v0;
+    vec3 e2 = tr.v2 - tr.v0;
+    vec3 n = cross(e1, e2);
+    t = dot(n, tr.v0 - o) / dot(n, d);
+    bary = vec2(0.0);
+    if (!(t > tmin && t < tmax)) return false;
+    vec3 rel = o + t * d - tr.v0;
+    vec3 w = n / dot(n, n);
+    bary = vec2(dot(w, cross(rel, e2)), dot(w, cross(e1, rel))); // rel = bary.x e1 + bary.y e2
+    return bary.x >= 0.0 && bary.y >= 0.0 && bary.x + bary.y <= 1.0;
 }
 
 // Whether the ray stops at distance t on sphere s (index i), its near root or, with `far`, its far one.
@@ -171,14 +196,13 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, uint key,
         if (HAS_ANISOTROPY || HAS_NORMAL_MAPS) hit.dpdu = q.edge_u;
         if (HAS_NORMAL_MAPS) hit.dpdv = q.edge_v;
     }
-    // A small mesh's triangles, written out (specialize.rs): each tested, with the BVH's watertight test.
+    // A small mesh's triangles, written out (specialize.rs): each tested by its plane (inline_triangle_test).
     if (NUM_INLINE_TRIANGLES > 0u) {
-        BvhRay br = bvh_ray(o, d);
         [[unroll]] for (uint i = 0u; i < NUM_INLINE_TRIANGLES; i++) {
             Triangle tr = INLINE_TRIANGLE(i);
             float t;
             vec2 bary;
-            if (bvh_triangle_test(br, tr.v0, tr.v1, tr.v2, tmin, hit.t, t, bary) && bvh_filter(br, i, tr.material, bary)) {
+            if (inline_triangle_test(o, d, tr, tmin, hit.t, t, bary) && triangle_stops(i, tr.material, bary)) {
                 hit.t = t; found = true; kind = HIT_TRIANGLE;
                 tri = tr; hit.material = tr.material;
                 hit.prim = i; hit.local = bary;

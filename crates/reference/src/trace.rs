@@ -108,11 +108,15 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32, key
         super::mask::keeps(g, m, key, tri, || triangle_uv(g, tri as usize, bary))
     };
     if g.triangles_inline {
-        // Written into the kernels: every triangle in order, the first of equal t winning, as geometry.glsl.
-        if let Some(h) = super::bvh::brute_force_filtered(&g.bvh_triangles, o, d, tmin, best, keep) {
-            best = h.t;
-            found = Some((2, h.triangle as usize));
-            local = h.bary;
+        // Written into the kernels: every triangle in order by its plane, the first of equal t winning, as
+        // geometry.glsl.
+        for (i, tr) in g.bvh_triangles.iter().enumerate() {
+            let hit = inline_triangle_test(o, d, tr, tmin, best).filter(|&(_, bary)| keep(i as u32, bary));
+            if let Some((t, bary)) = hit {
+                best = t;
+                found = Some((2, i));
+                local = bary;
+            }
         }
     } else if !g.bvh_triangles.is_empty() {
         // Unlimited budget: where the GPU's traversal is cut, the renderer fails instead.
@@ -194,6 +198,28 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32, key
             }
         }
     })
+}
+
+/// geometry.glsl's `inline_triangle_test`: a triangle of a small mesh tested by its plane, as a quad is
+/// (not watertight, unlike the BVH's test). Its hit's distance and weights of v1 and v2.
+pub fn inline_triangle_test(
+    o: Vec3,
+    d: Vec3,
+    tr: &ppm_vk_kernels::layout::Triangle,
+    tmin: f32,
+    tmax: f32,
+) -> Option<(f32, Vec2)> {
+    let v0 = v3(tr.v0);
+    let (e1, e2) = (v3(tr.v1) - v0, v3(tr.v2) - v0);
+    let n = e1.cross(e2);
+    let t = n.dot(v0 - o) / n.dot(d);
+    if !(t > tmin && t < tmax) {
+        return None;
+    }
+    let rel = o + t * d - v0;
+    let w = n / n.dot(n);
+    let bary = Vec2::new(w.dot(rel.cross(e2)), w.dot(e1.cross(rel))); // rel = bary.x e1 + bary.y e2
+    (bary.x >= 0.0 && bary.y >= 0.0 && bary.x + bary.y <= 1.0).then_some((t, bary))
 }
 
 /// texture.glsl's `surface_uv` of a sphere at unit normal `normal`: longitude and colatitude about the
@@ -290,6 +316,95 @@ pub fn triangle_derivatives(e1: Vec3, e2: Vec3, uv: [Vec2; 3]) -> [Vec3; 2] {
 mod tests {
     use super::*;
     use ppm_vk_materials::math::frame;
+
+    /// The written-out triangles' plane test against the BVH's watertight test (bvh::triangle_test), an
+    /// independent formulation: on rays at random triangles of every orientation and of sizes 1e-3 to 1e3,
+    /// from origins up to 30 triangle sizes away, both find the same hits (but where the point lies within
+    /// rounding of an edge, where rounding decides), at the same t and weights to rounding (which grows as
+    /// the incidence grazes). A degenerate triangle and a ray in or along the plane give no hit.
+    #[test]
+    fn the_plane_test_finds_what_the_watertight_test_finds() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut u = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let tri = |v: [Vec3; 3]| ppm_vk_kernels::layout::Triangle {
+            v0: v[0].to_array(),
+            material: 0,
+            v1: v[1].to_array(),
+            source: 0,
+            v2: v[2].to_array(),
+            pad0: 0,
+        };
+        let (mut hits, mut near_edge) = (0, 0);
+        for _ in 0..200_000 {
+            let scale = 10f32.powf(6.0 * u() - 3.0);
+            let mut p = || scale * Vec3::new(u() - 0.5, u() - 0.5, u() - 0.5);
+            let v = [p(), p(), p()];
+            // Well-shaped triangles only: a sliver's weights are ill-conditioned in either test.
+            let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
+            let longest = e1.length().max(e2.length()).max((v[2] - v[1]).length());
+            if e1.cross(e2).length() < 0.1 * longest * longest {
+                continue;
+            }
+            let t = tri(v);
+            // Aim at a point of the triangle's plane near it (weights in [-0.2, 1.2]), from afar.
+            let (a, b) = (1.4 * u() - 0.2, 1.4 * u() - 0.2);
+            let target = v[0] + a * (v[1] - v[0]) + b * (v[2] - v[0]);
+            let o = target + 30.0 * scale * (Vec3::new(u(), u(), u()) - 0.5);
+            let d = (target - o).normalize();
+            let want = super::super::bvh::triangle_test(
+                &super::super::bvh::BvhRay::new(o, d),
+                v[0],
+                v[1],
+                v[2],
+                0.0,
+                f32::MAX,
+            );
+            let got = inline_triangle_test(o, d, &t, 0.0, f32::MAX);
+            // Rounding moves a point found from `far` triangle sizes away at incidence cos by about
+            // ulp * far / cos in the weights: the tolerance, and the band about the edges where the two
+            // tests may disagree.
+            let cos = e1.cross(e2).normalize().dot(d).abs();
+            let far = (o - target).length() / scale;
+            let tol = 1e-5 + 2e-6 * far / cos;
+            let edge = a.min(b).min(1.0 - a - b).abs() < tol;
+            match (want, got) {
+                (Some((tw, bw)), Some((tg, bg))) => {
+                    hits += 1;
+                    assert!((tw - tg).abs() <= 1e-5 * tw / cos, "t {tg} against {tw}, cos {cos}");
+                    let off = (bw - bg).abs().max_element();
+                    assert!(off <= tol, "weights {bg} against {bw}, cos {cos}, {far} sizes away");
+                }
+                (None, None) => {}
+                _ if edge => near_edge += 1,
+                (w, g) => panic!("watertight {w:?}, plane {g:?}: weights ({a}, {b}) of {v:?} from {o}"),
+            }
+        }
+        assert!(hits > 40_000, "{hits} hits");
+        println!("{hits} hits, {near_edge} disagreements within rounding of an edge");
+        let o = Vec3::new(0.2, 0.2, 1.0);
+        let flat = tri([Vec3::ZERO, Vec3::X, Vec3::Y]);
+        assert_eq!(inline_triangle_test(o, Vec3::X, &flat, 0.0, f32::MAX), None, "parallel");
+        assert_eq!(
+            inline_triangle_test(Vec3::new(0.2, 0.2, 0.0), Vec3::X, &flat, 0.0, f32::MAX),
+            None,
+            "in the plane"
+        );
+        let degenerate = tri([Vec3::ZERO, Vec3::X, 2.0 * Vec3::X]);
+        assert_eq!(
+            inline_triangle_test(o, -Vec3::Z, &degenerate, 0.0, f32::MAX),
+            None,
+            "degenerate"
+        );
+        assert!(
+            inline_triangle_test(o, -Vec3::Z, &flat, 0.0, f32::MAX).is_some(),
+            "the plain case"
+        );
+    }
 
     /// The frame an anisotropic lobe lies in, against Mitsuba's: on each shape of tangents.xml (a sphere,
     /// a turned and stretched rectangle, one with flip_normals, a mirrored one, a mesh with texture
