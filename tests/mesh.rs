@@ -237,9 +237,9 @@ fn a_degenerate_bvh_stops_the_render_instead_of_losing_hits() {
     assert_clean(&ctx);
 }
 
-/// A small mesh is written into the tracing kernels and tested triangle by triangle by their planes
-/// (geometry.glsl's inline_triangle_test), not by the BVH's watertight test: it must trace what the BVH
-/// traces, to rounding. cornell-mesh (14 triangles, three spheres) both ways: the eye pass's hit points
+/// A small mesh is written into the tracing kernels and tested by the triangles' planes, two at a time
+/// where they make a parallelogram (geometry.glsl's inline_pair_test and inline_triangle_test), not by the
+/// BVH's watertight test: it must trace what the BVH traces, to rounding. cornell-mesh (14 triangles, three spheres) both ways: the eye pass's hit points
 /// in the same places and the photon records matched one to one, and both paths' records matched by the
 /// CPU reference's.
 #[test]
@@ -255,6 +255,12 @@ fn a_small_mesh_written_into_the_kernels_traces_what_the_bvh_traces() {
         };
         let mut r = Renderer::new(&ctx, &s, settings).unwrap();
         let inline = r.gpu_scene().triangles_inline;
+        let paired = (r.gpu_scene().inline_pairs.len(), r.gpu_scene().inline_singles.len());
+        assert_eq!(
+            paired,
+            if inline { (7, 0) } else { (0, 0) },
+            "the box's 7 quads are 14 triangles"
+        );
         let hits = r.read_hit_points().unwrap();
         let records = r.trace_and_gather(0, photons).unwrap();
         let cpu = ppm_vk_reference::photon_pass(r.gpu_scene(), 0, photons, ppm_vk_kernels::photon::SALT_PHOTON);

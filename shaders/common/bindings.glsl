@@ -1,7 +1,7 @@
 // Scene bindings shared by the kernels that trace rays (ray, photon): always bindings 0-7, in this order
 // (4 and 5: the triangle BVH, crates/engine/src/bvh/; one empty leaf in scenes without meshes).
-// The intersection loops read the scene through SPHERE(i), QUAD(i), INLINE_TRIANGLE(i), NUM_SPHERES,
-// NUM_QUADS and NUM_INLINE_TRIANGLES, and traverse the BVH when NUM_TRIANGLES > 0. Built as shipped, they
+// The intersection loops read the scene through SPHERE(i), QUAD(i), INLINE_TRIANGLE(i), INLINE_PAIR(k),
+// INLINE_SINGLE(k), NUM_SPHERES, NUM_QUADS, NUM_INLINE_TRIANGLES, NUM_INLINE_PAIRS and NUM_INLINE_SINGLES, and traverse the BVH when NUM_TRIANGLES > 0. Built as shipped, they
 // read the buffers; the renderer recompiles the tracing kernels with SCENE_CONSTANTS defined and the
 // spheres and quads written out as constants (crates/kernels/src/specialize.rs), so the unrolled loops
 // need no loads at all; the triangles of a small mesh are written out too, and then no BVH is traversed.
@@ -33,6 +33,18 @@ layout(binding = 7) uniform usamplerBuffer triangle_texels;
 // surface_tangent), whether any has a bump or normal map (normal_map.glsl), whether any is masked
 // (materials/mask.glsl: the intersection loops test opacity), and which kinds of light it has beyond quads
 // and triangles (lights.glsl): glowing spheres, delta lights (point, spot, directional), an environment.
+// Two triangles of a small mesh written out that make a parallelogram (crates/kernels/src/inline_pairs.rs):
+// the corner B off their shared diagonal, A - B and C - B, the two triangles' indices, and the corners
+// (0-3: A, B, C, D) of the first's v1 and v2 and the second's, 2 bits each from the lowest.
+struct InlinePair {
+    vec3 origin;
+    uint first;
+    vec3 edge_u;
+    uint second;
+    vec3 edge_v;
+    uint corners;
+};
+
 #ifdef SCENE_CONSTANTS
 #include "scene_constants.glsl"
 #define HAS_TEXTURES SCENE_TEXTURES
@@ -67,6 +79,8 @@ layout(binding = 7) uniform usamplerBuffer triangle_texels;
 #define SPHERE(i) SCENE_SPHERES[i]
 #define QUAD(i) SCENE_QUADS[i]
 #define INLINE_TRIANGLE(i) SCENE_TRIANGLES[i]
+#define INLINE_PAIR(k) SCENE_PAIRS[k]
+#define INLINE_SINGLE(k) SCENE_SINGLES[k]
 // SCENE_BVH: the scene's triangles are in the BVH, not written out.
 #define NUM_TRIANGLES (SCENE_BVH ? params.num_triangles : 0u)
 #else
@@ -74,6 +88,10 @@ layout(binding = 7) uniform usamplerBuffer triangle_texels;
 #define NUM_SPHERES params.num_spheres
 #define NUM_QUADS params.num_quads
 #define NUM_INLINE_TRIANGLES 0u
+#define NUM_INLINE_PAIRS 0u
+#define NUM_INLINE_SINGLES 0u
+#define INLINE_PAIR(k) InlinePair(vec3(0.0), 0u, vec3(0.0), 0u, vec3(0.0), 0u)
+#define INLINE_SINGLE(k) 0u
 #define SPHERE(i) spheres[i]
 #define QUAD(i) quads[i]
 #define INLINE_TRIANGLE(i) bvh_triangle(i)

@@ -121,6 +121,36 @@ bool inline_triangle_test(vec3 o, vec3 d, Triangle tr, float tmin, float tmax, o
     return bary.x >= 0.0 && bary.y >= 0.0 && bary.x + bary.y <= 1.0;
 }
 
+// The weights of a pair's corners A, B, C, D (inline_pairs.rs) at its planar coordinates (a, b), in its
+// first triangle (A B C, where a + b <= 1) or its second (A C D, D = A + C - B).
+vec4 pair_weights(bool first, float a, float b) {
+    return first ? vec4(a, 1.0 - a - b, b, 0.0) : vec4(1.0 - b, 0.0, 1.0 - a, a + b - 1.0);
+}
+
+// Two written-out triangles that make a parallelogram, tested as one (inline_pairs.rs) by its plane, as a
+// quad is: which of the two the ray met (`first`), where (t) and at what weights of that triangle's v1
+// and v2 (bary). Its corners are constants, as a single triangle's are. CPU twin:
+// reference::trace::inline_pair_test.
+bool inline_pair_test(vec3 o, vec3 d, InlinePair p, float tmin, float tmax, out float t, out bool first,
+                      out vec2 bary) {
+    vec3 n = cross(p.edge_u, p.edge_v);
+    t = dot(n, p.origin - o) / dot(n, d);
+    first = true;
+    bary = vec2(0.0);
+    if (!(t > tmin && t < tmax)) return false;
+    vec3 rel = o + t * d - p.origin;
+    vec3 w = n / dot(n, n);
+    float a = dot(w, cross(rel, p.edge_v));
+    float b = dot(w, cross(p.edge_u, rel));
+    if (!(a >= 0.0 && a <= 1.0 && b >= 0.0 && b <= 1.0)) return false;
+    first = a + b <= 1.0;
+    vec4 w1 = pair_weights(true, a, b);
+    vec4 w2 = pair_weights(false, a, b);
+    uint c = p.corners;
+    bary = first ? vec2(w1[c & 3u], w1[(c >> 2u) & 3u]) : vec2(w2[(c >> 4u) & 3u], w2[(c >> 6u) & 3u]);
+    return true;
+}
+
 // Whether the ray stops at distance t on sphere s (index i), its near root or, with `far`, its far one.
 bool sphere_stops(Sphere s, uint i, bool far, vec3 o, vec3 d, float t) {
     if (!HAS_MASKS) return true;
@@ -196,9 +226,25 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, uint key,
         if (HAS_ANISOTROPY || HAS_NORMAL_MAPS) hit.dpdu = q.edge_u;
         if (HAS_NORMAL_MAPS) hit.dpdv = q.edge_v;
     }
-    // A small mesh's triangles, written out (specialize.rs): each tested by its plane (inline_triangle_test).
+    // A small mesh's triangles, written out (specialize.rs): those that make parallelograms two at a time
+    // (inline_pair_test), then the rest one by one (inline_triangle_test), each by its plane.
     if (NUM_INLINE_TRIANGLES > 0u) {
-        [[unroll]] for (uint i = 0u; i < NUM_INLINE_TRIANGLES; i++) {
+        [[unroll]] for (uint k = 0u; k < NUM_INLINE_PAIRS; k++) {
+            InlinePair p = INLINE_PAIR(k);
+            float t;
+            bool first;
+            vec2 bary;
+            if (!inline_pair_test(o, d, p, tmin, hit.t, t, first, bary)) continue;
+            uint i = first ? p.first : p.second;
+            Triangle tr = first ? INLINE_TRIANGLE(p.first) : INLINE_TRIANGLE(p.second);
+            if (triangle_stops(i, tr.material, bary)) {
+                hit.t = t; found = true; kind = HIT_TRIANGLE;
+                tri = tr; hit.material = tr.material;
+                hit.prim = i; hit.local = bary;
+            }
+        }
+        [[unroll]] for (uint k = 0u; k < NUM_INLINE_SINGLES; k++) {
+            uint i = INLINE_SINGLE(k);
             Triangle tr = INLINE_TRIANGLE(i);
             float t;
             vec2 bary;

@@ -1809,6 +1809,8 @@ fn trace_constants(gpu: &GpuScene, settings: &Settings) -> Option<String> {
             quads: &gpu.quads,
             triangles: &gpu.bvh_triangles,
             inline_triangles: gpu.triangles_inline,
+            pairs: &gpu.inline_pairs,
+            singles: &gpu.inline_singles,
             lights: &gpu.lights,
             surfaces: gpu.materials.iter().fold(0, |bits, m| bits | 1 << m.surface),
             textures: gpu

@@ -53,6 +53,7 @@ pub mod reflected {
 
 pub mod bvh_trace;
 pub mod gather;
+pub mod inline_pairs;
 pub mod lookup;
 pub mod photon;
 pub mod probe;

@@ -6,6 +6,7 @@
 
 use anyhow::{anyhow, Context as _, Result};
 
+use crate::inline_pairs::InlinePair;
 use crate::layout::{
     Light, Quad, Sphere, Triangle, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_QUAD, LIGHT_SPHERE,
     LIGHT_SPOT, LIGHT_TRIANGLE, MICROFACET_BECKMANN, MICROFACET_GGX, QUAD_DISK, SURFACE_BLEND, SURFACE_CONDUCTOR,
@@ -31,6 +32,10 @@ pub struct SceneConstants<'a> {
     pub triangles: &'a [Triangle],
     /// Test `triangles` one by one (a small mesh) instead of traversing the BVH.
     pub inline_triangles: bool,
+    /// Where `inline_triangles`: the triangles that pair into parallelograms and the rest
+    /// (inline_pairs.rs), which together are all of them.
+    pub pairs: &'a [InlinePair],
+    pub singles: &'a [u32],
     pub lights: &'a [Light],
     /// The surfaces the scene's materials use, as bits `1 << SURFACE_*`: the kernels leave out the code of
     /// conductors, plastics, thin dielectrics and blends where there are none (lavapipe runs both sides of a
@@ -155,6 +160,42 @@ pub fn scene_constants(c: &SceneConstants) -> String {
             })
             .collect(),
         "Triangle(vec3(0.0), 0u, vec3(0.0), 0u, vec3(0.0), 0u)",
+    );
+    // The written-out triangles by pairs, then those left single (geometry.glsl's loops).
+    let (pairs, singles): (&[InlinePair], &[u32]) = match c.inline_triangles {
+        true => (c.pairs, c.singles),
+        false => (&[], &[]),
+    };
+    s += &format!(
+        "const uint NUM_INLINE_PAIRS = {}u;\nconst uint NUM_INLINE_SINGLES = {}u;\n",
+        pairs.len(),
+        singles.len()
+    );
+    s += &array(
+        "InlinePair",
+        "SCENE_PAIRS",
+        pairs
+            .iter()
+            .map(|p| {
+                let corners =
+                    p.first_corners[0] | p.first_corners[1] << 2 | p.second_corners[0] << 4 | p.second_corners[1] << 6;
+                format!(
+                    "InlinePair({}, {}u, {}, {}u, {}, {corners}u)",
+                    v(p.origin),
+                    p.first,
+                    v(p.edge_u),
+                    p.second,
+                    v(p.edge_v)
+                )
+            })
+            .collect(),
+        "InlinePair(vec3(0.0), 0u, vec3(0.0), 0u, vec3(0.0), 0u)",
+    );
+    s += &array(
+        "uint",
+        "SCENE_SINGLES",
+        singles.iter().map(|i| format!("{i}u")).collect(),
+        "0u",
     );
     s += &array(
         "Sphere",

@@ -3,6 +3,7 @@
 //! ppm_vk_materials::math.
 
 use glam::{Vec2, Vec3};
+use ppm_vk_kernels::inline_pairs::{self, InlinePair};
 use ppm_vk_kernels::layout::QUAD_DISK;
 use ppm_vk_materials::mask;
 use ppm_vk_materials::math::{fresnel_dielectric, oct_decode, reflect, PI};
@@ -108,13 +109,22 @@ pub fn intersect_scene(g: &GpuScene, o: Vec3, d: Vec3, tmin: f32, tmax: f32, key
         super::mask::keeps(g, m, key, tri, || triangle_uv(g, tri as usize, bary))
     };
     if g.triangles_inline {
-        // Written into the kernels: every triangle in order by its plane, the first of equal t winning, as
-        // geometry.glsl.
-        for (i, tr) in g.bvh_triangles.iter().enumerate() {
-            let hit = inline_triangle_test(o, d, tr, tmin, best).filter(|&(_, bary)| keep(i as u32, bary));
+        // Written into the kernels: the pairs, then the triangles left single, in order, each by its plane,
+        // the first of equal t winning, as geometry.glsl.
+        for p in &g.inline_pairs {
+            let hit = inline_pair_test(o, d, p, tmin, best).filter(|&(i, _, bary)| keep(i, bary));
+            if let Some((i, t, bary)) = hit {
+                best = t;
+                found = Some((2, i as usize));
+                local = bary;
+            }
+        }
+        for &i in &g.inline_singles {
+            let tr = &g.bvh_triangles[i as usize];
+            let hit = inline_triangle_test(o, d, tr, tmin, best).filter(|&(_, bary)| keep(i, bary));
             if let Some((t, bary)) = hit {
                 best = t;
-                found = Some((2, i));
+                found = Some((2, i as usize));
                 local = bary;
             }
         }
@@ -220,6 +230,31 @@ pub fn inline_triangle_test(
     let w = n / n.dot(n);
     let bary = Vec2::new(w.dot(rel.cross(e2)), w.dot(e1.cross(rel))); // rel = bary.x e1 + bary.y e2
     (bary.x >= 0.0 && bary.y >= 0.0 && bary.x + bary.y <= 1.0).then_some((t, bary))
+}
+
+/// geometry.glsl's `inline_pair_test`: two written-out triangles that make a parallelogram
+/// (ppm_vk_kernels::inline_pairs), tested as one by its plane. The triangle met, the hit's distance and
+/// its weights of that triangle's v1 and v2.
+pub fn inline_pair_test(o: Vec3, d: Vec3, p: &InlinePair, tmin: f32, tmax: f32) -> Option<(u32, f32, Vec2)> {
+    let (origin, eu, ev) = (v3(p.origin), v3(p.edge_u), v3(p.edge_v));
+    let n = eu.cross(ev);
+    let t = n.dot(origin - o) / n.dot(d);
+    if !(t > tmin && t < tmax) {
+        return None;
+    }
+    let rel = o + t * d - origin;
+    let w = n / n.dot(n);
+    let (a, b) = (w.dot(rel.cross(ev)), w.dot(eu.cross(rel)));
+    if !((0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b)) {
+        return None;
+    }
+    let first = a + b <= 1.0;
+    let weights = inline_pairs::weights(first, a, b);
+    let (i, [c1, c2]) = match first {
+        true => (p.first, p.first_corners),
+        false => (p.second, p.second_corners),
+    };
+    Some((i, t, Vec2::new(weights[c1 as usize], weights[c2 as usize])))
 }
 
 /// texture.glsl's `surface_uv` of a sphere at unit normal `normal`: longitude and colatitude about the

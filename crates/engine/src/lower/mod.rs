@@ -48,6 +48,10 @@ pub struct GpuScene {
     /// The kernels test `bvh_triangles` one by one, written into them as constants (a small mesh:
     /// `specialize::MAX_INLINE_TRIANGLES`), and never traverse the BVH.
     pub triangles_inline: bool,
+    /// Where `triangles_inline`: those of them that pair into parallelograms, each pair tested as one, and
+    /// the rest (ppm_vk_kernels::inline_pairs); else empty.
+    pub inline_pairs: Vec<ppm_vk_kernels::inline_pairs::InlinePair>,
+    pub inline_singles: Vec<u32>,
     /// The starting search radius of every hit point (eq. 8, or the setting).
     pub initial_radius: f32,
     /// Total emitted power of all lights, per channel (W, un-normalised photon flux sums to this).
@@ -146,10 +150,16 @@ impl GpuScene {
             && !built.triangles.is_empty()
             && built.triangles.len() <= settings.max_inline_triangles as usize
             && spheres.len() + quads.len() <= MAX_INLINE_PRIMITIVES;
+        let (inline_pairs, inline_singles) = match triangles_inline {
+            true => ppm_vk_kernels::inline_pairs::pairs(&built.triangles),
+            false => (Vec::new(), Vec::new()),
+        };
         let mut g = GpuScene {
             textures,
             triangle_texels,
             triangles_inline,
+            inline_pairs,
+            inline_singles,
             params,
             materials,
             spheres,
