@@ -104,8 +104,8 @@ bool bvh_filter(BvhRay r, uint tri, uint m, vec2 bary) {
 // where the ray meets the plane, then the point's weights of v1 and v2 (bary) from the edges. Its edges,
 // normal and 1 / |n|^2 are constants there, so the compiler folds them into the test (an axis-aligned
 // wall's to a few operations), which the BVH's watertight test, permuted by the ray's own axes, does not
-// allow: it took 2.4x cornell-spheres' eye pass on cornell-mesh, this 1.6x (docs/performance.md,
-// "Small meshes by their planes"). Not watertight: a ray within an ulp or so of an edge two triangles
+// allow: cornell-mesh's eye pass took 2.2-2.4x cornell-spheres' with it, 1.1-1.4x by planes and pairs
+// (inline_pair_test below; docs/performance.md, "Small meshes by their planes"). Not watertight: a ray within an ulp or so of an edge two triangles
 // share can miss both, as at the edge of two quads. Two-sided; a degenerate triangle (n = 0) or a ray in
 // its plane gives no finite t and no hit. CPU twin: reference::trace::inline_triangle_test.
 bool inline_triangle_test(vec3 o, vec3 d, Triangle tr, float tmin, float tmax, out float t, out vec2 bary) {
