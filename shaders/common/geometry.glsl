@@ -105,9 +105,9 @@ bool bvh_filter(BvhRay r, uint tri, uint m, vec2 bary) {
 // normal and 1 / |n|^2 are constants there, so the compiler folds them into the test (an axis-aligned
 // wall's to a few operations), which the BVH's watertight test, permuted by the ray's own axes, does not
 // allow: cornell-mesh's eye pass took 2.2-2.4x cornell-spheres' with it, 1.1-1.4x by planes and pairs
-// (inline_pair_test below; docs/performance.md, "Small meshes by their planes"). Not watertight: a ray within an ulp or so of an edge two triangles
-// share can miss both, as at the edge of two quads. Two-sided; a degenerate triangle (n = 0) or a ray in
-// its plane gives no finite t and no hit. CPU twin: reference::trace::inline_triangle_test.
+// (inline_pair_test below; docs/performance.md, "Small meshes by their planes"). Not watertight: a ray
+// within an ulp or so of an edge two triangles share can miss both, as at the edge of two quads.
+// Two-sided; a degenerate triangle (n = 0) or a ray in its plane gives no finite t and no hit. CPU twin: reference::trace::inline_triangle_test.
 bool inline_triangle_test(vec3 o, vec3 d, Triangle tr, float tmin, float tmax, out float t, out vec2 bary) {
     vec3 e1 = tr.v1 - tr.v0;
     vec3 e2 = tr.v2 - tr.v0;
