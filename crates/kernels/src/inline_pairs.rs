@@ -179,6 +179,24 @@ mod tests {
         }
     }
 
+    /// The tolerance's bound: the far corner off the parallelogram's by half of it pairs, by twice it
+    /// does not.
+    #[test]
+    fn the_far_corner_pairs_within_the_tolerance_only() {
+        let lone = tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        let size = 2.0; // |A - B| + |C - B|: A and C end the shared edge, B is the origin
+        let near = |k: f32| {
+            tri(
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0 + k * PARALLELOGRAM_TOLERANCE * size, 0.0],
+                [0.0, 1.0, 0.0],
+            )
+        };
+        assert_eq!(pairs(&[lone, near(0.0)]).0.len(), 1);
+        assert_eq!(pairs(&[lone, near(0.5)]).0.len(), 1, "within the tolerance");
+        assert_eq!(pairs(&[lone, near(2.0)]).0.len(), 0, "beyond it");
+    }
+
     /// What does not pair: no shared edge, a kite (the far corner off the parallelogram), a degenerate
     /// triangle; and a strip of three squares' six triangles pairs into three.
     #[test]
