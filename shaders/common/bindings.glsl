@@ -1,10 +1,12 @@
 // Scene bindings shared by the kernels that trace rays (ray, photon): always bindings 0-7, in this order
 // (4 and 5: the triangle BVH, crates/engine/src/bvh/; one empty leaf in scenes without meshes).
 // The intersection loops read the scene through SPHERE(i), QUAD(i), INLINE_TRIANGLE(i), INLINE_PAIR(k),
-// INLINE_SINGLE(k), NUM_SPHERES, NUM_QUADS, NUM_INLINE_TRIANGLES, NUM_INLINE_PAIRS and NUM_INLINE_SINGLES, and traverse the BVH when NUM_TRIANGLES > 0. Built as shipped, they
-// read the buffers; the renderer recompiles the tracing kernels with SCENE_CONSTANTS defined and the
-// spheres and quads written out as constants (crates/kernels/src/specialize.rs), so the unrolled loops
-// need no loads at all; the triangles of a small mesh are written out too, and then no BVH is traversed.
+// INLINE_SINGLE(k), NUM_SPHERES, NUM_QUADS, NUM_INLINE_TRIANGLES, NUM_INLINE_PAIRS and
+// NUM_INLINE_SINGLES, and traverse the BVH when NUM_TRIANGLES > 0. Built as shipped, they read the
+// buffers; the renderer recompiles the tracing kernels with SCENE_CONSTANTS defined and the spheres and
+// quads written out as constants (crates/kernels/src/specialize.rs), so the unrolled loops need no loads at
+// all; the triangles of a small mesh are written out too (by parallelograms where they pair), and then no
+// BVH is traversed.
 // Only loop indices may index the constants: a dynamic index into a constant array makes lavapipe copy it
 // per invocation, so materials are read from their buffer (a chain of selects over constants measured no
 // faster).
@@ -27,12 +29,6 @@ layout(binding = 5) uniform usamplerBuffer bvh_triangle_texels;
 layout(binding = 6) uniform usamplerBuffer texture_texels;
 layout(binding = 7) uniform usamplerBuffer triangle_texels;
 
-// A kernel compiled for one scene knows whether any material has a texture (without one, the texture index is
-// not even read), on its specular reflectance or roughness, or on its emission, whether any mesh is
-// smooth-shaded (shading.glsl) and whether any rough surface is anisotropic (geometry.glsl's
-// surface_tangent), whether any has a bump or normal map (normal_map.glsl), whether any is masked
-// (materials/mask.glsl: the intersection loops test opacity), and which kinds of light it has beyond quads
-// and triangles (lights.glsl): glowing spheres, delta lights (point, spot, directional), an environment.
 // Two triangles of a small mesh written out that make a parallelogram (crates/kernels/src/inline_pairs.rs):
 // the corner B off their shared diagonal, A - B and C - B, the two triangles' indices, and the corners
 // (0-3: A, B, C, D) of the first's v1 and v2 and the second's, 2 bits each from the lowest.
@@ -45,6 +41,12 @@ struct InlinePair {
     uint corners;
 };
 
+// A kernel compiled for one scene knows whether any material has a texture (without one, the texture index is
+// not even read), on its specular reflectance or roughness, or on its emission, whether any mesh is
+// smooth-shaded (shading.glsl) and whether any rough surface is anisotropic (geometry.glsl's
+// surface_tangent), whether any has a bump or normal map (normal_map.glsl), whether any is masked
+// (materials/mask.glsl: the intersection loops test opacity), and which kinds of light it has beyond quads
+// and triangles (lights.glsl): glowing spheres, delta lights (point, spot, directional), an environment.
 #ifdef SCENE_CONSTANTS
 #include "scene_constants.glsl"
 #define HAS_TEXTURES SCENE_TEXTURES

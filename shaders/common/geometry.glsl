@@ -85,8 +85,8 @@ bool mask_keeps(uint m, uint key, uint prim, Hit h);
 // The mask key (materials/mask.glsl) of the ray trace_scene is tracing, for bvh_filter.
 uint trace_key = 0u;
 
-// bvh.glsl's any-hit filter: whether the ray stops at triangle `tri` (leaf order) of material m at
-// barycentric weights `bary`, or passes a masked surface there.
+// Whether the ray stops at triangle `tri` (leaf order) of material m at barycentric weights `bary`, or
+// passes a masked surface there.
 bool triangle_stops(uint tri, uint m, vec2 bary) {
     if (!HAS_MASKS) return true;
     Hit h;
@@ -96,6 +96,7 @@ bool triangle_stops(uint tri, uint m, vec2 bary) {
     return mask_keeps(m, trace_key, tri, h);
 }
 
+// bvh.glsl's any-hit filter.
 bool bvh_filter(BvhRay r, uint tri, uint m, vec2 bary) {
     return triangle_stops(tri, m, bary);
 }
@@ -107,7 +108,8 @@ bool bvh_filter(BvhRay r, uint tri, uint m, vec2 bary) {
 // allow: cornell-mesh's eye pass took 2.2-2.4x cornell-spheres' with it, 1.1-1.4x by planes and pairs
 // (inline_pair_test below; docs/performance.md, "Small meshes by their planes"). Not watertight: a ray
 // within an ulp or so of an edge two triangles share can miss both, as at the edge of two quads.
-// Two-sided; a degenerate triangle (n = 0) or a ray in its plane gives no finite t and no hit. CPU twin: reference::trace::inline_triangle_test.
+// Two-sided; a degenerate triangle (n = 0) or a ray in its plane gives no finite t and no hit.
+// CPU twin: reference::trace::inline_triangle_test.
 bool inline_triangle_test(vec3 o, vec3 d, Triangle tr, float tmin, float tmax, out float t, out vec2 bary) {
     vec3 e1 = tr.v1 - tr.v0;
     vec3 e2 = tr.v2 - tr.v0;
