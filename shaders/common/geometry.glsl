@@ -101,6 +101,20 @@ bool bvh_filter(BvhRay r, uint tri, uint m, vec2 bary) {
     return triangle_stops(tri, m, bary);
 }
 
+// Where o + t d meets the plane through `origin` spanned by e1 and e2, for t in (tmin, tmax): t and the
+// point's coordinates (a, b) = ab, point = origin + a e1 + b e2 (a quad's test, Shirley's trick). A
+// degenerate plane (e1 x e2 = 0) or a ray along it gives no finite t: false.
+bool plane_hit(vec3 o, vec3 d, vec3 origin, vec3 e1, vec3 e2, float tmin, float tmax, out float t, out vec2 ab) {
+    vec3 n = cross(e1, e2);
+    t = dot(n, origin - o) / dot(n, d);
+    ab = vec2(0.0);
+    if (!(t > tmin && t < tmax)) return false;
+    vec3 rel = o + t * d - origin;
+    vec3 w = n / dot(n, n);
+    ab = vec2(dot(w, cross(rel, e2)), dot(w, cross(e1, rel)));
+    return true;
+}
+
 // A triangle written into the kernel (specialize.rs, a small mesh) by its plane, as a quad is tested: t
 // where the ray meets the plane, then the point's weights of v1 and v2 (bary) from the edges. Its edges,
 // normal and 1 / |n|^2 are constants there, so the compiler folds them into the test (an axis-aligned
@@ -111,15 +125,8 @@ bool bvh_filter(BvhRay r, uint tri, uint m, vec2 bary) {
 // Two-sided; a degenerate triangle (n = 0) or a ray in its plane gives no finite t and no hit.
 // CPU twin: reference::trace::inline_triangle_test.
 bool inline_triangle_test(vec3 o, vec3 d, Triangle tr, float tmin, float tmax, out float t, out vec2 bary) {
-    vec3 e1 = tr.v1 - tr.v0;
-    vec3 e2 = tr.v2 - tr.v0;
-    vec3 n = cross(e1, e2);
-    t = dot(n, tr.v0 - o) / dot(n, d);
-    bary = vec2(0.0);
-    if (!(t > tmin && t < tmax)) return false;
-    vec3 rel = o + t * d - tr.v0;
-    vec3 w = n / dot(n, n);
-    bary = vec2(dot(w, cross(rel, e2)), dot(w, cross(e1, rel))); // rel = bary.x e1 + bary.y e2
+    // rel = bary.x e1 + bary.y e2
+    if (!plane_hit(o, d, tr.v0, tr.v1 - tr.v0, tr.v2 - tr.v0, tmin, tmax, t, bary)) return false;
     return bary.x >= 0.0 && bary.y >= 0.0 && bary.x + bary.y <= 1.0;
 }
 
@@ -135,15 +142,11 @@ vec4 pair_weights(bool first, float a, float b) {
 // reference::trace::inline_pair_test.
 bool inline_pair_test(vec3 o, vec3 d, InlinePair p, float tmin, float tmax, out float t, out bool first,
                       out vec2 bary) {
-    vec3 n = cross(p.edge_u, p.edge_v);
-    t = dot(n, p.origin - o) / dot(n, d);
     first = true;
     bary = vec2(0.0);
-    if (!(t > tmin && t < tmax)) return false;
-    vec3 rel = o + t * d - p.origin;
-    vec3 w = n / dot(n, n);
-    float a = dot(w, cross(rel, p.edge_v));
-    float b = dot(w, cross(p.edge_u, rel));
+    vec2 ab;
+    if (!plane_hit(o, d, p.origin, p.edge_u, p.edge_v, tmin, tmax, t, ab)) return false;
+    float a = ab.x, b = ab.y;
     if (!(a >= 0.0 && a <= 1.0 && b >= 0.0 && b <= 1.0)) return false;
     first = a + b <= 1.0;
     vec4 w1 = pair_weights(true, a, b);

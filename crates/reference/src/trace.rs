@@ -220,31 +220,30 @@ pub fn inline_triangle_test(
     tmax: f32,
 ) -> Option<(f32, Vec2)> {
     let v0 = v3(tr.v0);
-    let (e1, e2) = (v3(tr.v1) - v0, v3(tr.v2) - v0);
-    let n = e1.cross(e2);
-    let t = n.dot(v0 - o) / n.dot(d);
-    if !(t > tmin && t < tmax) {
-        return None;
-    }
-    let rel = o + t * d - v0;
-    let w = n / n.dot(n);
-    let bary = Vec2::new(w.dot(rel.cross(e2)), w.dot(e1.cross(rel))); // rel = bary.x e1 + bary.y e2
+    // bary: rel = bary.x e1 + bary.y e2
+    let (t, bary) = plane_hit(o, d, v0, v3(tr.v1) - v0, v3(tr.v2) - v0, tmin, tmax)?;
     (bary.x >= 0.0 && bary.y >= 0.0 && bary.x + bary.y <= 1.0).then_some((t, bary))
 }
 
-/// geometry.glsl's `inline_pair_test`: two written-out triangles that make a parallelogram
-/// (ppm_vk_kernels::inline_pairs), tested as one by its plane. The triangle met, the hit's distance and
-/// its weights of that triangle's v1 and v2.
-pub fn inline_pair_test(o: Vec3, d: Vec3, p: &InlinePair, tmin: f32, tmax: f32) -> Option<(u32, f32, Vec2)> {
-    let (origin, eu, ev) = (v3(p.origin), v3(p.edge_u), v3(p.edge_v));
-    let n = eu.cross(ev);
+/// geometry.glsl's `plane_hit`: where o + t d meets the plane through `origin` spanned by e1 and e2, for t
+/// in (tmin, tmax): t and the point's coordinates (a, b), point = origin + a e1 + b e2.
+fn plane_hit(o: Vec3, d: Vec3, origin: Vec3, e1: Vec3, e2: Vec3, tmin: f32, tmax: f32) -> Option<(f32, Vec2)> {
+    let n = e1.cross(e2);
     let t = n.dot(origin - o) / n.dot(d);
     if !(t > tmin && t < tmax) {
         return None;
     }
     let rel = o + t * d - origin;
     let w = n / n.dot(n);
-    let (a, b) = (w.dot(rel.cross(ev)), w.dot(eu.cross(rel)));
+    Some((t, Vec2::new(w.dot(rel.cross(e2)), w.dot(e1.cross(rel)))))
+}
+
+/// geometry.glsl's `inline_pair_test`: two written-out triangles that make a parallelogram
+/// (ppm_vk_kernels::inline_pairs), tested as one by its plane. The triangle met, the hit's distance and
+/// its weights of that triangle's v1 and v2.
+pub fn inline_pair_test(o: Vec3, d: Vec3, p: &InlinePair, tmin: f32, tmax: f32) -> Option<(u32, f32, Vec2)> {
+    let (t, ab) = plane_hit(o, d, v3(p.origin), v3(p.edge_u), v3(p.edge_v), tmin, tmax)?;
+    let (a, b) = (ab.x, ab.y);
     if !((0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b)) {
         return None;
     }
