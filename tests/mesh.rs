@@ -239,9 +239,9 @@ fn a_degenerate_bvh_stops_the_render_instead_of_losing_hits() {
 
 /// A small mesh is written into the tracing kernels and tested by the triangles' planes, two at a time
 /// where they make a parallelogram (geometry.glsl's inline_pair_test and inline_triangle_test), not by the
-/// BVH's watertight test: it must trace what the BVH traces, to rounding. cornell-mesh (14 triangles, three spheres) both ways: the eye pass's hit points
-/// in the same places and the photon records matched one to one, and both paths' records matched by the
-/// CPU reference's.
+/// BVH's watertight test: it must trace what the BVH traces, to rounding. cornell-mesh (14 triangles,
+/// three spheres) both ways: the eye pass's hit points in the same places and the photon records matched
+/// one to one, and both paths' records matched by the CPU reference's.
 #[test]
 fn a_small_mesh_written_into_the_kernels_traces_what_the_bvh_traces() {
     let ctx = ctx();

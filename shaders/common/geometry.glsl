@@ -241,6 +241,7 @@ bool trace_scene(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, uint key,
             vec2 bary;
             if (!inline_pair_test(o, d, p, tmin, hit.t, t, first, bary)) continue;
             uint i = first ? p.first : p.second;
+            // A select of two constants: INLINE_TRIANGLE(i) would index the constant array dynamically.
             Triangle tr = first ? INLINE_TRIANGLE(p.first) : INLINE_TRIANGLE(p.second);
             if (triangle_stops(i, tr.material, bary)) {
                 hit.t = t; found = true; kind = HIT_TRIANGLE;

@@ -273,24 +273,12 @@ fn traverse(
 /// The nearest hit by testing every triangle in order (the first of equal t wins): the check of
 /// [`intersect`].
 pub fn brute_force(tris: &[Triangle], o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<BvhHit> {
-    brute_force_filtered(tris, o, d, tmin, tmax, |_, _| true)
-}
-
-/// [`brute_force`] with [`intersect_filtered`]'s `keep`: the written-out triangles' loop of geometry.glsl.
-pub fn brute_force_filtered(
-    tris: &[Triangle],
-    o: Vec3,
-    d: Vec3,
-    tmin: f32,
-    tmax: f32,
-    keep: impl Fn(u32, Vec2) -> bool,
-) -> Option<BvhHit> {
     let r = BvhRay::new(o, d);
     let mut best = tmax;
     let mut hit = None;
     for (i, tr) in tris.iter().enumerate() {
         let found = triangle_test(&r, v3(tr.v0), v3(tr.v1), v3(tr.v2), tmin, best);
-        if let Some((t, bary)) = found.filter(|&(_, bary)| keep(i as u32, bary)) {
+        if let Some((t, bary)) = found {
             best = t;
             hit = Some(BvhHit {
                 t,

@@ -358,13 +358,8 @@ mod tests {
     /// the incidence grazes). A degenerate triangle and a ray in or along the plane give no hit.
     #[test]
     fn the_plane_test_finds_what_the_watertight_test_finds() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut u = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut rng = ppm_vk_materials::rng::Rng::new(7, 0);
+        let mut u = move || rng.float();
         let tri = |v: [Vec3; 3]| ppm_vk_kernels::layout::Triangle {
             v0: v[0].to_array(),
             material: 0,
