@@ -1504,11 +1504,16 @@ impl Renderer {
 
     /// What the pilot eye pass marked (read back from the device).
     pub fn pilot_marks(&self) -> anyhow::Result<PilotMarks> {
-        let busy: Vec<u32> = self.download(&self.busy, self.gpu.pixels(), "reading the pilot's marks")?;
         Ok(PilotMarks {
             pilot_all: self.pilot_all,
-            ..PilotMarks::new(&busy)
+            ..PilotMarks::new(&self.marks()?)
         })
+    }
+
+    /// The pilot's marks per pixel, row by row (ray.comp's `busy`, spread to the neighbours), read back
+    /// from the device: what decides each pixel's emission and light samples (`reference::samples_for_mark`).
+    pub fn marks(&self) -> anyhow::Result<Vec<u32>> {
+        Ok(self.download(&self.busy, self.gpu.pixels(), "reading the pilot's marks")?)
     }
 
     /// GPU time of the ray pass, in milliseconds.
