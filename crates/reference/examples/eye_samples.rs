@@ -37,10 +37,12 @@ fn main() -> Result<()> {
         };
         let renderer = Renderer::new(&ctx, &scene, settings.clone())?;
         let direct = settings.direct == DirectLight::Sample;
+        // As the renderer pushes them (ray_pushes): the unmarked pixels' count is light_samples, or one
+        // where the photons take direct light.
         let (e, r, l) = (
             settings.emission_samples,
             settings.rough_pixel_samples(),
-            settings.light_samples,
+            settings.unmarked_samples(),
         );
         let counts: Vec<u64> = (renderer.marks()?.iter())
             .map(|&m| samples_for_mark(direct, e, r, l, m) as u64)
