@@ -134,21 +134,12 @@ pub fn weights(first: bool, a: f32, b: f32) -> [f32; 4] {
 mod tests {
     use super::*;
 
-    fn tri(v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> Triangle {
-        Triangle {
-            v0,
-            v1,
-            v2,
-            ..Triangle::default()
-        }
-    }
-
     /// A point's barycentric coordinates in its triangle, from its pair's planar coordinates, give back
     /// the point: for a square split either way, with the triangles' vertices in every rotation.
     #[test]
     fn a_pairs_weights_give_back_the_point_in_either_triangle() {
         let (p, q, r, s) = ([0.0, 0.0, 1.0], [2.0, 0.0, 1.0], [2.0, 3.0, 1.0], [0.0, 3.0, 1.0]);
-        let rot = |t: [[f32; 3]; 3], k: usize| tri(t[k % 3], t[(k + 1) % 3], t[(k + 2) % 3]);
+        let rot = |t: [[f32; 3]; 3], k: usize| Triangle::through(t[k % 3], t[(k + 1) % 3], t[(k + 2) % 3]);
         for (t1, t2) in [([p, q, r], [p, r, s]), ([q, r, s], [q, s, p])] {
             for k1 in 0..3 {
                 for k2 in 0..3 {
@@ -183,10 +174,10 @@ mod tests {
     /// does not.
     #[test]
     fn the_far_corner_pairs_within_the_tolerance_only() {
-        let lone = tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        let lone = Triangle::through([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
         let size = 2.0; // |A - B| + |C - B|: A and C end the shared edge, B is the origin
         let near = |k: f32| {
-            tri(
+            Triangle::through(
                 [1.0, 0.0, 0.0],
                 [1.0, 1.0 + k * PARALLELOGRAM_TOLERANCE * size, 0.0],
                 [0.0, 1.0, 0.0],
@@ -201,21 +192,25 @@ mod tests {
     /// triangle; and a strip of three squares' six triangles pairs into three.
     #[test]
     fn only_parallelograms_pair() {
-        let lone = tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
-        let apart = tri([5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0]);
+        let lone = Triangle::through([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        let apart = Triangle::through([5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0]);
         assert_eq!(pairs(&[lone, apart]), (vec![], vec![0, 1]));
-        let kite = tri([1.0, 0.0, 0.0], [1.2, 1.1, 0.0], [0.0, 1.0, 0.0]);
+        let kite = Triangle::through([1.0, 0.0, 0.0], [1.2, 1.1, 0.0], [0.0, 1.0, 0.0]);
         assert_eq!(pairs(&[lone, kite]).0, vec![]);
-        let bent = tri([1.0, 0.0, 0.0], [1.0, 1.0, 1e-3], [0.0, 1.0, 0.0]);
+        let bent = Triangle::through([1.0, 0.0, 0.0], [1.0, 1.0, 1e-3], [0.0, 1.0, 0.0]);
         assert_eq!(pairs(&[lone, bent]).0, vec![], "out of the plane");
-        let flat = tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]);
-        let flat2 = tri([0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [3.0, 0.0, 0.0]);
+        let flat = Triangle::through([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]);
+        let flat2 = Triangle::through([0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [3.0, 0.0, 0.0]);
         assert_eq!(pairs(&[flat, flat2]).0, vec![], "degenerate");
         let mut strip = Vec::new();
         for k in 0..3 {
             let x = k as f32;
-            strip.push(tri([x, 0.0, 0.0], [x + 1.0, 0.0, 0.0], [x + 1.0, 1.0, 0.0]));
-            strip.push(tri([x, 0.0, 0.0], [x + 1.0, 1.0, 0.0], [x, 1.0, 0.0]));
+            strip.push(Triangle::through(
+                [x, 0.0, 0.0],
+                [x + 1.0, 0.0, 0.0],
+                [x + 1.0, 1.0, 0.0],
+            ));
+            strip.push(Triangle::through([x, 0.0, 0.0], [x + 1.0, 1.0, 0.0], [x, 1.0, 0.0]));
         }
         let (p, s) = pairs(&strip);
         assert_eq!((p.len(), s.len()), (3, 0));

@@ -670,3 +670,15 @@ gpu_struct!(Triangle {
     v2,
     pad0
 });
+
+impl Triangle {
+    /// A triangle of material 0 and source 0 through three vertices (the tests' shapes).
+    pub fn through(v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> Triangle {
+        Triangle {
+            v0,
+            v1,
+            v2,
+            ..Triangle::default()
+        }
+    }
+}

@@ -299,18 +299,9 @@ pub fn normal(tr: &Triangle) -> Vec3 {
 mod tests {
     use super::*;
 
-    fn tri(v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> Triangle {
-        Triangle {
-            v0,
-            v1,
-            v2,
-            ..Default::default()
-        }
-    }
-
     #[test]
     fn hits_the_inside_and_reports_barycentrics() {
-        let t = tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        let t = Triangle::through([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
         for d in [Vec3::Z, -Vec3::Z] {
             let o = Vec3::new(0.25, 0.5, 0.0) - 2.0 * d;
             let r = BvhRay::new(o, d);
@@ -391,8 +382,8 @@ mod tests {
     #[test]
     fn a_shared_edge_is_hit_by_exactly_one_side_or_both() {
         // Two triangles sharing the diagonal (0,0)-(1,1); rays exactly through points of it.
-        let a = tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]);
-        let b = tri([0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]);
+        let a = Triangle::through([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]);
+        let b = Triangle::through([0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]);
         // The square's corners (0,0) and (1,1) are on its outline, where a ray may pass outside.
         for k in 1..64 {
             let s = k as f32 / 64.0;

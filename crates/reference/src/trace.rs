@@ -360,14 +360,8 @@ mod tests {
     fn the_plane_test_finds_what_the_watertight_test_finds() {
         let mut rng = ppm_vk_materials::rng::Rng::new(7, 0);
         let mut u = move || rng.float();
-        let tri = |v: [Vec3; 3]| ppm_vk_kernels::layout::Triangle {
-            v0: v[0].to_array(),
-            material: 0,
-            v1: v[1].to_array(),
-            source: 0,
-            v2: v[2].to_array(),
-            pad0: 0,
-        };
+        let tri =
+            |v: [Vec3; 3]| ppm_vk_kernels::layout::Triangle::through(v[0].to_array(), v[1].to_array(), v[2].to_array());
         let (mut hits, mut near_edge) = (0, 0);
         for _ in 0..200_000 {
             let scale = 10f32.powf(6.0 * u() - 3.0);
